@@ -1,0 +1,85 @@
+// Shared vocabulary of microsim: vectors, errors, estimates and counter-based randomness.
+#pragma once
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace microsim {
+
+using Vec3 = Eigen::Vector3d;
+using Vec2 = Eigen::Vector2d;
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A usage error: bad option value, unknown surface kind, missing file... (CLI exit code 2).
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+// A failure while running on valid input (CLI exit code 1).
+struct RuntimeFailure : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// A Monte Carlo estimate with its standard error and the number of samples behind it.
+struct Estimate {
+  double mean = 0.0;
+  double stderr_ = 0.0;
+  std::uint64_t n = 0;
+};
+
+// Binomial proportion k/n with standard error sqrt(p(1-p)/n). For stratified sampling this
+// is an upper bound on the true standard error (stratification never increases variance).
+Estimate binomial_estimate(std::uint64_t k, std::uint64_t n);
+
+// Direction from spherical angles (radians) about the macrosurface normal +z.
+inline Vec3 direction_from_angles(double theta, double phi) {
+  return Vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+}
+inline double theta_of(const Vec3& d) { return std::acos(std::clamp(d.z(), -1.0, 1.0)); }
+inline double phi_of(const Vec3& d) {
+  double p = std::atan2(d.y(), d.x());
+  return p < 0 ? p + 2 * kPi : p;
+}
+inline double deg(double rad) { return rad * 180.0 / kPi; }
+inline double rad(double deg) { return deg * kPi / 180.0; }
+
+// Counter-based random numbers: the value depends only on (seed, stream, index), so results do
+// not depend on thread count or scheduling. Mixing by the splitmix64 finalizer.
+inline std::uint64_t mix64(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+class CounterRng {
+ public:
+  CounterRng(std::uint64_t seed, std::uint64_t stream, std::uint64_t index)
+      : state_(mix64(mix64(seed ^ mix64(stream + 0x51ED270B27E3A5F1ull)) ^ index)) {}
+  std::uint64_t next_u64() { return mix64(state_ += 0x9E3779B97F4A7C15ull); }
+  // Uniform in [0, 1), 53 random bits.
+  double uniform() { return (next_u64() >> 11) * (1.0 / 9007199254740992.0); }
+
+ private:
+  std::uint64_t state_;
+};
+
+// Morton (Z-order) decoding of a 2D index: rays are issued along this curve so that
+// consecutive rays are spatially close (coherent BVH traversal).
+inline std::uint32_t compact_bits(std::uint64_t x) {
+  x &= 0x5555555555555555ull;
+  x = (x | (x >> 1)) & 0x3333333333333333ull;
+  x = (x | (x >> 2)) & 0x0F0F0F0F0F0F0F0Full;
+  x = (x | (x >> 4)) & 0x00FF00FF00FF00FFull;
+  x = (x | (x >> 8)) & 0x0000FFFF0000FFFFull;
+  x = (x | (x >> 16)) & 0x00000000FFFFFFFFull;
+  return static_cast<std::uint32_t>(x);
+}
+inline void morton_decode(std::uint64_t code, std::uint32_t& x, std::uint32_t& y) {
+  x = compact_bits(code);
+  y = compact_bits(code >> 1);
+}
+
+}  // namespace microsim

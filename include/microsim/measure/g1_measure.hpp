@@ -1,0 +1,65 @@
+// Masking G1 measured on an explicit microsurface by the two estimators of DESIGN.md:
+//  (a) ray casting: parallel rays along -v, first-hit normals binned: visible projected area
+//      per normal bin over the bin's front-facing projected area sum_f A_f max(0, v.m_f);
+//  (b) area sampling: points drawn with density proportional to projected area A_f max(0,v.m_f),
+//      one occlusion ray toward v each; G1 = fraction unoccluded.
+// Both estimate, per normal bin B, sum_{f in B} A_f (v.m_f)+ V_f / sum_{f in B} A_f (v.m_f)+,
+// with V_f the visible fraction of facet f, so they must agree bin by bin.
+#pragma once
+#include <functional>
+
+#include <nlohmann/json.hpp>
+
+#include "microsim/measure/binning.hpp"
+#include "microsim/trace/tracer.hpp"
+
+namespace microsim {
+
+struct G1Options {
+  std::uint64_t rays = 1000000;  // per estimator and direction
+  std::uint64_t seed = 1;
+  int normal_theta_bins = 18;  // normal bins over the whole sphere (10 degree rings)
+  int normal_phi_bins = 8;     // 45 degree sectors
+  // Called from the calling thread with the fraction of work done (progress display).
+  std::function<void(double)> progress;
+};
+
+struct G1NormalBin {
+  Vec3 mean_normal = Vec3::Zero();  // projected-area-weighted mean unit normal
+  double area = 0;                  // sum_f A_f in the bin
+  double front_projected = 0;       // sum_f A_f max(0, v.m_f)
+  std::uint64_t raycast_hits = 0;   // estimator (a)
+  std::uint64_t samples = 0;        // estimator (b)
+  std::uint64_t visible = 0;
+};
+
+struct G1Result {
+  Vec3 v;
+  double theta = 0, phi = 0;
+  std::uint64_t raycast_rays = 0, sample_rays = 0;
+  std::uint64_t raycast_hits = 0, sample_visible = 0;
+  double window_area_perp = 0;     // area of the ray window perpendicular to v
+  double front_projected = 0;      // sum_f A_f max(0, v.m_f)
+  double total_area = 0;
+  double macro_area = 1;           // A
+  double total_area_macro() const { return macro_area; }
+  double lambda_numeric = 0;       // Lambda from the surface's facets
+  TraceCounters counters;
+  std::vector<G1NormalBin> bins;
+  DirectionBinning binning{1, 1, kPi};
+  double seconds = 0;
+
+  // Derived quantities with standard errors.
+  Estimate g1_area_sampling() const;  // (b), averaged over front-facing projected area
+  Estimate g1_raycast() const;        // (a), averaged
+  Estimate visible_area_ratio() const;
+  Estimate bin_g1_area_sampling(int b) const;
+  Estimate bin_g1_raycast(int b) const;
+};
+
+// v must have v.n > 0. Throws UsageError otherwise.
+G1Result measure_g1(const Tracer& tracer, const Vec3& v, const G1Options& options);
+
+nlohmann::json g1_row_json(const G1Result& r, const Microsurface& s);
+
+}  // namespace microsim

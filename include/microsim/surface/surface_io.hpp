@@ -1,0 +1,19 @@
+// Saving and loading microsurfaces: heightfields as single-channel float EXR with every
+// parameter in the header; any surface as a PLY/OBJ/OFF mesh (OpenMesh) with a JSON sidecar
+// "FILE.json" that keeps the macrosurface and the generator's description.
+#pragma once
+#include <string>
+
+#include "microsim/surface/microsurface.hpp"
+
+namespace microsim {
+
+// Format chosen by extension: .exr (heightfields only), .ply, .obj, .off.
+void save_surface(const Microsurface& s, const std::string& path);
+// Throws UsageError with a one-line message for a missing, unreadable or corrupt file.
+Microsurface load_surface(const std::string& path);
+
+// Converts a heightfield to a triangle mesh with the same facets (same triangulation).
+Microsurface heightfield_to_mesh(const Microsurface& s);
+
+}  // namespace microsim

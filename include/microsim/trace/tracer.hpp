@@ -1,0 +1,91 @@
+// Ray tracing of a microsurface with Embree 3: first hits and occlusion, periodic wrap-around,
+// and self-intersection handled by rejecting the plane of the facet a ray leaves.
+#pragma once
+#include <cstdint>
+#include <memory>
+
+#include <embree3/rtcore.h>
+
+#include "microsim/surface/microsurface.hpp"
+
+namespace microsim {
+
+// A ray leaving a facet never meets that facet's plane again; hits on it are rounding
+// artefacts and are rejected by an Embree filter (DESIGN.md "Self-intersection").
+struct SourcePlane {
+  Vec3 normal;    // unit
+  double offset;  // normal . p for p on the plane
+  static SourcePlane of(const Triangle& t) {
+    Vec3 n = t.normal();
+    return {n, n.dot(t.p0)};
+  }
+};
+
+struct TraceHit {
+  bool hit = false;
+  Vec3 point;           // may lie one cell outside the tile (periodic copy)
+  Vec3 normal;          // unit facet normal (exact, from the surface's own facet)
+  std::size_t facet = 0;
+  bool backface = false;  // the ray met the facet from behind (rounding at silhouettes)
+};
+
+// Events that a careful reader wants counted (DESIGN.md "Numerical hygiene").
+struct TraceCounters {
+  std::uint64_t rays = 0;
+  std::uint64_t border_crossings = 0;  // periodic wrap-arounds
+  std::uint64_t lost_below = 0;        // left the surface's slab downward without a hit
+  std::uint64_t backface_hits = 0;     // first hit on a back face
+  std::uint64_t unresolved = 0;        // still inside the slab after the wrap limit
+  TraceCounters& operator+=(const TraceCounters& o) {
+    rays += o.rays;
+    border_crossings += o.border_crossings;
+    lost_below += o.lost_below;
+    backface_hits += o.backface_hits;
+    unresolved += o.unresolved;
+    return *this;
+  }
+};
+
+class Tracer {
+ public:
+  explicit Tracer(const Microsurface& surface);
+  ~Tracer();
+  Tracer(const Tracer&) = delete;
+  Tracer& operator=(const Tracer&) = delete;
+
+  // First hit along org + t dir, t > 0, following periodic wrap-around. `source`, when given,
+  // is the plane the ray leaves.
+  TraceHit first_hit(const Vec3& org, const Vec3& dir, const SourcePlane* source,
+                     TraceCounters& counters) const;
+  // True when anything blocks the ray before it leaves the surface's slab upward (or, for a
+  // finite object, before infinity).
+  bool occluded(const Vec3& org, const Vec3& dir, const SourcePlane* source,
+                TraceCounters& counters) const;
+
+  const Microsurface& surface() const { return surface_; }
+  double z_top() const { return z_top_; }
+  double z_bottom() const { return z_bottom_; }
+  RTCScene scene() const { return scene_; }
+  double build_seconds() const { return build_seconds_; }
+
+  // Which of the surface's facets a raw Embree hit refers to.
+  std::size_t facet_of_hit(unsigned prim_id, float u, float v, const Vec3& ng) const;
+
+ private:
+  template <bool kOcclusion>
+  bool trace(const Vec3& org, const Vec3& dir, const SourcePlane* source, TraceCounters& c,
+             TraceHit* out) const;
+
+  const Microsurface& surface_;
+  RTCDevice device_ = nullptr;
+  RTCScene scene_ = nullptr;
+  double z_top_ = 0, z_bottom_ = 0;
+  int pad_ = 1;            // heightfield: cells of periodic copy around the tile
+  int grid_width_ = 0;     // heightfield: vertices per grid row in Embree
+  int grid_height_ = 0;
+  std::vector<std::uint32_t> mesh_prim_to_facet_;  // periodic meshes: copies map back
+  double build_seconds_ = 0;
+  double scale_ = 1;  // scene size, for relative tolerances (read by the filter)
+};
+
+}  // namespace microsim

@@ -1,0 +1,293 @@
+#include "microsim/measure/g1_measure.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <chrono>
+
+namespace microsim {
+
+namespace {
+
+// Stratified origins: a G x G grid of strata (G a power of two, G^2 <= n) visited in Morton
+// order, r rays per stratum; the ray count is rounded up to r G^2.
+struct Strata {
+  std::uint32_t grid = 1;
+  std::uint64_t per_stratum = 1;
+  explicit Strata(std::uint64_t n) {
+    while (static_cast<std::uint64_t>(grid) * 2 * grid * 2 <= n && grid < (1u << 15)) grid *= 2;
+    std::uint64_t cells = static_cast<std::uint64_t>(grid) * grid;
+    per_stratum = (n + cells - 1) / cells;
+  }
+  std::uint64_t total() const { return per_stratum * grid * grid; }
+  Vec2 point(std::uint64_t i, CounterRng& rng) const {
+    std::uint32_t sx, sy;
+    morton_decode(i / per_stratum, sx, sy);
+    return Vec2((sx + rng.uniform()) / grid, (sy + rng.uniform()) / grid);
+  }
+};
+
+// The window the parallel rays start from: origin0 + a e1 + b e2, (a, b) in [0,1]^2.
+struct RayWindow {
+  Vec3 origin0, e1, e2;
+  double area_perp = 0;  // |(e1 x e2) . v|
+};
+
+RayWindow make_window(const Tracer& tracer, const Vec3& v) {
+  const Macrosurface& m = tracer.surface().macro();
+  RayWindow w;
+  if (m.periodic) {
+    // Horizontal tile at the top of the slab; wrap-around makes every ray equivalent.
+    w.origin0 = Vec3(-0.5 * m.size_x, -0.5 * m.size_y, tracer.z_top());
+    w.e1 = Vec3(m.size_x, 0, 0);
+    w.e2 = Vec3(0, m.size_y, 0);
+  } else {
+    // Finite object: a rectangle perpendicular to v covering the projection of its bounds.
+    Eigen::AlignedBox3d box = tracer.surface().bounds();
+    Vec3 t1 = std::abs(v.z()) < 0.9 ? v.cross(Vec3::UnitZ()).normalized()
+                                     : v.cross(Vec3::UnitX()).normalized();
+    Vec3 t2 = v.cross(t1);
+    Vec3 c = box.center();
+    double lo1 = 1e300, hi1 = -1e300, lo2 = 1e300, hi2 = -1e300;
+    for (int k = 0; k < 8; ++k) {
+      Vec3 q = box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)) - c;
+      lo1 = std::min(lo1, q.dot(t1));
+      hi1 = std::max(hi1, q.dot(t1));
+      lo2 = std::min(lo2, q.dot(t2));
+      hi2 = std::max(hi2, q.dot(t2));
+    }
+    double pad = 1e-3 * box.sizes().norm();
+    double far = box.sizes().norm() + 1.0;
+    w.origin0 = c + (lo1 - pad) * t1 + (lo2 - pad) * t2 + far * v;
+    w.e1 = (hi1 - lo1 + 2 * pad) * t1;
+    w.e2 = (hi2 - lo2 + 2 * pad) * t2;
+  }
+  w.area_perp = std::abs(w.e1.cross(w.e2).dot(v));
+  return w;
+}
+
+struct Tally {
+  std::vector<std::uint64_t> hits, samples, visible;
+  TraceCounters counters;
+  explicit Tally(int nbins = 0) : hits(nbins), samples(nbins), visible(nbins) {}
+};
+
+constexpr std::uint64_t kChunk = 1 << 14;
+
+// Runs `body(i, tally)` for i in [0, n) in parallel chunks and merges the chunk tallies in
+// chunk order (integer counts: identical for any thread count).
+template <class Body>
+void run_chunks(std::uint64_t n, int nbins, Tally& total, std::atomic<std::uint64_t>& done,
+                Body&& body) {
+  std::uint64_t nchunks = (n + kChunk - 1) / kChunk;
+  std::vector<Tally> parts(nchunks, Tally(nbins));
+  tbb::parallel_for(std::uint64_t(0), nchunks, [&](std::uint64_t c) {
+    std::uint64_t end = std::min(n, (c + 1) * kChunk);
+    for (std::uint64_t i = c * kChunk; i < end; ++i) body(i, parts[c]);
+    done += end - c * kChunk;
+  });
+  for (const auto& p : parts) {
+    for (int b = 0; b < nbins; ++b) {
+      total.hits[b] += p.hits[b];
+      total.samples[b] += p.samples[b];
+      total.visible[b] += p.visible[b];
+    }
+    total.counters += p.counters;
+  }
+}
+
+}  // namespace
+
+Estimate G1Result::g1_area_sampling() const { return binomial_estimate(sample_visible, sample_rays); }
+
+Estimate G1Result::g1_raycast() const {
+  Estimate p = binomial_estimate(raycast_hits, raycast_rays);
+  double k = front_projected > 0 ? window_area_perp / front_projected : 0;
+  return {p.mean * k, p.stderr_ * k, p.n};
+}
+
+Estimate G1Result::visible_area_ratio() const {
+  Estimate p = binomial_estimate(raycast_hits, raycast_rays);
+  double denom = v.z() * total_area_macro();
+  double k = denom > 0 ? window_area_perp / denom : 0;
+  return {p.mean * k, p.stderr_ * k, p.n};
+}
+
+Estimate G1Result::bin_g1_area_sampling(int b) const {
+  return binomial_estimate(bins[b].visible, bins[b].samples);
+}
+
+Estimate G1Result::bin_g1_raycast(int b) const {
+  Estimate p = binomial_estimate(bins[b].raycast_hits, raycast_rays);
+  double k = bins[b].front_projected > 0 ? window_area_perp / bins[b].front_projected : 0;
+  return {p.mean * k, p.stderr_ * k, bins[b].raycast_hits};
+}
+
+G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o) {
+  const Microsurface& s = tracer.surface();
+  if (!(v_in.z() > 0)) throw UsageError("--theta must be in [0, 90) degrees");
+  if (o.rays == 0) throw UsageError("--rays must be positive");
+  auto t0 = std::chrono::steady_clock::now();
+  G1Result r;
+  r.v = v_in.normalized();
+  r.theta = theta_of(r.v);
+  r.phi = phi_of(r.v);
+  r.macro_area = s.macro().area;
+  r.binning = DirectionBinning(o.normal_theta_bins, o.normal_phi_bins, kPi);
+  const int nbins = r.binning.size();
+  r.bins.assign(nbins, G1NormalBin{});
+  const Vec3 v = r.v;
+
+  // Exact facet sums per normal bin, and the CDF of projected area for estimator (b).
+  const std::size_t nf = s.num_facets();
+  std::vector<double> cdf(nf);
+  std::vector<int> facet_bin(nf);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf, 1 << 14),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+                        Triangle t = s.facet(k);
+                        Vec3 c = t.cross();
+                        double a = 0.5 * c.norm();
+                        cdf[k] = a > 0 ? std::max(0.0, 0.5 * c.dot(v)) : 0.0;
+                        facet_bin[k] = a > 0 ? r.binning.bin_of(c / (2 * a)) : 0;
+                      }
+                    });
+  for (std::size_t k = 0; k < nf; ++k) {  // sequential: deterministic sums
+    Triangle t = s.facet(k);
+    double a = t.area();
+    if (a == 0) continue;
+    G1NormalBin& b = r.bins[facet_bin[k]];
+    b.area += a;
+    b.front_projected += cdf[k];
+    b.mean_normal += cdf[k] * t.normal();
+    r.total_area += a;
+  }
+  for (std::size_t k = 1; k < nf; ++k) cdf[k] += cdf[k - 1];
+  r.front_projected = nf ? cdf[nf - 1] : 0.0;
+  r.lambda_numeric = lambda_from_facets(s, v);
+  for (auto& b : r.bins)
+    if (b.mean_normal.norm() > 0) b.mean_normal.normalize();
+  if (!(r.front_projected > 0)) throw RuntimeFailure("no facet faces the direction");
+
+  const RayWindow w = make_window(tracer, v);
+  r.window_area_perp = w.area_perp;
+  const Strata strata(o.rays);
+  r.raycast_rays = strata.total();
+  r.sample_rays = strata.total();
+  const std::uint64_t total_work = 2 * strata.total();
+  std::atomic<std::uint64_t> done{0};
+  Tally tally(nbins);
+
+  auto report = [&] {
+    if (o.progress) o.progress(static_cast<double>(done.load()) / total_work);
+  };
+
+  // (a) ray casting along -v from the stratified window.
+  run_chunks(strata.total(), nbins, tally, done, [&](std::uint64_t i, Tally& t) {
+    CounterRng rng(o.seed, 0xA000 + static_cast<std::uint64_t>(r.theta * 1e6) * 7919 +
+                               static_cast<std::uint64_t>(r.phi * 1e6), i);
+    Vec2 ab = strata.point(i, rng);
+    Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
+    TraceHit h = tracer.first_hit(org, -v, nullptr, t.counters);
+    if (h.hit && !h.backface) ++t.hits[r.binning.bin_of(h.normal)];
+  });
+  report();
+  // Hits on back faces (counted in counters) are left out of the visible area: a ray that
+  // meets a facet from behind crossed the surface through a rounding gap.
+  for (int b = 0; b < nbins; ++b) {
+    r.bins[b].raycast_hits = tally.hits[b];
+    r.raycast_hits += tally.hits[b];
+  }
+
+  // (b) area sampling, strata along the CDF (facet order is spatially coherent).
+  const double total = r.front_projected;
+  run_chunks(strata.total(), nbins, tally, done, [&](std::uint64_t i, Tally& t) {
+    CounterRng rng(o.seed, 0xB000 + static_cast<std::uint64_t>(r.theta * 1e6) * 7919 +
+                               static_cast<std::uint64_t>(r.phi * 1e6), i);
+    double u = (static_cast<double>(i) + rng.uniform()) / strata.total() * total;
+    std::size_t k = std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin();
+    k = std::min(k, nf - 1);
+    while (k > 0 && cdf[k] == cdf[k - 1]) --k;  // never land on a zero-weight facet
+    Triangle f = s.facet(k);
+    double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
+    Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
+    SourcePlane plane = SourcePlane::of(f);
+    int b = facet_bin[k];
+    ++t.samples[b];
+    if (!tracer.occluded(p, v, &plane, t.counters)) ++t.visible[b];
+  });
+  report();
+  for (int b = 0; b < nbins; ++b) {
+    r.bins[b].samples = tally.samples[b];
+    r.bins[b].visible = tally.visible[b];
+    r.sample_visible += tally.visible[b];
+  }
+  r.counters = tally.counters;
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+nlohmann::json g1_row_json(const G1Result& r, const Microsurface& s) {
+  nlohmann::json row;
+  row["theta_deg"] = deg(r.theta);
+  row["phi_deg"] = deg(r.phi);
+  Estimate g = r.g1_area_sampling(), gr = r.g1_raycast(), var = r.visible_area_ratio();
+  row["g1"] = g.mean;
+  row["g1_stderr"] = g.stderr_;
+  row["g1_raycast"] = gr.mean;
+  row["g1_raycast_stderr"] = gr.stderr_;
+  row["visible_area_ratio"] = var.mean;
+  row["visible_area_ratio_stderr"] = var.stderr_;
+  row["lambda_numeric"] = r.lambda_numeric;
+  double smith_numeric = 1.0 / (1.0 + r.lambda_numeric);
+  row["smith_numeric"] = smith_numeric;
+  row["z_numeric"] = g.stderr_ > 0 ? (g.mean - smith_numeric) / g.stderr_ : 0.0;
+  if (s.nominal) {
+    double model = s.nominal->G1(r.v);
+    row["smith_nominal"] = model;
+    row["rel_dev_nominal"] = (g.mean - model) / model;
+  } else {
+    row["smith_nominal"] = nullptr;
+    row["rel_dev_nominal"] = nullptr;
+  }
+  row["rays"] = r.raycast_rays;
+  row["area_samples"] = r.sample_rays;
+  row["lost_rays"] = r.counters.lost_below + r.counters.unresolved;
+  row["backface_hits"] = r.counters.backface_hits;
+  row["border_crossings"] = r.counters.border_crossings;
+  row["seconds"] = r.seconds;
+  nlohmann::json bins = nlohmann::json::array();
+  double max_abs_z = 0;
+  for (int b = 0; b < r.binning.size(); ++b) {
+    const G1NormalBin& nb = r.bins[b];
+    if (nb.area <= 0) continue;
+    nlohmann::json jb;
+    jb["m"] = {nb.mean_normal.x(), nb.mean_normal.y(), nb.mean_normal.z()};
+    int it = b / r.binning.n_phi(), ip = b % r.binning.n_phi();
+    jb["theta_m_range_deg"] = {deg(r.binning.theta_lo(it)), deg(r.binning.theta_hi(it))};
+    jb["phi_m_range_deg"] = {deg(r.binning.phi_lo(ip)), deg(r.binning.phi_hi(ip))};
+    jb["area_fraction"] = nb.area / r.total_area;
+    if (nb.front_projected > 0 && nb.samples > 0) {
+      Estimate eb = r.bin_g1_area_sampling(b), ea = r.bin_g1_raycast(b);
+      jb["g1"] = eb.mean;
+      jb["g1_stderr"] = eb.stderr_;
+      jb["g1_raycast"] = ea.mean;
+      jb["g1_raycast_stderr"] = ea.stderr_;
+      double se = std::hypot(eb.stderr_, ea.stderr_);
+      double z = se > 0 ? (eb.mean - ea.mean) / se : 0.0;
+      jb["z_estimators"] = z;
+      max_abs_z = std::max(max_abs_z, std::abs(z));
+    } else {
+      jb["g1"] = 0.0;  // back-facing to v: G1(v, m) = 0 by definition
+      jb["g1_stderr"] = 0.0;
+    }
+    bins.push_back(jb);
+  }
+  row["max_abs_z_estimators"] = max_abs_z;
+  row["bins"] = bins;
+  return row;
+}
+
+}  // namespace microsim

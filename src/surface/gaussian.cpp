@@ -1,0 +1,128 @@
+#include "microsim/surface/gaussian.hpp"
+
+#include <unsupported/Eigen/FFT>
+
+#include <tbb/parallel_for.h>
+#include <unistd.h>
+
+#include <complex>
+#include <sstream>
+
+namespace microsim {
+
+double gaussian_memory_estimate(int resolution) {
+  double n2 = static_cast<double>(resolution + 3) * (resolution + 3);
+  // complex<double> work array, float heights, Embree grid vertices (12 B) plus its BVH
+  // (measured at about 40 B per vertex for grids), and per-bin tallies.
+  return n2 * (16.0 + 4.0 + 12.0 + 40.0);
+}
+
+void validate(const GaussianParams& p) {
+  if (!(p.alpha_x > 0) || !(p.alpha_y > 0) || !std::isfinite(p.alpha_x) ||
+      !std::isfinite(p.alpha_y) || p.alpha_x > 10 || p.alpha_y > 10)
+    throw UsageError("--alpha/--alpha-x/--alpha-y must be in (0, 10]");
+  if (p.resolution < 4) throw UsageError("--resolution must be at least 4 (got " +
+                                         std::to_string(p.resolution) + ")");
+  if (p.resolution > 32760)
+    throw UsageError("--resolution must be at most 32760 (Embree grid limit); got " +
+                     std::to_string(p.resolution));
+  double need = gaussian_memory_estimate(p.resolution);
+  double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
+  if (need > 0.8 * have) {
+    std::ostringstream os;
+    os << "--resolution " << p.resolution << " needs about " << need / (1 << 30)
+       << " GiB, more than 80% of this machine's " << have / (1 << 30) << " GiB";
+    throw UsageError(os.str());
+  }
+  if (!(p.size > 0) || !std::isfinite(p.size)) throw UsageError("--size must be > 0");
+  double dx = p.size / p.resolution;
+  if (p.correlation_length != 0.0 &&
+      !(p.correlation_length >= dx && p.correlation_length <= 0.25 * p.size))
+    throw UsageError("--correlation-length must be in [size/resolution, size/4]");
+}
+
+namespace {
+using Complex = std::complex<double>;
+
+// In-place 2D FFT of an n x n row-major array, as rows then columns (Eigen's FFT is 1D).
+void fft2d(std::vector<Complex>& a, int n, bool inverse) {
+  tbb::parallel_for(0, n, [&](int j) {
+    Eigen::FFT<double> fft;
+    std::vector<Complex> in(a.begin() + static_cast<long>(j) * n,
+                            a.begin() + static_cast<long>(j + 1) * n),
+        out;
+    if (inverse) fft.inv(out, in); else fft.fwd(out, in);
+    std::copy(out.begin(), out.end(), a.begin() + static_cast<long>(j) * n);
+  });
+  tbb::parallel_for(0, n, [&](int i) {
+    Eigen::FFT<double> fft;
+    std::vector<Complex> in(n), out;
+    for (int j = 0; j < n; ++j) in[j] = a[static_cast<std::size_t>(j) * n + i];
+    if (inverse) fft.inv(out, in); else fft.fwd(out, in);
+    for (int j = 0; j < n; ++j) a[static_cast<std::size_t>(j) * n + i] = out[j];
+  });
+}
+}  // namespace
+
+Microsurface generate_gaussian(const GaussianParams& p) {
+  validate(p);
+  const int n = p.resolution;
+  const double dx = p.size / n;
+  const double ell = p.correlation_length > 0 ? p.correlation_length : 4.0 * dx;
+  // Anisotropy by the spectrum's shape: correlation lengths l_x = l, l_y = l alpha_x/alpha_y
+  // give slope variances in the ratio alpha_x^2 : alpha_y^2; the x scale fixes the amplitude.
+  const double ell_x = ell, ell_y = ell * p.alpha_x / p.alpha_y;
+
+  // White noise from the counter-based generator (Box-Muller), deterministic for any threads.
+  std::vector<Complex> a(static_cast<std::size_t>(n) * n);
+  tbb::parallel_for(0, n, [&](int j) {
+    for (int i = 0; i < n; ++i) {
+      CounterRng rng(p.seed, 0x6A05, static_cast<std::uint64_t>(j) * n + i);
+      double u1 = 1.0 - rng.uniform(), u2 = rng.uniform();
+      a[static_cast<std::size_t>(j) * n + i] =
+          std::sqrt(-2.0 * std::log(u1)) * std::cos(2 * kPi * u2);
+    }
+  });
+  fft2d(a, n, false);
+
+  // Filter H(k) = sqrt(S(k)), S(k) ~ exp(-(kx^2 lx^2 + ky^2 ly^2)/4) for C(r) = exp(-r^2/l^2).
+  // Expected finite-difference variances (unit-variance noise, Eigen's unnormalised fwd):
+  //   Var[h(i+1,j) - h(i,j)] = (1/n^2) sum_k |H(k)|^2 4 sin^2(kx dx / 2).
+  std::vector<double> kfreq(n);
+  for (int i = 0; i < n; ++i) kfreq[i] = 2 * kPi * ((i <= n / 2) ? i : i - n) / p.size;
+  double var_dx = 0, var_dy = 0;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      double kx = kfreq[i], ky = kfreq[j];
+      double s = std::exp(-(kx * kx * ell_x * ell_x + ky * ky * ell_y * ell_y) / 4.0);
+      a[static_cast<std::size_t>(j) * n + i] *= std::sqrt(s);
+      double sx = std::sin(kx * dx / 2), sy = std::sin(ky * dx / 2);
+      var_dx += s * 4 * sx * sx;
+      var_dy += s * 4 * sy * sy;
+    }
+  }
+  var_dx /= static_cast<double>(n) * n;
+  var_dy /= static_cast<double>(n) * n;
+  a[0] = 0.0;  // zero mean height (does not affect slopes)
+  fft2d(a, n, true);
+
+  // Expected slope variance along x is var_dx / dx^2; scale to alpha_x^2 / 2.
+  const double scale = std::sqrt(0.5 * p.alpha_x * p.alpha_x * dx * dx / var_dx);
+  std::vector<float> h(static_cast<std::size_t>(n) * n);
+  for (std::size_t k = 0; k < h.size(); ++k) h[k] = static_cast<float>(scale * a[k].real());
+
+  Microsurface s = Microsurface::heightfield(n, n, p.size, p.size, std::move(h));
+  s.nominal = models::Ndf::beckmann(p.alpha_x, p.alpha_y);
+  s.description = {{"kind", "gaussian"},
+                   {"resolution", n},
+                   {"size", p.size},
+                   {"correlation_length", ell},
+                   {"alpha_x", p.alpha_x},
+                   {"alpha_y", p.alpha_y},
+                   {"seed", p.seed},
+                   {"nominal_ndf", "beckmann"},
+                   {"expected_slope_var_y", var_dy * scale * scale / (dx * dx)}};
+  return s;
+}
+
+}  // namespace microsim

@@ -1,0 +1,205 @@
+#include "microsim/surface/surface_io.hpp"
+
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+
+#include <fstream>
+#include <sys/stat.h>
+
+#include "microsim/io/output.hpp"
+
+namespace microsim {
+
+namespace {
+using OMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+
+bool file_exists(const std::string& path) {
+  struct stat st;
+  return stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+nlohmann::json macro_to_json(const Macrosurface& m) {
+  return {{"normal", {m.normal.x(), m.normal.y(), m.normal.z()}},
+          {"area", m.area},
+          {"periodic", m.periodic},
+          {"size_x", m.size_x},
+          {"size_y", m.size_y}};
+}
+
+Macrosurface macro_from_json(const nlohmann::json& j) {
+  Macrosurface m;
+  auto n = j.at("normal");
+  m.normal = Vec3(n.at(0).get<double>(), n.at(1).get<double>(), n.at(2).get<double>());
+  m.area = j.at("area").get<double>();
+  m.periodic = j.at("periodic").get<bool>();
+  m.size_x = j.at("size_x").get<double>();
+  m.size_y = j.at("size_y").get<double>();
+  return m;
+}
+
+// The nominal NDF travels in the description ("nominal_ndf", "alpha_x", "alpha_y").
+void restore_nominal(Microsurface& s) {
+  const auto& d = s.description;
+  if (!d.contains("nominal_ndf") || !d.contains("alpha_x") || !d.contains("alpha_y")) return;
+  std::string kind = d["nominal_ndf"].get<std::string>();
+  double ax = d["alpha_x"].get<double>(), ay = d["alpha_y"].get<double>();
+  if (kind == "beckmann") s.nominal = models::Ndf::beckmann(ax, ay);
+  if (kind == "ggx") s.nominal = models::Ndf::ggx(ax, ay);
+}
+
+void save_heightfield_exr(const Microsurface& s, const std::string& path) {
+  ExrTable t;
+  t.width = s.nx();
+  t.height = s.ny();
+  t.channel_names = {"Z"};
+  t.channels = {s.heights()};
+  t.attributes = s.description;
+  t.attributes["microsim_surface"] = "heightfield";
+  t.attributes["microsim_description"] = s.description.dump();
+  t.attributes["microsim_macrosurface"] = macro_to_json(s.macro()).dump();
+  t.attributes["parameterization"] =
+      "Z(i,j) = height of grid vertex x = -size_x/2 + i size_x/width, y = -size_y/2 + j "
+      "size_y/height (row j = y index); periodic tile; cell split along its (i+1,j)-(i,j+1) "
+      "diagonal";
+  write_exr(path, t);
+}
+
+Microsurface load_heightfield_exr(const std::string& path) {
+  ExrTable t = read_exr(path);
+  if (!t.attributes.contains("microsim_surface") || !t.attributes.contains("microsim_macrosurface"))
+    throw UsageError(path + " is an EXR file but not a microsim heightfield (no microsim header)");
+  auto it = std::find(t.channel_names.begin(), t.channel_names.end(), "Z");
+  if (it == t.channel_names.end()) throw UsageError(path + " has no Z channel");
+  try {
+    Macrosurface m = macro_from_json(nlohmann::json::parse(
+        t.attributes["microsim_macrosurface"].get<std::string>()));
+    Microsurface s = Microsurface::heightfield(t.width, t.height, m.size_x, m.size_y,
+                                               t.channels[it - t.channel_names.begin()]);
+    s.description = nlohmann::json::parse(t.attributes["microsim_description"].get<std::string>());
+    restore_nominal(s);
+    for (float h : s.heights())
+      if (!std::isfinite(h)) throw UsageError(path + " contains non-finite heights");
+    return s;
+  } catch (const nlohmann::json::exception& e) {
+    throw UsageError(path + " has a corrupt microsim header (" + std::string(e.what()) + ")");
+  }
+}
+
+void save_mesh(const Microsurface& s, const std::string& path) {
+  Microsurface m = s.kind() == Microsurface::Kind::Mesh ? s : heightfield_to_mesh(s);
+  OMesh om;
+  std::vector<OMesh::VertexHandle> vh;
+  vh.reserve(m.vertices().size());
+  for (const auto& v : m.vertices()) vh.push_back(om.add_vertex(OMesh::Point(v.x(), v.y(), v.z())));
+  for (const auto& t : m.triangles()) {
+    auto f = om.add_face(vh[t[0]], vh[t[1]], vh[t[2]]);
+    if (!f.is_valid()) throw RuntimeFailure("cannot export: the mesh is not manifold");
+  }
+  write_atomically(path, [&](const std::string& tmp) {
+    OpenMesh::IO::Options opt;
+    if (extension_of(path) == "ply") opt += OpenMesh::IO::Options::Binary;
+    if (!OpenMesh::IO::write_mesh(om, tmp, opt)) throw RuntimeFailure("cannot write " + path);
+  });
+  nlohmann::json side = {{"microsim_surface", "mesh"},
+                         {"macrosurface", macro_to_json(m.macro())},
+                         {"description", s.description}};
+  write_json(path + ".json", side);
+}
+
+Microsurface load_mesh(const std::string& path) {
+  OMesh om;
+  OpenMesh::IO::Options opt;
+  if (!OpenMesh::IO::read_mesh(om, path, opt) || om.n_faces() == 0)
+    throw UsageError(path + " is not a readable mesh (PLY/OBJ/OFF with at least one face)");
+  std::vector<Eigen::Vector3f> verts;
+  verts.reserve(om.n_vertices());
+  for (auto v : om.vertices()) {
+    auto p = om.point(v);
+    verts.emplace_back(p[0], p[1], p[2]);
+  }
+  std::vector<std::array<std::uint32_t, 3>> tris;
+  for (auto f : om.faces()) {
+    std::array<std::uint32_t, 3> t{};
+    int k = 0;
+    for (auto v : om.fv_range(f)) {
+      if (k == 3) throw UsageError(path + ": face with more than 3 vertices after triangulation");
+      t[k++] = static_cast<std::uint32_t>(v.idx());
+    }
+    tris.push_back(t);
+  }
+  Macrosurface macro;
+  nlohmann::json description = {{"kind", "mesh"}, {"file", path}};
+  std::string side = path + ".json";
+  if (file_exists(side)) {
+    try {
+      std::ifstream f(side);
+      auto j = nlohmann::json::parse(f);
+      macro = macro_from_json(j.at("macrosurface"));
+      if (j.contains("description")) description = j["description"];
+    } catch (const nlohmann::json::exception& e) {
+      throw UsageError(side + " is not a valid microsim sidecar (" + std::string(e.what()) + ")");
+    }
+  } else {
+    // No sidecar: a finite object whose window is its xy bounds, area the window's.
+    Eigen::AlignedBox3f box;
+    for (const auto& v : verts) box.extend(v);
+    macro.periodic = false;
+    macro.size_x = 2 * std::max(std::abs(box.min().x()), std::abs(box.max().x()));
+    macro.size_y = 2 * std::max(std::abs(box.min().y()), std::abs(box.max().y()));
+    macro.area = macro.size_x * macro.size_y;
+  }
+  Microsurface s = Microsurface::mesh(std::move(verts), std::move(tris), macro);
+  for (std::size_t k = 0; k < s.num_facets(); ++k)
+    if (!(s.facet(k).area() > 0))
+      throw UsageError(path + ": degenerate triangle " + std::to_string(k) + " (zero area)");
+  s.description = description;
+  restore_nominal(s);
+  return s;
+}
+}  // namespace
+
+Microsurface heightfield_to_mesh(const Microsurface& s) {
+  if (s.kind() == Microsurface::Kind::Mesh) return s;
+  const int nx = s.nx(), ny = s.ny();
+  // (nx+1) x (ny+1) vertices: the last row/column duplicates the first one shifted by the
+  // tile size, so the mesh's border lies exactly on the tile's border.
+  std::vector<Eigen::Vector3f> verts;
+  verts.reserve(static_cast<std::size_t>(nx + 1) * (ny + 1));
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) verts.push_back(s.grid_point(i, j).cast<float>());
+  auto id = [&](int i, int j) { return static_cast<std::uint32_t>(j * (nx + 1) + i); };
+  std::vector<std::array<std::uint32_t, 3>> tris;
+  tris.reserve(2 * static_cast<std::size_t>(nx) * ny);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      tris.push_back({id(i, j), id(i + 1, j), id(i, j + 1)});
+      tris.push_back({id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  Microsurface m = Microsurface::mesh(std::move(verts), std::move(tris), s.macro());
+  m.description = s.description;
+  m.nominal = s.nominal;
+  return m;
+}
+
+void save_surface(const Microsurface& s, const std::string& path) {
+  std::string ext = extension_of(path);
+  if (ext == "exr") {
+    if (s.kind() != Microsurface::Kind::Heightfield)
+      throw UsageError("-o " + path + ": only heightfields can be saved as EXR; use .ply/.obj");
+    save_heightfield_exr(s, path);
+  } else if (ext == "ply" || ext == "obj" || ext == "off") {
+    save_mesh(s, path);
+  } else {
+    throw UsageError("-o " + path + ": unknown surface format (use .exr, .ply, .obj or .off)");
+  }
+}
+
+Microsurface load_surface(const std::string& path) {
+  if (!file_exists(path)) throw UsageError("surface file " + path + " does not exist");
+  std::string ext = extension_of(path);
+  if (ext == "exr") return load_heightfield_exr(path);
+  if (ext == "ply" || ext == "obj" || ext == "off") return load_mesh(path);
+  throw UsageError("surface file " + path + ": unknown format (expected .exr, .ply, .obj or .off)");
+}
+
+}  // namespace microsim

@@ -1,0 +1,285 @@
+#include "microsim/trace/tracer.hpp"
+
+#include <chrono>
+#include <limits>
+
+namespace microsim {
+
+namespace {
+
+// Embree context extended with the plane the ray leaves (read by the filter functions).
+struct PlaneContext {
+  RTCIntersectContext context;
+  const SourcePlane* source;
+};
+
+// For rays that leave a facet: rejects back-face hits and hits on the plane the ray leaves
+// (self-intersection). The 1 - cos tolerance allows for Embree's float normals; the plane
+// distance tolerance is relative to the scene scale.
+void reject_source_plane(const RTCFilterFunctionNArguments* args) {
+  const auto* ctx = reinterpret_cast<const PlaneContext*>(args->context);
+  if (!ctx->source) return;
+  const double scale = *static_cast<const double*>(args->geometryUserPtr);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    Vec3 ng(RTCHitN_Ng_x(args->hit, args->N, i), RTCHitN_Ng_y(args->hit, args->N, i),
+            RTCHitN_Ng_z(args->hit, args->N, i));
+    double len = ng.norm();
+    if (len == 0) continue;
+    Vec3 dir(RTCRayN_dir_x(args->ray, args->N, i), RTCRayN_dir_y(args->ray, args->N, i),
+             RTCRayN_dir_z(args->ray, args->N, i));
+    // A ray leaving the surface enters the solid through a front face first; a back face
+    // first means its float origin rounded to just below a neighbouring facet (concave edge).
+    if (ng.dot(dir) > 0) {
+      args->valid[i] = 0;
+      continue;
+    }
+    if (std::abs(ng.dot(ctx->source->normal)) / len < 1.0 - 1e-6) continue;
+    float t = RTCRayN_tfar(args->ray, args->N, i);
+    Vec3 p(RTCRayN_org_x(args->ray, args->N, i) + t * RTCRayN_dir_x(args->ray, args->N, i),
+           RTCRayN_org_y(args->ray, args->N, i) + t * RTCRayN_dir_y(args->ray, args->N, i),
+           RTCRayN_org_z(args->ray, args->N, i) + t * RTCRayN_dir_z(args->ray, args->N, i));
+    if (std::abs(ctx->source->normal.dot(p) - ctx->source->offset) < 1e-5 * scale)
+      args->valid[i] = 0;
+  }
+}
+
+void throw_on_embree_error(RTCDevice device, const char* what) {
+  RTCError e = rtcGetDeviceError(device);
+  if (e != RTC_ERROR_NONE)
+    throw RuntimeFailure(std::string("Embree error while ") + what + " (code " +
+                         std::to_string(static_cast<int>(e)) + ")");
+}
+
+}  // namespace
+
+Tracer::Tracer(const Microsurface& surface) : surface_(surface) {
+  auto t0 = std::chrono::steady_clock::now();
+  device_ = rtcNewDevice(nullptr);
+  if (!device_) throw RuntimeFailure("cannot create an Embree device");
+  scene_ = rtcNewScene(device_);
+  // ROBUST: without it a few rays per million slip through shared edges (DESIGN.md).
+  rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
+
+  const Macrosurface& macro = surface.macro();
+  Eigen::AlignedBox3d box = surface.bounds();
+  RTCGeometry geom;
+  if (surface.kind() == Microsurface::Kind::Heightfield) {
+    geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_GRID);
+    grid_width_ = surface.nx() + 1 + 2 * pad_;
+    grid_height_ = surface.ny() + 1 + 2 * pad_;
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+        static_cast<std::size_t>(grid_width_) * grid_height_));
+    for (int j = 0; j < grid_height_; ++j)
+      for (int i = 0; i < grid_width_; ++i) {
+        Vec3 p = surface.grid_point(i - pad_, j - pad_);
+        float* q = v + 3 * (static_cast<std::size_t>(j) * grid_width_ + i);
+        q[0] = static_cast<float>(p.x());
+        q[1] = static_cast<float>(p.y());
+        q[2] = static_cast<float>(p.z());
+      }
+    auto* g = static_cast<RTCGrid*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_GRID, 0,
+                                                            RTC_FORMAT_GRID, sizeof(RTCGrid), 1));
+    g->startVertexID = 0;
+    g->stride = grid_width_;
+    g->width = static_cast<unsigned short>(grid_width_);
+    g->height = static_cast<unsigned short>(grid_height_);
+  } else {
+    geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    const auto& verts = surface.vertices();
+    const auto& tris = surface.triangles();
+    // Periodic meshes: add copies, shifted by one tile, of the triangles near the borders so
+    // that a ray crossing a border meets interior geometry (no hit lost to rounding there).
+    std::vector<Eigen::Vector3f> vout(verts);
+    std::vector<std::array<std::uint32_t, 3>> tout(tris);
+    for (std::uint32_t k = 0; k < tris.size(); ++k) mesh_prim_to_facet_.push_back(k);
+    if (macro.periodic) {
+      const double mx = 0.05 * macro.size_x, my = 0.05 * macro.size_y;
+      for (int sx = -1; sx <= 1; ++sx)
+        for (int sy = -1; sy <= 1; ++sy) {
+          if (sx == 0 && sy == 0) continue;
+          Eigen::Vector3f shift(sx * macro.size_x, sy * macro.size_y, 0);
+          for (std::uint32_t k = 0; k < tris.size(); ++k) {
+            Eigen::AlignedBox3f tb;
+            for (auto id : tris[k]) tb.extend(verts[id] + shift);
+            if (tb.max().x() < -0.5 * macro.size_x - mx || tb.min().x() > 0.5 * macro.size_x + mx ||
+                tb.max().y() < -0.5 * macro.size_y - my || tb.min().y() > 0.5 * macro.size_y + my)
+              continue;
+            std::array<std::uint32_t, 3> t{};
+            for (int c = 0; c < 3; ++c) {
+              t[c] = static_cast<std::uint32_t>(vout.size());
+              vout.push_back(verts[tris[k][c]] + shift);
+            }
+            tout.push_back(t);
+            mesh_prim_to_facet_.push_back(k);
+          }
+        }
+    }
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vout.size() + 1));
+    for (std::size_t k = 0; k < vout.size(); ++k)
+      for (int c = 0; c < 3; ++c) v[3 * k + c] = vout[k][c];
+    auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), tout.size()));
+    for (std::size_t k = 0; k < tout.size(); ++k)
+      for (int c = 0; c < 3; ++c) idx[3 * k + c] = tout[k][c];
+  }
+  static_assert(sizeof(double) == 8, "");
+  scale_ = std::max({box.sizes().maxCoeff(), macro.size_x, macro.size_y});
+  rtcSetGeometryUserData(geom, &scale_);
+  rtcSetGeometryIntersectFilterFunction(geom, reject_source_plane);
+  rtcSetGeometryOccludedFilterFunction(geom, reject_source_plane);
+  rtcCommitGeometry(geom);
+  rtcAttachGeometry(scene_, geom);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(scene_);
+  throw_on_embree_error(device_, "building the scene");
+
+  // The slab that holds all geometry; a little margin so that its faces are never tangent.
+  const double eps = 1e-6 * scale_;
+  z_top_ = box.max().z() + eps;
+  z_bottom_ = box.min().z() - eps;
+  build_seconds_ =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+Tracer::~Tracer() {
+  if (scene_) rtcReleaseScene(scene_);
+  if (device_) rtcReleaseDevice(device_);
+}
+
+std::size_t Tracer::facet_of_hit(unsigned prim_id, float u, float v, const Vec3& ng) const {
+  if (surface_.kind() == Microsurface::Kind::Mesh) return mesh_prim_to_facet_[prim_id];
+  // Grid hits report u, v normalised over the whole grid. The cell from u, v can be off by
+  // one at cell borders (float rounding): pick, around it, the facet whose normal matches Ng.
+  const Vec3 n = ng.normalized();
+  const double gu = static_cast<double>(u) * (grid_width_ - 1);
+  const double gv = static_cast<double>(v) * (grid_height_ - 1);
+  const long ci = static_cast<long>(std::floor(gu)), cj = static_cast<long>(std::floor(gv));
+  const long nx = surface_.nx(), ny = surface_.ny();
+  auto facet_index = [&](long i, long j, int half) {
+    long ii = (((i - pad_) % nx) + nx) % nx, jj = (((j - pad_) % ny) + ny) % ny;
+    return 2 * static_cast<std::size_t>(jj * nx + ii) + half;
+  };
+  int half = (gu - ci) + (gv - cj) < 1.0 ? 0 : 1;
+  std::size_t best = facet_index(ci, cj, half);
+  double best_dot = surface_.facet(best).normal().dot(n);
+  if (best_dot > 1 - 1e-6) return best;
+  for (long dj = -1; dj <= 1; ++dj)
+    for (long di = -1; di <= 1; ++di)
+      for (int h = 0; h < 2; ++h) {
+        std::size_t k = facet_index(ci + di, cj + dj, h);
+        double d = surface_.facet(k).normal().dot(n);
+        if (d > best_dot) {
+          best_dot = d;
+          best = k;
+        }
+      }
+  return best;
+}
+
+template <bool kOcclusion>
+bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
+                   TraceCounters& c, TraceHit* out) const {
+  ++c.rays;
+  const Macrosurface& macro = surface_.macro();
+  PlaneContext ctx;
+  rtcInitIntersectContext(&ctx.context);
+  ctx.source = source;
+
+  Vec3 o = org;
+  const double hx = 0.5 * macro.size_x, hy = 0.5 * macro.size_y;
+  // Beyond the tile border a ray may travel this far inside the padded copy before it is cut
+  // (half a cell), so a hit exactly on the border is found inside the geometry.
+  double dxy = std::max(std::abs(dir.x()), std::abs(dir.y()));
+  double cell = surface_.kind() == Microsurface::Kind::Heightfield
+                    ? std::min(surface_.dx(), surface_.dy())
+                    : 0.02 * std::min(macro.size_x, macro.size_y);
+  const double margin = dxy > 0 ? 0.5 * cell / dxy : 0.0;
+  const int max_segments = 100000;
+
+  for (int segment = 0; segment < max_segments; ++segment) {
+    double t_exit = std::numeric_limits<double>::infinity();
+    if (macro.periodic) {
+      if (dir.x() > 0) t_exit = std::min(t_exit, (hx - o.x()) / dir.x());
+      if (dir.x() < 0) t_exit = std::min(t_exit, (-hx - o.x()) / dir.x());
+      if (dir.y() > 0) t_exit = std::min(t_exit, (hy - o.y()) / dir.y());
+      if (dir.y() < 0) t_exit = std::min(t_exit, (-hy - o.y()) / dir.y());
+      t_exit = std::max(t_exit, 0.0);
+    }
+    // Distance to the slab face the ray is heading for.
+    double t_slab = std::numeric_limits<double>::infinity();
+    if (dir.z() > 0) t_slab = (z_top_ - o.z()) / dir.z();
+    if (dir.z() < 0) t_slab = (z_bottom_ - o.z()) / dir.z();
+    if (t_slab < 0) {
+      // Already outside the slab and moving away from it.
+      if (dir.z() < 0) ++c.lost_below;
+      return false;
+    }
+    double tfar = std::min(t_exit + margin, t_slab);
+
+    RTCRayHit rh;
+    rh.ray.org_x = static_cast<float>(o.x());
+    rh.ray.org_y = static_cast<float>(o.y());
+    rh.ray.org_z = static_cast<float>(o.z());
+    rh.ray.dir_x = static_cast<float>(dir.x());
+    rh.ray.dir_y = static_cast<float>(dir.y());
+    rh.ray.dir_z = static_cast<float>(dir.z());
+    rh.ray.tnear = 0.0f;
+    rh.ray.tfar = std::isfinite(tfar) ? static_cast<float>(tfar) : std::numeric_limits<float>::infinity();
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.flags = 0;
+    rh.ray.time = 0;
+    rh.ray.id = 0;
+    if (kOcclusion) {
+      rtcOccluded1(scene_, &ctx.context, &rh.ray);
+      if (rh.ray.tfar < 0) return true;  // Embree marks occlusion with tfar = -inf
+    } else {
+      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+      rtcIntersect1(scene_, &ctx.context, &rh);
+      if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
+        Vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+        out->hit = true;
+        out->point = o + static_cast<double>(rh.ray.tfar) * dir;
+        out->facet = facet_of_hit(rh.hit.primID, rh.hit.u, rh.hit.v, ng);
+        out->normal = surface_.facet(out->facet).normal();
+        out->backface = out->normal.dot(dir) > 0;
+        if (out->backface) ++c.backface_hits;
+        return true;
+      }
+    }
+    if (t_slab <= t_exit) {
+      // Leaves the slab inside this tile: upward it escapes, downward it was lost.
+      if (dir.z() < 0) ++c.lost_below;
+      return false;
+    }
+    if (!macro.periodic) return false;
+    // Move to the border and re-enter through the opposite side (both at a corner).
+    o += t_exit * dir;
+    const double tol = 1e-12 * std::max(macro.size_x, macro.size_y);
+    if (dir.x() > 0 && o.x() >= hx - tol) o.x() -= macro.size_x;
+    else if (dir.x() < 0 && o.x() <= -hx + tol) o.x() += macro.size_x;
+    if (dir.y() > 0 && o.y() >= hy - tol) o.y() -= macro.size_y;
+    else if (dir.y() < 0 && o.y() <= -hy + tol) o.y() += macro.size_y;
+    ++c.border_crossings;
+  }
+  ++c.unresolved;
+  return false;
+}
+
+TraceHit Tracer::first_hit(const Vec3& org, const Vec3& dir, const SourcePlane* source,
+                           TraceCounters& counters) const {
+  TraceHit h;
+  trace<false>(org, dir, source, counters, &h);
+  return h;
+}
+
+bool Tracer::occluded(const Vec3& org, const Vec3& dir, const SourcePlane* source,
+                      TraceCounters& counters) const {
+  return trace<true>(org, dir, source, counters, nullptr);
+}
+
+}  // namespace microsim
