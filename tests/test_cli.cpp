@@ -1,2 +1,139 @@
+// The command line as users and scripts see it: outputs and their fields, and bad input
+// answered with one line on stderr, exit code 2 and no output file.
 #include <gtest/gtest.h>
-TEST(Placeholder, Empty) {}
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+#include <nlohmann/json.hpp>
+
+namespace {
+struct Result {
+  int code;
+  std::string out, err;
+};
+std::string tmp(const std::string& name) { return ::testing::TempDir() + "microsim_cli_" + name; }
+std::string slurp(const std::string& p) {
+  std::ifstream f(p);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+bool exists(const std::string& p) {
+  struct stat st;
+  return stat(p.c_str(), &st) == 0;
+}
+Result run(const std::string& args) {
+  std::string out = tmp("stdout.txt"), err = tmp("stderr.txt");
+  std::string cmd = std::string(MICROSIM_BINARY) + " " + args + " >" + out + " 2>" + err;
+  int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+int lines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    surface_ = tmp("s.exr");
+    Result r = run("generate gaussian --resolution 64 --alpha 0.5 --seed 2 -o " + surface_);
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  // Bad input: exit 2, exactly one line on stderr mentioning `needle`, no output written.
+  static void expect_usage_error(const std::string& args, const std::string& output,
+                                 const std::string& needle) {
+    std::remove(output.c_str());
+    Result r = run(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+    EXPECT_EQ(lines(r.err), 1) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(needle), std::string::npos) << args << "\n" << r.err;
+    EXPECT_FALSE(exists(output)) << args;
+  }
+  static std::string surface_;
+};
+std::string Cli::surface_;
+}  // namespace
+
+TEST_F(Cli, MeasureG1WritesTheDocumentedJsonFields) {
+  std::string out = tmp("g1.json");
+  Result r = run("measure g1 " + surface_ + " --theta 0:80:40 --phi 0,90 --rays 20000 --seed 3 -o " + out);
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto j = nlohmann::json::parse(slurp(out));
+  ASSERT_EQ(j["rows"].size(), 6u);
+  for (const auto& row : j["rows"]) {
+    for (const char* k : {"theta_deg", "phi_deg", "g1", "g1_stderr", "visible_area_ratio",
+                          "smith_numeric", "smith_nominal", "bins"})
+      EXPECT_TRUE(row.contains(k)) << k;
+    EXPECT_TRUE(row["smith_nominal"].is_number());
+    ASSERT_FALSE(row["bins"].empty());
+    for (const char* k : {"m", "area_fraction", "g1", "g1_stderr"})
+      EXPECT_TRUE(row["bins"][0].contains(k)) << k;
+  }
+  EXPECT_EQ(j["rows"][1]["theta_deg"], 40.0);
+  EXPECT_EQ(j["rows"][3]["phi_deg"], 90.0);
+  EXPECT_EQ(j["parameters"]["seed"], 3);
+  EXPECT_TRUE(j["surface"].contains("alpha_x"));
+  // The same run as CSV: one line per row plus the header.
+  std::string csv = tmp("g1.csv");
+  ASSERT_EQ(run("measure g1 " + surface_ + " --theta 0:80:40 --phi 0,90 --rays 20000 --seed 3 -o " + csv).code, 0);
+  EXPECT_EQ(lines(slurp(csv)), 7);
+}
+
+TEST_F(Cli, MeasureNdfWritesExrAndJson) {
+  std::string exr = tmp("ndf.exr"), json = tmp("ndf.json");
+  ASSERT_EQ(run("measure ndf " + surface_ + " -o " + exr).code, 0);
+  EXPECT_TRUE(exists(exr));
+  ASSERT_EQ(run("measure ndf " + surface_ + " -o " + json + " --quiet").code, 0);
+  auto j = nlohmann::json::parse(slurp(json));
+  EXPECT_LT(j["checks"]["eq_1b_error"].get<double>(), 1e-9);
+  EXPECT_LT(j["checks"]["eq_1c_error"].get<double>(), 1e-9);
+  EXPECT_EQ(j["rows"].size(), 90u);
+}
+
+TEST_F(Cli, InfoPrintsFittedAlphaAndChecks) {
+  Result r = run("info " + surface_);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("fitted alpha"), std::string::npos);
+  EXPECT_NE(r.out.find("eq. 1b"), std::string::npos);
+  EXPECT_NE(r.out.find("eq. 1c"), std::string::npos);
+}
+
+TEST_F(Cli, PresetConfigGeneratesTheDocumentedSurface) {
+  std::string out = tmp("preset.exr");
+  Result r = run("generate gaussian --config " + std::string(MICROSIM_SOURCE_DIR) +
+              "/surfaces/beckmann-0.5.toml --resolution 64 -o " + out);
+  ASSERT_EQ(r.code, 0) << r.err;
+  Result info = run("info " + out + " --json " + tmp("info.json"));
+  auto j = nlohmann::json::parse(slurp(tmp("info.json")));
+  EXPECT_EQ(j["surface"]["alpha_x"], 0.5);
+  EXPECT_EQ(j["surface"]["resolution"], 64);
+}
+
+TEST_F(Cli, BadInputIsOneLineExitTwoAndNoOutput) {
+  std::string o = tmp("bad.json"), s = tmp("bad.exr");
+  expect_usage_error("generate gaussian --alpha 0 -o " + s, s, "--alpha");
+  expect_usage_error("generate gaussian --alpha -0.5 -o " + s, s, "--alpha");
+  expect_usage_error("generate gaussian --resolution 0 -o " + s, s, "--resolution");
+  expect_usage_error("generate gaussian --resolution 30000 -o " + s, s, "--resolution");
+  expect_usage_error("generate gaussian -o " + tmp("bad.xyz"), tmp("bad.xyz"), "format");
+  expect_usage_error("generate sphere -o " + s, s, "sphere");
+  expect_usage_error("measure g1 " + surface_ + " --theta 90 -o " + o, o, "--theta");
+  expect_usage_error("measure g1 " + surface_ + " --theta 0:95:5 -o " + o, o, "--theta");
+  expect_usage_error("measure g1 " + surface_ + " --rays -5 -o " + o, o, "--rays");
+  expect_usage_error("measure g1 " + surface_ + " --theta abc -o " + o, o, "--theta");
+  expect_usage_error("measure g1 " + tmp("missing.exr") + " -o " + o, o, "does not exist");
+  std::string corrupt = tmp("corrupt.exr");
+  std::ofstream(corrupt) << "not an exr";
+  expect_usage_error("measure g1 " + corrupt + " -o " + o, o, "corrupt.exr");
+  expect_usage_error("measure ndf " + corrupt + " -o " + o, o, "corrupt.exr");
+  expect_usage_error("info " + corrupt, o, "corrupt.exr");
+  expect_usage_error("measure g1 " + surface_ + " -o " + tmp("bad.exr"), tmp("bad.exr"), ".json");
+  expect_usage_error("frobnicate", o, "frobnicate");
+}

@@ -1,2 +1,89 @@
+// Output layer: atomic writes, CSV mirroring JSON rows, self-describing EXR tables.
 #include <gtest/gtest.h>
-TEST(Placeholder, Empty) {}
+
+#include <fstream>
+#include <sstream>
+#include <sys/stat.h>
+
+#include "microsim/common.hpp"
+#include "microsim/io/output.hpp"
+
+using namespace microsim;
+
+namespace {
+std::string tmp(const std::string& name) { return ::testing::TempDir() + "microsim_io_" + name; }
+bool exists(const std::string& p) {
+  struct stat st;
+  return stat(p.c_str(), &st) == 0;
+}
+std::string slurp(const std::string& p) {
+  std::ifstream f(p);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+}  // namespace
+
+TEST(Output, FailedWriteLeavesNothingBehind) {
+  std::string path = tmp("never.json");
+  std::remove(path.c_str());
+  EXPECT_THROW(write_atomically(path,
+                                [](const std::string& t) {
+                                  std::ofstream(t) << "half";
+                                  throw RuntimeFailure("boom");
+                                }),
+               RuntimeFailure);
+  EXPECT_FALSE(exists(path));
+  // ... and no temporary either.
+  std::string dir = ::testing::TempDir();
+  std::string tmpname = dir + ".tmp-" + std::to_string(getpid()) + "-microsim_io_never.json";
+  EXPECT_FALSE(exists(tmpname));
+}
+
+TEST(Output, FailedWriteKeepsThePreviousFile) {
+  std::string path = tmp("keep.json");
+  write_json(path, {{"a", 1}});
+  EXPECT_THROW(write_atomically(path, [](const std::string&) { throw RuntimeFailure("x"); }),
+               RuntimeFailure);
+  EXPECT_EQ(Json::parse(slurp(path))["a"], 1);
+  std::remove(path.c_str());
+}
+
+TEST(Output, CsvMirrorsJsonRowsAndSkipsNestedFields) {
+  Json j = {{"rows",
+                       {{{"theta_deg", 10}, {"g1", 0.5}, {"bins", {1, 2}}},
+                        {{"theta_deg", 20}, {"g1", 0.25}, {"smith_nominal", nullptr}}}}};
+  std::string path = tmp("rows.csv");
+  write_csv_rows(path, j);
+  EXPECT_EQ(slurp(path), "theta_deg,g1,smith_nominal\n10,0.5,\n20,0.25,\n");
+  std::remove(path.c_str());
+}
+
+TEST(Output, ExrTableRoundTripWithAttributes) {
+  ExrTable t;
+  t.width = 3;
+  t.height = 2;
+  t.channel_names = {"D", "D_stderr"};
+  t.channels = {{1, 2, 3, 4, 5, 6}, {0.1f, 0.2f, 0.3f, 0.4f, 0.5f, 0.6f}};
+  t.attributes = {{"alpha", 0.5}, {"parameterization", "theta rows"}, {"nested", {{"k", 1}}}};
+  std::string path = tmp("t.exr");
+  write_exr(path, t);
+  ExrTable r = read_exr(path);
+  EXPECT_EQ(r.width, 3);
+  EXPECT_EQ(r.height, 2);
+  ASSERT_EQ(r.channel_names.size(), 2u);
+  for (std::size_t c = 0; c < 2; ++c) {
+    auto it = std::find(t.channel_names.begin(), t.channel_names.end(), r.channel_names[c]);
+    ASSERT_NE(it, t.channel_names.end());
+    EXPECT_EQ(r.channels[c], t.channels[it - t.channel_names.begin()]);
+  }
+  EXPECT_DOUBLE_EQ(r.attributes["alpha"].get<double>(), 0.5);
+  EXPECT_EQ(r.attributes["parameterization"], "theta rows");
+  EXPECT_EQ(Json::parse(r.attributes["nested"].get<std::string>())["k"], 1);
+  std::remove(path.c_str());
+}
+
+TEST(Output, ExtensionIsCaseInsensitiveAndIgnoresFolders) {
+  EXPECT_EQ(extension_of("a/b.c/file.JSON"), "json");
+  EXPECT_EQ(extension_of("a/b.c/file"), "");
+}

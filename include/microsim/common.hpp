@@ -7,10 +7,14 @@
 #include <stdexcept>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 namespace microsim {
 
 using Vec3 = Eigen::Vector3d;
 using Vec2 = Eigen::Vector2d;
+// JSON records keep their fields in the order they are written (readable files and CSV columns).
+using Json = nlohmann::ordered_json;
 
 constexpr double kPi = 3.14159265358979323846;
 

@@ -59,7 +59,7 @@ void require_extension(const std::string& path, std::initializer_list<const char
   throw UsageError("-o " + path + ": unsupported output format (use " + list + ")");
 }
 
-void write_record(const std::string& path, const nlohmann::json& j) {
+void write_record(const std::string& path, const Json& j) {
   if (extension_of(path) == "csv") write_csv_rows(path, j);
   else write_json(path, j);
 }
@@ -70,7 +70,7 @@ std::string fmt(double x, int precision = 4) {
   return os.str();
 }
 
-nlohmann::json run_header(const std::string& command, const GlobalOptions& g) {
+Json run_header(const std::string& command, const GlobalOptions& g) {
   return {{"command", command},
           {"microsim_version", "0.1.0"},
           {"threads", g.threads > 0 ? g.threads : tbb::this_task_arena::max_concurrency()}};
@@ -139,7 +139,7 @@ int run_info(const std::string& path, const std::string& json_out, const GlobalO
   if (!json_out.empty()) require_extension(json_out, {"json"});
   Microsurface s = load_surface(path);
   FacetSums f = facet_sums(s);
-  nlohmann::json j = run_header("info", g);
+  Json j = run_header("info", g);
   j["file"] = path;
   j["surface"] = s.description;
   j["kind"] = s.kind() == Microsurface::Kind::Heightfield ? "heightfield" : "mesh";
@@ -184,21 +184,21 @@ int run_measure_ndf(const MeasureOptions& o, const GlobalOptions& g) {
   if (extension_of(o.output) == "exr") {
     write_exr(o.output, ndf_to_exr(r, s));
   } else {
-    nlohmann::json j = ndf_to_json(r, s);
+    Json j = ndf_to_json(r, s);
     j.update(run_header("measure ndf", g));
     j["file"] = o.surface;
     j["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     write_record(o.output, j);
   }
   if (!g.quiet) {
-    nlohmann::json c = surface_checks_json(r.sums, s);
+    Json c = surface_checks_json(r.sums, s);
     std::cout << "D of " << o.surface << " (phi-averaged rings; stderr from "
               << r.blocks * r.blocks << " spatial blocks)\n"
               << "000 eq. 1b |error| " << c["eq_1b_error"].get<double>() << ", eq. 1c |error| "
               << c["eq_1c_error"].get<double>() << "\n"
               << std::setw(12) << "theta_deg" << std::setw(14) << "D" << std::setw(12) << "stderr"
               << std::setw(14) << "nominal" << std::setw(9) << "z" << "\n";
-    nlohmann::json rows = ndf_to_json(r, s)["rows"];
+    Json rows = ndf_to_json(r, s)["rows"];
     for (const auto& row : rows) {
       if (row["d"].get<double>() == 0 && (row["d_nominal"].is_null() || row["d_nominal"].get<double>() < 1e-6))
         continue;
@@ -231,7 +231,7 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   G1Options go;
   go.rays = static_cast<std::uint64_t>(o.rays);
   go.seed = o.seed;
-  nlohmann::json j = run_header("measure g1", g);
+  Json j = run_header("measure g1", g);
   j["file"] = o.surface;
   j["surface"] = s.description;
   j["parameters"] = {{"theta", o.theta}, {"phi", o.phi}, {"rays", o.rays}, {"seed", o.seed},
@@ -250,13 +250,14 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   Progress progress("measure g1", g.quiet);
   std::size_t total = thetas.size() * phis.size(), done = 0;
   go.progress = [&](double f) { progress.update((done + f) / total); };
-  nlohmann::json rows = nlohmann::json::array();
+  const FacetTable table = build_facet_table(s, g1_normal_binning(go));
+  Json rows = Json::array();
   TraceCounters counters;
   for (double p : phis)
     for (double t : thetas) {
-      G1Result r = measure_g1(tracer, direction_from_angles(rad(t), rad(p)), go);
+      G1Result r = measure_g1(tracer, direction_from_angles(rad(t), rad(p)), go, &table);
       counters += r.counters;
-      nlohmann::json row = g1_row_json(r, s);
+      Json row = g1_row_json(r, s);
       row["theta_deg"] = t;  // exactly as requested (no round trip through radians)
       row["phi_deg"] = p;
       rows.push_back(row);

@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
                "Builds microgeometry, ray-traces it with Embree, measures D, G1 (and more) with "
                "standard errors beside the analytic Smith model."};
   app.require_subcommand(1);
+  app.fallthrough();  // --threads and --quiet are accepted after the subcommand too
   GlobalOptions g;
   app.add_option("--threads", g.threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(0, 4096));
@@ -62,6 +63,20 @@ int main(int argc, char** argv) {
   g1->add_option("--rays", mo.rays, "Rays per estimator and direction")->capture_default_str();
   g1->add_option("--seed", mo.seed, "Random seed")->capture_default_str();
 
+  // An unknown surface kind names itself (CLI11 would only say that a subcommand is missing).
+  if (argc >= 3 && std::string(argv[1]) == "generate" && argv[2][0] != '-') {
+    std::string kinds;
+    bool known = false;
+    for (const auto* sub : gen->get_subcommands({})) {
+      kinds += (kinds.empty() ? "" : ", ") + sub->get_name();
+      known = known || sub->get_name() == argv[2];
+    }
+    if (!known) {
+      std::cerr << "microsim: error: unknown surface kind '" << argv[2] << "' (known: " << kinds
+                << ")\n";
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

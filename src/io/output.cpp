@@ -49,7 +49,7 @@ void write_atomically(const std::string& path,
   }
 }
 
-void write_json(const std::string& path, const nlohmann::json& j) {
+void write_json(const std::string& path, const Json& j) {
   write_atomically(path, [&](const std::string& tmp) {
     std::ofstream f(tmp);
     if (!f) throw RuntimeFailure("cannot open " + path + " for writing");
@@ -58,7 +58,7 @@ void write_json(const std::string& path, const nlohmann::json& j) {
   });
 }
 
-void write_csv_rows(const std::string& path, const nlohmann::json& j) {
+void write_csv_rows(const std::string& path, const Json& j) {
   const auto& rows = j.at("rows");
   std::vector<std::string> cols;
   for (const auto& row : rows)

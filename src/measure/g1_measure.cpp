@@ -125,7 +125,32 @@ Estimate G1Result::bin_g1_raycast(int b) const {
   return {p.mean * k, p.stderr_ * k, bins[b].raycast_hits};
 }
 
-G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o) {
+DirectionBinning g1_normal_binning(const G1Options& o) {
+  return DirectionBinning(o.normal_theta_bins, o.normal_phi_bins, kPi);
+}
+
+FacetTable build_facet_table(const Microsurface& s, const DirectionBinning& binning) {
+  FacetTable t;
+  const std::size_t nf = s.num_facets();
+  t.normal.resize(nf);
+  t.area.resize(nf);
+  t.bin.resize(nf);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf, 1 << 14),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+                        Vec3 c = s.facet(k).cross();
+                        double a = 0.5 * c.norm();
+                        Vec3 m = a > 0 ? Vec3(c / (2 * a)) : Vec3::UnitZ();
+                        t.normal[k] = m.cast<float>();
+                        t.area[k] = static_cast<float>(a);
+                        t.bin[k] = binning.bin_of(m);
+                      }
+                    });
+  return t;
+}
+
+G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
+                    const FacetTable* table) {
   const Microsurface& s = tracer.surface();
   if (!(v_in.z() > 0)) throw UsageError("--theta must be in [0, 90) degrees");
   if (o.rays == 0) throw UsageError("--rays must be positive");
@@ -135,41 +160,66 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o) 
   r.theta = theta_of(r.v);
   r.phi = phi_of(r.v);
   r.macro_area = s.macro().area;
-  r.binning = DirectionBinning(o.normal_theta_bins, o.normal_phi_bins, kPi);
+  r.binning = g1_normal_binning(o);
   const int nbins = r.binning.size();
   r.bins.assign(nbins, G1NormalBin{});
   const Vec3 v = r.v;
 
   // Exact facet sums per normal bin, and the CDF of projected area for estimator (b).
-  const std::size_t nf = s.num_facets();
-  std::vector<double> cdf(nf);
-  std::vector<int> facet_bin(nf);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf, 1 << 14),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t k = range.begin(); k != range.end(); ++k) {
-                        Triangle t = s.facet(k);
-                        Vec3 c = t.cross();
-                        double a = 0.5 * c.norm();
-                        cdf[k] = a > 0 ? std::max(0.0, 0.5 * c.dot(v)) : 0.0;
-                        facet_bin[k] = a > 0 ? r.binning.bin_of(c / (2 * a)) : 0;
-                      }
-                    });
-  for (std::size_t k = 0; k < nf; ++k) {  // sequential: deterministic sums
-    Triangle t = s.facet(k);
-    double a = t.area();
-    if (a == 0) continue;
-    G1NormalBin& b = r.bins[facet_bin[k]];
-    b.area += a;
-    b.front_projected += cdf[k];
-    b.mean_normal += cdf[k] * t.normal();
-    r.total_area += a;
+  auto t_facets = std::chrono::steady_clock::now();
+  FacetTable own;
+  if (!table) {
+    own = build_facet_table(s, r.binning);
+    table = &own;
   }
-  for (std::size_t k = 1; k < nf; ++k) cdf[k] += cdf[k - 1];
+  const FacetTable& ft = *table;
+  const std::size_t nf = s.num_facets();
+  if (ft.area.size() != nf) throw RuntimeFailure("facet table does not match the surface");
+  const std::vector<int>& facet_bin = ft.bin;
+  std::vector<double> cdf(nf);
+  // Per bin: area, front projected area, projected-area-weighted normal (3); then back area.
+  using Sums = std::vector<double>;
+  const std::size_t width = 5 * static_cast<std::size_t>(nbins) + 1;
+  const Eigen::Vector3f vf = v.cast<float>();
+  Sums sums = tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<std::size_t>(0, nf, std::max<std::size_t>(1 << 15, nf / 64)), Sums{},
+      [&](const tbb::blocked_range<std::size_t>& range, Sums acc) {
+        if (acc.empty()) acc.assign(width, 0.0);
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+          const double a = ft.area[k];
+          const double proj = a * static_cast<double>(ft.normal[k].dot(vf));  // A_f (v.m_f)
+          cdf[k] = std::max(0.0, proj);
+          double* bin = acc.data() + 5 * static_cast<std::size_t>(facet_bin[k]);
+          bin[0] += a;
+          bin[1] += cdf[k];
+          bin[2] += cdf[k] * ft.normal[k].x();
+          bin[3] += cdf[k] * ft.normal[k].y();
+          bin[4] += cdf[k] * ft.normal[k].z();
+          acc[width - 1] += std::max(0.0, -proj);
+        }
+        return acc;
+      },
+      [](Sums a, const Sums& b) {
+        if (a.empty()) return b;
+        for (std::size_t k = 0; k < b.size(); ++k) a[k] += b[k];
+        return a;
+      });
+  if (sums.empty()) sums.assign(width, 0.0);
+  for (int b = 0; b < nbins; ++b) {
+    const double* bin = sums.data() + 5 * static_cast<std::size_t>(b);
+    r.bins[b].area = bin[0];
+    r.bins[b].front_projected = bin[1];
+    r.bins[b].mean_normal = Vec3(bin[2], bin[3], bin[4]);
+    if (r.bins[b].mean_normal.norm() > 0) r.bins[b].mean_normal.normalize();
+    r.total_area += bin[0];
+  }
+  // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   (DESIGN.md, 001 App. A)
+  r.lambda_numeric = sums[width - 1] / (v.dot(s.macro().normal) * s.macro().area);
+  for (std::size_t k = 1; k < nf; ++k) cdf[k] += cdf[k - 1];  // sequential: deterministic
   r.front_projected = nf ? cdf[nf - 1] : 0.0;
-  r.lambda_numeric = lambda_from_facets(s, v);
-  for (auto& b : r.bins)
-    if (b.mean_normal.norm() > 0) b.mean_normal.normalize();
   if (!(r.front_projected > 0)) throw RuntimeFailure("no facet faces the direction");
+  r.facet_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_facets).count();
 
   const RayWindow w = make_window(tracer, v);
   r.window_area_perp = w.area_perp;
@@ -229,8 +279,8 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o) 
   return r;
 }
 
-nlohmann::json g1_row_json(const G1Result& r, const Microsurface& s) {
-  nlohmann::json row;
+Json g1_row_json(const G1Result& r, const Microsurface& s) {
+  Json row;
   row["theta_deg"] = deg(r.theta);
   row["phi_deg"] = deg(r.phi);
   Estimate g = r.g1_area_sampling(), gr = r.g1_raycast(), var = r.visible_area_ratio();
@@ -258,12 +308,12 @@ nlohmann::json g1_row_json(const G1Result& r, const Microsurface& s) {
   row["backface_hits"] = r.counters.backface_hits;
   row["border_crossings"] = r.counters.border_crossings;
   row["seconds"] = r.seconds;
-  nlohmann::json bins = nlohmann::json::array();
+  Json bins = Json::array();
   double max_abs_z = 0;
   for (int b = 0; b < r.binning.size(); ++b) {
     const G1NormalBin& nb = r.bins[b];
     if (nb.area <= 0) continue;
-    nlohmann::json jb;
+    Json jb;
     jb["m"] = {nb.mean_normal.x(), nb.mean_normal.y(), nb.mean_normal.z()};
     int it = b / r.binning.n_phi(), ip = b % r.binning.n_phi();
     jb["theta_m_range_deg"] = {deg(r.binning.theta_lo(it)), deg(r.binning.theta_hi(it))};

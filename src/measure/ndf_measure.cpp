@@ -82,10 +82,10 @@ NdfResult measure_ndf(const Microsurface& s, const NdfOptions& o) {
   return r;
 }
 
-nlohmann::json surface_checks_json(const FacetSums& f, const Microsurface& s) {
+Json surface_checks_json(const FacetSums& f, const Microsurface& s) {
   const Macrosurface& m = s.macro();
   Vec3 eq1b = f.sum_area_normal / m.area;
-  nlohmann::json j;
+  Json j;
   j["eq_1b_sum_area_normal_over_A"] = {eq1b.x(), eq1b.y(), eq1b.z()};
   j["eq_1b_error"] = (eq1b - m.normal).norm();
   j["eq_1c_sum_area_cos_over_A"] = f.sum_area_cos / m.area;
@@ -107,17 +107,17 @@ nlohmann::json surface_checks_json(const FacetSums& f, const Microsurface& s) {
   return j;
 }
 
-nlohmann::json ndf_to_json(const NdfResult& r, const Microsurface& s) {
-  nlohmann::json j;
+Json ndf_to_json(const NdfResult& r, const Microsurface& s) {
+  Json j;
   j["command"] = "measure ndf";
   j["surface"] = s.description;
   j["checks"] = surface_checks_json(r.sums, s);
   j["binning"] = {{"theta_bins", r.bins.n_theta()}, {"phi_bins", r.bins.n_phi()},
                   {"theta_range_deg", {0, 180}}, {"stderr_blocks", r.blocks * r.blocks},
                   {"rows", "one per theta ring, D averaged over phi"}};
-  nlohmann::json rows = nlohmann::json::array();
+  Json rows = Json::array();
   for (int it = 0; it < r.bins.n_theta(); ++it) {
-    nlohmann::json row;
+    Json row;
     row["theta_lo_deg"] = deg(r.bins.theta_lo(it));
     row["theta_hi_deg"] = deg(r.bins.theta_hi(it));
     row["d"] = r.ring_d[it];

@@ -2,6 +2,7 @@
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Core/System/omstream.hh>
 
 #include <fstream>
 #include <sys/stat.h>
@@ -13,12 +14,19 @@ namespace microsim {
 namespace {
 using OMesh = OpenMesh::TriMesh_ArrayKernelT<>;
 
+// OpenMesh logs to stdout/stderr on its own; microsim reports errors itself, in one line.
+void silence_openmesh() {
+  omlog().disable();
+  omout().disable();
+  omerr().disable();
+}
+
 bool file_exists(const std::string& path) {
   struct stat st;
   return stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
 }
 
-nlohmann::json macro_to_json(const Macrosurface& m) {
+Json macro_to_json(const Macrosurface& m) {
   return {{"normal", {m.normal.x(), m.normal.y(), m.normal.z()}},
           {"area", m.area},
           {"periodic", m.periodic},
@@ -26,7 +34,7 @@ nlohmann::json macro_to_json(const Macrosurface& m) {
           {"size_y", m.size_y}};
 }
 
-Macrosurface macro_from_json(const nlohmann::json& j) {
+Macrosurface macro_from_json(const Json& j) {
   Macrosurface m;
   auto n = j.at("normal");
   m.normal = Vec3(n.at(0).get<double>(), n.at(1).get<double>(), n.at(2).get<double>());
@@ -71,21 +79,22 @@ Microsurface load_heightfield_exr(const std::string& path) {
   auto it = std::find(t.channel_names.begin(), t.channel_names.end(), "Z");
   if (it == t.channel_names.end()) throw UsageError(path + " has no Z channel");
   try {
-    Macrosurface m = macro_from_json(nlohmann::json::parse(
+    Macrosurface m = macro_from_json(Json::parse(
         t.attributes["microsim_macrosurface"].get<std::string>()));
     Microsurface s = Microsurface::heightfield(t.width, t.height, m.size_x, m.size_y,
                                                t.channels[it - t.channel_names.begin()]);
-    s.description = nlohmann::json::parse(t.attributes["microsim_description"].get<std::string>());
+    s.description = Json::parse(t.attributes["microsim_description"].get<std::string>());
     restore_nominal(s);
     for (float h : s.heights())
       if (!std::isfinite(h)) throw UsageError(path + " contains non-finite heights");
     return s;
-  } catch (const nlohmann::json::exception& e) {
+  } catch (const Json::exception& e) {
     throw UsageError(path + " has a corrupt microsim header (" + std::string(e.what()) + ")");
   }
 }
 
 void save_mesh(const Microsurface& s, const std::string& path) {
+  silence_openmesh();
   Microsurface m = s.kind() == Microsurface::Kind::Mesh ? s : heightfield_to_mesh(s);
   OMesh om;
   std::vector<OMesh::VertexHandle> vh;
@@ -100,13 +109,14 @@ void save_mesh(const Microsurface& s, const std::string& path) {
     if (extension_of(path) == "ply") opt += OpenMesh::IO::Options::Binary;
     if (!OpenMesh::IO::write_mesh(om, tmp, opt)) throw RuntimeFailure("cannot write " + path);
   });
-  nlohmann::json side = {{"microsim_surface", "mesh"},
+  Json side = {{"microsim_surface", "mesh"},
                          {"macrosurface", macro_to_json(m.macro())},
                          {"description", s.description}};
   write_json(path + ".json", side);
 }
 
 Microsurface load_mesh(const std::string& path) {
+  silence_openmesh();
   OMesh om;
   OpenMesh::IO::Options opt;
   if (!OpenMesh::IO::read_mesh(om, path, opt) || om.n_faces() == 0)
@@ -128,15 +138,15 @@ Microsurface load_mesh(const std::string& path) {
     tris.push_back(t);
   }
   Macrosurface macro;
-  nlohmann::json description = {{"kind", "mesh"}, {"file", path}};
+  Json description = {{"kind", "mesh"}, {"file", path}};
   std::string side = path + ".json";
   if (file_exists(side)) {
     try {
       std::ifstream f(side);
-      auto j = nlohmann::json::parse(f);
+      auto j = Json::parse(f);
       macro = macro_from_json(j.at("macrosurface"));
       if (j.contains("description")) description = j["description"];
-    } catch (const nlohmann::json::exception& e) {
+    } catch (const Json::exception& e) {
       throw UsageError(side + " is not a valid microsim sidecar (" + std::string(e.what()) + ")");
     }
   } else {

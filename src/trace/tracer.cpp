@@ -11,6 +11,7 @@ namespace {
 struct PlaneContext {
   RTCIntersectContext context;
   const SourcePlane* source;
+  double scale;
 };
 
 // For rays that leave a facet: rejects back-face hits and hits on the plane the ray leaves
@@ -18,8 +19,7 @@ struct PlaneContext {
 // distance tolerance is relative to the scene scale.
 void reject_source_plane(const RTCFilterFunctionNArguments* args) {
   const auto* ctx = reinterpret_cast<const PlaneContext*>(args->context);
-  if (!ctx->source) return;
-  const double scale = *static_cast<const double*>(args->geometryUserPtr);
+  const double scale = ctx->scale;
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
     Vec3 ng(RTCHitN_Ng_x(args->hit, args->N, i), RTCHitN_Ng_y(args->hit, args->N, i),
@@ -59,7 +59,8 @@ Tracer::Tracer(const Microsurface& surface) : surface_(surface) {
   if (!device_) throw RuntimeFailure("cannot create an Embree device");
   scene_ = rtcNewScene(device_);
   // ROBUST: without it a few rays per million slip through shared edges (DESIGN.md).
-  rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
+  // Context filter: only rays that leave a facet pay for the filter; primary rays run bare.
+  rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
   rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
 
   const Macrosurface& macro = surface.macro();
@@ -128,9 +129,6 @@ Tracer::Tracer(const Microsurface& surface) : surface_(surface) {
   }
   static_assert(sizeof(double) == 8, "");
   scale_ = std::max({box.sizes().maxCoeff(), macro.size_x, macro.size_y});
-  rtcSetGeometryUserData(geom, &scale_);
-  rtcSetGeometryIntersectFilterFunction(geom, reject_source_plane);
-  rtcSetGeometryOccludedFilterFunction(geom, reject_source_plane);
   rtcCommitGeometry(geom);
   rtcAttachGeometry(scene_, geom);
   rtcReleaseGeometry(geom);
@@ -188,6 +186,8 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
   PlaneContext ctx;
   rtcInitIntersectContext(&ctx.context);
   ctx.source = source;
+  ctx.scale = scale_;
+  if (source) ctx.context.filter = reject_source_plane;
 
   Vec3 o = org;
   const double hx = 0.5 * macro.size_x, hy = 0.5 * macro.size_y;
@@ -244,6 +244,12 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
         Vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
         out->hit = true;
         out->point = o + static_cast<double>(rh.ray.tfar) * dir;
+        if (macro.periodic) {  // canonical copy: inside the tile, like the facet reported
+          if (out->point.x() >= hx) out->point.x() -= macro.size_x;
+          else if (out->point.x() < -hx) out->point.x() += macro.size_x;
+          if (out->point.y() >= hy) out->point.y() -= macro.size_y;
+          else if (out->point.y() < -hy) out->point.y() += macro.size_y;
+        }
         out->facet = facet_of_hit(rh.hit.primID, rh.hit.u, rh.hit.v, ng);
         out->normal = surface_.facet(out->facet).normal();
         out->backface = out->normal.dot(dir) > 0;

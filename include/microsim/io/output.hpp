@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "microsim/common.hpp"
+
 namespace microsim {
 
 // Extension of a path, lower case, without the dot ("json", "csv", "exr"...).
@@ -15,9 +17,9 @@ std::string extension_of(const std::string& path);
 // Calls write(tmp_path) and renames tmp_path to path; removes tmp_path if write throws.
 void write_atomically(const std::string& path, const std::function<void(const std::string&)>& write);
 
-void write_json(const std::string& path, const nlohmann::json& j);
+void write_json(const std::string& path, const Json& j);
 // One CSV line per element of j["rows"]; nested objects and arrays are skipped (CSV is flat).
-void write_csv_rows(const std::string& path, const nlohmann::json& j);
+void write_csv_rows(const std::string& path, const Json& j);
 
 // A float image table: named channels of width x height, plus header attributes (numbers become
 // double attributes, strings string attributes, anything else its JSON text).
@@ -25,7 +27,7 @@ struct ExrTable {
   int width = 0, height = 0;
   std::vector<std::string> channel_names;
   std::vector<std::vector<float>> channels;  // each width*height, row-major
-  nlohmann::json attributes = nlohmann::json::object();
+  Json attributes = Json::object();
 };
 void write_exr(const std::string& path, const ExrTable& t);
 ExrTable read_exr(const std::string& path);

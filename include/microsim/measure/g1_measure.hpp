@@ -47,7 +47,8 @@ struct G1Result {
   TraceCounters counters;
   std::vector<G1NormalBin> bins;
   DirectionBinning binning{1, 1, kPi};
-  double seconds = 0;
+  double seconds = 0;        // wall time of the whole measurement
+  double facet_seconds = 0;  // of which the exact facet sums
 
   // Derived quantities with standard errors.
   Estimate g1_area_sampling() const;  // (b), averaged over front-facing projected area
@@ -57,9 +58,21 @@ struct G1Result {
   Estimate bin_g1_raycast(int b) const;
 };
 
-// v must have v.n > 0. Throws UsageError otherwise.
-G1Result measure_g1(const Tracer& tracer, const Vec3& v, const G1Options& options);
+// Direction-independent facet data (unit normal, area, normal bin), computed once and shared
+// by the directions of a run.
+struct FacetTable {
+  std::vector<Eigen::Vector3f> normal;
+  std::vector<float> area;
+  std::vector<int> bin;
+};
+FacetTable build_facet_table(const Microsurface& s, const DirectionBinning& binning);
+DirectionBinning g1_normal_binning(const G1Options& options);
 
-nlohmann::json g1_row_json(const G1Result& r, const Microsurface& s);
+// v must have v.n > 0. Throws UsageError otherwise. `table` (from build_facet_table with
+// g1_normal_binning(options)) saves recomputing the facets for every direction.
+G1Result measure_g1(const Tracer& tracer, const Vec3& v, const G1Options& options,
+                    const FacetTable* table = nullptr);
+
+Json g1_row_json(const G1Result& r, const Microsurface& s);
 
 }  // namespace microsim

@@ -30,10 +30,10 @@ struct NdfResult {
 // the error bar that matters against a nominal model.
 NdfResult measure_ndf(const Microsurface& s, const NdfOptions& options);
 
-nlohmann::json ndf_to_json(const NdfResult& r, const Microsurface& s);
+Json ndf_to_json(const NdfResult& r, const Microsurface& s);
 ExrTable ndf_to_exr(const NdfResult& r, const Microsurface& s);
 
 // Summary of the 000 eq. 1b/1c identities and of the slope statistics ("fitted alpha").
-nlohmann::json surface_checks_json(const FacetSums& f, const Microsurface& s);
+Json surface_checks_json(const FacetSums& f, const Microsurface& s);
 
 }  // namespace microsim

@@ -102,15 +102,19 @@ double gl_panel(const F& f, double a, double b, double* abs_sum) {
 
 // Adaptive bisection: compare the rule on [a, b] (`whole`) with the rule on both halves and
 // accept the halves when they agree to tol_abs (halved at each level, so the total error stays
-// below the initial tol_abs for smooth integrands). Depth-limited; non-finite values propagate.
+// below the initial tol_abs for smooth integrands) or to the rounding level of the panel.
+// Depth-limited; non-finite values propagate.
 template <class F>
 double adaptive_gl(const F& f, double a, double b, double whole, double tol_abs, int depth) {
   const double m = 0.5 * (a + b);
-  const double left = gl_panel(f, a, m, nullptr);
-  const double right = gl_panel(f, m, b, nullptr);
+  double al = 0.0, ar = 0.0;
+  const double left = gl_panel(f, a, m, &al);
+  const double right = gl_panel(f, m, b, &ar);
   const double halves = left + right;
   if (!std::isfinite(halves)) return halves;
-  if (depth >= 40 || std::abs(halves - whole) <= tol_abs) return halves;
+  // accept: tolerance met, or difference at the rounding level of this panel, or depth limit
+  const double diff = std::abs(halves - whole);
+  if (depth >= 40 || diff <= tol_abs || diff <= 1e-14 * (al + ar)) return halves;
   return adaptive_gl(f, a, m, left, 0.5 * tol_abs, depth + 1) +
          adaptive_gl(f, m, b, right, 0.5 * tol_abs, depth + 1);
 }

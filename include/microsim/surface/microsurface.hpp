@@ -45,7 +45,7 @@ class Microsurface {
   const Macrosurface& macro() const { return macro_; }
 
   // Generator name and parameters, carried into every output so a file explains itself.
-  nlohmann::json description = nlohmann::json::object();
+  Json description = Json::object();
   // The generator's nominal NDF, when it has one (e.g. gaussian: Beckmann with the requested alpha).
   std::optional<models::Ndf> nominal;
 

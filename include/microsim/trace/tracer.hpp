@@ -23,7 +23,7 @@ struct SourcePlane {
 
 struct TraceHit {
   bool hit = false;
-  Vec3 point;           // may lie one cell outside the tile (periodic copy)
+  Vec3 point;           // periodic surfaces: the copy inside the tile
   Vec3 normal;          // unit facet normal (exact, from the surface's own facet)
   std::size_t facet = 0;
   bool backface = false;  // the ray met the facet from behind (rounding at silhouettes)
