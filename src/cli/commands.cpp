@@ -1,5 +1,6 @@
 #include "commands.hpp"
 
+#include <sys/stat.h>
 #include <tbb/task_arena.h>
 #include <unistd.h>
 
@@ -297,6 +298,22 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
               << counters.backface_hits << ", " << fmt(counters.rays / wall / 1e6, 2)
               << " Mrays/s; wrote " << o.output << "\n";
   }
+  return 0;
+}
+
+int run_demo(GenerateOptions gen, MeasureOptions meas, const std::string& dir,
+             const GlobalOptions& g) {
+  if (mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST)
+    throw UsageError("--out-dir " + dir + ": cannot create the folder");
+  gen.output = dir + "/surface.exr";
+  run_generate_gaussian(gen, g);
+  meas.surface = gen.output;
+  meas.output = dir + "/ndf.json";
+  if (!g.quiet) std::cout << "\n";
+  run_measure_ndf(meas, g);
+  meas.output = dir + "/g1.json";
+  if (!g.quiet) std::cout << "\n";
+  run_measure_g1(meas, g);
   return 0;
 }
 

@@ -36,5 +36,8 @@ int run_generate_gaussian(GenerateOptions o, const GlobalOptions& g);
 int run_info(const std::string& surface, const std::string& json_out, const GlobalOptions& g);
 int run_measure_ndf(const MeasureOptions& o, const GlobalOptions& g);
 int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g);
+// generate + measure ndf + measure g1 into `dir`, printing both tables.
+int run_demo(GenerateOptions gen, MeasureOptions meas, const std::string& dir,
+             const GlobalOptions& g);
 
 }  // namespace microsim::cli

@@ -40,6 +40,24 @@ int main(int argc, char** argv) {
   gauss->add_option("--alpha-y", go.gaussian.alpha_y, "Roughness along y");
   gauss->add_option("--seed", go.gaussian.seed, "Random seed")->capture_default_str();
 
+  // demo: generate the default preset, measure D and G1, print them beside Smith.
+  auto* demo = app.add_subcommand(
+      "demo", "Generate a surface (default preset), measure D and G1, print measured vs Smith");
+  GenerateOptions demo_gen;
+  MeasureOptions demo_meas;
+  std::string demo_dir = "microsim-demo";
+  demo->set_config("--config", "", "Surface preset (TOML), e.g. surfaces/beckmann-0.5.toml");
+  demo->add_option("--resolution", demo_gen.gaussian.resolution, "Grid cells per side")->capture_default_str();
+  demo->add_option("--size", demo_gen.gaussian.size, "Tile side length");
+  demo->add_option("--correlation-length", demo_gen.gaussian.correlation_length, "Correlation length");
+  demo->add_option("--alpha", demo_gen.alpha, "Isotropic Beckmann roughness");
+  demo->add_option("--alpha-x", demo_gen.gaussian.alpha_x, "Roughness along x");
+  demo->add_option("--alpha-y", demo_gen.gaussian.alpha_y, "Roughness along y");
+  demo->add_option("--seed", demo_gen.gaussian.seed, "Random seed")->capture_default_str();
+  demo->add_option("--theta", demo_meas.theta, "View zenith angles (deg)")->capture_default_str();
+  demo->add_option("--rays", demo_meas.rays, "Rays per estimator and direction")->capture_default_str();
+  demo->add_option("--out-dir", demo_dir, "Folder for the surface and the tables")->capture_default_str();
+
   // info
   auto* info = app.add_subcommand("info", "Describe a surface: parameters, slope statistics, fitted alpha, 000 eq. 1b/1c");
   std::string info_file, info_json;
@@ -63,18 +81,23 @@ int main(int argc, char** argv) {
   g1->add_option("--rays", mo.rays, "Rays per estimator and direction")->capture_default_str();
   g1->add_option("--seed", mo.seed, "Random seed")->capture_default_str();
 
-  // An unknown surface kind names itself (CLI11 would only say that a subcommand is missing).
-  if (argc >= 3 && std::string(argv[1]) == "generate" && argv[2][0] != '-') {
-    std::string kinds;
-    bool known = false;
-    for (const auto* sub : gen->get_subcommands({})) {
-      kinds += (kinds.empty() ? "" : ", ") + sub->get_name();
-      known = known || sub->get_name() == argv[2];
-    }
-    if (!known) {
-      std::cerr << "microsim: error: unknown surface kind '" << argv[2] << "' (known: " << kinds
-                << ")\n";
-      return 2;
+  // An unknown command or surface kind names itself (CLI11 would only say that a subcommand
+  // is missing): walk the leading words down the command tree.
+  {
+    const CLI::App* level = &app;
+    for (int k = 1; k < argc && argv[k][0] != '-' && !level->get_subcommands({}).empty(); ++k) {
+      std::string names;
+      const CLI::App* next = nullptr;
+      for (const auto* sub : level->get_subcommands({})) {
+        names += (names.empty() ? "" : ", ") + sub->get_name();
+        if (sub->get_name() == argv[k]) next = sub;
+      }
+      if (!next) {
+        std::cerr << "microsim: error: unknown " << (level == gen ? "surface kind" : "command")
+                  << " '" << argv[k] << "' (known: " << names << ")\n";
+        return 2;
+      }
+      level = next;
     }
   }
   try {
@@ -99,6 +122,11 @@ int main(int argc, char** argv) {
       go.alpha_x_given = gauss->count("--alpha-x") > 0;
       go.alpha_y_given = gauss->count("--alpha-y") > 0;
       return run_generate_gaussian(go, g);
+    }
+    if (*demo) {
+      demo_gen.alpha_x_given = demo->count("--alpha-x") > 0;
+      demo_gen.alpha_y_given = demo->count("--alpha-y") > 0;
+      return run_demo(demo_gen, demo_meas, demo_dir, g);
     }
     if (*info) return run_info(info_file, info_json, g);
     if (*ndf) return run_measure_ndf(mo, g);
