@@ -86,6 +86,34 @@ TEST_F(Cli, MeasureG1WritesTheDocumentedJsonFields) {
   EXPECT_EQ(lines(slurp(csv)), 7);
 }
 
+TEST_F(Cli, MeasureG1OverSeveralSurfacesReportsTheBetweenSurfaceError) {
+  std::string second = tmp("s2.exr"), out = tmp("ens.json");
+  ASSERT_EQ(run("generate gaussian --resolution 64 --alpha 0.5 --seed 3 -o " + second).code, 0);
+  Result r = run("measure g1 " + surface_ + " " + second + " --theta 70 --rays 20000 -o " + out);
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto j = nlohmann::json::parse(slurp(out));
+  ASSERT_EQ(j["per_surface"].size(), 2u);
+  const auto& row = j["rows"][0];
+  double a = j["per_surface"][0]["rows"][0]["g1"], b = j["per_surface"][1]["rows"][0]["g1"];
+  EXPECT_NEAR(row["g1"].get<double>(), 0.5 * (a + b), 1e-12);
+  // Between-surface standard error of two values: |a - b| / 2.
+  EXPECT_NEAR(row["g1_stderr"].get<double>(), std::abs(a - b) / 2, 1e-12);
+  EXPECT_TRUE(row.contains("g1_stderr_rays"));
+  EXPECT_TRUE(row["z_nominal"].is_number());
+  EXPECT_FALSE(row["bins"].empty());
+}
+
+TEST_F(Cli, ConvertExportsAMeshThatMeasuresLikeTheHeightfield) {
+  std::string ply = tmp("s.ply"), a = tmp("a.json"), b = tmp("b.json");
+  ASSERT_EQ(run("convert " + surface_ + " -o " + ply).code, 0);
+  ASSERT_EQ(run("measure g1 " + surface_ + " --theta 75 --rays 20000 -o " + a).code, 0);
+  ASSERT_EQ(run("measure g1 " + ply + " --theta 75 --rays 20000 -o " + b).code, 0);
+  auto ja = nlohmann::json::parse(slurp(a)), jb = nlohmann::json::parse(slurp(b));
+  EXPECT_NEAR(ja["rows"][0]["smith_numeric"].get<double>(), jb["rows"][0]["smith_numeric"].get<double>(), 1e-5);
+  double se = std::hypot(ja["rows"][0]["g1_stderr"].get<double>(), jb["rows"][0]["g1_stderr"].get<double>());
+  EXPECT_LT(std::abs(ja["rows"][0]["g1"].get<double>() - jb["rows"][0]["g1"].get<double>()), 4 * se);
+}
+
 TEST_F(Cli, MeasureNdfWritesExrAndJson) {
   std::string exr = tmp("ndf.exr"), json = tmp("ndf.json");
   ASSERT_EQ(run("measure ndf " + surface_ + " -o " + exr).code, 0);

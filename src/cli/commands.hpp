@@ -23,6 +23,7 @@ struct GenerateOptions {
 
 struct MeasureOptions {
   std::string surface, output;
+  std::vector<std::string> extra_surfaces;  // measure g1: an ensemble of independent surfaces
   std::string theta = "0:85:5", phi = "0";
   long long rays = 1000000;
   std::uint64_t seed = 1;
@@ -33,6 +34,7 @@ struct MeasureOptions {
 std::vector<double> parse_angle_list(const std::string& text, const std::string& option);
 
 int run_generate_gaussian(GenerateOptions o, const GlobalOptions& g);
+int run_convert(const std::string& input, const std::string& output, const GlobalOptions& g);
 int run_info(const std::string& surface, const std::string& json_out, const GlobalOptions& g);
 int run_measure_ndf(const MeasureOptions& o, const GlobalOptions& g);
 int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g);

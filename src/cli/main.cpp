@@ -58,6 +58,12 @@ int main(int argc, char** argv) {
   demo->add_option("--rays", demo_meas.rays, "Rays per estimator and direction")->capture_default_str();
   demo->add_option("--out-dir", demo_dir, "Folder for the surface and the tables")->capture_default_str();
 
+  // convert
+  auto* conv = app.add_subcommand("convert", "Save a surface in another format (.exr heightfield, .ply/.obj/.off mesh)");
+  std::string conv_in, conv_out;
+  conv->add_option("surface", conv_in, "Surface file")->required();
+  conv->add_option("-o,--output", conv_out, "Output surface file")->required();
+
   // info
   auto* info = app.add_subcommand("info", "Describe a surface: parameters, slope statistics, fitted alpha, 000 eq. 1b/1c");
   std::string info_file, info_json;
@@ -74,7 +80,11 @@ int main(int argc, char** argv) {
   ndf->add_option("--theta-bins", mo.theta_bins, "Theta bins over [0, 180] deg")->check(CLI::Range(1, 3600));
   ndf->add_option("--phi-bins", mo.phi_bins, "Phi bins over [0, 360) deg")->check(CLI::Range(1, 7200));
   auto* g1 = meas->add_subcommand("g1", "Masking G1 per direction: ray casting and area sampling, beside Smith");
-  g1->add_option("surface", mo.surface, "Surface file")->required();
+  std::vector<std::string> g1_surfaces;
+  g1->add_option("surfaces", g1_surfaces,
+                 "Surface file(s). Several independent surfaces of the same statistics (e.g. "
+                 "seeds) give rows averaged over them with the between-surface standard error")
+      ->required();
   g1->add_option("-o,--output", mo.output, "Output (.json or .csv)")->required();
   g1->add_option("--theta", mo.theta, "View zenith angles in degrees: a, a,b,c or start:stop:step")->capture_default_str();
   g1->add_option("--phi", mo.phi, "View azimuths in degrees, same syntax")->capture_default_str();
@@ -129,8 +139,13 @@ int main(int argc, char** argv) {
       return run_demo(demo_gen, demo_meas, demo_dir, g);
     }
     if (*info) return run_info(info_file, info_json, g);
+    if (*conv) return run_convert(conv_in, conv_out, g);
     if (*ndf) return run_measure_ndf(mo, g);
-    if (*g1) return run_measure_g1(mo, g);
+    if (*g1) {
+      mo.surface = g1_surfaces.front();
+      mo.extra_surfaces.assign(g1_surfaces.begin() + 1, g1_surfaces.end());
+      return run_measure_g1(mo, g);
+    }
   } catch (const UsageError& e) {
     std::cerr << "microsim: error: " << e.what() << "\n";
     return 2;
