@@ -38,18 +38,26 @@ struct Rule {
   std::vector<double> x, w;
 };
 
-// Panels on [a, b] with edges center +- c 2^k (k = 0, 1, ...), n Gauss-Legendre nodes each.
-Rule refined_rule(double a, double b, double center, double c, int n) {
+// Panels on [a, b] with edges center +- c 2^k (k = 0, 1, ...) around each center, panels no
+// wider than max_width, n Gauss-Legendre nodes each: resolves peaks and endpoint singularities
+// at the given centers.
+Rule refined_rule(double a, double b, const std::vector<double>& centers, double c, int n,
+                  double max_width = 0.25) {
   std::vector<double> edges = {a, b};
-  if (center > a && center < b) edges.push_back(center);
-  for (double d = c; d < 2.0 * (b - a); d *= 2.0) {
-    if (center - d > a && center - d < b) edges.push_back(center - d);
-    if (center + d > a && center + d < b) edges.push_back(center + d);
+  for (double center : centers) {
+    if (center > a && center < b) edges.push_back(center);
+    for (double d = c; d < 2.0 * (b - a); d *= 2.0) {
+      if (center - d > a && center - d < b) edges.push_back(center - d);
+      if (center + d > a && center + d < b) edges.push_back(center + d);
+    }
   }
+  const int nuni = static_cast<int>(std::ceil((b - a) / max_width));
+  for (int k = 1; k < nuni; ++k) edges.push_back(a + (b - a) * k / nuni);
   std::sort(edges.begin(), edges.end());
   const auto gl = mm::detail::gauss_legendre(n);
   Rule r;
   for (std::size_t k = 0; k + 1 < edges.size(); ++k) {
+    if (edges[k + 1] - edges[k] < 1e-14) continue;
     const double m = 0.5 * (edges[k] + edges[k + 1]), h = 0.5 * (edges[k + 1] - edges[k]);
     for (const auto& [x, w] : gl) {
       r.x.push_back(m + h * x);
@@ -63,7 +71,7 @@ Rule refined_rule(double a, double b, double center, double c, int n) {
 // scale, phi by the periodic trapezoid rule, spectrally accurate for smooth periodic integrands).
 template <class F>
 double integrate_hemisphere(const F& f, double scale, int nphi = 512) {
-  const Rule th = refined_rule(0.0, kPi / 2, 0.0, scale / 8.0, 16);
+  const Rule th = refined_rule(0.0, kPi / 2, {0.0}, scale / 8.0, 16);
   double sum = 0.0;
   for (std::size_t a = 0; a < th.x.size(); ++a) {
     const double st = std::sin(th.x[a]);
@@ -77,25 +85,30 @@ double integrate_hemisphere(const F& f, double scale, int nphi = 512) {
 // 001 eq. (19) weak white furnace integral over the sphere of incident directions i:
 // int G1(o, h) D(h) / (4 |o.n|) dw_i, h = (o + i)/|o + i|. Integrated in theta_i over
 // [0, pi - theta_o] only: beyond, h.z <= 0 and D(h) = 0 (for GGX D jumps there, so the jump is
-// put on the domain boundary). theta_i is refined around the mirror direction theta_i = theta_o.
+// put on the domain boundary). Product Gauss-Legendre, with panels refined geometrically around
+// the mirror direction (theta_i = theta_o, phi_i = phi_o + pi) and around i = -o (theta_i =
+// pi - theta_o, same phi): near -o, h = (o+i)/|o+i| sweeps a whole great circle, so for a
+// grazing o the lobe of D is squeezed into a tiny neighbourhood of -o (the reason why the
+// uniform grid of 001 App. C needs small steps). Quadrature error measured < 3e-6.
 template <class G1>
-double weak_white_furnace(const Ndf& ndf, const Vec3& o, const G1& g1, int nphi = 512) {
-  const double to = std::acos(o.z());
-  const double amin = std::min(ndf.alpha_x, ndf.alpha_y);
-  const Rule th = refined_rule(0.0, kPi - to, to, amin / 8.0, 16);
+double weak_white_furnace(const Ndf& ndf, const Vec3& o, const G1& g1) {
+  const double to = std::acos(std::clamp(o.z(), -1.0, 1.0));
+  const double po = std::atan2(o.y(), o.x());
+  const double c = std::min(ndf.alpha_x, ndf.alpha_y) / 16.0;
+  const Rule th = refined_rule(0.0, kPi - to, {to, kPi - to}, c, 8);
+  const Rule ph = refined_rule(po, po + 2 * kPi, {po + kPi}, c, 8);
   double sum = 0.0;
   for (std::size_t a = 0; a < th.x.size(); ++a) {
-    const double st = std::sin(th.x[a]);
     double row = 0.0;
-    for (int b = 0; b < nphi; ++b) {
-      const Vec3 i = dir(th.x[a], 2 * kPi * b / nphi);
+    for (std::size_t b = 0; b < ph.x.size(); ++b) {
+      const Vec3 i = dir(th.x[a], ph.x[b]);
       const Vec3 hsum = o + i;
       const double len = hsum.norm();
       if (len == 0.0) continue;
       const Vec3 h = hsum / len;
-      row += g1(o, h) * ndf.D(h) / (4.0 * std::abs(o.z()));
+      row += ph.w[b] * g1(o, h) * ndf.D(h) / (4.0 * std::abs(o.z()));
     }
-    sum += th.w[a] * st * row * (2 * kPi / nphi);
+    sum += th.w[a] * std::sin(th.x[a]) * row;
   }
   return sum;
 }
@@ -244,7 +257,7 @@ TEST(Ndf, ProjectedAreaNormalization) {
       const Ndf ndf = make(kind, ax, ay);
       const double I = integrate_hemisphere([&](const Vec3& m) { return m.z() * ndf.D(m); },
                                             std::min(ax, ay));
-      EXPECT_NEAR(I, 1.0, 1e-3) << mm::to_string(kind) << " " << ax << " " << ay;
+      EXPECT_NEAR(I, 1.0, 1e-4) << mm::to_string(kind) << " " << ax << " " << ay;
       worst = std::max(worst, std::abs(I - 1.0));
     }
   std::printf("[ info ] max |int (n.m) D dm - 1| = %.2e\n", worst);
@@ -264,7 +277,7 @@ TEST(Ndf, VisibleNormalsNormalized) {
           const Vec3 v = dir(deg(th), ph);
           const double I = integrate_hemisphere([&](const Vec3& m) { return ndf.D_visible(v, m); },
                                                 std::min(ax, ay));
-          EXPECT_NEAR(I, 1.0, 1e-3) << mm::to_string(kind) << " " << ax << " " << ay << " th=" << th;
+          EXPECT_NEAR(I, 1.0, 1e-4) << mm::to_string(kind) << " " << ax << " " << ay << " th=" << th;
           worst = std::max(worst, std::abs(I - 1.0));
         }
   std::printf("[ info ] max |int D_v dm - 1| = %.2e\n", worst);
@@ -274,14 +287,14 @@ TEST(Ndf, WeakWhiteFurnaceEq19) {
   double worst = 0.0;
   for (auto kind : {Distribution::Beckmann, Distribution::GGX})
     for (const auto& [ax, ay] : kAlphas)
-      for (double th : {0.0, 30.0, 60.0, 80.0})
+      for (double th : {0.0, 30.0, 60.0, 80.0, 89.0})
         for (double ph : {0.0, 1.0}) {
           if (ax == ay && ph != 0.0) continue;
           const Ndf ndf = make(kind, ax, ay);
           const Vec3 o = dir(deg(th), ph);
           const double I =
               weak_white_furnace(ndf, o, [&](const Vec3& v, const Vec3& h) { return ndf.G1(v, h); });
-          EXPECT_NEAR(I, 1.0, 1e-3) << mm::to_string(kind) << " " << ax << " " << ay << " th=" << th;
+          EXPECT_NEAR(I, 1.0, 1e-4) << mm::to_string(kind) << " " << ax << " " << ay << " th=" << th;
           worst = std::max(worst, std::abs(I - 1.0));
         }
   std::printf("[ info ] max |eq.(19) - 1| = %.2e\n", worst);
@@ -299,7 +312,7 @@ TEST(VCavity, WeakWhiteFurnace) {
         const double I = weak_white_furnace(ndf, o, [](const Vec3& v, const Vec3& h) {
           return mm::vcavity_G1(v, h);
         });
-        EXPECT_NEAR(I, 1.0, 1e-3) << mm::to_string(kind) << " " << ax << " th=" << th;
+        EXPECT_NEAR(I, 1.0, 1e-4) << mm::to_string(kind) << " " << ax << " th=" << th;
         worst = std::max(worst, std::abs(I - 1.0));
       }
   std::printf("[ info ] max |eq.(19) with V-cavity G1 - 1| = %.2e\n", worst);
@@ -344,29 +357,37 @@ TEST(Lambda, ClosedFormMatchesSlopeDistribution) {
   EXPECT_EQ(mm::lambda_from_slope_distribution([](double, double) { return 1.0; }, Vec3(0, 0, 1)), 0.0);
 }
 
-// Walter et al. rational approximation vs the exact erf form. Bounds verified over a in [0.05, 10]:
-// max |Lambda_rat - Lambda| < 3e-3 (largest near small a where Lambda ~ 1/(2 a sqrt(pi)) is large),
-// max relative error of Lambda for a <= 1.5 < 3e-3 and max |G1_rat - G1| < 5e-4 (the
-// approximation was fitted to G1).
+// Walter et al. rational approximation vs the exact erf form, on a in [0.05, 10] (step 5e-4).
+// Verified: max |Lambda_rat - Lambda| = 9.85e-3 (at a ~ 0.082, where Lambda ~ 3.1; relative
+// 0.35%), max |G1_rat - G1| = 3.11e-3 (at a ~ 1.34), max relative G1 error 0.313%. The relative
+// error of Lambda itself is large where Lambda is small (the rational form has roots at a = 1.548
+// and 1.631, and is slightly negative, down to -6.1e-5, on [1.548, 1.6)); G1 is what it was
+// fitted to. Bounds tested: 1.0e-2 (Lambda, absolute), 3.2e-3 (G1 absolute and relative).
 TEST(Lambda, BeckmannRationalApproximation) {
-  double max_abs = 0.0, max_rel = 0.0, max_g1 = 0.0, max_diff = 0.0;
-  for (int k = 0; k <= 20000; ++k) {
-    const double a = 0.05 + (10.0 - 0.05) * k / 20000.0;
+  double max_abs = 0.0, max_g1 = 0.0, max_g1_rel = 0.0, min_rat = 0.0;
+  for (int k = 0; k <= 19900; ++k) {
+    const double a = 0.05 + 5e-4 * k;
     const double ex = mm::beckmann_lambda(a), ap = mm::beckmann_lambda_rational(a);
     max_abs = std::max(max_abs, std::abs(ap - ex));
-    if (a <= 1.5) max_rel = std::max(max_rel, std::abs(ap / ex - 1.0));
-    max_g1 = std::max(max_g1, std::abs(1 / (1 + ap) - 1 / (1 + ex)));
-    max_diff = std::max(max_diff, std::abs(ap - ex));
+    const double g_ex = 1 / (1 + ex), g_ap = 1 / (1 + ap);
+    max_g1 = std::max(max_g1, std::abs(g_ap - g_ex));
+    max_g1_rel = std::max(max_g1_rel, std::abs(g_ap / g_ex - 1));
+    min_rat = std::min(min_rat, ap);
   }
-  std::printf("[ info ] rational Lambda on a in [0.05,10]: max abs %.3e, max rel (a<=1.5) %.3e, "
-              "max |dG1| %.3e\n", max_abs, max_rel, max_g1);
-  EXPECT_LT(max_abs, 3e-3);
-  EXPECT_LT(max_rel, 3e-3);
-  EXPECT_LT(max_g1, 5e-4);
-  EXPECT_GT(max_diff, 1e-4);  // it is an approximation, not the exact formula
+  std::printf("[ info ] rational Lambda on a in [0.05,10]: max |dLambda| %.3e, max |dG1| %.3e, "
+              "max rel dG1 %.3e, min %.2e\n", max_abs, max_g1, max_g1_rel, min_rat);
+  EXPECT_LT(max_abs, 1.0e-2);
+  EXPECT_LT(max_g1, 3.2e-3);
+  EXPECT_LT(max_g1_rel, 3.2e-3);
+  // it is an approximation, not the exact formula: the error is of the published size
+  EXPECT_GT(max_g1, 2e-3);
   EXPECT_NE(mm::beckmann_lambda_rational(0.8), mm::beckmann_lambda(0.8));
+  EXPECT_LT(min_rat, 0.0);
+  EXPECT_GT(min_rat, -1e-4);
   EXPECT_EQ(mm::beckmann_lambda_rational(1.6), 0.0);
   EXPECT_GT(mm::beckmann_lambda(1.6), 0.0);
+  // for small a both tend to the same leading term 1/(2 a sqrt(pi)) vs 1/(3.535 a)
+  EXPECT_NEAR(mm::beckmann_lambda_rational(1e-4) / mm::beckmann_lambda(1e-4), 2 * std::sqrt(kPi) / 3.535, 1e-3);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -112,11 +112,14 @@ double adaptive_gl(const F& f, double a, double b, double whole, double tol_abs,
   const double right = gl_panel(f, m, b, &ar);
   const double halves = left + right;
   if (!std::isfinite(halves)) return halves;
-  // accept: tolerance met, or difference at the rounding level of this panel, or depth limit
+  // Accept when the tolerance is met, or at the rounding level of the panel: difference below
+  // 1e-13 of the panel's |f| integral, panel narrower than ~1e-11 of its abscissa (rounding of
+  // the nodes then dominates), or difference below 1e-280 (near-denormal values carry no
+  // precision; callers only refine functions whose integral exceeds 1e-250). Depth limit 40.
   const double diff = std::abs(halves - whole);
-  // (the 1e-280 floor stops refinement among near-denormal values, which carry no precision;
-  // callers only integrate functions whose total exceeds 1e-250)
-  if (depth >= 40 || diff <= tol_abs || diff <= 1e-14 * (al + ar) || diff <= 1e-280) return halves;
+  if (depth >= 40 || diff <= tol_abs || diff <= 1e-13 * (al + ar) || diff <= 1e-280 ||
+      (b - a) <= 1e-11 * (std::abs(a) + std::abs(b)))
+    return halves;
   return adaptive_gl(f, a, m, left, 0.5 * tol_abs, depth + 1) +
          adaptive_gl(f, m, b, right, 0.5 * tol_abs, depth + 1);
 }

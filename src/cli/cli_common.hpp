@@ -1,0 +1,55 @@
+// Shared pieces of the command-line layer: global options, progress display, output helpers.
+// Each command lives in its own src/cli/cmd_*.cpp and registers itself from main.cpp.
+#pragma once
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <initializer_list>
+#include <string>
+#include <vector>
+
+#include "microsim/common.hpp"
+
+namespace microsim::cli {
+
+struct GlobalOptions {
+  int threads = 0;  // 0 = all cores
+  bool quiet = false;
+};
+
+// A progress bar with ETA on a terminal; silent in pipes, CI and with --quiet.
+class Progress {
+ public:
+  Progress(const std::string& label, bool quiet);
+  ~Progress() { finish(); }
+  void update(double fraction);
+  void finish();
+
+ private:
+  std::string label_;
+  bool enabled_;
+  bool shown_ = false;
+  std::chrono::steady_clock::time_point start_;
+};
+
+// UsageError naming -o and the accepted extensions unless `path` has one of them.
+void require_extension(const std::string& path, std::initializer_list<const char*> allowed);
+// JSON or CSV (rows only) by extension, atomically.
+void write_record(const std::string& path, const Json& j);
+std::string fmt(double x, int precision = 4);
+// Fields every JSON record starts with: command, version, threads.
+Json run_header(const std::string& command, const GlobalOptions& g);
+// "a:b:step" (inclusive), "a,b,c" or "a", in degrees.
+std::vector<double> parse_angle_list(const std::string& text, const std::string& option);
+// UsageError unless every angle is in [0, 90).
+void require_above_horizon(const std::vector<double>& thetas_deg, const std::string& option);
+
+// Registration of each command (definitions in cmd_*.cpp).
+void register_generate(CLI::App& app, const GlobalOptions& g);
+void register_info(CLI::App& app, const GlobalOptions& g);
+void register_convert(CLI::App& app, const GlobalOptions& g);
+void register_measure_ndf(CLI::App& measure, const GlobalOptions& g);
+void register_measure_g1(CLI::App& measure, const GlobalOptions& g);
+void register_demo(CLI::App& app, const GlobalOptions& g);
+
+}  // namespace microsim::cli

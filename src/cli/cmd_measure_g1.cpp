@@ -1,0 +1,240 @@
+// microsim measure g1 FILE... : masking by ray casting and area sampling, beside Smith.
+#include <iomanip>
+#include <iostream>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "microsim/io/output.hpp"
+#include "microsim/measure/g1_measure.hpp"
+#include "microsim/surface/surface_io.hpp"
+#include "microsim/trace/tracer.hpp"
+
+namespace microsim::cli {
+
+namespace {
+
+// Mean over surfaces of a numeric field, with the between-surface standard error sd / sqrt(K).
+std::pair<double, double> ensemble_stat(const std::vector<const Json*>& rows, const char* key) {
+  double sum = 0, sum2 = 0;
+  int k = 0;
+  for (const Json* r : rows) {
+    auto it = r->find(key);
+    if (it == r->end() || !it->is_number()) continue;
+    double x = it->get<double>();
+    sum += x;
+    sum2 += x * x;
+    ++k;
+  }
+  if (k == 0) return {0.0, 0.0};
+  double mean = sum / k;
+  double var = k > 1 ? std::max(0.0, (sum2 - k * mean * mean) / (k - 1)) : 0.0;
+  return {mean, std::sqrt(var / k)};
+}
+
+// Ensemble rows (DESIGN.md "Two kinds of error bar"): every field is the mean over surfaces;
+// g1_stderr etc. are the between-surface standard errors, the ray-count ones are kept as
+// *_stderr_rays. Bins are matched by their normal ranges.
+Json ensemble_row(const std::vector<const Json*>& rows) {
+  Json e;
+  e["theta_deg"] = (*rows[0])["theta_deg"];
+  e["phi_deg"] = (*rows[0])["phi_deg"];
+  e["surfaces"] = rows.size();
+  for (const char* key : {"g1", "g1_raycast", "visible_area_ratio", "smith_numeric"}) {
+    auto [mean, se] = ensemble_stat(rows, key);
+    e[key] = mean;
+    e[std::string(key) + "_stderr"] = se;
+    double rays2 = 0;
+    for (const Json* r : rows) {
+      auto it = r->find(std::string(key) + "_stderr");
+      if (it != r->end()) rays2 += std::pow(it->get<double>(), 2);
+    }
+    if (key != std::string("smith_numeric"))
+      e[std::string(key) + "_stderr_rays"] = std::sqrt(rays2) / rows.size();
+  }
+  e["smith_nominal"] = (*rows[0])["smith_nominal"];
+  if (e["smith_nominal"].is_number()) {
+    double model = e["smith_nominal"].get<double>(), se = e["g1_stderr"].get<double>();
+    e["z_nominal"] = se > 0 ? (e["g1"].get<double>() - model) / se : 0.0;
+    e["rel_dev_nominal"] = (e["g1"].get<double>() - model) / model;
+  } else {
+    e["z_nominal"] = nullptr;
+    e["rel_dev_nominal"] = nullptr;
+  }
+  double se_num = e["g1_stderr"].get<double>();
+  e["z_numeric"] = se_num > 0 ? (e["g1"].get<double>() - e["smith_numeric"].get<double>()) / se_num : 0.0;
+  Json bins = Json::array();
+  for (const auto& b0 : (*rows[0])["bins"]) {
+    std::vector<const Json*> same;
+    for (const Json* r : rows)
+      for (const auto& b : (*r)["bins"])
+        if (b["theta_m_range_deg"] == b0["theta_m_range_deg"] &&
+            b["phi_m_range_deg"] == b0["phi_m_range_deg"])
+          same.push_back(&b);
+    Json eb;
+    eb["theta_m_range_deg"] = b0["theta_m_range_deg"];
+    eb["phi_m_range_deg"] = b0["phi_m_range_deg"];
+    Vec3 m = Vec3::Zero();
+    for (const Json* b : same) m += Vec3((*b)["m"][0], (*b)["m"][1], (*b)["m"][2]);
+    m.normalize();
+    eb["m"] = {m.x(), m.y(), m.z()};
+    for (const char* key : {"area_fraction", "g1", "g1_raycast"}) {
+      auto [mean, se] = ensemble_stat(same, key);
+      eb[key] = mean;
+      if (key != std::string("area_fraction")) eb[std::string(key) + "_stderr"] = se;
+    }
+    eb["surfaces"] = same.size();
+    bins.push_back(eb);
+  }
+  e["bins"] = bins;
+  return e;
+}
+
+void print_g1_table(const Json& rows, bool ensemble) {
+  std::cout << std::setw(7) << "theta" << std::setw(6) << "phi" << std::setw(10) << "g1"
+            << std::setw(10) << "stderr" << std::setw(10) << "raycast" << std::setw(10)
+            << "smith_num" << std::setw(8) << "z_num" << std::setw(10) << "smith_nom"
+            << std::setw(10) << "rel_dev" << std::setw(9) << (ensemble ? "z_nom" : "vis_ar")
+            << std::setw(8) << (ensemble ? "" : "max|z|") << "\n";
+  for (const auto& row : rows) {
+    std::cout << std::setw(7) << fmt(row["theta_deg"].get<double>(), 1) << std::setw(6)
+              << fmt(row["phi_deg"].get<double>(), 0) << std::setw(10)
+              << fmt(row["g1"].get<double>()) << std::setw(10)
+              << fmt(row["g1_stderr"].get<double>(), 5) << std::setw(10)
+              << fmt(row["g1_raycast"].get<double>()) << std::setw(10)
+              << fmt(row["smith_numeric"].get<double>()) << std::setw(8)
+              << fmt(row["z_numeric"].get<double>(), 2);
+    if (!row["smith_nominal"].is_null())
+      std::cout << std::setw(10) << fmt(row["smith_nominal"].get<double>()) << std::setw(9)
+                << fmt(100 * row["rel_dev_nominal"].get<double>(), 2) << "%";
+    else
+      std::cout << std::setw(10) << "-" << std::setw(10) << "-";
+    if (ensemble)
+      std::cout << std::setw(9)
+                << (row["z_nominal"].is_null() ? std::string("-") : fmt(row["z_nominal"].get<double>(), 2));
+    else
+      std::cout << std::setw(9) << fmt(row["visible_area_ratio"].get<double>()) << std::setw(8)
+                << fmt(row["max_abs_z_estimators"].get<double>(), 2);
+    std::cout << "\n";
+  }
+}
+
+}  // namespace
+
+int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
+  require_extension(o.output, {"json", "csv"});
+  std::vector<double> thetas = parse_angle_list(o.theta, "--theta");
+  std::vector<double> phis = parse_angle_list(o.phi, "--phi");
+  for (double t : thetas)
+    if (!(t >= 0 && t < 90))
+      throw UsageError("--theta must be in [0, 90) degrees (got " + fmt(t, 2) + ")");
+  if (o.rays <= 0) throw UsageError("--rays must be a positive integer (got " + std::to_string(o.rays) + ")");
+  std::vector<std::string> files = {o.surface};
+  files.insert(files.end(), o.extra_surfaces.begin(), o.extra_surfaces.end());
+  // Check every file before the long run starts.
+  std::vector<Microsurface> first;
+  first.push_back(load_surface(files[0]));
+  for (std::size_t k = 1; k < files.size(); ++k) load_surface(files[k]);
+  auto t0 = std::chrono::steady_clock::now();
+
+  G1Options go;
+  go.rays = static_cast<std::uint64_t>(o.rays);
+  go.seed = o.seed;
+  Json j = run_header("measure g1", g);
+  j["file"] = files.size() == 1 ? Json(files[0]) : Json(files);
+  j["surface"] = first[0].description;
+  j["parameters"] = {{"theta", o.theta}, {"phi", o.phi}, {"rays", o.rays}, {"seed", o.seed},
+                     {"normal_bins", {{"theta", go.normal_theta_bins}, {"phi", go.normal_phi_bins}}}};
+  j["definitions"] = {
+      {"g1", "area sampling: fraction of points, drawn by projected area A_f max(0,v.m_f), "
+             "unoccluded toward v (DESIGN.md estimator b)"},
+      {"g1_raycast", "visible projected area of first hits along -v / sum_f A_f max(0,v.m_f) "
+                     "(estimator a)"},
+      {"visible_area_ratio", "visible projected area / ((v.n) A)"},
+      {"smith_numeric", "1/(1+Lambda), Lambda = sum_f A_f max(0,-v.m_f) / ((v.n) A)"},
+      {"smith_nominal", "Smith G1 of the generator's nominal NDF (001 eq. 11 with alpha_o)"},
+      {"stderr", files.size() == 1
+                     ? "ray-count standard error of this one surface (binomial bound; stratified "
+                       "sampling only lowers it)"
+                     : "between-surface standard error (sd over surfaces / sqrt(K)); the ray-count "
+                       "one is *_stderr_rays; per_surface holds each surface's own rows"}};
+  Progress progress("measure g1", g.quiet);
+  const std::size_t total = files.size() * thetas.size() * phis.size();
+  std::size_t done = 0;
+  go.progress = [&](double f) { progress.update((done + f) / total); };
+  std::vector<Json> per_surface;
+  TraceCounters counters;
+  double build_seconds = 0;
+  for (std::size_t k = 0; k < files.size(); ++k) {
+    Microsurface s = k == 0 ? std::move(first[0]) : load_surface(files[k]);
+    Tracer tracer(s);
+    build_seconds += tracer.build_seconds();
+    const FacetTable table = build_facet_table(s, g1_normal_binning(go));
+    Json rows = Json::array();
+    for (double p : phis)
+      for (double t : thetas) {
+        G1Result r = measure_g1(tracer, direction_from_angles(rad(t), rad(p)), go, &table);
+        counters += r.counters;
+        Json row = g1_row_json(r, s);
+        row["theta_deg"] = t;  // exactly as requested (no round trip through radians)
+        row["phi_deg"] = p;
+        rows.push_back(row);
+        ++done;
+      }
+    per_surface.push_back(rows);
+  }
+  progress.finish();
+  j["build_seconds"] = build_seconds;
+  if (files.size() == 1) {
+    j["rows"] = per_surface[0];
+  } else {
+    Json rows = Json::array();
+    for (std::size_t d = 0; d < per_surface[0].size(); ++d) {
+      std::vector<const Json*> same;
+      for (const auto& ps : per_surface) same.push_back(&ps[d]);
+      rows.push_back(ensemble_row(same));
+    }
+    j["rows"] = rows;
+    Json ps = Json::array();
+    for (std::size_t k = 0; k < files.size(); ++k) ps.push_back({{"file", files[k]}, {"rows", per_surface[k]}});
+    j["per_surface"] = ps;
+  }
+  double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  j["wall_seconds"] = wall;
+  j["total_rays"] = counters.rays;
+  j["rays_per_second"] = counters.rays / wall;
+  j["lost_rays"] = counters.lost_below + counters.unresolved;
+  j["backface_hits"] = counters.backface_hits;
+  write_record(o.output, j);
+  if (!g.quiet) {
+    std::cout << "G1 of " << (files.size() == 1 ? files[0] : std::to_string(files.size()) + " surfaces")
+              << "  (" << go.rays << " rays per estimator and direction"
+              << (files.size() > 1 ? "; stderr between surfaces" : "") << ")\n";
+    print_g1_table(j["rows"], files.size() > 1);
+    std::cout << "rays lost " << counters.lost_below + counters.unresolved << ", back-face hits "
+              << counters.backface_hits << ", " << fmt(counters.rays / wall / 1e6, 2)
+              << " Mrays/s; wrote " << o.output << "\n";
+  }
+  return 0;
+}
+
+void register_measure_g1(CLI::App& measure, const GlobalOptions& g) {
+  auto* g1 = measure.add_subcommand("g1", "Masking G1 per direction: ray casting and area sampling, beside Smith");
+  auto mo = std::make_shared<MeasureOptions>();
+  auto files = std::make_shared<std::vector<std::string>>();
+  g1->add_option("surfaces", *files,
+                 "Surface file(s). Several independent surfaces of the same statistics (e.g. "
+                 "seeds) give rows averaged over them with the between-surface standard error")
+      ->required();
+  g1->add_option("-o,--output", mo->output, "Output (.json or .csv)")->required();
+  g1->add_option("--theta", mo->theta, "View zenith angles in degrees: a, a,b,c or start:stop:step")->capture_default_str();
+  g1->add_option("--phi", mo->phi, "View azimuths in degrees, same syntax")->capture_default_str();
+  g1->add_option("--rays", mo->rays, "Rays per estimator and direction")->capture_default_str();
+  g1->add_option("--seed", mo->seed, "Random seed")->capture_default_str();
+  g1->callback([mo, files, &g] {
+    mo->surface = files->front();
+    mo->extra_surfaces.assign(files->begin() + 1, files->end());
+    run_measure_g1(*mo, g);
+  });
+}
+
+}  // namespace microsim::cli
