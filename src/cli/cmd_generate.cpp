@@ -5,9 +5,16 @@
 #include "commands.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/surface/gaussian.hpp"
+#include "microsim/surface/generators.hpp"
 #include "microsim/surface/surface_io.hpp"
 
 namespace microsim::cli {
+
+void require_surface_extension(const std::string& path) {
+  std::string ext = extension_of(path);
+  if (ext != "exr" && ext != "ply" && ext != "obj" && ext != "off")
+    throw UsageError("-o " + path + ": unknown surface format (use .exr, .ply, .obj or .off)");
+}
 
 int run_generate_gaussian(GenerateOptions o, const GlobalOptions& g) {
   if (o.alpha != -1) {
@@ -20,9 +27,7 @@ int run_generate_gaussian(GenerateOptions o, const GlobalOptions& g) {
     else o.gaussian.alpha_x = o.gaussian.alpha_y;
   }
   validate(o.gaussian);
-  std::string ext = extension_of(o.output);
-  if (ext != "exr" && ext != "ply" && ext != "obj" && ext != "off")
-    throw UsageError("-o " + o.output + ": unknown surface format (use .exr, .ply, .obj or .off)");
+  require_surface_extension(o.output);
   Microsurface s = generate_gaussian(o.gaussian);
   save_surface(s, o.output);
   if (!g.quiet) {
@@ -48,6 +53,20 @@ void register_generate(CLI::App& app, const GlobalOptions& g) {
     go->alpha_x_given = gauss->count("--alpha-x") > 0;
     go->alpha_y_given = gauss->count("--alpha-y") > 0;
     run_generate_gaussian(*go, g);
+  });
+
+  auto flat = std::make_shared<FlatParams>();
+  auto flat_out = std::make_shared<std::string>();
+  auto* fl = gen->add_subcommand("flat", "Periodic plane z = 0: the exact reference of every estimator");
+  fl->set_config("--config", "", "Read options from a TOML preset");
+  fl->add_option("-o,--output", *flat_out, "Output surface file (.exr, .ply, .obj, .off)")->required();
+  fl->add_option("--resolution", flat->resolution, "Grid cells per side")->capture_default_str();
+  fl->add_option("--size", flat->size, "Tile side length")->capture_default_str();
+  fl->callback([=, &g] {
+    require_surface_extension(*flat_out);
+    Microsurface s = generate_flat(*flat);
+    save_surface(s, *flat_out);
+    if (!g.quiet) std::cout << "wrote " << *flat_out << ": flat plane\n";
   });
 }
 

@@ -11,9 +11,7 @@ namespace microsim::cli {
 
 namespace {
 int run_convert(const std::string& input, const std::string& output, const GlobalOptions& g) {
-  std::string ext = extension_of(output);
-  if (ext != "exr" && ext != "ply" && ext != "obj" && ext != "off")
-    throw UsageError("-o " + output + ": unknown surface format (use .exr, .ply, .obj or .off)");
+  require_surface_extension(output);
   Microsurface s = load_surface(input);
   save_surface(s, output);
   if (!g.quiet) std::cout << "wrote " << output << " (" << s.num_facets() << " facets)\n";

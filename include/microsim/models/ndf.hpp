@@ -125,13 +125,13 @@ double adaptive_gl(const F& f, double a, double b, double whole, double tol_abs,
 }
 
 // Integral of f over [a, +inf) to a relative accuracy ~rel (of the integral of |f|).
-// Scale-free panel layout anchored at a: [a, a + 1e-7], then quarter-decades
-// [a + 10^k, a + 10^(k+1)] for k = -7..2 (each split in 4), then [a + 1e3, inf) mapped by
-// q = a + 1e3 / (1 - t), t in [0, 1), which turns tails decaying like q^-2 (GGX) into a bounded
-// integrand. A first pass with one 10-point rule per panel sets the absolute tolerance
-// rel * int |f|; each panel is then refined adaptively. The layout resolves any feature whose
-// width is at least ~1/40 of its distance to a (true for the centered unimodal slope
-// distributions of microfacet theory).
+// Scale-free panel layout anchored at a: offsets 0, then every decade [10^k, 10^(k+1)],
+// k = -7..2, split in 4 equal panels, then [a + 1e3, inf) mapped by q = a + 1e3 / (1 - t),
+// t in [0, 1), which turns tails decaying like q^-2 (GGX) into a bounded integrand. A first pass
+// with one 10-point rule per panel sets the absolute tolerance rel * int |f|; each panel is then
+// refined adaptively. The first pass samples any point at offset d with a spacing <~ d/4, so
+// features narrower than that, far from a, could be missed; the centered unimodal slope
+// distributions of microfacet theory (and their marginals) are far from that limit.
 template <class F>
 double integrate_halfline(const F& f, double a, double rel = 1e-12) {
   const double big = 1e3;
@@ -294,7 +294,7 @@ struct Ndf {
   // forms). Written directly in m so that it stays finite for mz -> 0:
   //   Beckmann: exp(-(mx^2/ax^2 + my^2/ay^2) / mz^2) / (pi ax ay mz^4)
   //   GGX:      1 / (pi ax ay (mz^2 + mx^2/ax^2 + my^2/ay^2)^2)
-  // (m unit; GGX tends to alpha_x alpha_y / pi-ish finite values at the horizon, Beckmann to 0.)
+  // (m unit. At the horizon Beckmann D -> 0 while GGX D stays finite: alpha^2 / pi when isotropic.)
   double D(const Vec3& m) const {
     const double mz = m.z();
     if (!(mz > 0.0)) return 0.0;
