@@ -235,6 +235,7 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   };
 
   // (a) ray casting along -v from the stratified window.
+  auto t_raycast = std::chrono::steady_clock::now();
   run_chunks(strata.total(), nbins, tally, done, [&](std::uint64_t i, Tally& t) {
     CounterRng rng(o.seed, 0xA000 + static_cast<std::uint64_t>(r.theta * 1e6) * 7919 +
                                static_cast<std::uint64_t>(r.phi * 1e6), i);
@@ -251,7 +252,10 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
     r.raycast_hits += tally.hits[b];
   }
 
+  r.raycast_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_raycast).count();
   // (b) area sampling, strata along the CDF (facet order is spatially coherent).
+  auto t_sample = std::chrono::steady_clock::now();
   const double total = r.front_projected;
   run_chunks(strata.total(), nbins, tally, done, [&](std::uint64_t i, Tally& t) {
     CounterRng rng(o.seed, 0xB000 + static_cast<std::uint64_t>(r.theta * 1e6) * 7919 +
@@ -274,6 +278,8 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
     r.bins[b].visible = tally.visible[b];
     r.sample_visible += tally.visible[b];
   }
+  r.sample_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_sample).count();
   r.counters = tally.counters;
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;

@@ -148,33 +148,66 @@ Tracer::~Tracer() {
   if (device_) rtcReleaseDevice(device_);
 }
 
-std::size_t Tracer::facet_of_hit(unsigned prim_id, float u, float v, const Vec3& ng) const {
-  if (surface_.kind() == Microsurface::Kind::Mesh) return mesh_prim_to_facet_[prim_id];
-  // Grid hits report u, v normalised over the whole grid. The cell from u, v can be off by
-  // one at cell borders (float rounding): pick, around it, the facet whose normal matches Ng.
-  const Vec3 n = ng.normalized();
+std::size_t Tracer::facet_of_hit(unsigned prim_id, float u, float v, const Vec3& ng,
+                                 Vec3* normal) const {
+  if (surface_.kind() == Microsurface::Kind::Mesh) {
+    std::size_t k = mesh_prim_to_facet_[prim_id];
+    if (normal) *normal = surface_.facet(k).normal();
+    return k;
+  }
+  // Grid hits report u, v normalised over the whole grid: the cell and its half follow. At
+  // cell borders float rounding can name a neighbour; the facet's own normal must then match
+  // Ng, else search the cells around for the facet that does.
+  const long nx = surface_.nx(), ny = surface_.ny();
   const double gu = static_cast<double>(u) * (grid_width_ - 1);
   const double gv = static_cast<double>(v) * (grid_height_ - 1);
   const long ci = static_cast<long>(std::floor(gu)), cj = static_cast<long>(std::floor(gv));
-  const long nx = surface_.nx(), ny = surface_.ny();
-  auto facet_index = [&](long i, long j, int half) {
-    long ii = (((i - pad_) % nx) + nx) % nx, jj = (((j - pad_) % ny) + ny) % ny;
-    return 2 * static_cast<std::size_t>(jj * nx + ii) + half;
+  const int half = (gu - ci) + (gv - cj) < 1.0 ? 0 : 1;
+  auto wrap = [](long i, long n) {
+    while (i < 0) i += n;
+    while (i >= n) i -= n;
+    return i;
   };
-  int half = (gu - ci) + (gv - cj) < 1.0 ? 0 : 1;
-  std::size_t best = facet_index(ci, cj, half);
-  double best_dot = surface_.facet(best).normal().dot(n);
-  if (best_dot > 1 - 1e-6) return best;
+  const std::vector<float>& h = surface_.heights();
+  const double dx = surface_.dx(), dy = surface_.dy();
+  // Unnormalised normal (cross product) of facet `half` of cell (i, j), from the heights.
+  auto cell_cross = [&](long i, long j, int hf) {
+    long i0 = wrap(i, nx), j0 = wrap(j, ny);
+    long i1 = wrap(i0 + 1, nx), j1 = wrap(j0 + 1, ny);
+    double h00 = h[j0 * nx + i0], h10 = h[j0 * nx + i1], h01 = h[j1 * nx + i0],
+           h11 = h[j1 * nx + i1];
+    // facet 0 = (v00, v10, v01), facet 1 = (v10, v11, v01); see Microsurface::facet.
+    if (hf == 0) return Vec3(-(h10 - h00) * dy, -(h01 - h00) * dx, dx * dy);
+    return Vec3(-(h11 - h01) * dy, -(h11 - h10) * dx, dx * dy);
+  };
+  auto index = [&](long i, long j, int hf) {
+    return 2 * static_cast<std::size_t>(wrap(j, ny) * nx + wrap(i, nx)) + hf;
+  };
+  const double ng2 = ng.squaredNorm();
+  auto alignment = [&](const Vec3& c) {  // cos^2 of the angle between c and Ng (sign kept)
+    double d = c.dot(ng);
+    return (d > 0 ? 1 : -1) * d * d / (c.squaredNorm() * ng2);
+  };
+  long i = ci - pad_, j = cj - pad_;
+  Vec3 c = cell_cross(i, j, half);
+  if (alignment(c) > 1 - 2e-6) {
+    if (normal) *normal = c.normalized();
+    return index(i, j, half);
+  }
+  double best_align = -2;
+  std::size_t best = 0;
   for (long dj = -1; dj <= 1; ++dj)
     for (long di = -1; di <= 1; ++di)
-      for (int h = 0; h < 2; ++h) {
-        std::size_t k = facet_index(ci + di, cj + dj, h);
-        double d = surface_.facet(k).normal().dot(n);
-        if (d > best_dot) {
-          best_dot = d;
-          best = k;
+      for (int hf = 0; hf < 2; ++hf) {
+        Vec3 cc = cell_cross(i + di, j + dj, hf);
+        double a = alignment(cc);
+        if (a > best_align) {
+          best_align = a;
+          best = index(i + di, j + dj, hf);
+          c = cc;
         }
       }
+  if (normal) *normal = c.normalized();
   return best;
 }
 
@@ -250,8 +283,7 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
           if (out->point.y() >= hy) out->point.y() -= macro.size_y;
           else if (out->point.y() < -hy) out->point.y() += macro.size_y;
         }
-        out->facet = facet_of_hit(rh.hit.primID, rh.hit.u, rh.hit.v, ng);
-        out->normal = surface_.facet(out->facet).normal();
+        out->facet = facet_of_hit(rh.hit.primID, rh.hit.u, rh.hit.v, ng, &out->normal);
         out->backface = out->normal.dot(dir) > 0;
         if (out->backface) ++c.backface_hits;
         return true;

@@ -48,7 +48,9 @@ struct G1Result {
   std::vector<G1NormalBin> bins;
   DirectionBinning binning{1, 1, kPi};
   double seconds = 0;        // wall time of the whole measurement
-  double facet_seconds = 0;  // of which the exact facet sums
+  double facet_seconds = 0;  // of which the exact facet sums,
+  double raycast_seconds = 0;  // estimator (a),
+  double sample_seconds = 0;   // estimator (b)
 
   // Derived quantities with standard errors.
   Estimate g1_area_sampling() const;  // (b), averaged over front-facing projected area

@@ -68,8 +68,10 @@ class Tracer {
   RTCScene scene() const { return scene_; }
   double build_seconds() const { return build_seconds_; }
 
-  // Which of the surface's facets a raw Embree hit refers to.
-  std::size_t facet_of_hit(unsigned prim_id, float u, float v, const Vec3& ng) const;
+  // Which of the surface's facets a raw Embree hit refers to, and (optionally) its exact unit
+  // normal.
+  std::size_t facet_of_hit(unsigned prim_id, float u, float v, const Vec3& ng,
+                           Vec3* normal = nullptr) const;
 
  private:
   template <bool kOcclusion>
