@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "microsim/common.hpp"
 #include "microsim/io/output.hpp"
@@ -11,7 +12,9 @@
 using namespace microsim;
 
 namespace {
-std::string tmp(const std::string& name) { return ::testing::TempDir() + "microsim_io_" + name; }
+std::string tmp(const std::string& name) {
+  return ::testing::TempDir() + "microsim_io_" + std::to_string(getpid()) + "_" + name;
+}
 bool exists(const std::string& p) {
   struct stat st;
   return stat(p.c_str(), &st) == 0;
@@ -36,7 +39,7 @@ TEST(Output, FailedWriteLeavesNothingBehind) {
   EXPECT_FALSE(exists(path));
   // ... and no temporary either.
   std::string dir = ::testing::TempDir();
-  std::string tmpname = dir + ".tmp-" + std::to_string(getpid()) + "-microsim_io_never.json";
+  std::string tmpname = dir + ".tmp-" + std::to_string(getpid()) + "-" + path.substr(dir.size());
   EXPECT_FALSE(exists(tmpname));
 }
 

@@ -1,5 +1,6 @@
 // Surface layer: Gaussian generator statistics, 000 eq. 1b/1c, file round trips, bad input.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <fstream>
@@ -18,7 +19,9 @@ GaussianParams small(double alpha, std::uint64_t seed, int res = 128) {
   p.seed = seed;
   return p;
 }
-std::string tmp(const std::string& name) { return ::testing::TempDir() + "microsim_" + name; }
+std::string tmp(const std::string& name) {
+  return ::testing::TempDir() + "microsim_" + std::to_string(getpid()) + "_" + name;
+}
 }  // namespace
 
 TEST(Gaussian, SameSeedSameHeightsOtherSeedOtherHeights) {
