@@ -1,6 +1,7 @@
-"""Figures of the report. Each function reads microsim records (already loaded) and writes one
-PNG; it returns the path, or raises ValueError("reason") when the data lacks what it needs
-(the report then lists the figure as skipped with that reason).
+"""Figures of the report. Each function `f(path, *data)` reads microsim records (already
+loaded) and writes one PNG at `path`; it raises NoData("reason") when the records lack what it
+needs (the report then lists the figure as not drawn, with the reason). Any other exception is
+a bug and fails the report.
 """
 import math
 
@@ -14,6 +15,11 @@ from . import models  # noqa: E402
 from .readers import column, num, has_field  # noqa: E402
 
 DPI = 100
+
+
+class NoData(Exception):
+    """The records do not hold what a figure needs."""
+
 VERDICT_COLORS = {
     "pass": "#2a9d4b",
     "FAIL": "#d62728",
@@ -43,11 +49,11 @@ def _nominal(description):
 # Validation overview
 
 
-def validation_z(validation, path):
+def validation_z(path, validation):
     """z of every z-tested row, one line per (quantity vs model), colored by verdict."""
     rows = [r for r in validation.get("rows", []) if num(r.get("z")) == num(r.get("z"))]
     if not rows:
-        raise ValueError("no z-tested rows in the validation record")
+        raise NoData("no z-tested rows in the validation record")
     zt = num(validation.get("z_threshold"), 3.0)
     cats = []
     for r in rows:
@@ -81,10 +87,10 @@ def validation_z(validation, path):
 # NDF
 
 
-def ndf_map(channels, attrs, path, title=""):
+def ndf_map(path, channels, attrs, title=""):
     """Upper hemisphere of D (measured, nominal, ratio) from a `measure ndf` EXR."""
     if "D" not in channels:
-        raise ValueError("the EXR has no D channel")
+        raise NoData("the EXR has no D channel")
     d = channels["D"]
     n_theta, n_phi = d.shape
     upper = n_theta // 2  # rows cover theta in [0, 180]; keep [0, 90]
@@ -118,12 +124,12 @@ def ndf_map(channels, attrs, path, title=""):
     return _save(fig, path)
 
 
-def ndf_rings(entries, path):
+def ndf_rings(path, entries):
     """D(theta_m) per ring with error bars against the nominal NDF, one column per entry."""
     usable = [(e["name"], e["measurements"]["d_nominal"]) for e in entries
               if isinstance(e.get("measurements", {}).get("d_nominal"), dict)]
     if not usable:
-        raise ValueError("no entry with a nominal NDF")
+        raise NoData("no entry with a nominal NDF")
     fig, axes = plt.subplots(2, len(usable), figsize=(4.6 * len(usable), 6), squeeze=False,
                              gridspec_kw={"height_ratios": [2, 1]}, sharex="col")
     for c, (name, m) in enumerate(usable):
@@ -158,11 +164,11 @@ def ndf_rings(entries, path):
 # G1
 
 
-def g1_curves(record, path, title=""):
+def g1_curves(path, record, title=""):
     """Averaged G1 vs theta from `measure g1` (one surface or an ensemble) against Smith."""
     rows = record.get("rows", [])
     if not rows or not has_field(rows, "g1"):
-        raise ValueError("no G1 rows")
+        raise NoData("no G1 rows")
     nominal = _nominal(record.get("surface"))
     phis = sorted(set(column(rows, "phi_deg")))
     fig, axes = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True, gridspec_kw={"height_ratios": [2, 1]})
@@ -237,16 +243,16 @@ def _pooled_bins(per_surface, theta, phi):
     return out
 
 
-def g1_per_normal(entry, path):
+def g1_per_normal(path, entry):
     """G1(v, m) against theta_m, one curve per azimuth sector of m relative to the view (the
     test of Smith's independence of masking and normals), with Smith and V-cavity beside it."""
     per_surface = entry.get("measurements", {}).get("g1")
     if not per_surface:
-        raise ValueError("entry %s has no G1 measurements" % entry.get("name"))
+        raise NoData("entry %s has no G1 measurements" % entry.get("name"))
     rows = per_surface[0].get("rows", [])
     dirs = sorted({(num(r.get("theta_deg")), num(r.get("phi_deg"))) for r in rows if num(r.get("theta_deg")) > 0})
     if not dirs:
-        raise ValueError("no oblique view direction")
+        raise NoData("no oblique view direction")
     dirs = dirs[-3:] if len(dirs) > 3 else dirs
     fig, axes = plt.subplots(1, len(dirs), figsize=(4.8 * len(dirs), 4.2), squeeze=False)
     for ax, (theta, phi) in zip(axes[0], dirs):
@@ -298,13 +304,13 @@ G2_MODELS = [
 ]
 
 
-def g2_curves(record, path, title=""):
+def g2_curves(path, record, title=""):
     rows = record.get("rows", [])
     if not rows or not has_field(rows, "g2"):
-        raise ValueError("no G2 rows")
+        raise NoData("no G2 rows")
     for key in ("theta_o_deg", "theta_i_deg"):
         if not has_field(rows, key):
-            raise ValueError("G2 rows lack %s" % key)
+            raise NoData("G2 rows lack %s" % key)
 
     def dphi(r):
         d = abs((num(r.get("phi_i_deg"), 0) - num(r.get("phi_o_deg"), 0) + 180) % 360 - 180)
@@ -342,10 +348,10 @@ def g2_curves(record, path, title=""):
 ORDER_KEYS = ["order_1", "order_2", "order_3", "order_4plus", "total"]
 
 
-def bsdf_albedo(record, path, title=""):
+def bsdf_albedo(path, record, title=""):
     alb = record.get("albedo")
     if not isinstance(alb, dict):
-        raise ValueError("no albedo in the BSDF record")
+        raise NoData("no albedo in the BSDF record")
     fig, ax = plt.subplots(figsize=(7, 3.8))
     width = 0.38
     x = np.arange(len(ORDER_KEYS))
@@ -392,10 +398,10 @@ def _lobe(ax, rows, with_total=True):
     ax.grid(True, alpha=0.3)
 
 
-def bsdf_lobes(record, path, title=""):
+def bsdf_lobes(path, record, title=""):
     rows = record.get("in_plane")
     if not isinstance(rows, list) or not rows or not has_field(rows, "f_order_1"):
-        raise ValueError("no in_plane rows in the BSDF record")
+        raise NoData("no in_plane rows in the BSDF record")
     fig, ax = plt.subplots(figsize=(7.5, 4.3))
     _lobe(ax, rows)
     ax.set_yscale("log")
@@ -404,11 +410,11 @@ def bsdf_lobes(record, path, title=""):
     return _save(fig, path)
 
 
-def table4(records, path):
+def table4(path, records):
     """001 Table 4: in-plane single-scattering lobes at theta = 1.5 rad for several alphas."""
     usable = [(a, r) for a, r in records if isinstance(r.get("in_plane"), list) and r["in_plane"]]
     if not usable:
-        raise ValueError("no BSDF record with in_plane rows")
+        raise NoData("no BSDF record with in_plane rows")
     fig, axes = plt.subplots(1, len(usable), figsize=(3.6 * len(usable), 3.6), squeeze=False)
     for ax, (alpha, rec) in zip(axes[0], usable):
         _lobe(ax, rec["in_plane"], with_total=False)
@@ -423,7 +429,7 @@ def table4(records, path):
 # Tiled boxes (measure g1 on generate tiled-boxes; fields of issue 3)
 
 
-def tiled_boxes(points, path):
+def tiled_boxes(path, points):
     """points: list of (tiles N, measure g1 record). Visible area ratio against N per theta."""
     series = {}
     for n, rec in points:
@@ -431,7 +437,7 @@ def tiled_boxes(points, path):
             series.setdefault(num(r.get("theta_deg")), []).append(
                 (n, num(r.get("visible_area_ratio")), num(r.get("visible_area_ratio_stderr"), 0.0)))
     if not series:
-        raise ValueError("no visible_area_ratio rows")
+        raise NoData("no visible_area_ratio rows")
     fig, ax = plt.subplots(figsize=(6.5, 4))
     for k, theta in enumerate(sorted(series)):
         pts = sorted(series[theta])

@@ -61,11 +61,11 @@ class Section:
         return self
 
     def figure(self, ctx, name, draw, caption, *args):
-        """Draws one figure; a ValueError from the plot becomes a note, not a failure."""
+        """Draws one figure; missing data (plots.NoData) becomes a note, not a failure."""
         path = os.path.join(ctx.fig_dir, name)
         try:
-            draw(*args, path)
-        except ValueError as e:
+            draw(path, *args)
+        except plots.NoData as e:
             self.notes.append("%s not drawn: %s" % (name, e))
             return
         self.figures.append((os.path.relpath(path, ctx.out), caption))

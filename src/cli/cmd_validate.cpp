@@ -57,7 +57,7 @@ std::vector<std::string> split_list(const std::string& text) {
 
 // Runs `microsim generate KIND --config PRESET [--key value...] [--seed S] -o PATH` in this
 // process (the same parser and generators as the command line), then loads the surface.
-Microsurface generate_entry(const validate::SuiteEntry& e, const std::string& suite_file,
+Microsurface generate_entry(const validation::SuiteEntry& e, const std::string& suite_file,
                             std::optional<std::uint64_t> seed, const std::string& path, int threads) {
   CLI::App app;
   app.require_subcommand(1);
@@ -98,7 +98,7 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
                      [] {
                        std::string s;
                        for (const auto& d : suite_dirs())
-                         for (const auto& n : validate::list_suites(d))
+                         for (const auto& n : validation::list_suites(d))
                            if (s.find(n) == std::string::npos) s += (s.empty() ? "" : ", ") + n;
                        return s.empty() ? std::string("none") : s;
                      }() + ")");
@@ -107,14 +107,14 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
     throw UsageError("--significance must be in (0, 1) (got " + fmt(o.significance, 4) + ")");
   if (o.rays <= 0) throw UsageError("--rays must be a positive integer (got " + std::to_string(o.rays) + ")");
   // Command-line overrides of the checks' options (for FILE always; for a suite when given).
-  validate::Options cli_options;
+  validation::Options cli_options;
   cli_options.theta_deg = parse_angle_list(o.theta, "--theta");
   require_above_horizon(cli_options.theta_deg, "--theta");
   cli_options.phi_deg = parse_angle_list(o.phi, "--phi");
   cli_options.rays = static_cast<std::uint64_t>(o.rays);
   cli_options.seed = o.seed;
   cli_options.checks = split_list(o.checks);
-  auto apply_overrides = [&](validate::Options& opt) {
+  auto apply_overrides = [&](validation::Options& opt) {
     if (o.theta_given) opt.theta_deg = cli_options.theta_deg;
     if (o.phi_given) opt.phi_deg = cli_options.phi_deg;
     if (o.rays_given) opt.rays = cli_options.rays;
@@ -124,11 +124,11 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
 
   auto t0 = std::chrono::steady_clock::now();
   Json j = run_header("validate", g);
-  std::vector<validate::SurfaceSet> sets;
+  std::vector<validation::SurfaceSet> sets;
   double significance = o.significance;
   std::unique_ptr<fs::path> temp_dir;  // removed at the end unless --surfaces-dir
   if (!o.files.empty()) {
-    validate::SurfaceSet set;
+    validation::SurfaceSet set;
     set.name = fs::path(o.files[0]).stem().string();
     for (const auto& f : o.files) {
       set.surfaces.push_back(load_surface(f));
@@ -138,8 +138,8 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
     sets.push_back(std::move(set));
     j["files"] = o.files;
   } else {
-    const std::string path = validate::find_suite(o.suite, suite_dirs());
-    validate::Suite suite = validate::load_suite(path);
+    const std::string path = validation::find_suite(o.suite, suite_dirs());
+    validation::Suite suite = validation::load_suite(path);
     if (!o.significance_given) significance = suite.significance;
     j["suite"] = {{"name", suite.name}, {"file", path}, {"description", suite.description}};
     fs::path dir;
@@ -158,7 +158,7 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
     Json generated = Json::array();
     try {
       for (const auto& e : suite.entries) {
-        validate::SurfaceSet set;
+        validation::SurfaceSet set;
         set.name = e.name;
         set.options = e.options;
         apply_overrides(set.options);
@@ -189,22 +189,22 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
                                     {"checks", o.checks_given ? Json(o.checks) : Json(nullptr)}}}};
 
   Progress progress("validate", g.quiet);
-  validate::Result result;
+  validation::Result result;
   try {
-    result = validate::run(sets, significance, [&](double f) { progress.update(f); });
+    result = validation::run(sets, significance, [&](double f) { progress.update(f); });
   } catch (...) {
     if (temp_dir) fs::remove_all(*temp_dir);
     throw;
   }
   progress.finish();
   if (temp_dir) fs::remove_all(*temp_dir);
-  j.update(validate::result_to_json(result));
+  j.update(validation::result_to_json(result));
   j["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!o.output.empty()) write_record(o.output, j);
   if (!g.quiet) {
     std::cout << "validate " << (o.suite.empty() ? o.files[0] : "--suite " + o.suite) << ": "
               << result.rows.size() << " rows (groups of per-bin rows shown by their worst row)\n"
-              << validate::format_table(result) << result.count("pass") << " pass, "
+              << validation::format_table(result) << result.count("pass") << " pass, "
               << result.count("FAIL") << " FAIL, " << result.count("agrees") << " agree, "
               << result.count("deviates (finding)") << " deviate (finding), "
               << result.count("measured") << " measured only; |z| threshold "

@@ -18,7 +18,7 @@
 #include "microsim/models/ndf.hpp"
 #include "microsim/trace/tracer.hpp"
 
-namespace microsim::validate {
+namespace microsim::validation {
 
 const char* to_string(Kind k) {
   switch (k) {
@@ -688,29 +688,36 @@ namespace {
   throw UsageError("--suite " + file + ": " + what);
 }
 
+// A positive integer (JSON integer, or a number with an integral value such as 1e6).
+std::uint64_t get_count(const Json& j, const char* key, const std::string& file, const std::string& where) {
+  const Json& x = j[key];
+  if (!x.is_number() || !(x.get<double>() >= 1) || x.get<double>() != std::floor(x.get<double>()) ||
+      x.get<double>() > 9e18)
+    suite_error(file, where + ": " + key + " must be a positive integer");
+  return x.is_number_unsigned() ? x.get<std::uint64_t>() : static_cast<std::uint64_t>(x.get<double>());
+}
+
 void read_options(const Json& j, Options& o, const std::string& file, const std::string& where) {
-  static const char* known[] = {"theta_deg", "phi_deg", "rays", "seed", "checks", "ndf_theta_bins",
-                                "ndf_phi_bins", "min_ring_mass", "min_bin_count"};
   try {
     if (j.contains("theta_deg")) o.theta_deg = j["theta_deg"].get<std::vector<double>>();
     if (j.contains("phi_deg")) o.phi_deg = j["phi_deg"].get<std::vector<double>>();
-    if (j.contains("rays")) o.rays = j["rays"].get<std::uint64_t>();
-    if (j.contains("seed")) o.seed = j["seed"].get<std::uint64_t>();
+    if (j.contains("rays")) o.rays = get_count(j, "rays", file, where);
+    if (j.contains("seed")) o.seed = j["seed"].is_number_unsigned() ? j["seed"].get<std::uint64_t>()
+                                                                    : get_count(j, "seed", file, where);
     if (j.contains("checks")) o.checks = j["checks"].get<std::vector<std::string>>();
-    if (j.contains("ndf_theta_bins")) o.ndf_theta_bins = j["ndf_theta_bins"].get<int>();
-    if (j.contains("ndf_phi_bins")) o.ndf_phi_bins = j["ndf_phi_bins"].get<int>();
+    if (j.contains("ndf_theta_bins")) o.ndf_theta_bins = static_cast<int>(get_count(j, "ndf_theta_bins", file, where));
+    if (j.contains("ndf_phi_bins")) o.ndf_phi_bins = static_cast<int>(get_count(j, "ndf_phi_bins", file, where));
     if (j.contains("min_ring_mass")) o.min_ring_mass = j["min_ring_mass"].get<double>();
-    if (j.contains("min_bin_count")) o.min_bin_count = j["min_bin_count"].get<std::uint64_t>();
+    if (j.contains("min_bin_count")) o.min_bin_count = get_count(j, "min_bin_count", file, where);
   } catch (const Json::exception& e) {
     suite_error(file, where + ": " + e.what());
   }
-  (void)known;
   for (double t : o.theta_deg)
     if (!(t >= 0 && t < 90)) suite_error(file, where + ": theta_deg must be in [0, 90) degrees");
   if (o.theta_deg.empty() || o.phi_deg.empty()) suite_error(file, where + ": empty theta_deg or phi_deg");
-  if (o.rays == 0) suite_error(file, where + ": rays must be positive");
-  if (o.ndf_theta_bins < 1 || o.ndf_theta_bins > 3600 || o.ndf_phi_bins < 1 || o.ndf_phi_bins > 7200)
+  if (o.ndf_theta_bins > 3600 || o.ndf_phi_bins > 7200)
     suite_error(file, where + ": ndf_theta_bins in [1, 3600], ndf_phi_bins in [1, 7200]");
+  if (!(o.min_ring_mass >= 0)) suite_error(file, where + ": min_ring_mass must be >= 0");
 }
 
 bool is_option_key(const std::string& k) {
@@ -830,4 +837,4 @@ std::vector<std::string> list_suites(const std::string& dir) {
   return names;
 }
 
-}  // namespace microsim::validate
+}  // namespace microsim::validation

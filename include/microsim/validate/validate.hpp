@@ -28,7 +28,7 @@
 #include "microsim/common.hpp"
 #include "microsim/surface/microsurface.hpp"
 
-namespace microsim::validate {
+namespace microsim::validation {
 
 enum class Kind { Identity, Deterministic, Model, Info };
 const char* to_string(Kind k);
@@ -164,4 +164,4 @@ std::string find_suite(const std::string& name, const std::vector<std::string>& 
 // Names of the suites (*.json) in a folder, sorted.
 std::vector<std::string> list_suites(const std::string& dir);
 
-}  // namespace microsim::validate
+}  // namespace microsim::validation
