@@ -323,10 +323,17 @@ def collapse_rows(rows):
         blocks[index[g]].append(r)
     out = []
     for members in blocks:
-        def badness(r):
+        def badness(r):  # as the CLI: a FAIL first, then |z| (deterministic: |d| / tolerance)
             z = num(r.get("z"))
-            z = abs(z) if z == z else (float("inf") if r.get("z_infinite") else -1)
-            return (r.get("verdict") == "FAIL", z)
+            if z == z:
+                b = abs(z)
+            elif r.get("z_infinite"):
+                b = float("inf")
+            elif r.get("kind") == "deterministic":
+                b = abs(num(r.get("measured")) - num(r.get("model"))) / max(num(r.get("tolerance"), 0.0), 1e-300)
+            else:
+                b = -1
+            return (r.get("verdict") == "FAIL", b)
         worst = max(members, key=badness)
         outside = sum(1 for r in members if r.get("verdict") in ("FAIL", "deviates (finding)"))
         out.append((worst, len(members), outside))

@@ -155,6 +155,7 @@ void check_d_identities(const SurfaceSet& set, Progress& progress, CheckOutput& 
       r.model = m.normal[a];
       r.tolerance = tol;
       r.error = "rounding";
+      r.group = set.name + "/eq_1b";
       r.condition += (r.condition.empty() ? "" : ", ") + std::string("sum A_f m_f.") + axis[a] + " / A";
       out.rows.push_back(r);
     }
@@ -163,6 +164,7 @@ void check_d_identities(const SurfaceSet& set, Progress& progress, CheckOutput& 
     c.model = 1.0;
     c.tolerance = tol;
     c.error = "rounding";
+    c.group = set.name + "/eq_1c";
     c.condition += ", sum A_f (n.m_f) / A";
     out.rows.push_back(c);
     per_surface.push_back({{"label", set.labels[k]},
@@ -211,8 +213,14 @@ void check_d_nominal(const SurfaceSet& set, Progress& progress, CheckOutput& out
       se = res[0].ring_d_stderr[it];
     } else {
       std::vector<double> x;
-      for (const auto& r : res) x.push_back(r.ring_d[it]);
+      double blocks2 = 0;
+      for (const auto& r : res) {
+        x.push_back(r.ring_d[it]);
+        blocks2 += r.ring_d_stderr[it] * r.ring_d_stderr[it];
+      }
       std::tie(d, se) = mean_and_se(x);
+      // Floor: the within-surface (block) error of the mean, in case K values agree by chance.
+      se = std::max(se, std::sqrt(blocks2) / static_cast<double>(K));
     }
     const double lo = deg(bins.theta_lo(it)), hi = deg(bins.theta_hi(it));
     ndf["theta_lo_deg"].push_back(lo);
@@ -305,7 +313,7 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
   const bool periodic = set.surfaces[0].macro().periodic;
   Json per_surface = Json::array();
   // Averaged G1 per direction and surface, for the ensemble comparison with the nominal Smith.
-  std::map<std::pair<double, double>, std::vector<double>> g1_by_direction;
+  std::map<std::pair<double, double>, std::vector<double>> g1_by_direction, se_by_direction;
   for (std::size_t k = 0; k < K; ++k) {
     const Microsurface& s = set.surfaces[k];
     const std::string label = surface_label(set, k);
@@ -340,6 +348,7 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         var.stderr_ = hit.stderr_ * ratio_scale;
         if (periodic) var.model = 1.0;
         var.error = "rays";
+        var.group = set.name + "/visible_area_ratio/" + dir;
         var.extra = ang;
         out.rows.push_back(var);
 
@@ -353,6 +362,7 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         est.stderr_ = std::hypot(gb.stderr_, hit.stderr_ * scale_a);
         est.model = hit.mean * scale_a;
         est.error = "rays";
+        est.group = set.name + "/g1_raycast/" + dir;
         est.extra = ang;
         out.rows.push_back(est);
 
@@ -367,6 +377,7 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         sn.stderr_ = gb.stderr_;
         sn.model = smith_numeric;
         sn.error = "rays";
+        sn.group = set.name + "/smith_numeric/" + dir;
         sn.extra = ang;
         out.rows.push_back(sn);
 
@@ -396,7 +407,7 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
           a.stderr_ = std::hypot(eb.stderr_, ha.stderr_ * sa);
           a.model = ha.mean * sa;
           a.error = "rays";
-          a.group = set.name + "/" + label + "/g1_bin_raycast/" + dir;
+          a.group = set.name + "/g1_bin_raycast/" + dir;
           a.extra = bx;
           out.rows.push_back(a);
           ++nb_est;
@@ -408,7 +419,7 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
           sm.stderr_ = eb.stderr_;
           sm.model = smith_numeric;
           sm.error = "rays";
-          sm.group = set.name + "/" + label + "/g1_bin_smith/" + dir;
+          sm.group = set.name + "/g1_bin_smith/" + dir;
           sm.extra = bx;
           out.rows.push_back(sm);
           ++nb_smith;
@@ -419,7 +430,7 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
           vc.stderr_ = eb.stderr_;
           vc.model = vcav[b];
           vc.error = "rays";
-          vc.group = set.name + "/" + label + "/g1_bin_vcavity/" + dir;
+          vc.group = set.name + "/g1_bin_vcavity/" + dir;
           vc.extra = bx;
           out.rows.push_back(vc);
         }
@@ -439,6 +450,7 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         }
         rows.push_back(row);
         g1_by_direction[{t, p}].push_back(gb.mean);
+        se_by_direction[{t, p}].push_back(gb.stderr_);
       }
     per_surface.push_back({{"label", set.labels[k]}, {"rows", rows}});
   }
@@ -451,6 +463,11 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
       for (double t : o.theta_deg) {
         const Vec3 v = direction_from_angles(rad(t), rad(p));
         auto [mean, se] = mean_and_se(g1_by_direction[{t, p}]);
+        // The spread of K values can be 0 by chance (e.g. every surface unmasked at a steep
+        // angle): the ray-count error of the mean, sqrt(sum se^2) / K, is a floor.
+        double rays2 = 0;
+        for (double e : se_by_direction[{t, p}]) rays2 += e * e;
+        se = std::max(se, std::sqrt(rays2) / static_cast<double>(K));
         Row r = make_row(set, K > 1 ? std::to_string(K) + " surfaces," : "", "g1", "smith_nominal",
                          K > 1 ? Kind::Model : Kind::Info, "001 eq. (11) with alpha_o; Beckmann Lambda");
         r.condition += " theta " + angle(t) + " phi " + angle(p);
@@ -639,14 +656,19 @@ std::string format_table(const Result& r) {
     blocks[it->second].push_back(&row);
   }
   for (const auto& members : blocks) {
+    // The worst row: a FAIL first, then the largest |z| (deterministic rows: |d| / tolerance).
+    auto badness = [](const Row* x) {
+      double b = -1;
+      if (x->z) b = std::abs(*x->z);
+      else if (x->kind == Kind::Deterministic && x->model)
+        b = std::abs(x->measured - *x->model) / std::max(x->tolerance, 1e-300);
+      return std::make_pair(x->verdict == "FAIL", b);
+    };
     const Row* worst = members[0];
     std::size_t deviating = 0;
     for (const Row* m : members) {
       if (m->verdict == "FAIL" || m->verdict == "deviates (finding)") ++deviating;
-      const double zw = worst->z ? std::abs(*worst->z) : -1, zm = m->z ? std::abs(*m->z) : -1;
-      if ((m->verdict == "FAIL") > (worst->verdict == "FAIL") ||
-          ((m->verdict == "FAIL") == (worst->verdict == "FAIL") && zm > zw))
-        worst = m;
+      if (badness(m) > badness(worst)) worst = m;
     }
     Line l;
     l.quantity = worst->quantity + (worst->model_name.empty() ? "" : " vs " + worst->model_name);
