@@ -30,6 +30,7 @@ VERDICT_COLORS = {
 
 
 def _save(fig, path):
+    fig.tight_layout()
     fig.savefig(path, dpi=DPI, bbox_inches="tight")
     plt.close(fig)
     return path
@@ -213,9 +214,10 @@ def g1_curves(path, record, title=""):
     return _save(fig, path)
 
 
-def _pooled_bins(per_surface, theta, phi):
+def _pooled_bins(per_surface, theta, phi, min_count=100):
     """Per normal bin, the mean over surfaces of g1 and the models at (theta, phi); error: ray
-    count, combined over surfaces (sqrt(sum se^2) / K)."""
+    count, combined over surfaces (sqrt(sum se^2) / K). Bins with fewer than min_count area
+    samples or ray hits on some surface are left out (as in the validation's z tests)."""
     acc = {}
     for s in per_surface:
         for row in s.get("rows", []):
@@ -224,6 +226,8 @@ def _pooled_bins(per_surface, theta, phi):
             for b in row.get("bins", []):
                 if "g1_raycast" not in b:
                     continue  # back-facing bin
+                if num(b.get("samples"), min_count) < min_count or num(b.get("raycast_hits"), min_count) < min_count:
+                    continue
                 key = (tuple(b["theta_m_range_deg"]), tuple(b["phi_m_range_deg"]))
                 a = acc.setdefault(key, {"g1": [], "se": [], "smith": [], "vc": [], "ray": [], "rayse": []})
                 a["g1"].append(num(b.get("g1")))
@@ -233,8 +237,11 @@ def _pooled_bins(per_surface, theta, phi):
                 a["smith"].append(num(b.get("smith_numeric")))
                 a["vc"].append(num(b.get("vcavity")))
     out = {}
+    surfaces = len(per_surface)
     for key, a in acc.items():
         k = len(a["g1"])
+        if k < surfaces:
+            continue  # too few samples on some surface
         out[key] = {
             "g1": np.mean(a["g1"]), "se": math.sqrt(np.sum(np.square(a["se"]))) / k,
             "ray": np.mean(a["ray"]), "rayse": math.sqrt(np.sum(np.square(a["rayse"]))) / k,
@@ -405,6 +412,8 @@ def bsdf_lobes(path, record, title=""):
     fig, ax = plt.subplots(figsize=(7.5, 4.3))
     _lobe(ax, rows)
     ax.set_yscale("log")
+    fmax = max([v for k in ("f_order_1", "f_total") for v in column(rows, k) if v == v and v > 0] or [1.0])
+    ax.set_ylim(bottom=1e-4 * fmax)  # four decades below the peak
     ax.legend(fontsize=7)
     ax.set_title((title + ": " if title else "") + "in-plane BSDF lobe per order against the models", fontsize=10)
     return _save(fig, path)

@@ -22,7 +22,8 @@ PROFILES = {
     "default": {
         "suite": "default",
         "g1_theta": "0:85:5",
-        "g1_rays": 200000,
+        "g1_rays": 100000,
+        "g1_max_phis": 2,
         "g2_rays": 200000,
         "bsdf_rays": 1000000,
         "table4_resolution": 256,
@@ -34,6 +35,7 @@ PROFILES = {
         "suite": "smoke",
         "g1_theta": "0:80:20",
         "g1_rays": 10000,
+        "g1_max_phis": 2,
         "g2_rays": 10000,
         "bsdf_rays": 20000,
         "table4_resolution": 64,
@@ -190,8 +192,12 @@ def section_g1(ctx):
         if not files:
             continue
         out = ctx.data("g1_%s.json" % e["name"])
+        # The suite's azimuths, at most g1_max_phis of them (first and last: e.g. 0 and 90).
+        phis = e["parameters"]["phi_deg"]
+        if len(phis) > ctx.profile["g1_max_phis"]:
+            phis = [phis[0], phis[-1]]
         ctx.run(["measure", "g1"] + files + ["--theta", ctx.profile["g1_theta"], "--phi",
-                                             ",".join("%g" % p for p in e["parameters"]["phi_deg"]),
+                                             ",".join("%g" % p for p in phis),
                                              "--rays", str(ctx.profile["g1_rays"]), "-o", out])
         s.figure(ctx, "g1_%s.png" % e["name"], plots.g1_curves,
                  "%s: G1(theta) with %s error bars against Smith; bottom: relative deviations."

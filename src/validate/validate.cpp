@@ -446,6 +446,8 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
           if (r.bins[b].area <= 0) continue;
           row["bins"][jb]["smith_numeric"] = r.bins[b].front_projected > 0 ? smith_numeric : 0.0;
           row["bins"][jb]["vcavity"] = vcav[b];
+          row["bins"][jb]["samples"] = r.bins[b].samples;
+          row["bins"][jb]["raycast_hits"] = r.bins[b].raycast_hits;
           ++jb;
         }
         rows.push_back(row);
