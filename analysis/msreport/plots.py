@@ -261,6 +261,8 @@ def g1_per_normal(path, entry):
     if not dirs:
         raise NoData("no oblique view direction")
     dirs = dirs[-3:] if len(dirs) > 3 else dirs
+    if len(_pooled_bins(per_surface, *dirs[0])) < 3:
+        raise NoData("fewer than 3 normal bins with enough samples (e.g. a flat plane)")
     fig, axes = plt.subplots(1, len(dirs), figsize=(4.8 * len(dirs), 4.2), squeeze=False)
     for ax, (theta, phi) in zip(axes[0], dirs):
         bins = _pooled_bins(per_surface, theta, phi)

@@ -232,7 +232,7 @@ void check_d_nominal(const SurfaceSet& set, Progress& progress, CheckOutput& out
     // macro area) are tested; the far tails hold too few facets for a normal z.
     if (model * bins.solid_angle_of_ring(it) < o.min_ring_mass) continue;
     Row r = make_row(set, K > 1 ? std::to_string(K) + " surfaces" : surface_label(set, 0), "d_ring",
-                     "nominal", Kind::Model, "DESIGN.md D; 001 eq. (4)/(5) Beckmann");
+                     "nominal", Kind::Model, "DESIGN.md D; 001 Sec. 3.2 Beckmann D, bin-averaged");
     r.condition += (K > 1 || !surface_label(set, 0).empty() ? ", " : " ") + std::string("theta_m ") +
                    angle(lo) + "-" + angle(hi);
     r.measured = d;
@@ -243,14 +243,14 @@ void check_d_nominal(const SurfaceSet& set, Progress& progress, CheckOutput& out
     r.extra = {{"theta_m_range_deg", {lo, hi}}};
     out.rows.push_back(r);
   }
-  // Moment fit of alpha (slope variance alpha^2/2 per axis, 001 Sec. 3.3) vs the nominal alpha.
+  // Moment fit of alpha (slope variance alpha^2/2 per axis, 001 Sec. 3.2, App. A) vs the nominal alpha.
   for (int a = 0; a < 2; ++a) {
     std::vector<double> x;
     for (const auto& f : sums) x.push_back(std::sqrt(2 * (a == 0 ? f.slope_var_x : f.slope_var_y)));
     auto [mean, se] = mean_and_se(x);
     Row r = make_row(set, K > 1 ? std::to_string(K) + " surfaces" : surface_label(set, 0),
                      a == 0 ? "fitted_alpha_x" : "fitted_alpha_y", "nominal",
-                     K > 1 ? Kind::Model : Kind::Info, "001 Sec. 3.3 (slope variance alpha^2/2)");
+                     K > 1 ? Kind::Model : Kind::Info, "001 Sec. 3.2 and App. A: P22 dslope = (n.m) D dm, Beckmann slope variance alpha^2/2 per axis");
     r.measured = mean;
     if (K > 1) r.stderr_ = se;
     r.model = a == 0 ? nominal.alpha_x : nominal.alpha_y;
@@ -367,11 +367,12 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         out.rows.push_back(est);
 
         // Averaged G1 against 1/(1 + Lambda) from the facets: on a periodic tile the visible
-        // projected area is (v.n) A, so G1 = (v.n) A / sum_f A_f (v.m_f)+ = 1/(1+Lambda)
-        // exactly (001 eq. 7-10, 000 eq. 2a): an identity, not a test of Smith. On a finite
-        // object it is a model (the object is not infinitesimally thick).
+        // projected area is (v.n) A (000 eq. 2a-2b), so the projected-area average
+        // G1 = (v.n) A / sum_f A_f (v.m_f)+ = 1/(1+Lambda) exactly (000 eq. 3Xc-3Xd): an
+        // identity, not a test of Smith. On a finite object it is a model (the object is not
+        // infinitesimally thick, 000 "Inherent Assumptions").
         Row sn = make_row(set, "", "g1", "smith_numeric", periodic ? Kind::Identity : Kind::Model,
-                          "001 eq. (10) / App. A; DESIGN.md Smith from the facets");
+                          "000 eq. 3Xc-3Xd (exact for the projected-area average on a periodic tile)");
         sn.condition += " " + where;
         sn.measured = gb.mean;
         sn.stderr_ = gb.stderr_;
