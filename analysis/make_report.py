@@ -6,8 +6,8 @@ measurements behind the figures, draws the figures (PNG) and writes OUT/index.ht
     analysis/make_report.py --out /tmp/r --profile smoke  # seconds: the CTest smoke test
 
 Exit code: 0 when the report was built and every exact identity passed; 1 when an identity
-FAILED (the report is still written, with the failing rows in red) or a run failed; 2 for bad
-arguments. Needs Debian's python3-numpy, python3-matplotlib and python3-openimageio.
+FAILED or a section's command failed (the page is still written, with the failing rows and
+sections in red), or when the validation run itself failed; 2 for bad arguments. Needs Debian's python3-numpy, python3-matplotlib and python3-openimageio.
 """
 import argparse
 import os
@@ -70,10 +70,12 @@ def main(argv=None):
     skipped = [s.key for s in sections if s.skipped]
     print("wrote %s: %d figures in %.0f s%s" % (page, nfig, wall,
                                                 "; skipped: " + ", ".join(skipped) if skipped else ""))
+    failed = [s.key for s in sections if s.failed]
+    if failed:
+        print("make_report: sections failed (see the page): %s" % ", ".join(failed), file=sys.stderr)
     if ctx.validation_failed:
         print("make_report: exact identities FAILED (see the validation table)", file=sys.stderr)
-        return 1
-    return 0
+    return 1 if failed or ctx.validation_failed else 0
 
 
 if __name__ == "__main__":

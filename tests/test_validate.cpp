@@ -266,8 +266,10 @@ bool exists(const std::string& p) {
   struct stat st;
   return stat(p.c_str(), &st) == 0;
 }
+// Per-test capture files: ctest -j runs the tests of this file as parallel processes.
 Result run(const std::string& args) {
-  std::string out = tmp("stdout.txt"), err = tmp("stderr.txt");
+  const std::string test = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  std::string out = tmp(test + "_stdout.txt"), err = tmp(test + "_stderr.txt");
   std::string cmd = std::string(MICROSIM_BINARY) + " " + args + " >" + out + " 2>" + err;
   int status = std::system(cmd.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};

@@ -55,6 +55,7 @@ class Section:
         self.figures = []  # (relative path, caption)
         self.html = ""     # extra HTML (tables)
         self.skipped = None
+        self.failed = None  # a command of this section failed: shown on the page, exit code 1
         self.notes = []
 
     def skip(self, reason):
@@ -108,7 +109,8 @@ class Context:
         shown = [c.replace(self.out, "REPORT") if c.startswith(self.out) else c for c in cmd]
         self.log.append((" ".join(shlex.quote(c) for c in shown), dt, p.returncode))
         if check and p.returncode != 0:
-            raise RuntimeError("microsim %s failed (exit %d): %s" % (args[0], p.returncode, p.stderr.strip()))
+            words = " ".join(a for a in list(args)[:2] if not a.startswith("-") and "/" not in a)
+            raise RuntimeError("microsim %s failed (exit %d): %s" % (words, p.returncode, p.stderr.strip()))
         return p
 
     def has_command(self, *words):
@@ -404,13 +406,17 @@ def write_html(ctx, sections, wall_seconds):
               esc(ctx.profile["suite"]), wall_seconds, time.strftime("%Y-%m-%d %H:%M"))]
     out.append("<ul>")
     for s in sections:
-        out.append('<li><a href="#%s">%s</a>%s</li>' % (s.key, esc(s.title),
-                                                         ' <span class="skipped">(skipped)</span>' if s.skipped else ""))
+        state = (' <span class="v-FAIL">(failed)</span>' if s.failed else
+                 ' <span class="skipped">(skipped)</span>' if s.skipped else "")
+        out.append('<li><a href="#%s">%s</a>%s</li>' % (s.key, esc(s.title), state))
     out.append("</ul>")
     for s in sections:
         out.append('<h2 id="%s">%s</h2>' % (s.key, esc(s.title)))
         if s.intro:
             out.append("<p>%s</p>" % esc(s.intro).replace("`", ""))
+        if s.failed:
+            out.append('<p class="v-FAIL">This section failed: %s</p>' % esc(s.failed))
+            continue
         if s.skipped:
             out.append('<p class="skipped">Skipped: %s</p>' % esc(s.skipped))
             continue
@@ -439,15 +445,23 @@ def build(ctx):
     sections = []
     for fn in SECTIONS:
         t = time.time()
-        s = fn(ctx)
-        if ctx.verbose:
-            print("%-12s %s (%.1f s)" % (s.key, "skipped: " + s.skipped if s.skipped else
-                                         "%d figure(s)" % len(s.figures), time.time() - t), flush=True)
+        key = fn.__name__.replace("section_", "")
+        try:
+            s = fn(ctx)
+        except RuntimeError as e:
+            if fn is section_validation:
+                raise  # nothing else can run without the validation record
+            s = Section(key, key.replace("_", " "))
+            s.failed = str(e)
+        if ctx.verbose or s.failed:
+            state = ("FAILED: " + s.failed if s.failed else "skipped: " + s.skipped if s.skipped
+                     else "%d figure(s)" % len(s.figures))
+            print("%-12s %s (%.1f s)" % (s.key, state, time.time() - t), flush=True)
         sections.append(s)
     wall = time.time() - t0
     with open(os.path.join(ctx.data_dir, "report.json"), "w") as f:
         json.dump({"profile": ctx.profile_name, "wall_seconds": wall,
                    "sections": [{"key": s.key, "figures": [p for p, _ in s.figures], "skipped": s.skipped,
-                                 "notes": s.notes} for s in sections],
+                                 "failed": s.failed, "notes": s.notes} for s in sections],
                    "commands": [{"command": c, "seconds": d, "exit": r} for c, d, r in ctx.log]}, f, indent=1)
     return sections, wall
