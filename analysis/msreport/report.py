@@ -348,6 +348,44 @@ def collapse_rows(rows):
     return out
 
 
+def summary_table_html(rows):
+    """One line per (entry, quantity vs model): how many rows, how many outside, the largest
+    |relative deviation| and |z| -- the findings at a glance."""
+    order, acc = [], {}
+    for r in rows:
+        key = (r.get("entry", ""), "%s vs %s" % (r.get("quantity"), r.get("model_name")), r.get("kind", ""))
+        if key not in acc:
+            order.append(key)
+            acc[key] = {"n": 0, "out": 0, "rel": 0.0, "z": 0.0, "fail": 0}
+        a = acc[key]
+        a["n"] += 1
+        a["out"] += r.get("verdict") in ("FAIL", "deviates (finding)")
+        a["fail"] += r.get("verdict") == "FAIL"
+        rel, z = num(r.get("rel_dev")), num(r.get("z"))
+        if rel == rel:
+            a["rel"] = max(a["rel"], abs(rel))
+        if z == z:
+            a["z"] = max(a["z"], abs(z))
+        elif r.get("z_infinite"):
+            a["z"] = float("inf")
+    out = ['<table class="validation"><thead><tr><th>entry</th><th>quantity vs model</th><th>kind</th>'
+           '<th>rows</th><th>outside the threshold</th><th>max |rel. dev.|</th><th>max |z|</th></tr></thead><tbody>']
+    for key in order:
+        a = acc[key]
+        if a["fail"]:
+            cls = "v-FAIL"
+        elif a["out"]:
+            cls = "v-deviates"
+        else:
+            cls = "v-pass" if key[2] in ("identity", "deterministic") else "v-agrees"
+        out.append('<tr><td>%s</td><td>%s</td><td>%s</td><td>%d</td><td class="%s">%d%s</td><td>%.3g%%</td>'
+                   '<td>%s</td></tr>' % (html.escape(key[0]), html.escape(key[1]), html.escape(key[2]), a["n"], cls,
+                                          a["out"], " FAIL" if a["fail"] else "", 100 * a["rel"],
+                                          "-" if a["z"] == 0 and key[2] in ("deterministic", "info") else "%.3g" % a["z"]))
+    out.append("</tbody></table>")
+    return "\n".join(out)
+
+
 def validation_table_html(v):
     summ = v.get("summary", {})
     parts = ['<p class="summary">%d rows: <b class="v-pass">%d pass</b>, <b class="v-FAIL">%d FAIL</b>, '
@@ -356,6 +394,8 @@ def validation_table_html(v):
              % (summ.get("rows", 0), summ.get("pass", 0), summ.get("fail", 0), summ.get("agrees", 0),
                 summ.get("deviates", 0), summ.get("measured", 0), num(v.get("z_threshold")),
                 int(num(v.get("comparisons"), 0)), num(v.get("significance")))]
+    parts.append(summary_table_html(v.get("rows", [])))
+    parts.append("<p>All rows (groups of per-bin rows shown by their worst row):</p>")
     parts.append('<table class="validation"><thead><tr><th>quantity</th><th>condition</th><th>measured &plusmn; stderr'
                  '</th><th>model</th><th>z</th><th>rel. dev.</th><th>verdict</th><th>kind</th><th>source</th>'
                  '</tr></thead><tbody>')

@@ -297,9 +297,12 @@ std::vector<double> vcavity_bin_model(const FacetTable& t, const Vec3& v, int nb
 double g1_work(const SurfaceSet& set) {
   const Options& o = set.options;
   double w = 0;
+  // As counted in check_g1: the facet table once, then per direction both estimators' rays
+  // and the V-cavity pass over the facets.
   for (const auto& s : set.surfaces)
-    w += static_cast<double>(o.theta_deg.size() * o.phi_deg.size()) *
-         (2.0 * static_cast<double>(o.rays) + 0.5 * static_cast<double>(s.num_facets()));
+    w += 0.1 * static_cast<double>(s.num_facets()) +
+         static_cast<double>(o.theta_deg.size() * o.phi_deg.size()) *
+             (2.0 * static_cast<double>(o.rays) + 0.4 * static_cast<double>(s.num_facets()));
   return w;
 }
 
@@ -323,7 +326,6 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
     Json rows = Json::array();
     for (double p : o.phi_deg)
       for (double t : o.theta_deg) {
-        if (!(t >= 0 && t < 90)) throw UsageError("--theta must be in [0, 90) degrees (got " + num(t) + ")");
         const Vec3 v = direction_from_angles(rad(t), rad(p));
         const double unit = 2.0 * static_cast<double>(o.rays);
         go.progress = [&](double f) { progress.update(f * unit); };
@@ -383,7 +385,6 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         out.rows.push_back(sn);
 
         // Per normal bin G1(v, m).
-        int nb_est = 0, nb_smith = 0;
         for (int b = 0; b < binning.size(); ++b) {
           const G1NormalBin& nb = r.bins[b];
           if (nb.front_projected <= 0 || nb.samples < o.min_bin_count ||
@@ -411,7 +412,6 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
           a.group = set.name + "/g1_bin_raycast/" + dir;
           a.extra = bx;
           out.rows.push_back(a);
-          ++nb_est;
           // Smith: G1(v, m) = chi+(v.m) G1(v), independent of m (001 eq. 9-10).
           Row sm = make_row(set, "", "g1_bin", "smith_numeric", Kind::Model,
                             "001 eq. (9)-(10): Smith G1(v,m) = chi+(v.m) G1(v)");
@@ -423,7 +423,6 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
           sm.group = set.name + "/g1_bin_smith/" + dir;
           sm.extra = bx;
           out.rows.push_back(sm);
-          ++nb_smith;
           Row vc = make_row(set, "", "g1_bin", "vcavity", Kind::Model,
                             "001 eq. (24), averaged over the bin's facets");
           vc.condition += " " + bin_where;
@@ -435,8 +434,6 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
           vc.extra = bx;
           out.rows.push_back(vc);
         }
-        (void)nb_est;
-        (void)nb_smith;
 
         Json row = g1_row_json(r, s);
         row["theta_deg"] = t;
@@ -526,6 +523,12 @@ Result run(const std::vector<SurfaceSet>& sets, double significance,
     if (set.surfaces.empty()) throw UsageError("validation entry " + set.name + " has no surface");
     if (set.labels.size() != set.surfaces.size())
       throw RuntimeFailure("validation entry " + set.name + ": one label per surface expected");
+    const Options& o = set.options;
+    if (o.theta_deg.empty() || o.phi_deg.empty())
+      throw UsageError("validation entry " + set.name + ": no view direction (--theta, --phi)");
+    for (double t : o.theta_deg)
+      if (!(t >= 0 && t < 90)) throw UsageError("--theta must be in [0, 90) degrees (got " + num(t) + ")");
+    if (o.rays == 0) throw UsageError("--rays must be positive");
     for (const std::string& name : set.options.checks) {
       auto it = std::find_if(checks().begin(), checks().end(), [&](const Check& c) { return c.name == name; });
       if (it == checks().end()) {
