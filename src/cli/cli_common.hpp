@@ -53,5 +53,6 @@ void register_convert(CLI::App& app, const GlobalOptions& g);
 void register_measure_ndf(CLI::App& measure, const GlobalOptions& g);
 void register_measure_g1(CLI::App& measure, const GlobalOptions& g);
 void register_demo(CLI::App& app, const GlobalOptions& g);
+void register_validate(CLI::App& app, const GlobalOptions& g);
 
 }  // namespace microsim::cli

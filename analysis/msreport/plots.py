@@ -1,0 +1,465 @@
+"""Figures of the report. Each function `f(path, *data)` reads microsim records (already
+loaded) and writes one PNG at `path`; it raises NoData("reason") when the records lack what it
+needs (the report then lists the figure as not drawn, with the reason). Any other exception is
+a bug and fails the report.
+"""
+import math
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from . import models  # noqa: E402
+from .readers import column, num, has_field  # noqa: E402
+
+DPI = 100
+
+
+class NoData(Exception):
+    """The records do not hold what a figure needs."""
+
+VERDICT_COLORS = {
+    "pass": "#2a9d4b",
+    "FAIL": "#d62728",
+    "agrees": "#1f77b4",
+    "deviates (finding)": "#ff7f0e",
+    "measured": "#7f7f7f",
+}
+
+
+def _save(fig, path):
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI, bbox_inches="tight")
+    plt.close(fig)
+    return path
+
+
+def _nominal(description):
+    """(kind, alpha_x, alpha_y) of a surface description, or None."""
+    if not isinstance(description, dict) or "nominal_ndf" not in description:
+        return None
+    ax, ay = num(description.get("alpha_x")), num(description.get("alpha_y"))
+    if not (ax > 0 and ay > 0):
+        return None
+    return description["nominal_ndf"], ax, ay
+
+
+# ----------------------------------------------------------------------------------------------
+# Validation overview
+
+
+def validation_z(path, validation):
+    """z of every z-tested row, one line per (quantity vs model), colored by verdict."""
+    rows = [r for r in validation.get("rows", []) if num(r.get("z")) == num(r.get("z"))]
+    if not rows:
+        raise NoData("no z-tested rows in the validation record")
+    zt = num(validation.get("z_threshold"), 3.0)
+    cats = []
+    for r in rows:
+        c = "%s vs %s [%s]" % (r.get("quantity"), r.get("model_name"), r.get("kind"))
+        if c not in cats:
+            cats.append(c)
+    fig, ax = plt.subplots(figsize=(9, 0.45 * len(cats) + 1.6))
+    rng = np.random.default_rng(0)
+    for verdict, color in VERDICT_COLORS.items():
+        sel = [r for r in rows if r.get("verdict") == verdict]
+        if not sel:
+            continue
+        y = np.array([cats.index("%s vs %s [%s]" % (r.get("quantity"), r.get("model_name"), r.get("kind")))
+                      for r in sel]) + rng.uniform(-0.25, 0.25, len(sel))
+        ax.scatter(column(sel, "z"), y, s=9, color=color, alpha=0.7, label="%s (%d)" % (verdict, len(sel)))
+    for s in (-1, 1):
+        ax.axvline(s * zt, color="k", ls="--", lw=0.8)
+    ax.set_xscale("symlog", linthresh=max(zt, 1.0))
+    ax.set_yticks(range(len(cats)))
+    ax.set_yticklabels(cats, fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xlabel("z = (measured - model) / stderr   (dashed: Sidak threshold |z| = %.2f over %d tests)"
+                  % (zt, int(num(validation.get("comparisons"), 0))))
+    ax.legend(fontsize=8, loc="lower right")
+    ax.set_title("Validation: z-scores by check (identities must pass; models may deviate)")
+    ax.grid(True, axis="x", alpha=0.3)
+    return _save(fig, path)
+
+
+# ----------------------------------------------------------------------------------------------
+# NDF
+
+
+def ndf_map(path, channels, attrs, title=""):
+    """Upper hemisphere of D (measured, nominal, ratio) from a `measure ndf` EXR."""
+    if "D" not in channels:
+        raise NoData("the EXR has no D channel")
+    d = channels["D"]
+    n_theta, n_phi = d.shape
+    upper = n_theta // 2  # rows cover theta in [0, 180]; keep [0, 90]
+    theta_edges = np.linspace(0, 90, upper + 1)
+    phi_edges = np.linspace(0, 2 * np.pi, n_phi + 1)
+    panels = [("D measured", d[:upper])]
+    if "D_nominal" in channels:
+        nom = channels["D_nominal"][:upper]
+        panels.append(("D nominal", nom))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = np.where(nom > 1e-3 * nom.max(), d[:upper] / nom, np.nan)
+        panels.append(("measured / nominal", ratio))
+    fig, axes = plt.subplots(1, len(panels), subplot_kw={"projection": "polar"},
+                             figsize=(4.2 * len(panels), 4.2))
+    axes = np.atleast_1d(axes)
+    pos = d[:upper][d[:upper] > 0]
+    vmin = max(pos.min(), pos.max() * 1e-4) if pos.size else 1e-3
+    vmax = pos.max() if pos.size else 1.0
+    for ax, (name, data) in zip(axes, panels):
+        if name.startswith("measured /"):
+            m = ax.pcolormesh(phi_edges, theta_edges, data, cmap="RdBu_r", vmin=0.5, vmax=1.5, shading="flat")
+        else:
+            m = ax.pcolormesh(phi_edges, theta_edges, np.maximum(data, vmin * 1e-3), cmap="viridis",
+                              norm=matplotlib.colors.LogNorm(vmin=vmin, vmax=vmax), shading="flat")
+        fig.colorbar(m, ax=ax, shrink=0.7, pad=0.1)
+        ax.set_title(name, fontsize=10)
+        ax.set_yticks([30, 60, 90])
+        ax.set_yticklabels(["30", "60", "90"], fontsize=7)
+        ax.tick_params(axis="x", labelsize=7)
+    fig.suptitle(title + "  (radius: theta_m in degrees, angle: phi_m; D per steradian)", fontsize=10)
+    return _save(fig, path)
+
+
+def ndf_rings(path, entries):
+    """D(theta_m) per ring with error bars against the nominal NDF, one column per entry."""
+    usable = [(e["name"], e["measurements"]["d_nominal"]) for e in entries
+              if isinstance(e.get("measurements", {}).get("d_nominal"), dict)]
+    if not usable:
+        raise NoData("no entry with a nominal NDF")
+    fig, axes = plt.subplots(2, len(usable), figsize=(4.6 * len(usable), 6), squeeze=False,
+                             gridspec_kw={"height_ratios": [2, 1]}, sharex="col")
+    for c, (name, m) in enumerate(usable):
+        lo, hi = np.array(m["theta_lo_deg"]), np.array(m["theta_hi_deg"])
+        mid = 0.5 * (lo + hi)
+        d, se, nom = np.array(m["d"], float), np.array(m["d_stderr"], float), np.array(m["d_nominal"], float)
+        keep = (mid < 90) & ((d > 0) | (nom > 1e-6 * nom.max()))
+        ax = axes[0, c]
+        ax.errorbar(mid[keep], d[keep], yerr=se[keep], fmt="o", ms=3, capsize=2,
+                    label="measured (stderr: %s)" % m.get("error", "?"))
+        ax.step(np.append(lo[keep], hi[keep][-1:]), np.append(nom[keep], nom[keep][-1:]), where="post",
+                color="k", lw=1, label="%s alpha=(%g, %g), bin-averaged" % (m.get("nominal"), m.get("alpha_x"), m.get("alpha_y")))
+        ax.set_yscale("log")
+        ax.set_title(name, fontsize=10)
+        ax.set_ylabel("D (phi-averaged ring)")
+        ax.legend(fontsize=7)
+        ax.grid(True, alpha=0.3)
+        ax2 = axes[1, c]
+        ok = keep & (nom > 0)
+        rel = (d[ok] - nom[ok]) / nom[ok]
+        ax2.errorbar(mid[ok], rel, yerr=se[ok] / nom[ok], fmt="o", ms=3, capsize=2)
+        ax2.axhline(0, color="k", lw=0.8)
+        ax2.set_ylim(-0.5, 0.5)
+        ax2.set_xlabel("theta_m (deg)")
+        ax2.set_ylabel("(D - nominal) / nominal")
+        ax2.grid(True, alpha=0.3)
+    fig.suptitle("Normal distribution D of the generated surfaces against the nominal NDF", fontsize=11)
+    return _save(fig, path)
+
+
+# ----------------------------------------------------------------------------------------------
+# G1
+
+
+def g1_curves(path, record, title=""):
+    """Averaged G1 vs theta from `measure g1` (one surface or an ensemble) against Smith."""
+    rows = record.get("rows", [])
+    if not rows or not has_field(rows, "g1"):
+        raise NoData("no G1 rows")
+    nominal = _nominal(record.get("surface"))
+    phis = sorted(set(column(rows, "phi_deg")))
+    fig, axes = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True, gridspec_kw={"height_ratios": [2, 1]})
+    ax, ax2 = axes
+    ensemble = isinstance(record.get("per_surface"), list)
+    err_kind = "between %d surfaces" % len(record["per_surface"]) if ensemble else "ray count, one surface"
+    for k, phi in enumerate(phis):
+        sel = [r for r in rows if num(r.get("phi_deg")) == phi]
+        sel.sort(key=lambda r: num(r.get("theta_deg")))
+        th = column(sel, "theta_deg")
+        g, gse = column(sel, "g1"), column(sel, "g1_stderr")
+        gr, grse = column(sel, "g1_raycast"), column(sel, "g1_raycast_stderr")
+        sn = column(sel, "smith_numeric")
+        suffix = "" if len(phis) == 1 else ", phi=%g" % phi
+        color = "C%d" % k
+        ax.errorbar(th, g, yerr=gse, fmt="o", ms=4, capsize=2, color=color,
+                    label="G1 area sampling (stderr %s)%s" % (err_kind, suffix))
+        if has_field(sel, "g1_raycast"):
+            ax.errorbar(th + 0.6, gr, yerr=grse, fmt="s", ms=3, mfc="none", capsize=2, color=color,
+                        label="G1 ray casting%s" % suffix)
+        ax.plot(th, sn, "x", color="k", ms=6, label="Smith with the surface's facets (smith_numeric)" if k == 0 else None)
+        if nominal:
+            kind, axx, ayy = nominal
+            t = np.linspace(0, min(89.5, th.max() + 2), 300)
+            ax.plot(t, models.smith_g1(kind, axx, ayy, np.radians(t), math.radians(phi)), "-", color=color, lw=1,
+                    label="Smith %s nominal alpha=(%g, %g)%s" % (kind, axx, ayy, suffix))
+            sm = models.smith_g1(kind, axx, ayy, np.radians(th), math.radians(phi))
+            ax2.errorbar(th, (g - sm) / sm, yerr=gse / sm, fmt="o", ms=4, capsize=2, color=color,
+                         label="vs Smith nominal%s" % suffix)
+        ax2.errorbar(th + 0.6, (g - sn) / sn, yerr=gse / sn, fmt="x", ms=5, capsize=2, color="k" if k == 0 else color,
+                     label="vs smith_numeric%s" % suffix)
+    ax.set_ylabel("G1(v), projected-area average")
+    ax.legend(fontsize=7, loc="lower left")
+    ax.grid(True, alpha=0.3)
+    ax.set_title((title + ": " if title else "") + "masking G1 against Smith (V-cavity's average is the same curve)",
+                 fontsize=10)
+    ax2.axhline(0, color="k", lw=0.8)
+    ax2.set_xlabel("view zenith theta (deg)")
+    ax2.set_ylabel("relative deviation")
+    ax2.legend(fontsize=7)
+    ax2.grid(True, alpha=0.3)
+    return _save(fig, path)
+
+
+def _pooled_bins(per_surface, theta, phi, min_count=100):
+    """Per normal bin, the mean over surfaces of g1 and the models at (theta, phi); error: ray
+    count, combined over surfaces (sqrt(sum se^2) / K). Bins with fewer than min_count area
+    samples or ray hits on some surface are left out (as in the validation's z tests)."""
+    acc = {}
+    for s in per_surface:
+        for row in s.get("rows", []):
+            if num(row.get("theta_deg")) != theta or num(row.get("phi_deg")) != phi:
+                continue
+            for b in row.get("bins", []):
+                if "g1_raycast" not in b:
+                    continue  # back-facing bin
+                if num(b.get("samples"), min_count) < min_count or num(b.get("raycast_hits"), min_count) < min_count:
+                    continue
+                key = (tuple(b["theta_m_range_deg"]), tuple(b["phi_m_range_deg"]))
+                a = acc.setdefault(key, {"g1": [], "se": [], "smith": [], "vc": [], "ray": [], "rayse": []})
+                a["g1"].append(num(b.get("g1")))
+                a["se"].append(num(b.get("g1_stderr")))
+                a["ray"].append(num(b.get("g1_raycast")))
+                a["rayse"].append(num(b.get("g1_raycast_stderr")))
+                a["smith"].append(num(b.get("smith_numeric")))
+                a["vc"].append(num(b.get("vcavity")))
+    out = {}
+    surfaces = len(per_surface)
+    for key, a in acc.items():
+        k = len(a["g1"])
+        if k < surfaces:
+            continue  # too few samples on some surface
+        out[key] = {
+            "g1": np.mean(a["g1"]), "se": math.sqrt(np.sum(np.square(a["se"]))) / k,
+            "ray": np.mean(a["ray"]), "rayse": math.sqrt(np.sum(np.square(a["rayse"]))) / k,
+            "smith": np.mean(a["smith"]), "vc": np.mean(a["vc"]), "n": k,
+        }
+    return out
+
+
+def g1_per_normal(path, entry):
+    """G1(v, m) against theta_m, one curve per azimuth sector of m relative to the view (the
+    test of Smith's independence of masking and normals), with Smith and V-cavity beside it."""
+    per_surface = entry.get("measurements", {}).get("g1")
+    if not per_surface:
+        raise NoData("entry %s has no G1 measurements" % entry.get("name"))
+    rows = per_surface[0].get("rows", [])
+    dirs = sorted({(num(r.get("theta_deg")), num(r.get("phi_deg"))) for r in rows if num(r.get("theta_deg")) > 0})
+    if not dirs:
+        raise NoData("no oblique view direction")
+    dirs = dirs[-3:] if len(dirs) > 3 else dirs
+    if len(_pooled_bins(per_surface, *dirs[0])) < 3:
+        raise NoData("fewer than 3 normal bins with enough samples (e.g. a flat plane)")
+    fig, axes = plt.subplots(1, len(dirs), figsize=(4.8 * len(dirs), 4.2), squeeze=False)
+    for ax, (theta, phi) in zip(axes[0], dirs):
+        bins = _pooled_bins(per_surface, theta, phi)
+        # Sectors by |phi_m - phi_v| folded to [0, 180]: 0 = facets tilted toward the viewer.
+        sectors = {}
+        for (tr, pr), b in bins.items():
+            dphi = abs(((0.5 * (pr[0] + pr[1]) - phi) + 180) % 360 - 180)
+            sectors.setdefault(round(dphi, 1), []).append((0.5 * (tr[0] + tr[1]), b))
+        smith = None
+        for k, dphi in enumerate(sorted(sectors)):
+            pts = sorted(sectors[dphi], key=lambda p: p[0])
+            # Average the two mirror sectors (+-dphi) bin by bin.
+            by_theta = {}
+            for t, b in pts:
+                by_theta.setdefault(t, []).append(b)
+            t = np.array(sorted(by_theta))
+            g = np.array([np.mean([b["g1"] for b in by_theta[x]]) for x in t])
+            se = np.array([math.sqrt(sum(b["se"] ** 2 for b in by_theta[x])) / len(by_theta[x]) for x in t])
+            vc = np.array([np.mean([b["vc"] for b in by_theta[x]]) for x in t])
+            smith = np.mean([b["smith"] for x in t for b in by_theta[x]])
+            color = "C%d" % k
+            ax.errorbar(t, g, yerr=se, fmt="o-", ms=3, lw=1, capsize=2, color=color,
+                        label="measured, |phi_m - phi_v| = %g" % dphi)
+            ax.plot(t, vc, "--", color=color, lw=1, label="V-cavity" if k == 0 else None)
+        if smith is not None:
+            ax.axhline(smith, color="k", lw=1.2, label="Smith (independent of m)")
+        ax.set_title("view theta = %g deg, phi = %g deg" % (theta, phi), fontsize=10)
+        ax.set_xlabel("theta_m (deg, bin center)")
+        ax.set_ylabel("G1(v, m)")
+        ax.set_ylim(0, 1.05)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc="lower left")
+    n = len(per_surface)
+    fig.suptitle("%s: masking per normal bin (%d surface%s pooled, ray-count errors); dashed: V-cavity (001 eq. 24)"
+                 % (entry.get("name"), n, "s" if n > 1 else ""), fontsize=10)
+    return _save(fig, path)
+
+
+# ----------------------------------------------------------------------------------------------
+# G2 (measure g2; documented fields of issue 4)
+
+G2_MODELS = [
+    ("smith_separable", "Smith separable (001 eq. 20)", "-"),
+    ("smith_height_correlated", "Smith height-correlated (eq. 21)", "--"),
+    ("smith_direction_correlated", "Smith direction-correlated (eq. 22)", ":"),
+    ("smith_height_direction_correlated", "Smith height-direction-correlated (eq. 23)", "-."),
+    ("vcavity", "V-cavity", (0, (1, 1))),
+]
+
+
+def g2_curves(path, record, title=""):
+    rows = record.get("rows", [])
+    if not rows or not has_field(rows, "g2"):
+        raise NoData("no G2 rows")
+    for key in ("theta_o_deg", "theta_i_deg"):
+        if not has_field(rows, key):
+            raise NoData("G2 rows lack %s" % key)
+
+    def dphi(r):
+        d = abs((num(r.get("phi_i_deg"), 0) - num(r.get("phi_o_deg"), 0) + 180) % 360 - 180)
+        return round(d, 3)
+
+    panels = sorted({(num(r.get("theta_o_deg")), dphi(r)) for r in rows})
+    panels = panels[:6]
+    ncol = min(3, len(panels))
+    nrow = (len(panels) + ncol - 1) // ncol
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 3.8 * nrow), squeeze=False)
+    for ax, (to, dp) in zip(axes.flat, panels):
+        sel = sorted([r for r in rows if num(r.get("theta_o_deg")) == to and dphi(r) == dp],
+                     key=lambda r: num(r.get("theta_i_deg")))
+        ti = column(sel, "theta_i_deg")
+        ax.errorbar(ti, column(sel, "g2"), yerr=column(sel, "g2_stderr"), fmt="o", ms=4, capsize=2,
+                    color="k", label="measured")
+        for key, label, ls in G2_MODELS:
+            if has_field(sel, key):
+                ax.plot(ti, column(sel, key), ls=ls, lw=1.2, label=label)
+        ax.set_title("theta_o = %g deg, delta phi = %g deg" % (to, dp), fontsize=10)
+        ax.set_xlabel("theta_i (deg)")
+        ax.set_ylabel("G2 (area average)")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=6)
+    for ax in list(axes.flat)[len(panels):]:
+        ax.axis("off")
+    fig.suptitle((title + ": " if title else "") + "masking-shadowing G2 against the four Smith forms and V-cavity",
+                 fontsize=10)
+    return _save(fig, path)
+
+
+# ----------------------------------------------------------------------------------------------
+# BSDF (measure bsdf; documented fields of issue 5)
+
+ORDER_KEYS = ["order_1", "order_2", "order_3", "order_4plus", "total"]
+
+
+def bsdf_albedo(path, record, title=""):
+    alb = record.get("albedo")
+    if not isinstance(alb, dict):
+        raise NoData("no albedo in the BSDF record")
+    fig, ax = plt.subplots(figsize=(7, 3.8))
+    width = 0.38
+    x = np.arange(len(ORDER_KEYS))
+    for k, side in enumerate(("reflected", "transmitted")):
+        vals = alb.get(side)
+        if not isinstance(vals, dict):
+            continue
+        errs = record.get(side + "_stderr") or alb.get(side + "_stderr") or {}
+        y = np.array([num(vals.get(o)) for o in ORDER_KEYS])
+        e = np.array([num(errs.get(o), 0.0) for o in ORDER_KEYS])
+        ax.bar(x + (k - 0.5) * width, y, width, yerr=e, capsize=3, label=side)
+        for xi, yi, ei in zip(x, y, e):
+            if yi == yi:
+                ax.text(xi + (k - 0.5) * width, yi, "%.4f\n+-%.1g" % (yi, ei), ha="center", va="bottom", fontsize=6)
+    ax.set_xticks(x)
+    ax.set_xticklabels(["order 1", "order 2", "order 3", "order 4+", "total"])
+    ax.set_ylabel("albedo")
+    ax.set_title((title + ": " if title else "") + "albedo per scattering order", fontsize=10)
+    ax.legend(fontsize=8)
+    ax.grid(True, axis="y", alpha=0.3)
+    return _save(fig, path)
+
+
+BSDF_MODELS = [
+    ("smith_single", "Smith single scattering (height-correlated G2)", "-"),
+    ("vcavity_single", "V-cavity single scattering", "--"),
+    ("smith_multiple", "Smith random walk, all orders", ":"),
+]
+
+
+def _lobe(ax, rows, with_total=True):
+    rows = sorted(rows, key=lambda r: num(r.get("theta_o_deg")))
+    th = column(rows, "theta_o_deg")
+    ax.errorbar(th, column(rows, "f_order_1"), yerr=column(rows, "f_order_1_stderr"), fmt="o", ms=3,
+                capsize=2, color="C0", label="measured order 1")
+    if with_total and has_field(rows, "f_total"):
+        ax.errorbar(th, column(rows, "f_total"), yerr=column(rows, "f_total_stderr"), fmt="s", ms=3,
+                    mfc="none", capsize=2, color="C3", label="measured, all orders")
+    for key, label, ls in BSDF_MODELS:
+        if has_field(rows, key) and (with_total or key != "smith_multiple"):
+            ax.plot(th, column(rows, key), ls=ls, color="k", lw=1.1, label=label)
+    ax.set_xlabel("theta_o (deg, signed: + on the specular side)")
+    ax.set_ylabel("f (1/sr)")
+    ax.grid(True, alpha=0.3)
+
+
+def bsdf_lobes(path, record, title=""):
+    rows = record.get("in_plane")
+    if not isinstance(rows, list) or not rows or not has_field(rows, "f_order_1"):
+        raise NoData("no in_plane rows in the BSDF record")
+    fig, ax = plt.subplots(figsize=(7.5, 4.3))
+    _lobe(ax, rows)
+    ax.set_yscale("log")
+    fmax = max([v for k in ("f_order_1", "f_total") for v in column(rows, k) if v == v and v > 0] or [1.0])
+    ax.set_ylim(bottom=1e-4 * fmax)  # four decades below the peak
+    ax.legend(fontsize=7)
+    ax.set_title((title + ": " if title else "") + "in-plane BSDF lobe per order against the models", fontsize=10)
+    return _save(fig, path)
+
+
+def table4(path, records):
+    """001 Table 4: in-plane single-scattering lobes at theta = 1.5 rad for several alphas."""
+    usable = [(a, r) for a, r in records if isinstance(r.get("in_plane"), list) and r["in_plane"]]
+    if not usable:
+        raise NoData("no BSDF record with in_plane rows")
+    fig, axes = plt.subplots(1, len(usable), figsize=(3.6 * len(usable), 3.6), squeeze=False)
+    for ax, (alpha, rec) in zip(axes[0], usable):
+        _lobe(ax, rec["in_plane"], with_total=False)
+        ax.set_title("alpha = %g" % alpha, fontsize=10)
+    axes[0][0].legend(fontsize=6)
+    fig.suptitle("001 Table 4 reproduced: order-1 lobe at grazing theta = 1.5 rad (85.9 deg), Beckmann tiles, "
+                 "against Smith and V-cavity", fontsize=10)
+    return _save(fig, path)
+
+
+# ----------------------------------------------------------------------------------------------
+# Tiled boxes (measure g1 on generate tiled-boxes; fields of issue 3)
+
+
+def tiled_boxes(path, points):
+    """points: list of (tiles N, measure g1 record). Visible area ratio against N per theta."""
+    series = {}
+    for n, rec in points:
+        for r in rec.get("rows", []):
+            series.setdefault(num(r.get("theta_deg")), []).append(
+                (n, num(r.get("visible_area_ratio")), num(r.get("visible_area_ratio_stderr"), 0.0)))
+    if not series:
+        raise NoData("no visible_area_ratio rows")
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    for k, theta in enumerate(sorted(series)):
+        pts = sorted(series[theta])
+        n = np.array([p[0] for p in pts], float)
+        ax.errorbar(n, [p[1] for p in pts], yerr=[p[2] for p in pts], fmt="o-", ms=4, capsize=2,
+                    color="C%d" % k, label="theta = %g deg" % theta)
+    ax.axhline(1, color="k", lw=0.8)
+    ax.set_xscale("log", base=2)
+    ax.set_xlabel("tiles per side N")
+    ax.set_ylabel("visible projected area / ((v.n) A)")
+    ax.set_title("Tiled boxes (000 Fig. 6): the visible area ratio converges to 1 as N grows", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    return _save(fig, path)

@@ -1,0 +1,507 @@
+"""The report: runs microsim, draws the figures, writes index.html.
+
+A section is one function `section_NAME(ctx)` in SECTIONS: it runs what it needs through
+ctx.run(...), draws its figures with msreport.plots and returns a Section. A section whose
+command does not exist in this microsim build (G2, BSDF, tiled boxes before their issues are
+merged) returns a Section with `skipped` set; the page lists it with the reason. Adding a
+quantity to the report is adding one such function.
+"""
+import html
+import json
+import os
+import shlex
+import subprocess
+import time
+
+from . import plots
+from .readers import load_json, num, read_exr
+
+# Run sizes. "default": the report of the README (at most 10 minutes on 2 cores);
+# "smoke": seconds, for the CTest smoke test (same code paths, tiny runs).
+PROFILES = {
+    "default": {
+        "suite": "default",
+        "g1_theta": "0:85:5",
+        "g1_rays": 100000,
+        "g1_max_phis": 2,
+        "g2_rays": 200000,
+        "bsdf_rays": 1000000,
+        "table4_resolution": 256,
+        "table4_rays": 1000000,
+        "tiles": [1, 2, 4, 8, 16],
+        "tiles_rays": 200000,
+    },
+    "smoke": {
+        "suite": "smoke",
+        "g1_theta": "0:80:20",
+        "g1_rays": 10000,
+        "g1_max_phis": 2,
+        "g2_rays": 10000,
+        "bsdf_rays": 20000,
+        "table4_resolution": 64,
+        "table4_rays": 20000,
+        "tiles": [1, 2, 4],
+        "tiles_rays": 10000,
+    },
+}
+
+TABLE4_ALPHAS = [0.1, 0.4, 0.7, 1.0, 1.3]
+TABLE4_THETA_DEG = 1.5 * 180.0 / 3.141592653589793  # 001 Table 4: theta = 1.5 rad
+
+
+class Section:
+    def __init__(self, key, title, intro=""):
+        self.key, self.title, self.intro = key, title, intro
+        self.figures = []  # (relative path, caption)
+        self.html = ""     # extra HTML (tables)
+        self.skipped = None
+        self.failed = None  # a command of this section failed: shown on the page, exit code 1
+        self.notes = []
+
+    def skip(self, reason):
+        """This section cannot run here (a command missing from this build, no data)."""
+        self.skipped = reason
+        return self
+
+    def figure(self, ctx, name, draw, caption, *args):
+        """Draws one figure; missing data (plots.NoData) becomes a note, not a failure."""
+        path = os.path.join(ctx.fig_dir, name)
+        try:
+            draw(path, *args)
+        except plots.NoData as e:
+            self.notes.append("%s not drawn: %s" % (name, e))
+            return
+        self.figures.append((os.path.relpath(path, ctx.out), caption))
+
+
+class Context:
+    def __init__(self, microsim, out, profile, threads=None, verbose=True):
+        self.microsim = microsim
+        self.out = out
+        self.data_dir = os.path.join(out, "data")
+        self.fig_dir = os.path.join(out, "figures")
+        self.surf_dir = os.path.join(self.data_dir, "surfaces")
+        self.profile = PROFILES[profile]
+        self.profile_name = profile
+        self.threads = threads
+        self.verbose = verbose
+        self.log = []  # (command line, seconds, exit code)
+        self.validation = None
+        self.validation_failed = False
+        for d in (self.data_dir, self.fig_dir, self.surf_dir):
+            os.makedirs(d, exist_ok=True)
+
+    def data(self, name):
+        return os.path.join(self.data_dir, name)
+
+    def run(self, args, check=True, quiet=True):
+        """Runs microsim ARGS; returns CompletedProcess. check: raise on a non-zero exit."""
+        cmd = [self.microsim] + list(args)
+        if quiet:
+            cmd.append("--quiet")
+        if self.threads:
+            cmd += ["--threads", str(self.threads)]
+        t0 = time.time()
+        if self.verbose:
+            print("  $ " + " ".join(shlex.quote(c) for c in cmd), flush=True)
+        p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        dt = time.time() - t0
+        shown = [c.replace(self.out, "REPORT") if c.startswith(self.out) else c for c in cmd]
+        self.log.append((" ".join(shlex.quote(c) for c in shown), dt, p.returncode))
+        if check and p.returncode != 0:
+            words = " ".join(a for a in list(args)[:2] if not a.startswith("-") and "/" not in a)
+            raise RuntimeError("microsim %s failed (exit %d): %s" % (words, p.returncode, p.stderr.strip()))
+        return p
+
+    def has_command(self, *words):
+        """True when `microsim WORDS --help` exists in this build."""
+        p = subprocess.run([self.microsim] + list(words) + ["--help"], stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, text=True)
+        return p.returncode == 0
+
+    def entries(self):
+        return (self.validation or {}).get("entries", [])
+
+    def surface_files(self, entry_name):
+        return [f["file"] for f in (self.validation or {}).get("surface_files", []) if f["entry"] == entry_name]
+
+
+def _nominal_entries(ctx):
+    return [e for e in ctx.entries() if isinstance(e.get("measurements", {}).get("d_nominal"), dict)]
+
+
+# ----------------------------------------------------------------------------------------------
+# Sections
+
+
+def section_validation(ctx):
+    s = Section("validation", "Validation suite",
+                "`microsim validate --suite %s`: every applicable check of every surface of the suite. "
+                "Identities (two estimators of one quantity, geometric consequences, 000 eq. 1b/1c) must "
+                "pass; approximate models (Smith per normal bin, V-cavity, the nominal NDF the generator "
+                "aimed at) are findings: their deviations are results, not errors." % ctx.profile["suite"])
+    out = ctx.data("validation.json")
+    p = ctx.run(["validate", "--suite", ctx.profile["suite"], "-o", out, "--surfaces-dir", ctx.surf_dir],
+                check=False, quiet=False)
+    with open(ctx.data("validation.txt"), "w") as f:
+        f.write(p.stdout)
+    if p.returncode not in (0, 1) or not os.path.isfile(out):
+        raise RuntimeError("microsim validate failed (exit %d): %s" % (p.returncode, p.stderr.strip()))
+    ctx.validation = load_json(out)
+    ctx.validation_failed = p.returncode == 1
+    s.figure(ctx, "validation_z.png", plots.validation_z,
+             "z-scores of all z-tested rows, by check. Identities (green pass / red FAIL) must stay inside "
+             "the dashed Sidak threshold; approximate models (blue agrees / orange deviates) may not.",
+             ctx.validation)
+    s.html = validation_table_html(ctx.validation)
+    return s
+
+
+def section_ndf(ctx):
+    s = Section("ndf", "Normal distribution D",
+                "D measured exactly from the facets (sum of facet areas per bin / (A x solid angle)); error bars "
+                "from spatial blocks of one tile, or between the surfaces of an ensemble.")
+    entries = _nominal_entries(ctx)
+    if not entries:
+        return s.skip("no suite entry with a nominal NDF")
+    s.figure(ctx, "ndf_rings.png", plots.ndf_rings,
+             "D per 5-degree ring (phi-averaged) against the nominal NDF, bin-averaged; bottom: relative "
+             "deviation. The far tail holds few facets.", entries)
+    for e in entries:
+        files = ctx.surface_files(e["name"])
+        if not files:
+            continue
+        exr = ctx.data("ndf_%s.exr" % e["name"])
+        ctx.run(["measure", "ndf", files[0], "-o", exr, "--theta-bins", "90", "--phi-bins", "72"])
+        ch, attrs = read_exr(exr)
+        s.figure(ctx, "ndf_map_%s.png" % e["name"], plots.ndf_map,
+                 "%s (first surface): D over the upper hemisphere in 2 x 5 degree bins, the nominal NDF and "
+                 "their ratio (from `measure ndf -o .exr`)." % e["name"], ch, attrs, e["name"])
+    return s
+
+
+def section_g1(ctx):
+    s = Section("g1", "Masking G1",
+                "Averaged G1 (projected-area average over front-facing facets) by area sampling and by ray "
+                "casting, against Smith with the surface's own facets (smith_numeric) and Smith with the "
+                "nominal NDF. Every model satisfying the weak white furnace test (Smith, V-cavity: 001 eq. 19) "
+                "has the same average G1 = 1/(1+Lambda); the models differ per normal, shown next.")
+    entries = _nominal_entries(ctx)
+    if not entries:
+        return s.skip("no suite entry with a nominal NDF")
+    for e in entries:
+        files = ctx.surface_files(e["name"])
+        if not files:
+            continue
+        out = ctx.data("g1_%s.json" % e["name"])
+        # The suite's azimuths, at most g1_max_phis of them (first and last: e.g. 0 and 90).
+        phis = e["parameters"]["phi_deg"]
+        if len(phis) > ctx.profile["g1_max_phis"]:
+            phis = [phis[0], phis[-1]]
+        ctx.run(["measure", "g1"] + files + ["--theta", ctx.profile["g1_theta"], "--phi",
+                                             ",".join("%g" % p for p in phis),
+                                             "--rays", str(ctx.profile["g1_rays"]), "-o", out])
+        s.figure(ctx, "g1_%s.png" % e["name"], plots.g1_curves,
+                 "%s: G1(theta) with %s error bars against Smith; bottom: relative deviations."
+                 % (e["name"], "between-surface" if len(files) > 1 else "ray-count"), load_json(out), e["name"])
+    for e in ctx.entries():
+        if e.get("measurements", {}).get("g1"):
+            s.figure(ctx, "g1_bins_%s.png" % e["name"], plots.g1_per_normal,
+                     "%s: G1(v, m) per normal bin (10 x 45 degree bins), by the azimuth of m relative to the "
+                     "view. Smith predicts one horizontal line; V-cavity (dashed) a function of m only."
+                     % e["name"], e)
+    return s
+
+
+def section_g2(ctx):
+    s = Section("g2", "Masking-shadowing G2",
+                "G2 averaged over the area front-facing to both directions, against the four Smith forms of "
+                "001 sec. 5 (eq. 20-23) and the V-cavity model.")
+    if not ctx.has_command("measure", "g2"):
+        return s.skip("`microsim measure g2` is not in this build (issue 4)")
+    entries = [e for e in _nominal_entries(ctx) if ctx.surface_files(e["name"])]
+    if not entries:
+        return s.skip("no surface with a nominal NDF")
+    e = entries[0]
+    out = ctx.data("g2_%s.json" % e["name"])
+    ctx.run(["measure", "g2", ctx.surface_files(e["name"])[0], "--theta-o", "30,60,80", "--phi-o", "0",
+             "--theta-i", "0:80:10", "--phi-i", "0,180", "--rays", str(ctx.profile["g2_rays"]), "-o", out])
+    s.figure(ctx, "g2_%s.png" % e["name"], plots.g2_curves,
+             "%s: G2 against theta_i for several theta_o, in the plane of incidence (delta phi = 0: same "
+             "side, 180: opposite sides)." % e["name"], load_json(out), e["name"])
+    return s
+
+
+def section_bsdf(ctx):
+    s = Section("bsdf", "BSDF per scattering order",
+                "Random walks on the explicit surface (mirror facets): albedo and in-plane lobe per scattering "
+                "order, against the single-scattering models and the Smith random-walk model (001 sec. 4.3, 7).")
+    if not ctx.has_command("measure", "bsdf"):
+        return s.skip("`microsim measure bsdf` is not in this build (issue 5)")
+    entries = [e for e in _nominal_entries(ctx) if ctx.surface_files(e["name"])]
+    if not entries:
+        return s.skip("no surface with a nominal NDF")
+    for e in entries[:2]:
+        out = ctx.data("bsdf_%s.json" % e["name"])
+        ctx.run(["measure", "bsdf", ctx.surface_files(e["name"])[0], "--material", "mirror", "--theta-i", "60",
+                 "--phi-i", "0", "--orders", "4", "--rays", str(ctx.profile["bsdf_rays"]), "-o", out])
+        rec = load_json(out)
+        s.figure(ctx, "bsdf_albedo_%s.png" % e["name"], plots.bsdf_albedo,
+                 "%s, mirror, theta_i = 60 deg: albedo per order (a mirror conserves energy: total 1)." % e["name"],
+                 rec, e["name"])
+        s.figure(ctx, "bsdf_lobe_%s.png" % e["name"], plots.bsdf_lobes,
+                 "%s, mirror, theta_i = 60 deg: in-plane lobe, order 1 and all orders, against the models."
+                 % e["name"], rec, e["name"])
+    return s
+
+
+def section_table4(ctx):
+    s = Section("table4", "001 Table 4 reproduced",
+                "Order-1 lobes of Beckmann tiles at grazing incidence theta = 1.5 rad for alpha = 0.1 ... 1.3 "
+                "(001 Table 4: Smith shifts the lobe toward the view direction as alpha grows, V-cavity does "
+                "not; the explicit surface decides).")
+    if not ctx.has_command("measure", "bsdf"):
+        return s.skip("`microsim measure bsdf` is not in this build (issue 5)")
+    records = []
+    for a in TABLE4_ALPHAS:
+        surf = os.path.join(ctx.surf_dir, "table4-alpha%g.exr" % a)
+        res = ctx.profile["table4_resolution"]
+        ctx.run(["generate", "gaussian", "--alpha", "%g" % a, "--resolution", str(res),
+                 "--correlation-length", "%g" % (4.0 / res), "--seed", "1", "-o", surf])
+        out = ctx.data("table4_alpha%g.json" % a)
+        ctx.run(["measure", "bsdf", surf, "--material", "mirror", "--theta-i", "%.6f" % TABLE4_THETA_DEG,
+                 "--phi-i", "0", "--orders", "4", "--rays", str(ctx.profile["table4_rays"]), "-o", out])
+        records.append((a, load_json(out)))
+    s.figure(ctx, "table4.png", plots.table4,
+             "In-plane order-1 lobes at theta_i = 1.5 rad (by reciprocity the lobes of 001 Table 4, which fixes "
+             "the view), measured against Smith and V-cavity single scattering.", records)
+    return s
+
+
+def section_tiled_boxes(ctx):
+    s = Section("tiled_boxes", "Tiled boxes",
+                "000 Fig. 5-6: a box is visibly larger than its macrosurface at grazing angles; tiling it N x N "
+                "times (scaled by 1/N) makes the visible projected area converge to (v.n) A.")
+    if not ctx.has_command("generate", "tiled-boxes"):
+        return s.skip("`microsim generate tiled-boxes` is not in this build (issue 3)")
+    preset = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "..", "surfaces",
+                          "tiled-boxes.toml")
+    points = []
+    for n in ctx.profile["tiles"]:
+        surf = os.path.join(ctx.surf_dir, "tiled-boxes-%d.ply" % n)
+        args = ["generate", "tiled-boxes", "--tiles", str(n), "-o", surf]
+        if os.path.isfile(preset):
+            args[2:2] = ["--config", os.path.normpath(preset)]
+        ctx.run(args)
+        out = ctx.data("tiled_boxes_%d.json" % n)
+        ctx.run(["measure", "g1", surf, "--theta", "30,60,80", "--rays", str(ctx.profile["tiles_rays"]), "-o", out])
+        points.append((n, load_json(out)))
+    s.figure(ctx, "tiled_boxes.png", plots.tiled_boxes,
+             "Visible area ratio of N x N tiled boxes at theta = 30, 60, 80 deg with ray-count errors.", points)
+    return s
+
+
+SECTIONS = [section_validation, section_ndf, section_g1, section_g2, section_bsdf, section_table4,
+            section_tiled_boxes]
+
+
+# ----------------------------------------------------------------------------------------------
+# HTML
+
+
+def _fmt(x, digits=6):
+    v = num(x)
+    if v != v:
+        return "-"
+    return "%.*g" % (digits, v)
+
+
+def collapse_rows(rows):
+    """Rows as the CLI prints them: a group shown once, by its worst row. Returns
+    [(row, members, outside)]."""
+    blocks, index = [], {}
+    for r in rows:
+        g = r.get("group") or ""
+        if not g:
+            blocks.append([r])
+            continue
+        if g not in index:
+            index[g] = len(blocks)
+            blocks.append([])
+        blocks[index[g]].append(r)
+    out = []
+    for members in blocks:
+        def badness(r):  # as the CLI: a FAIL first, then |z| (deterministic: |d| / tolerance)
+            z = num(r.get("z"))
+            if z == z:
+                b = abs(z)
+            elif r.get("z_infinite"):
+                b = float("inf")
+            elif r.get("kind") == "deterministic":
+                b = abs(num(r.get("measured")) - num(r.get("model"))) / max(num(r.get("tolerance"), 0.0), 1e-300)
+            else:
+                b = -1
+            return (r.get("verdict") == "FAIL", b)
+        worst = max(members, key=badness)
+        outside = sum(1 for r in members if r.get("verdict") in ("FAIL", "deviates (finding)"))
+        out.append((worst, len(members), outside))
+    return out
+
+
+def summary_table_html(rows):
+    """One line per (entry, quantity vs model): how many rows, how many outside, the largest
+    |relative deviation| and |z| -- the findings at a glance."""
+    order, acc = [], {}
+    for r in rows:
+        key = (r.get("entry", ""), "%s vs %s" % (r.get("quantity"), r.get("model_name")), r.get("kind", ""))
+        if key not in acc:
+            order.append(key)
+            acc[key] = {"n": 0, "out": 0, "rel": 0.0, "z": 0.0, "fail": 0}
+        a = acc[key]
+        a["n"] += 1
+        a["out"] += r.get("verdict") in ("FAIL", "deviates (finding)")
+        a["fail"] += r.get("verdict") == "FAIL"
+        rel, z = num(r.get("rel_dev")), num(r.get("z"))
+        if rel == rel:
+            a["rel"] = max(a["rel"], abs(rel))
+        if z == z:
+            a["z"] = max(a["z"], abs(z))
+        elif r.get("z_infinite"):
+            a["z"] = float("inf")
+    out = ['<table class="validation"><thead><tr><th>entry</th><th>quantity vs model</th><th>kind</th>'
+           '<th>rows</th><th>outside the threshold</th><th>max |rel. dev.|</th><th>max |z|</th></tr></thead><tbody>']
+    for key in order:
+        a = acc[key]
+        if a["fail"]:
+            cls = "v-FAIL"
+        elif a["out"]:
+            cls = "v-deviates"
+        else:
+            cls = "v-pass" if key[2] in ("identity", "deterministic") else "v-agrees"
+        out.append('<tr><td>%s</td><td>%s</td><td>%s</td><td>%d</td><td class="%s">%d%s</td><td>%.3g%%</td>'
+                   '<td>%s</td></tr>' % (html.escape(key[0]), html.escape(key[1]), html.escape(key[2]), a["n"], cls,
+                                          a["out"], " FAIL" if a["fail"] else "", 100 * a["rel"],
+                                          "-" if a["z"] == 0 and key[2] in ("deterministic", "info") else "%.3g" % a["z"]))
+    out.append("</tbody></table>")
+    return "\n".join(out)
+
+
+def validation_table_html(v):
+    summ = v.get("summary", {})
+    parts = ['<p class="summary">%d rows: <b class="v-pass">%d pass</b>, <b class="v-FAIL">%d FAIL</b>, '
+             '<b class="v-agrees">%d agree</b>, <b class="v-deviates">%d deviate (finding)</b>, %d measured only. '
+             '|z| threshold %.2f (Sidak over %d z-tests, family-wise significance %g).</p>'
+             % (summ.get("rows", 0), summ.get("pass", 0), summ.get("fail", 0), summ.get("agrees", 0),
+                summ.get("deviates", 0), summ.get("measured", 0), num(v.get("z_threshold")),
+                int(num(v.get("comparisons"), 0)), num(v.get("significance")))]
+    parts.append(summary_table_html(v.get("rows", [])))
+    parts.append("<p>All rows (groups of per-bin rows shown by their worst row):</p>")
+    parts.append('<table class="validation"><thead><tr><th>quantity</th><th>condition</th><th>measured &plusmn; stderr'
+                 '</th><th>model</th><th>z</th><th>rel. dev.</th><th>verdict</th><th>kind</th><th>source</th>'
+                 '</tr></thead><tbody>')
+    for r, n, outside in collapse_rows(v.get("rows", [])):
+        cond = html.escape(r.get("condition", ""))
+        if n > 1:
+            cond += ' <span class="group">[worst of %d, %d outside]</span>' % (n, outside)
+        z = "inf" if r.get("z_infinite") else _fmt(r.get("z"), 3)
+        if r.get("kind") == "deterministic":
+            z = "|d| = %s (tol %s)" % (_fmt(abs(num(r.get("measured")) - num(r.get("model"))), 2), _fmt(r.get("tolerance"), 2))
+        rel = num(r.get("rel_dev"))
+        measured = _fmt(r.get("measured")) + ("" if r.get("stderr") is None else " &plusmn; " + _fmt(r.get("stderr"), 2))
+        verdict = r.get("verdict", "")
+        vclass = "v-" + verdict.split(" ")[0]
+        parts.append("<tr><td>%s vs %s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td>"
+                     '<td class="%s">%s</td><td>%s</td><td>%s</td></tr>'
+                     % (html.escape(r.get("quantity", "")), html.escape(r.get("model_name", "")), cond, measured,
+                        _fmt(r.get("model")), z, "-" if rel != rel else "%.3f%%" % (100 * rel), vclass,
+                        html.escape(verdict), html.escape(r.get("kind", "")), html.escape(r.get("reference", ""))))
+    parts.append("</tbody></table>")
+    return "\n".join(parts)
+
+
+CSS = """
+body { font-family: sans-serif; max-width: 1200px; margin: 2em auto; color: #222; }
+h1 { font-size: 1.6em; } h2 { border-bottom: 1px solid #ccc; padding-bottom: .2em; margin-top: 2em; }
+figure { margin: 1.5em 0; } figure img { max-width: 100%; border: 1px solid #eee; }
+figcaption { font-size: .9em; color: #444; }
+table { border-collapse: collapse; font-size: .78em; }
+td, th { border: 1px solid #ddd; padding: 2px 6px; text-align: left; vertical-align: top; }
+th { background: #f4f4f4; }
+.v-pass { color: #2a9d4b; } .v-FAIL { color: #d62728; font-weight: bold; } .v-agrees { color: #1f77b4; }
+.v-deviates { color: #ff7f0e; } .v-measured { color: #777; } .group { color: #777; }
+.skipped { color: #777; font-style: italic; } code { background: #f4f4f4; padding: 0 3px; }
+"""
+
+
+def write_html(ctx, sections, wall_seconds):
+    v = ctx.validation or {}
+    esc = html.escape
+    out = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
+           "<title>microsim validation report</title><style>%s</style></head><body>" % CSS,
+           "<h1>microsim validation report</h1>",
+           "<p>microsim %s, %s threads, profile <code>%s</code>, suite <code>%s</code>; built in %.0f s on %s. "
+           "Data: <a href=\"data/\">data/</a> (validation record <a href=\"data/validation.json\">validation.json</a>, "
+           "table <a href=\"data/validation.txt\">validation.txt</a>).</p>"
+           % (esc(str(v.get("microsim_version", "?"))), esc(str(v.get("threads", "?"))), esc(ctx.profile_name),
+              esc(ctx.profile["suite"]), wall_seconds, time.strftime("%Y-%m-%d %H:%M"))]
+    out.append("<ul>")
+    for s in sections:
+        state = (' <span class="v-FAIL">(failed)</span>' if s.failed else
+                 ' <span class="skipped">(skipped)</span>' if s.skipped else "")
+        out.append('<li><a href="#%s">%s</a>%s</li>' % (s.key, esc(s.title), state))
+    out.append("</ul>")
+    for s in sections:
+        out.append('<h2 id="%s">%s</h2>' % (s.key, esc(s.title)))
+        if s.intro:
+            out.append("<p>%s</p>" % esc(s.intro).replace("`", ""))
+        if s.failed:
+            out.append('<p class="v-FAIL">This section failed: %s</p>' % esc(s.failed))
+            continue
+        if s.skipped:
+            out.append('<p class="skipped">Skipped: %s</p>' % esc(s.skipped))
+            continue
+        for path, caption in s.figures:
+            out.append('<figure><img src="%s" alt="%s"><figcaption>%s</figcaption></figure>'
+                       % (esc(path), esc(os.path.basename(path)), esc(caption)))
+        for n in s.notes:
+            out.append('<p class="skipped">%s</p>' % esc(n))
+        if s.html:
+            out.append(s.html)
+    out.append("<h2 id=\"commands\">Commands run</h2><table><tr><th>command</th><th>seconds</th><th>exit</th></tr>")
+    for cmd, dt, rc in ctx.log:
+        out.append("<tr><td><code>%s</code></td><td>%.1f</td><td>%d</td></tr>" % (esc(cmd), dt, rc))
+    out.append("</table></body></html>")
+    path = os.path.join(ctx.out, "index.html")
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        f.write("\n".join(out))
+    os.replace(tmp, path)
+    return path
+
+
+def build(ctx):
+    """Runs every section; returns (sections, wall seconds)."""
+    t0 = time.time()
+    sections = []
+    for fn in SECTIONS:
+        t = time.time()
+        key = fn.__name__.replace("section_", "")
+        try:
+            s = fn(ctx)
+        except RuntimeError as e:
+            if fn is section_validation:
+                raise  # nothing else can run without the validation record
+            s = Section(key, key.replace("_", " "))
+            s.failed = str(e)
+        if ctx.verbose or s.failed:
+            state = ("FAILED: " + s.failed if s.failed else "skipped: " + s.skipped if s.skipped
+                     else "%d figure(s)" % len(s.figures))
+            print("%-12s %s (%.1f s)" % (s.key, state, time.time() - t), flush=True)
+        sections.append(s)
+    wall = time.time() - t0
+    with open(os.path.join(ctx.data_dir, "report.json"), "w") as f:
+        json.dump({"profile": ctx.profile_name, "wall_seconds": wall,
+                   "sections": [{"key": s.key, "figures": [p for p, _ in s.figures], "skipped": s.skipped,
+                                 "failed": s.failed, "notes": s.notes} for s in sections],
+                   "commands": [{"command": c, "seconds": d, "exit": r} for c, d, r in ctx.log]}, f, indent=1)
+    return sections, wall

@@ -1,0 +1,868 @@
+#include "microsim/validate/validate.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include "microsim/measure/g1_measure.hpp"
+#include "microsim/measure/ndf_measure.hpp"
+#include "microsim/models/ndf.hpp"
+#include "microsim/trace/tracer.hpp"
+
+namespace microsim::validation {
+
+const char* to_string(Kind k) {
+  switch (k) {
+    case Kind::Identity: return "identity";
+    case Kind::Deterministic: return "deterministic";
+    case Kind::Model: return "model";
+    case Kind::Info: return "info";
+  }
+  return "info";
+}
+
+double sidak_z(double alpha, std::size_t k) {
+  if (k == 0) k = 1;
+  // Per-comparison two-sided rate 1 - (1 - alpha)^(1/k), computed without cancellation.
+  const double per = -std::expm1(std::log1p(-alpha) / static_cast<double>(k));
+  double lo = 0, hi = 40;
+  for (int i = 0; i < 200; ++i) {
+    const double z = 0.5 * (lo + hi);
+    if (std::erfc(z / std::sqrt(2.0)) > per) lo = z;
+    else hi = z;
+  }
+  return 0.5 * (lo + hi);
+}
+
+Estimate proportion(std::uint64_t k, std::uint64_t n) {
+  Estimate e;
+  e.n = n;
+  if (n == 0) return e;
+  e.mean = static_cast<double>(k) / static_cast<double>(n);
+  const double pt = (static_cast<double>(k) + 0.5) / (static_cast<double>(n) + 1.0);
+  e.stderr_ = std::sqrt(pt * (1 - pt) / static_cast<double>(n));
+  return e;
+}
+
+double assign_verdicts(std::vector<Row>& rows, double significance) {
+  std::size_t tested = 0;
+  for (const Row& r : rows)
+    if ((r.kind == Kind::Identity || r.kind == Kind::Model) && r.model && r.stderr_) ++tested;
+  const double zt = sidak_z(significance, tested);
+  for (Row& r : rows) {
+    r.z.reset();
+    r.rel_dev.reset();
+    if (r.model && *r.model != 0) r.rel_dev = (r.measured - *r.model) / std::abs(*r.model);
+    const bool tests = (r.kind == Kind::Identity || r.kind == Kind::Model) && r.model && r.stderr_;
+    if (tests) {
+      const double diff = r.measured - *r.model;
+      if (*r.stderr_ > 0) r.z = diff / *r.stderr_;
+      else r.z = std::abs(diff) <= 1e-12 * std::max(1.0, std::abs(*r.model))
+                     ? 0.0
+                     : std::copysign(std::numeric_limits<double>::infinity(), diff);
+    }
+    switch (r.kind) {
+      case Kind::Deterministic:
+        r.verdict = r.model && std::abs(r.measured - *r.model) <= r.tolerance ? "pass" : "FAIL";
+        break;
+      case Kind::Identity:
+        r.verdict = tests && std::abs(*r.z) <= zt ? "pass" : "FAIL";
+        break;
+      case Kind::Model:
+        r.verdict = !tests ? "measured" : std::abs(*r.z) <= zt ? "agrees" : "deviates (finding)";
+        break;
+      case Kind::Info: r.verdict = "measured"; break;
+    }
+  }
+  return zt;
+}
+
+std::size_t Result::count(const std::string& verdict) const {
+  return static_cast<std::size_t>(
+      std::count_if(rows.begin(), rows.end(), [&](const Row& r) { return r.verdict == verdict; }));
+}
+
+namespace {
+
+std::string num(double x, int precision = 6) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*g", precision, x);
+  return buf;
+}
+std::string fixed(double x, int digits) {
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(digits) << x;
+  return os.str();
+}
+std::string angle(double d) { return num(d, 4); }
+
+// Mean and between-surface standard error (sd / sqrt(K)) of per-surface values.
+std::pair<double, double> mean_and_se(const std::vector<double>& x) {
+  const double k = static_cast<double>(x.size());
+  double sum = 0;
+  for (double v : x) sum += v;
+  const double mean = x.empty() ? 0 : sum / k;
+  double ss = 0;
+  for (double v : x) ss += (v - mean) * (v - mean);
+  const double se = x.size() > 1 ? std::sqrt(ss / (k - 1) / k) : 0.0;
+  return {mean, se};
+}
+
+Row make_row(const SurfaceSet& set, const std::string& label, const std::string& quantity,
+             const std::string& model_name, Kind kind, const std::string& reference) {
+  Row r;
+  r.entry = set.name;
+  r.quantity = quantity;
+  r.model_name = model_name;
+  r.kind = kind;
+  r.reference = reference;
+  r.condition = set.name + (label.empty() ? "" : " " + label);
+  return r;
+}
+
+std::string surface_label(const SurfaceSet& set, std::size_t k) {
+  return set.surfaces.size() > 1 || !set.labels[k].empty() ? set.labels[k] : "";
+}
+
+// ---------------------------------------------------------------------------------------------
+// D identities: 000 eq. 1b (sum_f A_f m_f / A = n) and eq. 1c (sum_f A_f (n.m_f) / A = 1).
+void check_d_identities(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
+  Json per_surface = Json::array();
+  for (std::size_t k = 0; k < set.surfaces.size(); ++k) {
+    const Microsurface& s = set.surfaces[k];
+    const FacetSums f = facet_sums(s);
+    const Macrosurface& m = s.macro();
+    // Bound on the double rounding of a sum of N terms (|error| <= N eps sum |terms|, with a
+    // factor 2 for the cross products that make the terms): the identities hold exactly for
+    // any float-valued vertices of a closed (or periodic) surface.
+    const double eps = std::numeric_limits<double>::epsilon();
+    const double tol = 2.0 * (static_cast<double>(s.num_facets()) + 3.0) * eps * f.total_area / m.area;
+    const Vec3 b = f.sum_area_normal / m.area;
+    const char* axis[3] = {"x", "y", "z"};
+    for (int a = 0; a < 3; ++a) {
+      Row r = make_row(set, surface_label(set, k), std::string("eq_1b_") + axis[a], "macro_normal",
+                       Kind::Deterministic, "000 eq. 1b");
+      r.measured = b[a];
+      r.model = m.normal[a];
+      r.tolerance = tol;
+      r.error = "rounding";
+      r.group = set.name + "/eq_1b";
+      r.condition += (r.condition.empty() ? "" : ", ") + std::string("sum A_f m_f.") + axis[a] + " / A";
+      out.rows.push_back(r);
+    }
+    Row c = make_row(set, surface_label(set, k), "eq_1c", "one", Kind::Deterministic, "000 eq. 1c");
+    c.measured = f.sum_area_cos / m.area;
+    c.model = 1.0;
+    c.tolerance = tol;
+    c.error = "rounding";
+    c.group = set.name + "/eq_1c";
+    c.condition += ", sum A_f (n.m_f) / A";
+    out.rows.push_back(c);
+    per_surface.push_back({{"label", set.labels[k]},
+                           {"sum_area_normal_over_A", {b.x(), b.y(), b.z()}},
+                           {"sum_area_cos_over_A", f.sum_area_cos / m.area},
+                           {"total_area_over_A", f.total_area / m.area},
+                           {"tolerance", tol}});
+    progress.completed += 0.1 * static_cast<double>(s.num_facets());
+    progress.update();
+  }
+  out.measurements = per_surface;
+}
+
+// ---------------------------------------------------------------------------------------------
+// D against the generator's nominal NDF, per theta ring (phi-averaged). One surface: the
+// spatial-block standard error of measure_ndf; an ensemble: the between-surface one.
+void check_d_nominal(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
+  const Options& o = set.options;
+  const models::Ndf& nominal = *set.surfaces[0].nominal;
+  NdfOptions no;
+  no.n_theta = o.ndf_theta_bins;
+  no.n_phi = o.ndf_phi_bins;
+  std::vector<NdfResult> res;
+  std::vector<FacetSums> sums;
+  for (const Microsurface& s : set.surfaces) {
+    res.push_back(measure_ndf(s, no));
+    sums.push_back(res.back().sums);
+    progress.completed += 0.2 * static_cast<double>(s.num_facets());
+    progress.update();
+  }
+  const std::size_t K = res.size();
+  const DirectionBinning& bins = res[0].bins;
+  Json ndf = {{"theta_lo_deg", Json::array()}, {"theta_hi_deg", Json::array()},
+              {"d", Json::array()}, {"d_stderr", Json::array()}, {"d_nominal", Json::array()},
+              {"error", K > 1 ? "surfaces" : "blocks"}, {"surfaces", K},
+              {"nominal", std::string(models::to_string(nominal.kind))},
+              {"alpha_x", nominal.alpha_x}, {"alpha_y", nominal.alpha_y}};
+  for (int it = 0; it < bins.n_theta(); ++it) {
+    double model = 0;
+    for (int ip = 0; ip < bins.n_phi(); ++ip)
+      model += bins.bin_average(bins.index(it, ip), [&](const Vec3& m) { return nominal.D(m); });
+    model /= bins.n_phi();
+    double d, se;
+    if (K == 1) {
+      d = res[0].ring_d[it];
+      se = res[0].ring_d_stderr[it];
+    } else {
+      std::vector<double> x;
+      double blocks2 = 0;
+      for (const auto& r : res) {
+        x.push_back(r.ring_d[it]);
+        blocks2 += r.ring_d_stderr[it] * r.ring_d_stderr[it];
+      }
+      std::tie(d, se) = mean_and_se(x);
+      // Floor: the within-surface (block) error of the mean, in case K values agree by chance.
+      se = std::max(se, std::sqrt(blocks2) / static_cast<double>(K));
+    }
+    const double lo = deg(bins.theta_lo(it)), hi = deg(bins.theta_hi(it));
+    ndf["theta_lo_deg"].push_back(lo);
+    ndf["theta_hi_deg"].push_back(hi);
+    ndf["d"].push_back(d);
+    ndf["d_stderr"].push_back(se);
+    ndf["d_nominal"].push_back(model);
+    // Rings where the model puts at least min_ring_mass of the microsurface area (per unit
+    // macro area) are tested; the far tails hold too few facets for a normal z.
+    if (model * bins.solid_angle_of_ring(it) < o.min_ring_mass) continue;
+    Row r = make_row(set, K > 1 ? std::to_string(K) + " surfaces" : surface_label(set, 0), "d_ring",
+                     "nominal", Kind::Model, "DESIGN.md D; 001 Sec. 3.2 Beckmann D, bin-averaged");
+    r.condition += (K > 1 || !surface_label(set, 0).empty() ? ", " : " ") + std::string("theta_m ") +
+                   angle(lo) + "-" + angle(hi);
+    r.measured = d;
+    r.stderr_ = se;
+    r.model = model;
+    r.error = K > 1 ? "surfaces" : "blocks";
+    r.group = set.name + "/d_ring";
+    r.extra = {{"theta_m_range_deg", {lo, hi}}};
+    out.rows.push_back(r);
+  }
+  // Moment fit of alpha (slope variance alpha^2/2 per axis, 001 Sec. 3.2, App. A) vs the nominal alpha.
+  for (int a = 0; a < 2; ++a) {
+    std::vector<double> x;
+    for (const auto& f : sums) x.push_back(std::sqrt(2 * (a == 0 ? f.slope_var_x : f.slope_var_y)));
+    auto [mean, se] = mean_and_se(x);
+    Row r = make_row(set, K > 1 ? std::to_string(K) + " surfaces" : surface_label(set, 0),
+                     a == 0 ? "fitted_alpha_x" : "fitted_alpha_y", "nominal",
+                     K > 1 ? Kind::Model : Kind::Info, "001 Sec. 3.2 and App. A: P22 dslope = (n.m) D dm, Beckmann slope variance alpha^2/2 per axis");
+    r.measured = mean;
+    if (K > 1) r.stderr_ = se;
+    r.model = a == 0 ? nominal.alpha_x : nominal.alpha_y;
+    r.error = K > 1 ? "surfaces" : "none (one surface)";
+    out.rows.push_back(r);
+    ndf[a == 0 ? "fitted_alpha_x" : "fitted_alpha_y"] = x;
+  }
+  out.measurements = ndf;
+}
+
+// ---------------------------------------------------------------------------------------------
+// G1: the two estimators of DESIGN.md, visible area ratio, Smith from the facets, and per
+// normal bin Smith (m-independent) and the V-cavity model (001 eq. 24) averaged over the
+// bin's facets.
+
+// Per normal bin: sum_f A_f (v.m_f)+ G1_vcavity(v, m_f) / sum_f A_f (v.m_f)+ .
+std::vector<double> vcavity_bin_model(const FacetTable& t, const Vec3& v, int nbins) {
+  using Acc = std::vector<double>;
+  const std::size_t nf = t.area.size();
+  Acc acc = tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<std::size_t>(0, nf, std::max<std::size_t>(1 << 15, nf / 64)), Acc{},
+      [&](const tbb::blocked_range<std::size_t>& range, Acc a) {
+        if (a.empty()) a.assign(2 * static_cast<std::size_t>(nbins), 0.0);
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+          const Vec3 m = t.normal[k].cast<double>().normalized();
+          const double w = t.area[k] * std::max(0.0, v.dot(m));
+          if (w <= 0 || t.bin[k] < 0) continue;
+          a[2 * t.bin[k]] += w * models::vcavity_G1(v, m);  // 001 eq. (24)
+          a[2 * t.bin[k] + 1] += w;
+        }
+        return a;
+      },
+      [](Acc a, const Acc& b) {
+        if (a.empty()) return b;
+        for (std::size_t k = 0; k < b.size(); ++k) a[k] += b[k];
+        return a;
+      });
+  std::vector<double> model(nbins, 0.0);
+  if (acc.empty()) return model;
+  for (int b = 0; b < nbins; ++b) model[b] = acc[2 * b + 1] > 0 ? acc[2 * b] / acc[2 * b + 1] : 0.0;
+  return model;
+}
+
+double g1_work(const SurfaceSet& set) {
+  const Options& o = set.options;
+  double w = 0;
+  // As counted in check_g1: the facet table once, then per direction both estimators' rays
+  // and the V-cavity pass over the facets.
+  for (const auto& s : set.surfaces)
+    w += 0.1 * static_cast<double>(s.num_facets()) +
+         static_cast<double>(o.theta_deg.size() * o.phi_deg.size()) *
+             (2.0 * static_cast<double>(o.rays) + 0.4 * static_cast<double>(s.num_facets()));
+  return w;
+}
+
+void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
+  const Options& o = set.options;
+  G1Options go;
+  go.rays = o.rays;
+  go.seed = o.seed;
+  const DirectionBinning binning = g1_normal_binning(go);
+  const std::size_t K = set.surfaces.size();
+  const bool periodic = set.surfaces[0].macro().periodic;
+  Json per_surface = Json::array();
+  // Averaged G1 per direction and surface, for the ensemble comparison with the nominal Smith.
+  std::map<std::pair<double, double>, std::vector<double>> g1_by_direction, se_by_direction;
+  for (std::size_t k = 0; k < K; ++k) {
+    const Microsurface& s = set.surfaces[k];
+    const std::string label = surface_label(set, k);
+    Tracer tracer(s);
+    const FacetTable table = build_facet_table(s, binning);
+    progress.completed += 0.1 * static_cast<double>(s.num_facets());
+    Json rows = Json::array();
+    for (double p : o.phi_deg)
+      for (double t : o.theta_deg) {
+        const Vec3 v = direction_from_angles(rad(t), rad(p));
+        const double unit = 2.0 * static_cast<double>(o.rays);
+        go.progress = [&](double f) { progress.update(f * unit); };
+        G1Result r = measure_g1(tracer, v, go, &table);
+        progress.completed += unit;
+        const std::vector<double> vcav = vcavity_bin_model(table, r.v, binning.size());
+        progress.completed += 0.4 * static_cast<double>(s.num_facets());
+        progress.update();
+        const std::string dir = "theta " + angle(t) + " phi " + angle(p);
+        const std::string where = (label.empty() ? "" : label + ", ") + dir;
+        const Json ang = {{"theta_deg", t}, {"phi_deg", p}};
+        const double smith_numeric = 1.0 / (1.0 + r.lambda_numeric);
+
+        // Visible area ratio: exactly 1 on a periodic tile (every ray from above hits once).
+        Estimate hit = proportion(r.raycast_hits, r.raycast_rays);
+        const double ratio_scale = r.window_area_perp / (v.z() * r.macro_area);
+        Row var = make_row(set, "", "visible_area_ratio", periodic ? "one" : "",
+                           periodic ? Kind::Identity : Kind::Info,
+                           "DESIGN.md visible area ratio; 000 Inherent Assumptions");
+        var.condition += " " + where;
+        var.measured = hit.mean * ratio_scale;
+        var.stderr_ = hit.stderr_ * ratio_scale;
+        if (periodic) var.model = 1.0;
+        var.error = "rays";
+        var.group = set.name + "/visible_area_ratio/" + dir;
+        var.extra = ang;
+        out.rows.push_back(var);
+
+        // Averaged G1: estimator (b) against estimator (a) -- the same quantity.
+        Estimate gb = proportion(r.sample_visible, r.sample_rays);
+        const double scale_a = r.window_area_perp / r.front_projected;
+        Row est = make_row(set, "", "g1", "g1_raycast", Kind::Identity,
+                           "DESIGN.md G1 estimators (a) = (b)");
+        est.condition += " " + where;
+        est.measured = gb.mean;
+        est.stderr_ = std::hypot(gb.stderr_, hit.stderr_ * scale_a);
+        est.model = hit.mean * scale_a;
+        est.error = "rays";
+        est.group = set.name + "/g1_raycast/" + dir;
+        est.extra = ang;
+        out.rows.push_back(est);
+
+        // Averaged G1 against 1/(1 + Lambda) from the facets: on a periodic tile the visible
+        // projected area is (v.n) A (000 eq. 2a-2b), so the projected-area average
+        // G1 = (v.n) A / sum_f A_f (v.m_f)+ = 1/(1+Lambda) exactly (000 eq. 3Xc-3Xd): an
+        // identity, not a test of Smith. On a finite object it is a model (the object is not
+        // infinitesimally thick, 000 "Inherent Assumptions").
+        Row sn = make_row(set, "", "g1", "smith_numeric", periodic ? Kind::Identity : Kind::Model,
+                          "000 eq. 3Xc-3Xd (exact for the projected-area average on a periodic tile)");
+        sn.condition += " " + where;
+        sn.measured = gb.mean;
+        sn.stderr_ = gb.stderr_;
+        sn.model = smith_numeric;
+        sn.error = "rays";
+        sn.group = set.name + "/smith_numeric/" + dir;
+        sn.extra = ang;
+        out.rows.push_back(sn);
+
+        // Per normal bin G1(v, m).
+        for (int b = 0; b < binning.size(); ++b) {
+          const G1NormalBin& nb = r.bins[b];
+          if (nb.front_projected <= 0 || nb.samples < o.min_bin_count ||
+              nb.raycast_hits < o.min_bin_count)
+            continue;
+          const int it = b / binning.n_phi(), ip = b % binning.n_phi();
+          const double tlo = deg(binning.theta_lo(it)), thi = deg(binning.theta_hi(it));
+          const double plo = deg(binning.phi_lo(ip)), phi_hi = deg(binning.phi_hi(ip));
+          const std::string bin_where = where + ", m in [" + angle(tlo) + "," + angle(thi) + "]x[" +
+                                        angle(plo) + "," + angle(phi_hi) + "]";
+          Json bx = ang;
+          bx["theta_m_range_deg"] = {tlo, thi};
+          bx["phi_m_range_deg"] = {plo, phi_hi};
+          bx["m"] = {nb.mean_normal.x(), nb.mean_normal.y(), nb.mean_normal.z()};
+          Estimate eb = proportion(nb.visible, nb.samples);
+          Estimate ha = proportion(nb.raycast_hits, r.raycast_rays);
+          const double sa = r.window_area_perp / nb.front_projected;
+          Row a = make_row(set, "", "g1_bin", "g1_bin_raycast", Kind::Identity,
+                           "DESIGN.md G1(v,m) estimators (a) = (b)");
+          a.condition += " " + bin_where;
+          a.measured = eb.mean;
+          a.stderr_ = std::hypot(eb.stderr_, ha.stderr_ * sa);
+          a.model = ha.mean * sa;
+          a.error = "rays";
+          a.group = set.name + "/g1_bin_raycast/" + dir;
+          a.extra = bx;
+          out.rows.push_back(a);
+          // Smith: G1(v, m) = chi+(v.m) G1(v), independent of m (001 eq. 9-10).
+          Row sm = make_row(set, "", "g1_bin", "smith_numeric", Kind::Model,
+                            "001 eq. (9)-(10): Smith G1(v,m) = chi+(v.m) G1(v)");
+          sm.condition += " " + bin_where;
+          sm.measured = eb.mean;
+          sm.stderr_ = eb.stderr_;
+          sm.model = smith_numeric;
+          sm.error = "rays";
+          sm.group = set.name + "/g1_bin_smith/" + dir;
+          sm.extra = bx;
+          out.rows.push_back(sm);
+          Row vc = make_row(set, "", "g1_bin", "vcavity", Kind::Model,
+                            "001 eq. (24), averaged over the bin's facets");
+          vc.condition += " " + bin_where;
+          vc.measured = eb.mean;
+          vc.stderr_ = eb.stderr_;
+          vc.model = vcav[b];
+          vc.error = "rays";
+          vc.group = set.name + "/g1_bin_vcavity/" + dir;
+          vc.extra = bx;
+          out.rows.push_back(vc);
+        }
+
+        Json row = g1_row_json(r, s);
+        row["theta_deg"] = t;
+        row["phi_deg"] = p;
+        // Models per bin beside the measured G1(v, m), in the order g1_row_json lists the bins.
+        std::size_t jb = 0;
+        for (int b = 0; b < binning.size() && jb < row["bins"].size(); ++b) {
+          if (r.bins[b].area <= 0) continue;
+          row["bins"][jb]["smith_numeric"] = r.bins[b].front_projected > 0 ? smith_numeric : 0.0;
+          row["bins"][jb]["vcavity"] = vcav[b];
+          row["bins"][jb]["samples"] = r.bins[b].samples;
+          row["bins"][jb]["raycast_hits"] = r.bins[b].raycast_hits;
+          ++jb;
+        }
+        rows.push_back(row);
+        g1_by_direction[{t, p}].push_back(gb.mean);
+        se_by_direction[{t, p}].push_back(gb.stderr_);
+      }
+    per_surface.push_back({{"label", set.labels[k]}, {"rows", rows}});
+  }
+  // Averaged G1 against the Smith G1 of the nominal NDF (001 eq. 11 with alpha_o): a
+  // statistic of the generated surfaces, so it needs the between-surface error. One surface
+  // gives the relative deviation only.
+  const Microsurface& s0 = set.surfaces[0];
+  if (s0.nominal) {
+    for (double p : o.phi_deg)
+      for (double t : o.theta_deg) {
+        const Vec3 v = direction_from_angles(rad(t), rad(p));
+        auto [mean, se] = mean_and_se(g1_by_direction[{t, p}]);
+        // The spread of K values can be 0 by chance (e.g. every surface unmasked at a steep
+        // angle): the ray-count error of the mean, sqrt(sum se^2) / K, is a floor.
+        double rays2 = 0;
+        for (double e : se_by_direction[{t, p}]) rays2 += e * e;
+        se = std::max(se, std::sqrt(rays2) / static_cast<double>(K));
+        Row r = make_row(set, K > 1 ? std::to_string(K) + " surfaces," : "", "g1", "smith_nominal",
+                         K > 1 ? Kind::Model : Kind::Info, "001 eq. (11) with alpha_o; Beckmann Lambda");
+        r.condition += " theta " + angle(t) + " phi " + angle(p);
+        r.measured = mean;
+        if (K > 1) r.stderr_ = se;
+        r.model = s0.nominal->G1(v);
+        r.error = K > 1 ? "surfaces" : "none (one surface: give several for an error bar)";
+        r.extra = {{"theta_deg", t}, {"phi_deg", p}, {"surfaces", K}};
+        out.rows.push_back(r);
+      }
+  }
+  out.measurements = per_surface;
+}
+
+}  // namespace
+
+const std::vector<Check>& checks() {
+  static const std::vector<Check> registry = {
+      {"d_identities", "000 eq. 1b and 1c from the facets (exact, to rounding)",
+       [](const SurfaceSet&) { return true; },
+       [](const SurfaceSet& s) {
+         double w = 0;
+         for (const auto& m : s.surfaces) w += 0.1 * static_cast<double>(m.num_facets());
+         return w;
+       },
+       check_d_identities},
+      {"d_nominal", "D per theta ring and the fitted alpha against the generator's nominal NDF",
+       [](const SurfaceSet& s) { return s.surfaces[0].nominal.has_value(); },
+       [](const SurfaceSet& s) {
+         double w = 0;
+         for (const auto& m : s.surfaces) w += 0.2 * static_cast<double>(m.num_facets());
+         return w;
+       },
+       check_d_nominal},
+      {"g1", "G1: both estimators, visible area ratio, Smith from the facets and nominal, per-bin "
+             "G1(v,m) against Smith and the V-cavity model",
+       [](const SurfaceSet&) { return true; }, g1_work, check_g1},
+  };
+  return registry;
+}
+
+Result run(const std::vector<SurfaceSet>& sets, double significance,
+           const std::function<void(double)>& report) {
+  if (!(significance > 0 && significance < 1))
+    throw UsageError("--significance must be in (0, 1) (got " + num(significance) + ")");
+  auto t0 = std::chrono::steady_clock::now();
+  // Resolve the checks of every set first: an unknown name fails before any work.
+  std::vector<std::vector<const Check*>> todo(sets.size());
+  Progress progress;
+  progress.report = report;
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    const SurfaceSet& set = sets[i];
+    if (set.surfaces.empty()) throw UsageError("validation entry " + set.name + " has no surface");
+    if (set.labels.size() != set.surfaces.size())
+      throw RuntimeFailure("validation entry " + set.name + ": one label per surface expected");
+    const Options& o = set.options;
+    if (o.theta_deg.empty() || o.phi_deg.empty())
+      throw UsageError("validation entry " + set.name + ": no view direction (--theta, --phi)");
+    for (double t : o.theta_deg)
+      if (!(t >= 0 && t < 90)) throw UsageError("--theta must be in [0, 90) degrees (got " + num(t) + ")");
+    if (o.rays == 0) throw UsageError("--rays must be positive");
+    for (const std::string& name : set.options.checks) {
+      auto it = std::find_if(checks().begin(), checks().end(), [&](const Check& c) { return c.name == name; });
+      if (it == checks().end()) {
+        std::string known;
+        for (const Check& c : checks()) known += (known.empty() ? "" : ", ") + c.name;
+        throw UsageError("unknown check '" + name + "' (known: " + known + ")");
+      }
+    }
+    for (const Check& c : checks()) {
+      const bool wanted = set.options.checks.empty() ||
+                          std::find(set.options.checks.begin(), set.options.checks.end(), c.name) !=
+                              set.options.checks.end();
+      if (wanted && c.applies(set)) {
+        todo[i].push_back(&c);
+        progress.total += c.work(set);
+      }
+    }
+  }
+  Result result;
+  result.significance = significance;
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    const SurfaceSet& set = sets[i];
+    EntryResult e;
+    e.name = set.name;
+    for (std::size_t k = 0; k < set.surfaces.size(); ++k)
+      e.surfaces.push_back({{"label", set.labels[k]}, {"description", set.surfaces[k].description},
+                            {"facets", set.surfaces[k].num_facets()},
+                            {"periodic", set.surfaces[k].macro().periodic}});
+    const Options& o = set.options;
+    e.parameters = {{"theta_deg", o.theta_deg}, {"phi_deg", o.phi_deg}, {"rays", o.rays},
+                    {"seed", o.seed}, {"ndf_theta_bins", o.ndf_theta_bins},
+                    {"ndf_phi_bins", o.ndf_phi_bins}, {"min_ring_mass", o.min_ring_mass},
+                    {"min_bin_count", o.min_bin_count}, {"checks", Json::array()}};
+    for (const Check* c : todo[i]) {
+      e.parameters["checks"].push_back(c->name);
+      CheckOutput out;
+      c->run(set, progress, out);
+      result.rows.insert(result.rows.end(), out.rows.begin(), out.rows.end());
+      e.measurements[c->name] = out.measurements;
+    }
+    result.entries.push_back(std::move(e));
+  }
+  result.z_threshold = assign_verdicts(result.rows, significance);
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+Json row_to_json(const Row& r) {
+  Json j;
+  j["quantity"] = r.quantity;
+  j["model_name"] = r.model_name;
+  j["condition"] = r.condition;
+  j["entry"] = r.entry;
+  j["kind"] = to_string(r.kind);
+  j["measured"] = r.measured;
+  j["stderr"] = r.stderr_ ? Json(*r.stderr_) : Json(nullptr);
+  j["model"] = r.model ? Json(*r.model) : Json(nullptr);
+  j["z"] = r.z && std::isfinite(*r.z) ? Json(*r.z) : Json(nullptr);
+  if (r.z && !std::isfinite(*r.z)) j["z_infinite"] = true;
+  j["rel_dev"] = r.rel_dev ? Json(*r.rel_dev) : Json(nullptr);
+  j["verdict"] = r.verdict;
+  if (r.kind == Kind::Deterministic) j["tolerance"] = r.tolerance;
+  j["error"] = r.error;
+  j["reference"] = r.reference;
+  j["group"] = r.group;
+  for (auto it = r.extra.begin(); it != r.extra.end(); ++it) j[it.key()] = it.value();
+  return j;
+}
+
+Json verdict_rules_json(double significance, double z_threshold, std::size_t comparisons) {
+  return {
+      {"identity", "exact identity measured by Monte Carlo: pass when |z| <= z_threshold, else FAIL"},
+      {"deterministic", "exact identity without sampling: pass when |measured - model| <= tolerance "
+                        "(bound on double rounding of the facet sums), else FAIL"},
+      {"model", "approximate model: agrees when |z| <= z_threshold, else 'deviates (finding)'; a "
+                "deviation is a result about the model, not an error"},
+      {"info", "measured without a model or without an error bar: 'measured'"},
+      {"z", "(measured - model) / stderr"},
+      {"rel_dev", "(measured - model) / |model|"},
+      {"z_threshold", "Sidak: two-sided normal quantile with family-wise false-alarm rate "
+                      "'significance' over the 'comparisons' z-tested rows of the run"},
+      {"significance", significance},
+      {"comparisons", comparisons},
+      {"z_threshold_value", z_threshold},
+      {"binomial_stderr", "proportions k/n carry the standard error of (k+1/2)/(n+1), never 0"},
+      {"exit_code", "1 when any row is FAIL, else 0"}};
+}
+
+Json result_to_json(const Result& r) {
+  Json j;
+  std::size_t tested = 0;
+  for (const Row& row : r.rows) tested += row.z.has_value();
+  j["significance"] = r.significance;
+  j["z_threshold"] = r.z_threshold;
+  j["comparisons"] = tested;
+  j["verdict_rules"] = verdict_rules_json(r.significance, r.z_threshold, tested);
+  j["summary"] = {{"rows", r.rows.size()},
+                  {"pass", r.count("pass")},
+                  {"fail", r.count("FAIL")},
+                  {"agrees", r.count("agrees")},
+                  {"deviates", r.count("deviates (finding)")},
+                  {"measured", r.count("measured")}};
+  Json entries = Json::array();
+  for (const EntryResult& e : r.entries)
+    entries.push_back({{"name", e.name}, {"surfaces", e.surfaces}, {"parameters", e.parameters},
+                       {"measurements", e.measurements}});
+  j["entries"] = entries;
+  Json rows = Json::array();
+  for (const Row& row : r.rows) rows.push_back(row_to_json(row));
+  j["rows"] = rows;
+  j["seconds"] = r.seconds;
+  return j;
+}
+
+std::string format_table(const Result& r) {
+  struct Line {
+    std::string quantity, condition, measured, model, z, rel, verdict;
+  };
+  std::vector<Line> lines;
+  lines.push_back({"quantity", "condition", "measured +- stderr", "model", "z", "rel_dev", "verdict"});
+  // Group rows: a group is shown once, where its first row is, by its worst row.
+  std::vector<std::vector<const Row*>> blocks;
+  std::map<std::string, std::size_t> group_block;
+  for (const Row& row : r.rows) {
+    if (row.group.empty()) {
+      blocks.push_back({&row});
+      continue;
+    }
+    auto [it, fresh] = group_block.try_emplace(row.group, blocks.size());
+    if (fresh) blocks.emplace_back();
+    blocks[it->second].push_back(&row);
+  }
+  for (const auto& members : blocks) {
+    // The worst row: a FAIL first, then the largest |z| (deterministic rows: |d| / tolerance).
+    auto badness = [](const Row* x) {
+      double b = -1;
+      if (x->z) b = std::abs(*x->z);
+      else if (x->kind == Kind::Deterministic && x->model)
+        b = std::abs(x->measured - *x->model) / std::max(x->tolerance, 1e-300);
+      return std::make_pair(x->verdict == "FAIL", b);
+    };
+    const Row* worst = members[0];
+    std::size_t deviating = 0;
+    for (const Row* m : members) {
+      if (m->verdict == "FAIL" || m->verdict == "deviates (finding)") ++deviating;
+      if (badness(m) > badness(worst)) worst = m;
+    }
+    Line l;
+    l.quantity = worst->quantity + (worst->model_name.empty() ? "" : " vs " + worst->model_name);
+    l.condition = worst->condition;
+    if (members.size() > 1)
+      l.condition += "  [worst of " + std::to_string(members.size()) + ", " +
+                     std::to_string(deviating) + " outside]";
+    l.measured = num(worst->measured) + (worst->stderr_ ? " +- " + num(*worst->stderr_, 2) : "");
+    l.model = worst->model ? num(*worst->model) : "-";
+    l.z = worst->z ? (std::isfinite(*worst->z) ? fixed(*worst->z, 2) : (*worst->z > 0 ? "inf" : "-inf"))
+                   : "-";
+    l.rel = worst->rel_dev ? fixed(100 * *worst->rel_dev, 3) + "%" : "-";
+    if (worst->kind == Kind::Deterministic && worst->model)
+      l.z = "|d|=" + num(std::abs(worst->measured - *worst->model), 2);
+    l.verdict = worst->verdict;
+    lines.push_back(l);
+  }
+  std::size_t w[7] = {0, 0, 0, 0, 0, 0, 0};
+  for (const Line& l : lines) {
+    const std::string* f[7] = {&l.quantity, &l.condition, &l.measured, &l.model, &l.z, &l.rel, &l.verdict};
+    for (int c = 0; c < 7; ++c) w[c] = std::max(w[c], f[c]->size());
+  }
+  std::ostringstream os;
+  for (const Line& l : lines) {
+    os << std::left << std::setw(static_cast<int>(w[0])) << l.quantity << "  "
+       << std::setw(static_cast<int>(w[1])) << l.condition << "  " << std::right
+       << std::setw(static_cast<int>(w[2])) << l.measured << "  " << std::setw(static_cast<int>(w[3]))
+       << l.model << "  " << std::setw(static_cast<int>(w[4])) << l.z << "  "
+       << std::setw(static_cast<int>(w[5])) << l.rel << "  " << std::left << l.verdict << "\n";
+  }
+  return os.str();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Suites.
+
+namespace {
+[[noreturn]] void suite_error(const std::string& file, const std::string& what) {
+  throw UsageError("--suite " + file + ": " + what);
+}
+
+// A positive integer (JSON integer, or a number with an integral value such as 1e6).
+std::uint64_t get_count(const Json& j, const char* key, const std::string& file, const std::string& where) {
+  const Json& x = j[key];
+  if (!x.is_number() || !(x.get<double>() >= 1) || x.get<double>() != std::floor(x.get<double>()) ||
+      x.get<double>() > 9e18)
+    suite_error(file, where + ": " + key + " must be a positive integer");
+  return x.is_number_unsigned() ? x.get<std::uint64_t>() : static_cast<std::uint64_t>(x.get<double>());
+}
+
+void read_options(const Json& j, Options& o, const std::string& file, const std::string& where) {
+  try {
+    if (j.contains("theta_deg")) o.theta_deg = j["theta_deg"].get<std::vector<double>>();
+    if (j.contains("phi_deg")) o.phi_deg = j["phi_deg"].get<std::vector<double>>();
+    if (j.contains("rays")) o.rays = get_count(j, "rays", file, where);
+    if (j.contains("seed")) o.seed = j["seed"].is_number_unsigned() ? j["seed"].get<std::uint64_t>()
+                                                                    : get_count(j, "seed", file, where);
+    if (j.contains("checks")) o.checks = j["checks"].get<std::vector<std::string>>();
+    if (j.contains("ndf_theta_bins")) o.ndf_theta_bins = static_cast<int>(get_count(j, "ndf_theta_bins", file, where));
+    if (j.contains("ndf_phi_bins")) o.ndf_phi_bins = static_cast<int>(get_count(j, "ndf_phi_bins", file, where));
+    if (j.contains("min_ring_mass")) o.min_ring_mass = j["min_ring_mass"].get<double>();
+    if (j.contains("min_bin_count")) o.min_bin_count = get_count(j, "min_bin_count", file, where);
+  } catch (const Json::exception& e) {
+    suite_error(file, where + ": " + e.what());
+  }
+  for (double t : o.theta_deg)
+    if (!(t >= 0 && t < 90)) suite_error(file, where + ": theta_deg must be in [0, 90) degrees");
+  if (o.theta_deg.empty() || o.phi_deg.empty()) suite_error(file, where + ": empty theta_deg or phi_deg");
+  if (o.ndf_theta_bins > 3600 || o.ndf_phi_bins > 7200)
+    suite_error(file, where + ": ndf_theta_bins in [1, 3600], ndf_phi_bins in [1, 7200]");
+  if (!(o.min_ring_mass >= 0)) suite_error(file, where + ": min_ring_mass must be >= 0");
+}
+
+bool is_option_key(const std::string& k) {
+  static const char* keys[] = {"theta_deg", "phi_deg", "rays", "seed", "checks", "ndf_theta_bins",
+                               "ndf_phi_bins", "min_ring_mass", "min_bin_count"};
+  return std::find(std::begin(keys), std::end(keys), k) != std::end(keys);
+}
+}  // namespace
+
+Suite load_suite(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::ifstream in(path);
+  if (!in) throw UsageError("--suite " + path + ": cannot read the file");
+  Json j;
+  try {
+    j = Json::parse(in, nullptr, true, /*ignore_comments=*/true);
+  } catch (const Json::exception& e) {
+    suite_error(path, std::string("not valid JSON (") + e.what() + ")");
+  }
+  if (!j.is_object()) suite_error(path, "expected a JSON object");
+  Suite s;
+  s.file = path;
+  s.name = j.value("name", fs::path(path).stem().string());
+  s.description = j.value("description", "");
+  for (auto it = j.begin(); it != j.end(); ++it)
+    if (it.key() != "name" && it.key() != "description" && it.key() != "significance" &&
+        it.key() != "defaults" && it.key() != "entries")
+      suite_error(path, "unknown field '" + it.key() + "'");
+  if (j.contains("significance")) {
+    if (!j["significance"].is_number()) suite_error(path, "significance must be a number");
+    s.significance = j["significance"].get<double>();
+    if (!(s.significance > 0 && s.significance < 1)) suite_error(path, "significance must be in (0, 1)");
+  }
+  Options defaults;
+  if (j.contains("defaults")) {
+    if (!j["defaults"].is_object()) suite_error(path, "defaults must be an object");
+    for (auto it = j["defaults"].begin(); it != j["defaults"].end(); ++it)
+      if (!is_option_key(it.key())) suite_error(path, "defaults: unknown field '" + it.key() + "'");
+    read_options(j["defaults"], defaults, path, "defaults");
+  }
+  if (!j.contains("entries") || !j["entries"].is_array() || j["entries"].empty())
+    suite_error(path, "needs a non-empty 'entries' array");
+  // Presets are looked up beside the suite file, then in its parent folder (surfaces/).
+  const fs::path dir = fs::path(path).parent_path();
+  for (const Json& e : j["entries"]) {
+    SuiteEntry entry;
+    if (!e.is_object() || !e.contains("name") || !e["name"].is_string())
+      suite_error(path, "every entry needs a string 'name'");
+    entry.name = e["name"].get<std::string>();
+    const std::string where = "entry " + entry.name;
+    for (auto it = e.begin(); it != e.end(); ++it)
+      if (it.key() != "name" && it.key() != "generate" && it.key() != "preset" &&
+          it.key() != "args" && it.key() != "seeds" && it.key() != "format" &&
+          !is_option_key(it.key()))
+        suite_error(path, where + ": unknown field '" + it.key() + "'");
+    if (!e.contains("generate") || !e["generate"].is_string())
+      suite_error(path, where + ": needs 'generate' (a generator kind, as in microsim generate KIND)");
+    entry.generate = e["generate"].get<std::string>();
+    if (e.contains("preset")) {
+      if (!e["preset"].is_string()) suite_error(path, where + ": preset must be a string");
+      fs::path p = e["preset"].get<std::string>();
+      if (p.is_relative()) {
+        fs::path a = dir / p, b = dir.parent_path() / p;
+        p = fs::exists(a) ? a : b;
+      }
+      if (!fs::exists(p)) suite_error(path, where + ": preset " + e["preset"].get<std::string>() + " not found");
+      entry.preset = fs::absolute(p).lexically_normal().string();
+    }
+    if (e.contains("args")) {
+      if (!e["args"].is_object()) suite_error(path, where + ": args must be an object");
+      for (auto it = e["args"].begin(); it != e["args"].end(); ++it) {
+        std::string value = it.value().is_string() ? it.value().get<std::string>() : it.value().dump();
+        if (it.value().is_boolean()) value = it.value().get<bool>() ? "true" : "false";
+        entry.args.emplace_back(it.key(), value);
+      }
+    }
+    if (e.contains("seeds")) {
+      try {
+        entry.seeds = e["seeds"].get<std::vector<std::uint64_t>>();
+      } catch (const Json::exception&) {
+        suite_error(path, where + ": seeds must be an array of non-negative integers");
+      }
+    }
+    if (e.contains("format")) {
+      entry.format = e["format"].is_string() ? e["format"].get<std::string>() : "";
+      if (entry.format != "exr" && entry.format != "ply" && entry.format != "obj" && entry.format != "off")
+        suite_error(path, where + ": format must be exr, ply, obj or off");
+    }
+    entry.options = defaults;
+    read_options(e, entry.options, path, where);
+    s.entries.push_back(entry);
+  }
+  return s;
+}
+
+std::string find_suite(const std::string& name, const std::vector<std::string>& dirs) {
+  namespace fs = std::filesystem;
+  if (fs::is_regular_file(name)) return name;
+  for (const std::string& d : dirs) {
+    fs::path p = fs::path(d) / (name + ".json");
+    if (fs::is_regular_file(p)) return p.string();
+  }
+  std::string known;
+  for (const std::string& d : dirs)
+    for (const std::string& n : list_suites(d)) known += (known.empty() ? "" : ", ") + n;
+  throw UsageError("--suite " + name + ": no such suite (known: " + (known.empty() ? "none" : known) + ")");
+}
+
+std::vector<std::string> list_suites(const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> names;
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return names;
+  for (const auto& f : fs::directory_iterator(dir, ec))
+    if (f.path().extension() == ".json") names.push_back(f.path().stem().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+}  // namespace microsim::validation

@@ -1,0 +1,361 @@
+// Validation: verdict rules, exact behaviour on the flat plane, identities on Beckmann tiles
+// (statistical, Sidak-corrected, fixed seeds), a broken surface that must FAIL, suite files, and
+// `microsim validate` as users see it (table, JSON rows, exit codes, bad input).
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+#include "microsim/surface/gaussian.hpp"
+#include "microsim/validate/validate.hpp"
+#include "test_helpers.hpp"
+
+using namespace microsim;
+using namespace microsim::testing;
+namespace mv = microsim::validation;
+
+namespace {
+
+mv::Row row(mv::Kind kind, double measured, std::optional<double> se, std::optional<double> model) {
+  mv::Row r;
+  r.kind = kind;
+  r.measured = measured;
+  r.stderr_ = se;
+  r.model = model;
+  return r;
+}
+
+mv::SurfaceSet one_surface(Microsurface s, const std::string& name, mv::Options o) {
+  mv::SurfaceSet set;
+  set.name = name;
+  set.surfaces.push_back(std::move(s));
+  set.labels.push_back("");
+  set.options = o;
+  return set;
+}
+
+Microsurface gaussian(int resolution, double alpha, std::uint64_t seed) {
+  GaussianParams p;
+  p.resolution = resolution;
+  p.alpha_x = p.alpha_y = alpha;
+  p.seed = seed;
+  return generate_gaussian(p);
+}
+
+std::size_t count_rows(const mv::Result& r, const std::string& quantity, const std::string& model) {
+  return static_cast<std::size_t>(std::count_if(r.rows.begin(), r.rows.end(), [&](const mv::Row& x) {
+    return x.quantity == quantity && x.model_name == model;
+  }));
+}
+
+// A periodic flat unit square (two triangles) whose macrosurface declares area `area`: with
+// area != 1, 000 eq. 1c and the visible area ratio are violated.
+Microsurface flat_mesh(double area) {
+  std::vector<Eigen::Vector3f> v = {{-0.5f, -0.5f, 0}, {0.5f, -0.5f, 0}, {0.5f, 0.5f, 0}, {-0.5f, 0.5f, 0}};
+  std::vector<std::array<std::uint32_t, 3>> t = {{0, 1, 2}, {0, 2, 3}};
+  Macrosurface m;
+  m.area = area;
+  return Microsurface::mesh(v, t, m);
+}
+
+}  // namespace
+
+TEST(ValidateRules, SidakThresholdKnownValues) {
+  EXPECT_NEAR(mv::sidak_z(0.05, 1), 1.959964, 1e-5);
+  EXPECT_NEAR(mv::sidak_z(0.01, 1), 2.575829, 1e-5);
+  // 1 - (1 - 0.01)^(1/1000) = 1.00503e-5 two-sided: z = 4.417.
+  EXPECT_NEAR(mv::sidak_z(0.01, 1000), 4.417, 2e-3);
+  EXPECT_GT(mv::sidak_z(0.01, 1000000), mv::sidak_z(0.01, 1000));
+}
+
+TEST(ValidateRules, VerdictsFollowTheDocumentedRules) {
+  std::vector<mv::Row> rows = {
+      row(mv::Kind::Identity, 1.02, 0.01, 1.0),        // z = 2: pass
+      row(mv::Kind::Identity, 1.10, 0.01, 1.0),        // z = 10: FAIL
+      row(mv::Kind::Model, 0.90, 0.01, 1.0),           // z = -10: deviates
+      row(mv::Kind::Model, 0.99, 0.01, 1.0),           // z = -1: agrees
+      row(mv::Kind::Info, 0.5, std::nullopt, 1.0),     // no error bar: measured
+      row(mv::Kind::Identity, 1.0, 0.0, 1.0),          // no noise, equal: pass
+      row(mv::Kind::Identity, 0.999, 0.0, 1.0),        // no noise, different: FAIL
+  };
+  mv::Row det = row(mv::Kind::Deterministic, 1.0 + 1e-12, std::nullopt, 1.0);
+  det.tolerance = 1e-10;
+  rows.push_back(det);
+  det.measured = 1.0 + 1e-8;
+  rows.push_back(det);
+  const double zt = mv::assign_verdicts(rows, 0.01);
+  // 6 z-tested rows (identity and model rows with an error bar and a model).
+  EXPECT_NEAR(zt, mv::sidak_z(0.01, 6), 1e-12);
+  EXPECT_EQ(rows[0].verdict, "pass");
+  EXPECT_NEAR(*rows[0].z, 2.0, 1e-9);
+  EXPECT_EQ(rows[1].verdict, "FAIL");
+  EXPECT_EQ(rows[2].verdict, "deviates (finding)");
+  EXPECT_NEAR(*rows[2].rel_dev, -0.1, 1e-12);
+  EXPECT_EQ(rows[3].verdict, "agrees");
+  EXPECT_EQ(rows[4].verdict, "measured");
+  EXPECT_FALSE(rows[4].z.has_value());
+  EXPECT_NEAR(*rows[4].rel_dev, -0.5, 1e-12);
+  EXPECT_EQ(rows[5].verdict, "pass");
+  EXPECT_EQ(rows[6].verdict, "FAIL");
+  EXPECT_TRUE(std::isinf(*rows[6].z));
+  EXPECT_EQ(rows[7].verdict, "pass");
+  EXPECT_FALSE(rows[7].z.has_value());
+  EXPECT_EQ(rows[8].verdict, "FAIL");
+}
+
+TEST(ValidateRules, ProportionErrorIsNeverZero) {
+  Estimate all = mv::proportion(1000, 1000);
+  EXPECT_EQ(all.mean, 1.0);
+  EXPECT_NEAR(all.stderr_, std::sqrt(0.5) / 1000, 1e-6);
+  Estimate half = mv::proportion(5000, 10000);
+  EXPECT_NEAR(half.stderr_, 0.005, 1e-6);
+}
+
+// Flat plane: every quantity is known exactly; every row must pass with zero deviation.
+TEST(ValidateChecks, FlatPlaneIsExact) {
+  mv::Options o;
+  o.theta_deg = {0, 45, 85};
+  o.rays = 20000;
+  mv::Result r = mv::run({one_surface(flat_heightfield(16), "flat", o)}, 0.01);
+  EXPECT_FALSE(r.any_failure());
+  EXPECT_EQ(count_rows(r, "d_ring", "nominal"), 0u);  // no nominal NDF on the flat plane
+  EXPECT_EQ(count_rows(r, "eq_1c", "one"), 1u);
+  for (const auto& row : r.rows) {
+    // Identities pass; Smith and V-cavity are exact here too (no masking at all).
+    EXPECT_EQ(row.verdict, row.kind == mv::Kind::Model ? "agrees" : "pass")
+        << row.quantity << " vs " << row.model_name << " " << row.condition;
+    if (row.quantity == "g1" || row.quantity == "visible_area_ratio" || row.quantity == "g1_bin") {
+      EXPECT_DOUBLE_EQ(row.measured, 1.0) << row.condition;
+      // Models from float facet tables: 1 to float rounding.
+      EXPECT_NEAR(*row.model, 1.0, 1e-6) << row.model_name << " " << row.condition;
+    }
+  }
+  ASSERT_EQ(r.entries.size(), 1u);
+  EXPECT_TRUE(r.entries[0].measurements.contains("g1"));
+}
+
+// A Beckmann ensemble: every identity passes at the Sidak threshold (fixed seeds), the model
+// rows are there with the right error kind, and the groups collapse in the printed table.
+TEST(ValidateChecks, BeckmannEnsembleIdentitiesPassAndModelsAreReported) {
+  mv::SurfaceSet set;
+  set.name = "beckmann";
+  for (std::uint64_t seed : {1, 2}) {
+    set.surfaces.push_back(gaussian(128, 0.5, seed));
+    set.labels.push_back("seed " + std::to_string(seed));
+  }
+  set.options.theta_deg = {0, 60, 80};
+  set.options.rays = 40000;
+  mv::Result r = mv::run({set}, 0.01);
+  std::size_t identities = 0;
+  for (const auto& row : r.rows) {
+    if (row.kind == mv::Kind::Identity || row.kind == mv::Kind::Deterministic) {
+      ++identities;
+      EXPECT_EQ(row.verdict, "pass") << row.quantity << " vs " << row.model_name << " " << row.condition
+                                     << ": " << row.measured << " +- " << row.stderr_.value_or(0)
+                                     << " model " << row.model.value_or(0);
+    }
+    if (row.model_name == "smith_nominal") EXPECT_EQ(row.error, "surfaces");
+  }
+  EXPECT_GT(identities, 50u);
+  EXPECT_EQ(count_rows(r, "g1", "smith_nominal"), 3u);
+  EXPECT_GT(count_rows(r, "g1_bin", "vcavity"), 20u);
+  EXPECT_GT(count_rows(r, "d_ring", "nominal"), 5u);
+  EXPECT_EQ(count_rows(r, "eq_1b_z", "macro_normal"), 2u);
+  const std::string table = mv::format_table(r);
+  EXPECT_NE(table.find("worst of"), std::string::npos);
+  EXPECT_NE(table.find("verdict"), std::string::npos);
+  Json j = mv::result_to_json(r);
+  for (const char* k : {"quantity", "condition", "measured", "stderr", "model", "z", "rel_dev", "verdict"})
+    EXPECT_TRUE(j["rows"][0].contains(k)) << k;
+}
+
+// A surface that violates 000 eq. 1c and the visible area ratio must FAIL (the test can fail).
+TEST(ValidateChecks, BrokenMacrosurfaceFails) {
+  mv::Options o;
+  o.theta_deg = {30};
+  o.rays = 10000;
+  mv::Result ok = mv::run({one_surface(flat_mesh(1.0), "good", o)}, 0.01);
+  EXPECT_FALSE(ok.any_failure());
+  mv::Result bad = mv::run({one_surface(flat_mesh(2.0), "bad", o)}, 0.01);
+  EXPECT_TRUE(bad.any_failure());
+  for (const auto& row : bad.rows) {
+    if (row.quantity == "eq_1c" || row.quantity == "eq_1b_z" || row.quantity == "visible_area_ratio")
+      EXPECT_EQ(row.verdict, "FAIL") << row.quantity;
+  }
+}
+
+TEST(ValidateChecks, UnknownCheckNameIsAUsageError) {
+  mv::Options o;
+  o.checks = {"g1", "frobnicate"};
+  EXPECT_THROW(mv::run({one_surface(flat_heightfield(8), "flat", o)}, 0.01), UsageError);
+  o.checks = {"d_identities"};
+  mv::Result r = mv::run({one_surface(flat_heightfield(8), "flat", o)}, 0.01);
+  EXPECT_EQ(r.rows.size(), 4u);  // eq. 1b x, y, z and eq. 1c
+}
+
+// ---------------------------------------------------------------------------------------------
+// Suites
+
+namespace {
+std::string tmp(const std::string& name) { return ::testing::TempDir() + "microsim_validate_" + name; }
+std::string write(const std::string& name, const std::string& text) {
+  std::string p = tmp(name);
+  std::ofstream(p) << text;
+  return p;
+}
+std::string suites_dir() { return std::string(MICROSIM_SOURCE_DIR) + "/surfaces/suites"; }
+}  // namespace
+
+TEST(ValidateSuite, ShippedSuitesLoad) {
+  for (const std::string& name : mv::list_suites(suites_dir())) {
+    mv::Suite s = mv::load_suite(mv::find_suite(name, {suites_dir()}));
+    EXPECT_FALSE(s.entries.empty()) << name;
+    for (const auto& e : s.entries) {
+      if (!e.preset.empty()) {
+        struct stat st;
+        EXPECT_EQ(stat(e.preset.c_str(), &st), 0) << e.preset;
+      }
+    }
+  }
+  mv::Suite smoke = mv::load_suite(mv::find_suite("smoke", {suites_dir()}));
+  ASSERT_EQ(smoke.entries.size(), 2u);
+  EXPECT_EQ(smoke.entries[1].generate, "gaussian");
+  EXPECT_EQ(smoke.entries[1].seeds.size(), 2u);
+  EXPECT_EQ(smoke.entries[1].options.rays, 20000u);
+}
+
+TEST(ValidateSuite, MalformedSuitesAreRefusedWithTheField) {
+  auto refused = [](const std::string& text, const std::string& needle) {
+    std::string p = write("bad.json", text);
+    try {
+      mv::load_suite(p);
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const UsageError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  refused("{", "not valid JSON");
+  refused(R"({"entries": []})", "entries");
+  refused(R"({"entries": [{"name": "a", "generate": "flat"}], "typo": 1})", "typo");
+  refused(R"({"entries": [{"name": "a"}]})", "generate");
+  refused(R"({"entries": [{"name": "a", "generate": "flat", "theta_deg": [95]}]})", "theta_deg");
+  refused(R"({"entries": [{"name": "a", "generate": "flat", "preset": "nope.toml"}]})", "nope.toml");
+  refused(R"({"entries": [{"name": "a", "generate": "flat", "rays": -3}]})", "rays");
+  refused(R"({"significance": 2, "entries": [{"name": "a", "generate": "flat"}]})", "significance");
+  EXPECT_THROW(mv::find_suite("no-such-suite", {suites_dir()}), UsageError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The command line
+
+namespace {
+struct Result {
+  int code;
+  std::string out, err;
+};
+std::string slurp(const std::string& p) {
+  std::ifstream f(p);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+bool exists(const std::string& p) {
+  struct stat st;
+  return stat(p.c_str(), &st) == 0;
+}
+// Per-test capture files: ctest -j runs the tests of this file as parallel processes.
+Result run(const std::string& args) {
+  const std::string test = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  std::string out = tmp(test + "_stdout.txt"), err = tmp(test + "_stderr.txt");
+  std::string cmd = std::string(MICROSIM_BINARY) + " " + args + " >" + out + " 2>" + err;
+  int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+int lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+}  // namespace
+
+TEST(ValidateCli, BeckmannTilePrintsTheTableAndWritesRows) {
+  std::string surface = tmp("beckmann.exr"), out = tmp("v.json");
+  ASSERT_EQ(run("generate gaussian --resolution 64 --alpha 0.5 --seed 4 -o " + surface).code, 0);
+  Result r = run("validate " + surface + " --theta 0,60 --rays 20000 -o " + out);
+  ASSERT_EQ(r.code, 0) << r.err << r.out;
+  EXPECT_TRUE(r.err.empty()) << r.err;  // no progress bar in a pipe
+  for (const char* s : {"quantity", "measured +- stderr", "verdict", "g1 vs g1_raycast", "eq_1c vs one",
+                        "d_ring vs nominal", "g1_bin vs vcavity", "pass", "threshold"})
+    EXPECT_NE(r.out.find(s), std::string::npos) << s << "\n" << r.out;
+  auto j = Json::parse(slurp(out));
+  EXPECT_EQ(j["command"], "validate");
+  EXPECT_TRUE(j["entries"][0]["surfaces"][0]["description"].contains("alpha_x"));
+  ASSERT_GT(j["rows"].size(), 10u);
+  for (const auto& row : j["rows"])
+    for (const char* k : {"quantity", "condition", "measured", "stderr", "model", "z", "verdict"})
+      EXPECT_TRUE(row.contains(k)) << k;
+  EXPECT_GT(j["z_threshold"].get<double>(), 2.5);
+  // --quiet: nothing on stdout, same record.
+  Result q = run("validate " + surface + " --theta 0,60 --rays 20000 --quiet -o " + out);
+  EXPECT_EQ(q.code, 0);
+  EXPECT_TRUE(q.out.empty()) << q.out;
+  // CSV mirror of the rows.
+  std::string csv = tmp("v.csv");
+  ASSERT_EQ(run("validate " + surface + " --theta 60 --rays 20000 --quiet -o " + csv).code, 0);
+  EXPECT_GT(lines(slurp(csv)), 10);
+}
+
+TEST(ValidateCli, FailingIdentityExitsOneAfterWritingTheRecord) {
+  std::string obj = tmp("badmacro.obj"), out = tmp("bad.json");
+  std::ofstream(obj) << "v -0.5 -0.5 0\nv 0.5 -0.5 0\nv 0.5 0.5 0\nv -0.5 0.5 0\nf 1 2 3\nf 1 3 4\n";
+  std::ofstream(obj + ".json")
+      << R"({"microsim_surface": "mesh", "macrosurface": {"normal": [0, 0, 1], "area": 2.0,
+            "periodic": true, "size_x": 1, "size_y": 1}})";
+  Result r = run("validate " + obj + " --theta 30 --rays 10000 -o " + out);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("FAILED"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("FAIL"), std::string::npos);
+  ASSERT_TRUE(exists(out));
+  EXPECT_GT(Json::parse(slurp(out))["summary"]["fail"].get<int>(), 0);
+}
+
+TEST(ValidateCli, SmokeSuiteRuns) {
+  std::string out = tmp("suite.json"), dir = tmp("suite_surfaces");
+  Result r = run("validate --suite smoke --surfaces-dir " + dir + " -o " + out);
+  ASSERT_EQ(r.code, 0) << r.err << r.out;
+  auto j = Json::parse(slurp(out));
+  EXPECT_EQ(j["suite"]["name"], "smoke");
+  EXPECT_EQ(j["entries"].size(), 2u);
+  EXPECT_EQ(j["surface_files"].size(), 3u);  // flat + two seeds
+  EXPECT_TRUE(exists(dir + "/beckmann-0.5-seed2.exr"));
+  EXPECT_EQ(j["summary"]["fail"], 0);
+  // Command-line options override the suite's.
+  ASSERT_EQ(run("validate --suite smoke --rays 5000 --theta 45 --quiet -o " + out).code, 0);
+  auto k = Json::parse(slurp(out));
+  EXPECT_EQ(k["entries"][1]["parameters"]["rays"], 5000);
+  EXPECT_EQ(k["entries"][1]["parameters"]["theta_deg"], Json::array({45.0}));
+}
+
+TEST(ValidateCli, BadInputIsOneLineExitTwoAndNoOutput) {
+  std::string surface = tmp("bad_in.exr"), o = tmp("bad_out.json");
+  ASSERT_EQ(run("generate flat -o " + surface).code, 0);
+  auto usage = [&](const std::string& args, const std::string& output, const std::string& needle) {
+    std::remove(output.c_str());
+    Result r = run(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+    EXPECT_EQ(lines(r.err), 1) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(needle), std::string::npos) << args << "\n" << r.err;
+    EXPECT_FALSE(exists(output)) << args;
+  };
+  usage("validate -o " + o, o, "--suite");
+  usage("validate " + surface + " --suite smoke -o " + o, o, "either");
+  usage("validate --suite no-such-suite -o " + o, o, "smoke");
+  usage("validate " + surface + " --theta 90 -o " + o, o, "--theta");
+  usage("validate " + surface + " --rays 0 -o " + o, o, "--rays");
+  usage("validate " + surface + " --significance 1.5 -o " + o, o, "--significance");
+  usage("validate " + surface + " --checks g1,nope -o " + o, o, "nope");
+  usage("validate " + surface + " -o " + tmp("x.txt"), tmp("x.txt"), ".json");
+  usage("validate " + tmp("missing.exr") + " -o " + o, o, "does not exist");
+  std::string bad_suite = write("typo_suite.json", R"({"entries": [{"name": "a", "generate": "sphere"}]})");
+  usage("validate --suite " + bad_suite + " -o " + o, o, "sphere");
+}
