@@ -85,6 +85,7 @@ Microsurface generate_vcavity(const VCavityParams& p) {
   const int grid = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(K))));
   const double spacing = 2.0;  // strips of 1 x 1 (diagonal 1.42) never touch
   detail::MeshBuilder mb;
+  double area = 0;  // the strips' footprints, from their float vertices (eq. 1b to rounding)
   for (int k = 0; k < K; ++k) {
     // Slope drawn from P22 (density (n.m) D(m) over normals: every groove covers the same
     // macro area, 001 Sec. 6.1); the radius is stratified over the ensemble.
@@ -110,10 +111,11 @@ Microsurface generate_vcavity(const VCavityParams& p) {
     const Vec3 m2(-m.x(), -m.y(), m.z());
     mb.quad(v[0], v[2], v[3], v[1], m);   // facets 4k, 4k+1: normal m
     mb.quad(v[2], v[4], v[5], v[3], m2);  // facets 4k+2, 4k+3: normal m'
+    area += detail::polygon_area_xy(mb.vertices, {v[0], v[2], v[4], v[5], v[3], v[1]});
   }
   Macrosurface macro;
   macro.periodic = false;
-  macro.area = K;  // K grooves of unit period and unit length
+  macro.area = area;  // K grooves of unit period and unit length: K up to float rounding
   macro.size_x = macro.size_y = spacing * grid;
   Microsurface s = Microsurface::mesh(std::move(mb.vertices), std::move(mb.triangles), macro);
   s.nominal = p.ndf == "beckmann" ? models::Ndf::beckmann(p.alpha_x, p.alpha_y)
