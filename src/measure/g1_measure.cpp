@@ -7,6 +7,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <memory>
 
@@ -54,8 +55,10 @@ RayWindow make_window(const Tracer& tracer, const Vec3& v) {
     Vec3 t2 = v.cross(t1);
     Vec3 c = box.center();
     double lo1 = 1e300, hi1 = -1e300, lo2 = 1e300, hi2 = -1e300;
-    for (int k = 0; k < 8; ++k) {
-      Vec3 q = box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)) - c;
+    // The projection of the vertices (tighter than the bounding box's corners: fewer missed
+    // rays, a smaller binomial error for the same ray count).
+    for (const auto& vf : tracer.surface().vertices()) {
+      Vec3 q = vf.cast<double>() - c;
       lo1 = std::min(lo1, q.dot(t1));
       hi1 = std::max(hi1, q.dot(t1));
       lo2 = std::min(lo2, q.dot(t2));
@@ -149,6 +152,29 @@ FacetTable build_facet_table(const Microsurface& s, const DirectionBinning& binn
                         t.bin[k] = binning.bin_of(m);
                       }
                     });
+  if (s.kind() == Microsurface::Kind::Mesh) {
+    // Twins: same vertex positions (as a set), opposite normals.
+    using Key = std::array<float, 9>;
+    std::vector<std::pair<Key, std::uint32_t>> keys(nf);
+    for (std::size_t k = 0; k < nf; ++k) {
+      std::array<Eigen::Vector3f, 3> p;
+      for (int c = 0; c < 3; ++c) p[c] = s.vertices()[s.triangles()[k][c]];
+      std::sort(p.begin(), p.end(), [](const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+        return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+      });
+      Key key;
+      for (int c = 0; c < 3; ++c)
+        for (int d = 0; d < 3; ++d) key[3 * c + d] = p[c][d];
+      keys[k] = {key, static_cast<std::uint32_t>(k)};
+    }
+    std::sort(keys.begin(), keys.end());
+    t.buried.assign(nf, 0);
+    for (std::size_t i = 0; i + 1 < nf; ++i)
+      for (std::size_t j = i + 1; j < nf && keys[j].first == keys[i].first; ++j) {
+        const std::uint32_t a = keys[i].second, b = keys[j].second;
+        if (t.normal[a].dot(t.normal[b]) < 0) t.buried[a] = t.buried[b] = 1;
+      }
+  }
   return t;
 }
 
@@ -288,6 +314,10 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
     std::size_t k = std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin();
     k = std::min(k, nf - 1);
     while (k > 0 && cdf[k] == cdf[k - 1]) --k;  // never land on a zero-weight facet
+    if (!ft.buried.empty() && ft.buried[k]) {  // pressed against a twin: never visible
+      ++t.samples[facet_bin[k]];
+      return;
+    }
     Triangle f = s.facet(k);
     double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
     Vec3 p = f.point(r1 * (1 - r2), r1 * r2);

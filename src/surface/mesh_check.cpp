@@ -59,7 +59,7 @@ int corner_of(const std::array<std::uint32_t, 3>& t, std::uint32_t v) {
 
 }  // namespace
 
-MeshCheckReport check_mesh(const Microsurface& s, const std::string& name) {
+MeshCheckReport check_mesh(const Microsurface& s, const std::string& name, bool check_eq_1b) {
   MeshCheckReport rep;
   if (s.kind() != Microsurface::Kind::Mesh) return rep;
   const auto& V = s.vertices();
@@ -145,6 +145,7 @@ MeshCheckReport check_mesh(const Microsurface& s, const std::string& name) {
   }
 
   // 000 eq. 1b: sum_f A_f m_f = A n.
+  if (!check_eq_1b) return rep;
   if (!(macro.area > 0)) throw UsageError(name + ": the macrosurface area must be > 0");
   FacetSums f = facet_sums(s);
   const Vec3 ratio = f.sum_area_normal / macro.area;
@@ -249,7 +250,9 @@ Microsurface import_mesh(const MeshImportParams& p) {
     m.size_y = rim.sizes().y();
     m.area = p.area;
   }
+  if (m.area == 0) m.area = 1;  // placeholder until eq. 1c below
   Microsurface s = Microsurface::mesh(std::move(verts), std::move(tris), m);
+  check_mesh(s, p.input, false);  // topology first: its errors are the more specific ones
   if (!p.periodic && p.area == 0) {
     // 000 eq. 1c: A = sum_f A_f (n.m_f); eq. 1b then checks the tangential part.
     const double a = facet_sums(s).sum_area_cos;

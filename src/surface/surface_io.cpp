@@ -108,7 +108,8 @@ void save_mesh(const Microsurface& s, const std::string& path) {
   write_atomically(path, [&](const std::string& tmp) {
     OpenMesh::IO::Options opt;
     if (extension_of(path) == "ply") opt += OpenMesh::IO::Options::Binary;
-    if (!OpenMesh::IO::write_mesh(om, tmp, opt)) throw RuntimeFailure("cannot write " + path);
+    // 9 significant digits: text formats (OBJ, OFF) keep every float vertex exactly.
+    if (!OpenMesh::IO::write_mesh(om, tmp, opt, 9)) throw RuntimeFailure("cannot write " + path);
   });
   Json side = {{"microsim_surface", "mesh"},
                          {"macrosurface", macro_to_json(m.macro())},

@@ -68,6 +68,10 @@ struct FacetTable {
   std::vector<Eigen::Vector3f> normal;
   std::vector<float> area;
   std::vector<int> bin;
+  // Meshes: facets pressed against an opposite-facing twin with the same three vertex positions
+  // (walls of touching boxes, 000 Fig. 6): no ray can reach them, so area sampling counts them
+  // occluded without tracing (an occlusion ray leaving one starts inside the neighbour).
+  std::vector<std::uint8_t> buried;
 };
 FacetTable build_facet_table(const Microsurface& s, const DirectionBinning& binning);
 DirectionBinning g1_normal_binning(const G1Options& options);

@@ -23,8 +23,9 @@ struct MeshCheckReport {
   double eq_1b_relative_error = 0;  // |sum A_f m_f / A - n|
 };
 
-// Throws UsageError("<name>: ...") on the first violation.
-MeshCheckReport check_mesh(const Microsurface& s, const std::string& name);
+// Throws UsageError("<name>: ...") on the first violation. check_eq_1b = false checks the
+// topology only (used before the macro area is known).
+MeshCheckReport check_mesh(const Microsurface& s, const std::string& name, bool check_eq_1b = true);
 
 // Reads the triangles of a PLY/OBJ/OFF file with OpenMesh (polygons are triangulated).
 // UsageError for an unreadable file, a face with repeated or invalid vertices, and for
