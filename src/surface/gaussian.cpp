@@ -154,7 +154,8 @@ Microsurface generate_gaussian_ggx(const GaussianGgxParams& p) {
   const int n = p.resolution;
   const double dx = p.size / n;
   const double ell = p.correlation_length > 0 ? p.correlation_length : 4.0 * dx;
-  const double big = p.roughness_correlation_length > 0 ? p.roughness_correlation_length : 16 * ell;
+  const double big = p.roughness_correlation_length > 0 ? p.roughness_correlation_length
+                                                        : std::min(16 * ell, 0.25 * p.size);
   if (!(big >= ell && big <= 0.5 * p.size))
     throw UsageError("--roughness-correlation-length must be in [correlation length, size/2] (got " +
                      std::to_string(big) + ")");

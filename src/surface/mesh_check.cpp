@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <fstream>
 #include <iostream>
 #include <numeric>
 #include <sstream>
@@ -163,6 +164,7 @@ MeshCheckReport check_mesh(const Microsurface& s, const std::string& name, bool 
 void read_mesh_file(const std::string& path, std::vector<Eigen::Vector3f>& verts,
                     std::vector<std::array<std::uint32_t, 3>>& tris) {
   using OMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+  if (!std::ifstream(path).good()) throw UsageError("mesh file " + path + " does not exist or cannot be read");
   // OpenMesh reports problems on omerr and repairs non-manifold faces by duplicating their
   // vertices; capture its messages and read the repair flags instead.
   std::ostringstream captured;

@@ -41,7 +41,7 @@ struct GaussianGgxParams {
   int resolution = 1024;
   double size = 1.0;
   double correlation_length = 0.0;            // l of g; 0 = 4 cells
-  double roughness_correlation_length = 0.0;  // L of E(x); 0 = 16 l
+  double roughness_correlation_length = 0.0;  // L of E(x); 0 = min(16 l, size/4)
   double alpha_x = 0.5, alpha_y = 0.5;
   double tail_fraction = 1e-3;
   std::uint64_t seed = 1;
