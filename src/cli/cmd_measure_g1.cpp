@@ -141,6 +141,7 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   // Check every file before the long run starts.
   std::vector<Microsurface> first;
   first.push_back(load_surface(files[0]));
+  const bool periodic = first[0].macro().periodic;
   for (std::size_t k = 1; k < files.size(); ++k) load_surface(files[k]);
   if (below && first[0].kind() == Microsurface::Kind::Heightfield)
     throw UsageError("--theta must be in [0, 90) degrees for a heightfield (theta in (90, 180], the "
@@ -271,7 +272,9 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   j["wall_seconds"] = wall;
   j["total_rays"] = counters.rays;
   j["rays_per_second"] = counters.rays / wall;
-  j["lost_rays"] = counters.lost_below + counters.unresolved;
+  // Finite objects: window rays passing beside the object are misses, not losses.
+  j["lost_rays"] = periodic ? counters.lost_below + counters.unresolved : counters.unresolved;
+  if (!periodic) j["missed_rays"] = counters.lost_below;
   j["backface_hits"] = counters.backface_hits;
   write_record(o.output, j);
   if (!g.quiet) {
@@ -279,7 +282,9 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
               << "  (" << go.rays << " rays per estimator and direction"
               << (files.size() > 1 ? "; stderr between surfaces" : "") << ")\n";
     print_g1_table(j["rows"], files.size() > 1);
-    std::cout << "rays lost " << counters.lost_below + counters.unresolved << ", back-face hits "
+    std::cout << "rays lost " << (periodic ? counters.lost_below + counters.unresolved : counters.unresolved)
+              << (periodic ? std::string() : ", rays missing the object " + std::to_string(counters.lost_below))
+              << ", back-face hits "
               << counters.backface_hits << ", " << fmt(counters.rays / wall / 1e6, 2)
               << " Mrays/s; wrote " << o.output << "\n";
   }

@@ -363,7 +363,13 @@ Json g1_row_json(const G1Result& r, const Microsurface& s) {
   }
   row["rays"] = r.raycast_rays;
   row["area_samples"] = r.sample_rays;
-  row["lost_rays"] = r.counters.lost_below + r.counters.unresolved;
+  if (s.macro().periodic) {
+    row["lost_rays"] = r.counters.lost_below + r.counters.unresolved;
+  } else {
+    // A finite object: window rays that pass beside it are misses, not losses.
+    row["lost_rays"] = r.counters.unresolved;
+    row["missed_rays"] = r.counters.lost_below;
+  }
   row["backface_hits"] = r.counters.backface_hits;
   row["border_crossings"] = r.counters.border_crossings;
   row["seconds"] = r.seconds;
