@@ -163,7 +163,8 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
              "unoccluded toward v (DESIGN.md estimator b)"},
       {"g1_raycast", "visible projected area of first hits along -v / sum_f A_f max(0,v.m_f) "
                      "(estimator a)"},
-      {"visible_area_ratio", "visible projected area / ((v.n) A)"},
+      {"visible_area_ratio", "visible projected area / ((v.n) A); visible_projected_area is the "
+                             "same in absolute units, macro_projected_area = |v.n| A"},
       {"smith_numeric", "1/(1+Lambda), Lambda = sum_f A_f max(0,-v.m_f) / ((v.n) A)"},
       {"smith_nominal", "Smith G1 of the generator's nominal NDF (001 eq. 11 with alpha_o); "
                         "undersurface rows: at -v"},

@@ -348,6 +348,17 @@ Json g1_row_json(const G1Result& r, const Microsurface& s) {
   row["g1_raycast_stderr"] = gr.stderr_;
   row["visible_area_ratio"] = var.mean;
   row["visible_area_ratio_stderr"] = var.stderr_;
+  // In absolute units (surface units squared), perpendicular to v: hits / rays x window area.
+  {
+    Estimate p = binomial_estimate(r.raycast_hits, r.raycast_rays);
+    row["visible_projected_area"] = p.mean * r.window_area_perp;
+    row["visible_projected_area_stderr"] = p.stderr_ * r.window_area_perp;
+    row["macro_projected_area"] = std::abs(r.v.z()) * r.macro_area;  // |v.n| A
+  }
+  if (r.theta == 0.0) {  // 000 eq. 2b: int (n.m) G1(n, m) D(m) dm = visible area along n / A
+    row["eq_2b"] = var.mean;
+    row["eq_2b_stderr"] = var.stderr_;
+  }
   row["lambda_numeric"] = r.lambda_numeric;
   double smith_numeric = 1.0 / (1.0 + r.lambda_numeric);
   row["smith_numeric"] = smith_numeric;
