@@ -3,6 +3,7 @@
 // the explicit V-cavity ensemble against its model, mesh validation, and the generators'
 // identities (000 eq. 1b/1c). Every statistical test has a check that it can fail.
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cstdio>
 #include <fstream>
@@ -404,6 +405,22 @@ TEST(VCavity, EnsembleMatchesTheVCavityModelPerNormalBinNotSmith) {
   }
 }
 
+TEST(VCavity, IdenticalForAnyThreadCount) {
+  VCavityParams p;
+  p.grooves = 64;
+  Microsurface s = generate_vcavity(p);
+  const std::vector<Vec3> views = {direction_from_angles(rad(75), rad(30))};
+  std::vector<G1Result> a = measure_vcavity_g1(s, views, opts(50000));
+  std::vector<G1Result> b;
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    b = measure_vcavity_g1(s, views, opts(50000));
+  }
+  EXPECT_EQ(a[0].raycast_hits, b[0].raycast_hits);
+  EXPECT_EQ(a[0].sample_visible, b[0].sample_visible);
+  for (int k = 0; k < a[0].binning.size(); ++k) EXPECT_EQ(a[0].bins[k].visible, b[0].bins[k].visible);
+}
+
 // ---------------------------------------------------------------------------------------------
 // gaussian-ggx
 // ---------------------------------------------------------------------------------------------
@@ -509,6 +526,26 @@ TEST(MeshFiles, BadMeshesAreRefusedWithOneLine) {
     }
     std::remove(path.c_str());
   }
+}
+
+TEST(MeshFiles, ImportOfAPeriodicTileChecksItsBorders) {
+  // The square wave without its sidecar, declared periodic: accepted with the right tile,
+  // refused when the tile is too small (vertices outside) or too large (boundary off the border).
+  const std::string path = tmp("tile.ply");
+  save_surface(generate_square_wave({}), path);
+  std::remove((path + ".json").c_str());
+  MeshImportParams p;
+  p.input = path;
+  p.periodic = true;
+  p.tile_x = p.tile_y = 1.0;
+  Microsurface s = import_mesh(p);
+  EXPECT_TRUE(s.macro().periodic);
+  EXPECT_DOUBLE_EQ(s.macro().area, 1.0);
+  p.tile_x = 0.9;
+  EXPECT_THROW(import_mesh(p), UsageError);
+  p.tile_x = 1.2;
+  EXPECT_THROW(import_mesh(p), UsageError);
+  std::remove(path.c_str());
 }
 
 TEST(MeshFiles, ImportRotatesTheDeclaredNormalAndFindsTheArea) {
