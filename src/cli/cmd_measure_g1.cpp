@@ -183,6 +183,13 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
                        "sampling only lowers it)"
                      : "between-surface standard error (sd over surfaces / sqrt(K)); the ray-count "
                        "one is *_stderr_rays; per_surface holds each surface's own rows"}};
+  if (is_vcavity(first[0]))
+    j["definitions"]["vcavity"] =
+        "001 Sec. 6.1 made explicit: each groove of the ensemble (normals m, m' drawn from "
+        "(n.m) D(m)) is traced on its own as an infinite periodic V-groove; ray casting uses the "
+        "same number of rays per groove (equal macro areas), area sampling draws points over the "
+        "whole ensemble by front-facing projected area; counts are pooled per normal bin. "
+        "vcavity_numeric is 001 eq. 24 on the same normals";
   Progress progress("measure g1", g.quiet);
   const std::size_t total = files.size() * thetas.size() * phis.size();
   std::size_t done = 0;
