@@ -1,7 +1,6 @@
 // The command line as users and scripts see it: outputs and their fields, and bad input
 // answered with one line on stderr, exit code 2 and no output file.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <array>
 #include <cstdio>
@@ -9,6 +8,7 @@
 #include <sstream>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
@@ -168,4 +168,70 @@ TEST_F(Cli, BadInputIsOneLineExitTwoAndNoOutput) {
   expect_usage_error("info " + corrupt, o, "corrupt.exr");
   expect_usage_error("measure g1 " + surface_ + " -o " + tmp("bad.exr"), tmp("bad.exr"), ".json");
   expect_usage_error("frobnicate", o, "frobnicate");
+}
+
+// Issue 3: structured and non-heightfield surfaces through the command line.
+TEST_F(Cli, EveryStructuredKindGeneratesAndMeasures) {
+  const std::vector<std::pair<std::string, std::string>> kinds = {
+      {"box --width 1 --depth 1 --height 0.5", "box.ply"},
+      {"tiled-boxes --tiles 2", "tiled.ply"},
+      {"square-wave --period 1 --duty 0.5 --height 0.5", "sw.obj"},
+      {"square-wave --2d", "sw2.off"},
+      {"vgroove --facet-angle 30", "vg.exr"},
+      {"vgroove --facet-angle 30 --2d", "pyr.ply"},
+      {"vcavity --ndf ggx --alpha 0.4 --grooves 64", "vc.ply"},
+      {"parallelepiped --shear-x 0.5 --tiles 2", "pp.ply"},
+      {"ellipsoid --alpha-x 0.5 --alpha-y 0.3 --rings 16 --segments 64", "el.ply"},
+      {"gaussian-ggx --resolution 64 --alpha 0.3", "gg.exr"}};
+  for (const auto& [args, file] : kinds) {
+    const std::string out = tmp(file);
+    Result r = run("generate " + args + " -o " + out);
+    ASSERT_EQ(r.code, 0) << args << "\n" << r.err;
+    Result info = run("info " + out);
+    EXPECT_EQ(info.code, 0) << args << "\n" << info.err;
+    EXPECT_NE(info.out.find("eq. 1b"), std::string::npos);
+  }
+  // Views below the horizon on a mesh: the undersurface beside both approximations.
+  const std::string g1 = tmp("box_g1.json");
+  Result r = run("measure g1 " + tmp("box.ply") + " --theta 30,120 --rays 20000 -o " + g1);
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto j = nlohmann::json::parse(slurp(g1));
+  EXPECT_FALSE(j["rows"][0].contains("undersurface"));
+  for (const char* k : {"undersurface", "g1_reverse_v", "g1_reverse_v_stderr", "g1_reflect_v",
+                        "g1_reflect_v_stderr", "z_reverse_v", "z_reflect_v"})
+    EXPECT_TRUE(j["rows"][1].contains(k)) << k;
+  EXPECT_GT(j["rows"][0]["visible_area_ratio"].get<double>(), 1.2);  // 1 + tan(30)/2
+  // The V-cavity ensemble: per-bin V-cavity and Smith models beside the measurement.
+  const std::string vc = tmp("vc_g1.json");
+  r = run("measure g1 " + tmp("vc.ply") + " --theta 80 --rays 20000 -o " + vc);
+  ASSERT_EQ(r.code, 0) << r.err;
+  j = nlohmann::json::parse(slurp(vc));
+  EXPECT_EQ(j["surface"]["kind"], "vcavity");
+  for (const char* k : {"bins_chi2_vcavity", "bins_chi2_smith", "bins_mad_vcavity", "bins_mad_smith"})
+    EXPECT_TRUE(j["rows"][0].contains(k)) << k;
+  bool has_model = false;
+  for (const auto& b : j["rows"][0]["bins"]) has_model = has_model || b.contains("vcavity_numeric");
+  EXPECT_TRUE(has_model);
+  // D over the whole sphere of a non-heightfield.
+  EXPECT_EQ(run("measure ndf " + tmp("pp.ply") + " -o " + tmp("pp_ndf.json")).code, 0);
+}
+
+TEST_F(Cli, BadMeshesAndStructuredParametersAreRefused) {
+  const std::string bad = tmp("nonmanifold.off"), out = tmp("out.ply"), o = tmp("bad.json");
+  std::ofstream(bad) << "OFF\n5 3 0\n0 0 1\n1 0 1\n0 1 1\n0 -1 1\n0 0 2\n3 0 1 2\n3 1 0 3\n3 0 1 4\n";
+  expect_usage_error("generate mesh --input " + bad + " -o " + out, out, "non-manifold");
+  expect_usage_error("measure g1 " + bad + " -o " + o, o, "non-manifold");
+  const std::string open = tmp("open.off");
+  // A box without its top: open where it must be closed.
+  std::ofstream(open) << "OFF\n8 8 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+                         "3 1 2 6\n3 1 6 5\n3 0 4 7\n3 0 7 3\n3 3 7 6\n3 3 6 2\n3 0 1 5\n3 0 5 4\n";
+  expect_usage_error("generate mesh --input " + open + " -o " + out, out, "open mesh");
+  expect_usage_error("generate mesh --input " + tmp("none.ply") + " -o " + out, out, "does not exist");
+  expect_usage_error("generate box --height 0 -o " + out, out, "--height");
+  expect_usage_error("generate box -o " + tmp("box.exr"), tmp("box.exr"), ".ply");
+  expect_usage_error("generate square-wave --duty 1.5 -o " + out, out, "--duty");
+  expect_usage_error("generate vgroove --facet-angle 95 -o " + out, out, "--facet-angle");
+  expect_usage_error("generate parallelepiped --matrix 1,0,0,0,1,0,0.5,0,1 -o " + out, out, "--matrix");
+  expect_usage_error("generate vcavity --ndf phong -o " + out, out, "--ndf");
+  expect_usage_error("measure g1 " + surface_ + " --theta 120 -o " + o, o, "heightfield");
 }

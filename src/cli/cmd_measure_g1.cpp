@@ -1,11 +1,15 @@
 // microsim measure g1 FILE... : masking by ray casting and area sampling, beside Smith.
 #include <iomanip>
+#include <memory>
 #include <iostream>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/measure/g1_measure.hpp"
+#include "microsim/measure/vcavity_measure.hpp"
+#include "microsim/surface/generators.hpp"
+#include "microsim/surface/undersurface.hpp"
 #include "microsim/surface/surface_io.hpp"
 #include "microsim/trace/tracer.hpp"
 
@@ -124,16 +128,26 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   require_extension(o.output, {"json", "csv"});
   std::vector<double> thetas = parse_angle_list(o.theta, "--theta");
   std::vector<double> phis = parse_angle_list(o.phi, "--phi");
-  for (double t : thetas)
-    if (!(t >= 0 && t < 90))
-      throw UsageError("--theta must be in [0, 90) degrees (got " + fmt(t, 2) + ")");
+  bool below = false;  // views below the horizon: the undersurface (meshes only)
+  for (double t : thetas) {
+    if (!(t >= 0 && t <= 180) || t == 90)
+      throw UsageError("--theta must be in [0, 90) degrees, or (90, 180] for the undersurface of a "
+                       "mesh (got " + fmt(t, 2) + ")");
+    below = below || t > 90;
+  }
   if (o.rays <= 0) throw UsageError("--rays must be a positive integer (got " + std::to_string(o.rays) + ")");
   std::vector<std::string> files = {o.surface};
   files.insert(files.end(), o.extra_surfaces.begin(), o.extra_surfaces.end());
   // Check every file before the long run starts.
   std::vector<Microsurface> first;
   first.push_back(load_surface(files[0]));
+  const bool periodic = first[0].macro().periodic;
   for (std::size_t k = 1; k < files.size(); ++k) load_surface(files[k]);
+  if (below && first[0].kind() == Microsurface::Kind::Heightfield)
+    throw UsageError("--theta must be in [0, 90) degrees for a heightfield (theta in (90, 180], the "
+                     "undersurface, is measured on meshes only)");
+  if (below && is_vcavity(first[0]))
+    throw UsageError("--theta must be in [0, 90) degrees for a vcavity ensemble");
   auto t0 = std::chrono::steady_clock::now();
 
   G1Options go;
@@ -149,14 +163,33 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
              "unoccluded toward v (DESIGN.md estimator b)"},
       {"g1_raycast", "visible projected area of first hits along -v / sum_f A_f max(0,v.m_f) "
                      "(estimator a)"},
-      {"visible_area_ratio", "visible projected area / ((v.n) A)"},
+      {"visible_area_ratio", "visible projected area / ((v.n) A); visible_projected_area is the "
+                             "same in absolute units, macro_projected_area = |v.n| A"},
       {"smith_numeric", "1/(1+Lambda), Lambda = sum_f A_f max(0,-v.m_f) / ((v.n) A)"},
-      {"smith_nominal", "Smith G1 of the generator's nominal NDF (001 eq. 11 with alpha_o)"},
+      {"smith_nominal", "Smith G1 of the generator's nominal NDF (001 eq. 11 with alpha_o); "
+                        "undersurface rows: at -v"},
+      {"bins", "per normal bin: g1, g1_raycast, smith_numeric (1/(1+lambda_numeric) for "
+               "front-facing bins) and vcavity_numeric (001 eq. 24 averaged over the bin's facets "
+               "by front-facing projected area); bins_mad_* and bins_chi2_* summarise the "
+               "deviation of g1 from each model over the bins"},
+      {"undersurface", "theta > 90 (meshes): g1 is the explicit measurement of the undersurface "
+                       "(the sheet with reversed normals seen from v); g1_reverse_v and "
+                       "g1_reflect_v are the surface's own G1 at -v and at v reflected across the "
+                       "macrosurface, the two approximations of 000 'Inherent Assumptions'"},
+      {"eq_2b", "the visible_area_ratio at theta = 0 is 000 eq. 2b, int (n.m) G1(n,m) D(m) dm; "
+                "1 for a valid periodic microsurface"},
       {"stderr", files.size() == 1
                      ? "ray-count standard error of this one surface (binomial bound; stratified "
                        "sampling only lowers it)"
                      : "between-surface standard error (sd over surfaces / sqrt(K)); the ray-count "
                        "one is *_stderr_rays; per_surface holds each surface's own rows"}};
+  if (is_vcavity(first[0]))
+    j["definitions"]["vcavity"] =
+        "001 Sec. 6.1 made explicit: each groove of the ensemble (normals m, m' drawn from "
+        "(n.m) D(m)) is traced on its own as an infinite periodic V-groove; ray casting uses the "
+        "same number of rays per groove (equal macro areas), area sampling draws points over the "
+        "whole ensemble by front-facing projected area; counts are pooled per normal bin. "
+        "vcavity_numeric is 001 eq. 24 on the same normals";
   Progress progress("measure g1", g.quiet);
   const std::size_t total = files.size() * thetas.size() * phis.size();
   std::size_t done = 0;
@@ -166,17 +199,62 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   double build_seconds = 0;
   for (std::size_t k = 0; k < files.size(); ++k) {
     Microsurface s = k == 0 ? std::move(first[0]) : load_surface(files[k]);
+    Json rows = Json::array();
+    if (is_vcavity(s)) {
+      // 001 Sec. 6.1 made explicit: every groove traced on its own (measure/vcavity_measure.hpp).
+      std::vector<Vec3> views;
+      for (double p : phis)
+        for (double t : thetas) views.push_back(direction_from_angles(rad(t), rad(p)));
+      std::vector<G1Result> res = measure_vcavity_g1(s, views, go);
+      std::size_t i = 0;
+      for (double p : phis)
+        for (double t : thetas) {
+          counters += res[i].counters;
+          Json row = g1_row_json(res[i++], s);
+          row["theta_deg"] = t;
+          row["phi_deg"] = p;
+          rows.push_back(row);
+          ++done;
+        }
+      per_surface.push_back(rows);
+      continue;
+    }
     Tracer tracer(s);
     build_seconds += tracer.build_seconds();
     const FacetTable table = build_facet_table(s, g1_normal_binning(go));
-    Json rows = Json::array();
+    std::unique_ptr<Microsurface> under_surface;
+    std::unique_ptr<Tracer> under;
+    if (below) {
+      under_surface = std::make_unique<Microsurface>(undersurface(s));
+      under = std::make_unique<Tracer>(*under_surface);
+      build_seconds += under->build_seconds();
+    }
     for (double p : phis)
       for (double t : thetas) {
-        G1Result r = measure_g1(tracer, direction_from_angles(rad(t), rad(p)), go, &table);
+        const Vec3 v = direction_from_angles(rad(t), rad(p));
+        G1Result r = measure_g1(tracer, v, go, &table, under.get());
         counters += r.counters;
         Json row = g1_row_json(r, s);
         row["theta_deg"] = t;  // exactly as requested (no round trip through radians)
         row["phi_deg"] = p;
+        if (t > 90) {
+          // 000 "Inherent Assumptions": the undersurface approximated by the surface's own
+          // statistics with v reversed, or with v reflected across the macrosurface.
+          row["undersurface"] = true;
+          G1Result rev = measure_g1(tracer, -v, go, &table);
+          G1Result ref = measure_g1(tracer, mirror_z(v), go, &table);
+          counters += rev.counters;
+          counters += ref.counters;
+          const Estimate g = r.g1_area_sampling();
+          for (auto [name, e] : {std::pair<std::string, Estimate>{"reverse_v", rev.g1_area_sampling()},
+                                 std::pair<std::string, Estimate>{"reflect_v", ref.g1_area_sampling()}}) {
+            const double se = std::hypot(g.stderr_, e.stderr_);
+            row["g1_" + name] = e.mean;
+            row["g1_" + name + "_stderr"] = e.stderr_;
+            row["z_" + name] = se > 0 ? (e.mean - g.mean) / se : 0.0;
+            row["rel_dev_" + name] = g.mean > 0 ? (e.mean - g.mean) / g.mean : 0.0;
+          }
+        }
         rows.push_back(row);
         ++done;
       }
@@ -202,7 +280,9 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   j["wall_seconds"] = wall;
   j["total_rays"] = counters.rays;
   j["rays_per_second"] = counters.rays / wall;
-  j["lost_rays"] = counters.lost_below + counters.unresolved;
+  // Finite objects: window rays passing beside the object are misses, not losses.
+  j["lost_rays"] = periodic ? counters.lost_below + counters.unresolved : counters.unresolved;
+  if (!periodic) j["missed_rays"] = counters.lost_below;
   j["backface_hits"] = counters.backface_hits;
   write_record(o.output, j);
   if (!g.quiet) {
@@ -210,7 +290,9 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
               << "  (" << go.rays << " rays per estimator and direction"
               << (files.size() > 1 ? "; stderr between surfaces" : "") << ")\n";
     print_g1_table(j["rows"], files.size() > 1);
-    std::cout << "rays lost " << counters.lost_below + counters.unresolved << ", back-face hits "
+    std::cout << "rays lost " << (periodic ? counters.lost_below + counters.unresolved : counters.unresolved)
+              << (periodic ? std::string() : ", rays missing the object " + std::to_string(counters.lost_below))
+              << ", back-face hits "
               << counters.backface_hits << ", " << fmt(counters.rays / wall / 1e6, 2)
               << " Mrays/s; wrote " << o.output << "\n";
   }

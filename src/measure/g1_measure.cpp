@@ -1,11 +1,15 @@
 #include "microsim/measure/g1_measure.hpp"
 
+#include "microsim/surface/undersurface.hpp"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <memory>
 
 namespace microsim {
 
@@ -51,8 +55,10 @@ RayWindow make_window(const Tracer& tracer, const Vec3& v) {
     Vec3 t2 = v.cross(t1);
     Vec3 c = box.center();
     double lo1 = 1e300, hi1 = -1e300, lo2 = 1e300, hi2 = -1e300;
-    for (int k = 0; k < 8; ++k) {
-      Vec3 q = box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)) - c;
+    // The projection of the vertices (tighter than the bounding box's corners: fewer missed
+    // rays, a smaller binomial error for the same ray count).
+    for (const auto& vf : tracer.surface().vertices()) {
+      Vec3 q = vf.cast<double>() - c;
       lo1 = std::min(lo1, q.dot(t1));
       hi1 = std::max(hi1, q.dot(t1));
       lo2 = std::min(lo2, q.dot(t2));
@@ -110,7 +116,7 @@ Estimate G1Result::g1_raycast() const {
 
 Estimate G1Result::visible_area_ratio() const {
   Estimate p = binomial_estimate(raycast_hits, raycast_rays);
-  double denom = v.z() * total_area_macro();
+  double denom = std::abs(v.z()) * total_area_macro();  // |v.n| A (undersurface: v.n < 0)
   double k = denom > 0 ? window_area_perp / denom : 0;
   return {p.mean * k, p.stderr_ * k, p.n};
 }
@@ -146,13 +152,58 @@ FacetTable build_facet_table(const Microsurface& s, const DirectionBinning& binn
                         t.bin[k] = binning.bin_of(m);
                       }
                     });
+  if (s.kind() == Microsurface::Kind::Mesh) {
+    // Twins: same vertex positions (as a set), opposite normals.
+    using Key = std::array<float, 9>;
+    std::vector<std::pair<Key, std::uint32_t>> keys(nf);
+    for (std::size_t k = 0; k < nf; ++k) {
+      std::array<Eigen::Vector3f, 3> p;
+      for (int c = 0; c < 3; ++c) p[c] = s.vertices()[s.triangles()[k][c]];
+      std::sort(p.begin(), p.end(), [](const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+        return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+      });
+      Key key;
+      for (int c = 0; c < 3; ++c)
+        for (int d = 0; d < 3; ++d) key[3 * c + d] = p[c][d];
+      keys[k] = {key, static_cast<std::uint32_t>(k)};
+    }
+    std::sort(keys.begin(), keys.end());
+    t.buried.assign(nf, 0);
+    for (std::size_t i = 0; i + 1 < nf; ++i)
+      for (std::size_t j = i + 1; j < nf && keys[j].first == keys[i].first; ++j) {
+        const std::uint32_t a = keys[i].second, b = keys[j].second;
+        if (t.normal[a].dot(t.normal[b]) < 0) t.buried[a] = t.buried[b] = 1;
+      }
+  }
   return t;
 }
 
 G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
-                    const FacetTable* table) {
+                    const FacetTable* table, const Tracer* under) {
   const Microsurface& s = tracer.surface();
-  if (!(v_in.z() > 0)) throw UsageError("--theta must be in [0, 90) degrees");
+  if (!(std::abs(v_in.z()) > 1e-12 * v_in.norm()))
+    throw UsageError("--theta must not be 90 degrees: G1 is undefined at v.n = 0");
+  if (v_in.z() < 0) {
+    if (s.kind() == Microsurface::Kind::Heightfield)
+      throw UsageError("--theta must be in [0, 90) degrees for a heightfield (theta in (90, 180], "
+                       "the undersurface, is measured on meshes only)");
+    // 000 "Inherent Assumptions": the undersurface, explicitly. Traced on the mirrored,
+    // reversed sheet at mirror_z(v); results relabelled to v and to the normals -m_f.
+    std::unique_ptr<Microsurface> own_surface;
+    std::unique_ptr<Tracer> own_tracer;
+    if (!under) {
+      own_surface = std::make_unique<Microsurface>(undersurface(s));
+      own_tracer = std::make_unique<Tracer>(*own_surface);
+      under = own_tracer.get();
+    }
+    G1Result r = measure_g1(*under, mirror_z(v_in.normalized()), o, nullptr, nullptr);
+    r.undersurface = true;
+    r.v = v_in.normalized();
+    r.theta = theta_of(r.v);
+    r.phi = phi_of(r.v);
+    for (auto& b : r.bins) b.mean_normal = mirror_z(b.mean_normal);  // M m' = -m
+    return r;
+  }
   if (o.rays == 0) throw UsageError("--rays must be positive");
   auto t0 = std::chrono::steady_clock::now();
   G1Result r;
@@ -177,9 +228,10 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   if (ft.area.size() != nf) throw RuntimeFailure("facet table does not match the surface");
   const std::vector<int>& facet_bin = ft.bin;
   std::vector<double> cdf(nf);
-  // Per bin: area, front projected area, projected-area-weighted normal (3); then back area.
+  // Per bin: area, front projected area, projected-area-weighted normal (3), V-cavity-weighted
+  // front projected area; then back area.
   using Sums = std::vector<double>;
-  const std::size_t width = 5 * static_cast<std::size_t>(nbins) + 1;
+  const std::size_t width = 6 * static_cast<std::size_t>(nbins) + 1;
   const Eigen::Vector3f vf = v.cast<float>();
   Sums sums = tbb::parallel_deterministic_reduce(
       tbb::blocked_range<std::size_t>(0, nf, std::max<std::size_t>(1 << 15, nf / 64)), Sums{},
@@ -189,12 +241,13 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
           const double a = ft.area[k];
           const double proj = a * static_cast<double>(ft.normal[k].dot(vf));  // A_f (v.m_f)
           cdf[k] = std::max(0.0, proj);
-          double* bin = acc.data() + 5 * static_cast<std::size_t>(facet_bin[k]);
+          double* bin = acc.data() + 6 * static_cast<std::size_t>(facet_bin[k]);
           bin[0] += a;
           bin[1] += cdf[k];
           bin[2] += cdf[k] * ft.normal[k].x();
           bin[3] += cdf[k] * ft.normal[k].y();
           bin[4] += cdf[k] * ft.normal[k].z();
+          if (cdf[k] > 0) bin[5] += cdf[k] * models::vcavity_G1(v, ft.normal[k].cast<double>());
           acc[width - 1] += std::max(0.0, -proj);
         }
         return acc;
@@ -206,9 +259,10 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
       });
   if (sums.empty()) sums.assign(width, 0.0);
   for (int b = 0; b < nbins; ++b) {
-    const double* bin = sums.data() + 5 * static_cast<std::size_t>(b);
+    const double* bin = sums.data() + 6 * static_cast<std::size_t>(b);
     r.bins[b].area = bin[0];
     r.bins[b].front_projected = bin[1];
+    r.bins[b].vcavity_weighted = bin[5];
     r.bins[b].mean_normal = Vec3(bin[2], bin[3], bin[4]);
     if (r.bins[b].mean_normal.norm() > 0) r.bins[b].mean_normal.normalize();
     r.total_area += bin[0];
@@ -264,6 +318,10 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
     std::size_t k = std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin();
     k = std::min(k, nf - 1);
     while (k > 0 && cdf[k] == cdf[k - 1]) --k;  // never land on a zero-weight facet
+    if (!ft.buried.empty() && ft.buried[k]) {  // pressed against a twin: never visible
+      ++t.samples[facet_bin[k]];
+      return;
+    }
     Triangle f = s.facet(k);
     double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
     Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
@@ -296,12 +354,24 @@ Json g1_row_json(const G1Result& r, const Microsurface& s) {
   row["g1_raycast_stderr"] = gr.stderr_;
   row["visible_area_ratio"] = var.mean;
   row["visible_area_ratio_stderr"] = var.stderr_;
+  // In absolute units (surface units squared), perpendicular to v: hits / rays x window area.
+  {
+    Estimate p = binomial_estimate(r.raycast_hits, r.raycast_rays);
+    row["visible_projected_area"] = p.mean * r.window_area_perp;
+    row["visible_projected_area_stderr"] = p.stderr_ * r.window_area_perp;
+    row["macro_projected_area"] = std::abs(r.v.z()) * r.macro_area;  // |v.n| A
+  }
+  if (r.theta == 0.0) {  // 000 eq. 2b: int (n.m) G1(n, m) D(m) dm = visible area along n / A
+    row["eq_2b"] = var.mean;
+    row["eq_2b_stderr"] = var.stderr_;
+  }
   row["lambda_numeric"] = r.lambda_numeric;
   double smith_numeric = 1.0 / (1.0 + r.lambda_numeric);
   row["smith_numeric"] = smith_numeric;
   row["z_numeric"] = g.stderr_ > 0 ? (g.mean - smith_numeric) / g.stderr_ : 0.0;
   if (s.nominal) {
-    double model = s.nominal->G1(r.v);
+    // Undersurface rows: the nominal model with v reversed (000 "Inherent Assumptions").
+    double model = s.nominal->G1(r.undersurface ? Vec3(-r.v) : r.v);
     row["smith_nominal"] = model;
     row["rel_dev_nominal"] = (g.mean - model) / model;
   } else {
@@ -310,19 +380,33 @@ Json g1_row_json(const G1Result& r, const Microsurface& s) {
   }
   row["rays"] = r.raycast_rays;
   row["area_samples"] = r.sample_rays;
-  row["lost_rays"] = r.counters.lost_below + r.counters.unresolved;
+  if (s.macro().periodic) {
+    row["lost_rays"] = r.counters.lost_below + r.counters.unresolved;
+  } else {
+    // A finite object: window rays that pass beside it are misses, not losses.
+    row["lost_rays"] = r.counters.unresolved;
+    row["missed_rays"] = r.counters.lost_below;
+  }
   row["backface_hits"] = r.counters.backface_hits;
   row["border_crossings"] = r.counters.border_crossings;
   row["seconds"] = r.seconds;
   Json bins = Json::array();
   double max_abs_z = 0;
+  // Per-bin models on the bin's own facets, and the deviation of the measurement from each.
+  double chi2_smith = 0, chi2_vcav = 0, mad_smith = 0, mad_vcav = 0, mad_noise = 0, wsum = 0;
+  int dof = 0;
+  for (int b = 0; b < r.binning.size(); ++b)
+    if (r.bins[b].samples > 0) wsum += r.bins[b].front_projected;
   for (int b = 0; b < r.binning.size(); ++b) {
     const G1NormalBin& nb = r.bins[b];
     if (nb.area <= 0) continue;
     Json jb;
     jb["m"] = {nb.mean_normal.x(), nb.mean_normal.y(), nb.mean_normal.z()};
     int it = b / r.binning.n_phi(), ip = b % r.binning.n_phi();
-    jb["theta_m_range_deg"] = {deg(r.binning.theta_lo(it)), deg(r.binning.theta_hi(it))};
+    if (r.undersurface)  // labelled by the undersurface normal -m (theta measured from +z)
+      jb["theta_m_range_deg"] = {180 - deg(r.binning.theta_hi(it)), 180 - deg(r.binning.theta_lo(it))};
+    else
+      jb["theta_m_range_deg"] = {deg(r.binning.theta_lo(it)), deg(r.binning.theta_hi(it))};
     jb["phi_m_range_deg"] = {deg(r.binning.phi_lo(ip)), deg(r.binning.phi_hi(ip))};
     jb["area_fraction"] = nb.area / r.total_area;
     if (nb.front_projected > 0 && nb.samples > 0) {
@@ -335,12 +419,32 @@ Json g1_row_json(const G1Result& r, const Microsurface& s) {
       double z = se > 0 ? (eb.mean - ea.mean) / se : 0.0;
       jb["z_estimators"] = z;
       max_abs_z = std::max(max_abs_z, std::abs(z));
+      const double smith = 1.0 / (1.0 + r.lambda_numeric);     // 000 eq. 3Xc: W1, no m dependence
+      const double vcav = nb.vcavity_weighted / nb.front_projected;  // 001 eq. (24), bin average
+      jb["smith_numeric"] = smith;
+      jb["vcavity_numeric"] = vcav;
+      const double w = nb.front_projected / wsum;
+      mad_smith += w * std::abs(eb.mean - smith);
+      mad_vcav += w * std::abs(eb.mean - vcav);
+      mad_noise += w * eb.stderr_ * std::sqrt(2 / kPi);
+      // A bin whose samples are all visible (or none) has a zero binomial error: use the
+      // one-sample resolution 1/n instead, so that chi^2 stays finite and honest.
+      const double sb = std::max(eb.stderr_, 1.0 / static_cast<double>(nb.samples));
+      chi2_smith += std::pow((eb.mean - smith) / sb, 2);
+      chi2_vcav += std::pow((eb.mean - vcav) / sb, 2);
+      ++dof;
     } else {
       jb["g1"] = 0.0;  // back-facing to v: G1(v, m) = 0 by definition
       jb["g1_stderr"] = 0.0;
     }
     bins.push_back(jb);
   }
+  row["bins_dof"] = dof;
+  row["bins_chi2_smith"] = chi2_smith;
+  row["bins_chi2_vcavity"] = chi2_vcav;
+  row["bins_mad_smith"] = mad_smith;
+  row["bins_mad_vcavity"] = mad_vcav;
+  row["bins_mad_noise"] = mad_noise;
   row["max_abs_z_estimators"] = max_abs_z;
   row["bins"] = bins;
   return row;

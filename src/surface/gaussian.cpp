@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <complex>
+#include <numeric>
 #include <sstream>
 
 namespace microsim {
@@ -62,22 +63,22 @@ void fft2d(std::vector<Complex>& a, int n, bool inverse) {
     for (int j = 0; j < n; ++j) a[static_cast<std::size_t>(j) * n + i] = out[j];
   });
 }
-}  // namespace
 
-Microsurface generate_gaussian(const GaussianParams& p) {
-  validate(p);
-  const int n = p.resolution;
-  const double dx = p.size / n;
-  const double ell = p.correlation_length > 0 ? p.correlation_length : 4.0 * dx;
-  // Anisotropy by the spectrum's shape: correlation lengths l_x = l, l_y = l alpha_x/alpha_y
-  // give slope variances in the ratio alpha_x^2 : alpha_y^2; the x scale fixes the amplitude.
-  const double ell_x = ell, ell_y = ell * p.alpha_x / p.alpha_y;
-
+// One periodic Gaussian field on an n x n grid (tile side `size`), spectrum of the Gaussian
+// autocorrelation exp(-(x^2/lx^2 + y^2/ly^2)), scaled so that the expected finite-difference
+// slope variance along x is alpha_x^2 / 2; returns it with that of y.
+struct GaussianField {
+  std::vector<double> h;
+  double var_dy_scaled = 0;  // expected finite-difference slope variance along y after scaling
+};
+GaussianField gaussian_field(int n, double size, double ell_x, double ell_y, double alpha_x,
+                             std::uint64_t seed, std::uint64_t stream) {
+  const double dx = size / n;
   // White noise from the counter-based generator (Box-Muller), deterministic for any threads.
   std::vector<Complex> a(static_cast<std::size_t>(n) * n);
   tbb::parallel_for(0, n, [&](int j) {
     for (int i = 0; i < n; ++i) {
-      CounterRng rng(p.seed, 0x6A05, static_cast<std::uint64_t>(j) * n + i);
+      CounterRng rng(seed, stream, static_cast<std::uint64_t>(j) * n + i);
       double u1 = 1.0 - rng.uniform(), u2 = rng.uniform();
       a[static_cast<std::size_t>(j) * n + i] =
           std::sqrt(-2.0 * std::log(u1)) * std::cos(2 * kPi * u2);
@@ -89,7 +90,7 @@ Microsurface generate_gaussian(const GaussianParams& p) {
   // Expected finite-difference variances (unit-variance noise, Eigen's unnormalised fwd):
   //   Var[h(i+1,j) - h(i,j)] = (1/n^2) sum_k |H(k)|^2 4 sin^2(kx dx / 2).
   std::vector<double> kfreq(n);
-  for (int i = 0; i < n; ++i) kfreq[i] = 2 * kPi * ((i <= n / 2) ? i : i - n) / p.size;
+  for (int i = 0; i < n; ++i) kfreq[i] = 2 * kPi * ((i <= n / 2) ? i : i - n) / size;
   double var_dx = 0, var_dy = 0;
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < n; ++i) {
@@ -107,10 +108,26 @@ Microsurface generate_gaussian(const GaussianParams& p) {
   fft2d(a, n, true);
 
   // Expected slope variance along x is var_dx / dx^2; scale to alpha_x^2 / 2.
-  const double scale = std::sqrt(0.5 * p.alpha_x * p.alpha_x * dx * dx / var_dx);
-  std::vector<float> h(static_cast<std::size_t>(n) * n);
-  for (std::size_t k = 0; k < h.size(); ++k) h[k] = static_cast<float>(scale * a[k].real());
+  const double scale = std::sqrt(0.5 * alpha_x * alpha_x * dx * dx / var_dx);
+  GaussianField f;
+  f.h.resize(a.size());
+  for (std::size_t k = 0; k < a.size(); ++k) f.h[k] = scale * a[k].real();
+  f.var_dy_scaled = var_dy * scale * scale / (dx * dx);
+  return f;
+}
+}  // namespace
 
+Microsurface generate_gaussian(const GaussianParams& p) {
+  validate(p);
+  const int n = p.resolution;
+  const double dx = p.size / n;
+  const double ell = p.correlation_length > 0 ? p.correlation_length : 4.0 * dx;
+  // Anisotropy by the spectrum's shape: correlation lengths l_x = l, l_y = l alpha_x/alpha_y
+  // give slope variances in the ratio alpha_x^2 : alpha_y^2; the x scale fixes the amplitude.
+  const double ell_x = ell, ell_y = ell * p.alpha_x / p.alpha_y;
+  GaussianField f = gaussian_field(n, p.size, ell_x, ell_y, p.alpha_x, p.seed, 0x6A05);
+  std::vector<float> h(f.h.size());
+  for (std::size_t k = 0; k < h.size(); ++k) h[k] = static_cast<float>(f.h[k]);
   Microsurface s = Microsurface::heightfield(n, n, p.size, p.size, std::move(h));
   s.nominal = models::Ndf::beckmann(p.alpha_x, p.alpha_y);
   s.description = {{"kind", "gaussian"},
@@ -121,7 +138,64 @@ Microsurface generate_gaussian(const GaussianParams& p) {
                    {"alpha_y", p.alpha_y},
                    {"seed", p.seed},
                    {"nominal_ndf", "beckmann"},
-                   {"expected_slope_var_y", var_dy * scale * scale / (dx * dx)}};
+                   {"expected_slope_var_y", f.var_dy_scaled}};
+  return s;
+}
+
+Microsurface generate_gaussian_ggx(const GaussianGgxParams& p) {
+  GaussianParams base;
+  base.resolution = p.resolution;
+  base.size = p.size;
+  base.correlation_length = p.correlation_length;
+  base.alpha_x = p.alpha_x;
+  base.alpha_y = p.alpha_y;
+  base.seed = p.seed;
+  validate(base);
+  const int n = p.resolution;
+  const double dx = p.size / n;
+  const double ell = p.correlation_length > 0 ? p.correlation_length : 4.0 * dx;
+  const double big = p.roughness_correlation_length > 0 ? p.roughness_correlation_length
+                                                        : std::min(16 * ell, 0.25 * p.size);
+  if (!(big >= ell && big <= 0.5 * p.size))
+    throw UsageError("--roughness-correlation-length must be in [correlation length, size/2] (got " +
+                     std::to_string(big) + ")");
+  if (!(p.tail_fraction > 0 && p.tail_fraction < 0.5))
+    throw UsageError("--tail-fraction must be in (0, 0.5) (got " + std::to_string(p.tail_fraction) + ")");
+
+  // g: Beckmann(alpha_x, alpha_y) field, exactly as generate_gaussian.
+  GaussianField g = gaussian_field(n, p.size, ell, ell * p.alpha_x / p.alpha_y, p.alpha_x, p.seed, 0x6A05);
+  // z: smooth isotropic field of correlation length L; only its ranks are used.
+  GaussianField z = gaussian_field(n, p.size, big, big, 1.0, p.seed, 0x6A06);
+  const std::size_t count = g.h.size();
+  std::vector<std::uint32_t> order(count);
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return z.h[a] < z.h[b] || (z.h[a] == z.h[b] && a < b);
+  });
+  // Rank r -> the (r + 1/2)/count quantile of Exp(1): E = -ln(1 - u). Over the tile, E takes
+  // exactly the Exp(1) quantiles, so the pooled slope density is the GGX mixture
+  // int P22_Beckmann(s; alpha/sqrt(E)) e^-E dE = P22_GGX(s; alpha) up to the floor below.
+  const double e_min = -std::log1p(-p.tail_fraction);
+  std::vector<float> h(count);
+  for (std::size_t r = 0; r < count; ++r) {
+    double u = (static_cast<double>(r) + 0.5) / static_cast<double>(count);
+    double e = std::max(e_min, -std::log1p(-u));
+    std::uint32_t k = order[r];
+    h[k] = static_cast<float>(g.h[k] / std::sqrt(e));  // local roughness alpha / sqrt(E)
+  }
+  Microsurface s = Microsurface::heightfield(n, n, p.size, p.size, std::move(h));
+  s.nominal = models::Ndf::ggx(p.alpha_x, p.alpha_y);
+  s.description = {{"kind", "gaussian-ggx"},
+                   {"resolution", n},
+                   {"size", p.size},
+                   {"correlation_length", ell},
+                   {"roughness_correlation_length", big},
+                   {"alpha_x", p.alpha_x},
+                   {"alpha_y", p.alpha_y},
+                   {"tail_fraction", p.tail_fraction},
+                   {"max_local_alpha_factor", 1.0 / std::sqrt(e_min)},
+                   {"seed", p.seed},
+                   {"nominal_ndf", "ggx"}};
   return s;
 }
 

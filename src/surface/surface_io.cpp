@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 
 #include "microsim/io/output.hpp"
+#include "microsim/surface/mesh_check.hpp"
 
 namespace microsim {
 
@@ -107,7 +108,8 @@ void save_mesh(const Microsurface& s, const std::string& path) {
   write_atomically(path, [&](const std::string& tmp) {
     OpenMesh::IO::Options opt;
     if (extension_of(path) == "ply") opt += OpenMesh::IO::Options::Binary;
-    if (!OpenMesh::IO::write_mesh(om, tmp, opt)) throw RuntimeFailure("cannot write " + path);
+    // 9 significant digits: text formats (OBJ, OFF) keep every float vertex exactly.
+    if (!OpenMesh::IO::write_mesh(om, tmp, opt, 9)) throw RuntimeFailure("cannot write " + path);
   });
   Json side = {{"microsim_surface", "mesh"},
                          {"macrosurface", macro_to_json(m.macro())},
@@ -116,31 +118,14 @@ void save_mesh(const Microsurface& s, const std::string& path) {
 }
 
 Microsurface load_mesh(const std::string& path) {
-  silence_openmesh();
-  OMesh om;
-  OpenMesh::IO::Options opt;
-  if (!OpenMesh::IO::read_mesh(om, path, opt) || om.n_faces() == 0)
-    throw UsageError(path + " is not a readable mesh (PLY/OBJ/OFF with at least one face)");
   std::vector<Eigen::Vector3f> verts;
-  verts.reserve(om.n_vertices());
-  for (auto v : om.vertices()) {
-    auto p = om.point(v);
-    verts.emplace_back(p[0], p[1], p[2]);
-  }
   std::vector<std::array<std::uint32_t, 3>> tris;
-  for (auto f : om.faces()) {
-    std::array<std::uint32_t, 3> t{};
-    int k = 0;
-    for (auto v : om.fv_range(f)) {
-      if (k == 3) throw UsageError(path + ": face with more than 3 vertices after triangulation");
-      t[k++] = static_cast<std::uint32_t>(v.idx());
-    }
-    tris.push_back(t);
-  }
+  read_mesh_file(path, verts, tris);  // refuses unreadable, non-manifold, repeated-vertex faces
   Macrosurface macro;
   Json description = {{"kind", "mesh"}, {"file", path}};
   std::string side = path + ".json";
-  if (file_exists(side)) {
+  const bool has_sidecar = file_exists(side);
+  if (has_sidecar) {
     try {
       std::ifstream f(side);
       auto j = Json::parse(f);
@@ -150,19 +135,32 @@ Microsurface load_mesh(const std::string& path) {
       throw UsageError(side + " is not a valid microsim sidecar (" + std::string(e.what()) + ")");
     }
   } else {
-    // No sidecar: a finite object whose window is its xy bounds, area the window's.
+    // No sidecar: a finite object standing on z = 0, window its xy bounds, A from 000 eq. 1c
+    // (sum_f A_f (n.m_f)); check_mesh then verifies the rim and eq. 1b.
     Eigen::AlignedBox3f box;
     for (const auto& v : verts) box.extend(v);
     macro.periodic = false;
     macro.size_x = 2 * std::max(std::abs(box.min().x()), std::abs(box.max().x()));
     macro.size_y = 2 * std::max(std::abs(box.min().y()), std::abs(box.max().y()));
-    macro.area = macro.size_x * macro.size_y;
+    macro.area = 1.0;
   }
   Microsurface s = Microsurface::mesh(std::move(verts), std::move(tris), macro);
-  for (std::size_t k = 0; k < s.num_facets(); ++k)
-    if (!(s.facet(k).area() > 0))
-      throw UsageError(path + ": degenerate triangle " + std::to_string(k) + " (zero area)");
   s.description = description;
+  if (!has_sidecar) {
+    macro.area = facet_sums(s).sum_area_cos;
+    if (!(macro.area > 0))
+      throw UsageError(path + ": no macrosurface sidecar (" + side + ") and no positive signed "
+                       "projected area along +z; declare one with microsim generate mesh --input");
+    s = Microsurface::mesh(s.vertices(), s.triangles(), macro);
+    s.description = description;
+  }
+  try {
+    check_mesh(s, path);
+  } catch (const UsageError& e) {
+    if (has_sidecar) throw;
+    throw UsageError(std::string(e.what()) + " (no sidecar " + side +
+                     ": declare the macrosurface with microsim generate mesh --input)");
+  }
   restore_nominal(s);
   return s;
 }

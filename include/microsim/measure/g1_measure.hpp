@@ -28,6 +28,7 @@ struct G1NormalBin {
   Vec3 mean_normal = Vec3::Zero();  // projected-area-weighted mean unit normal
   double area = 0;                  // sum_f A_f in the bin
   double front_projected = 0;       // sum_f A_f max(0, v.m_f)
+  double vcavity_weighted = 0;      // sum_f A_f max(0, v.m_f) G1_vcavity(v, m_f) (001 eq. 24)
   std::uint64_t raycast_hits = 0;   // estimator (a)
   std::uint64_t samples = 0;        // estimator (b)
   std::uint64_t visible = 0;
@@ -35,6 +36,9 @@ struct G1NormalBin {
 
 struct G1Result {
   Vec3 v;
+  // v.n < 0: the explicit measurement of the undersurface (measured on undersurface(s) at
+  // mirror_z(v)); bins are labelled by the undersurface normal -m_f, in the original frame.
+  bool undersurface = false;
   double theta = 0, phi = 0;
   std::uint64_t raycast_rays = 0, sample_rays = 0;
   std::uint64_t raycast_hits = 0, sample_visible = 0;
@@ -66,15 +70,28 @@ struct FacetTable {
   std::vector<Eigen::Vector3f> normal;
   std::vector<float> area;
   std::vector<int> bin;
+  // Meshes: facets pressed against an opposite-facing twin with the same three vertex positions
+  // (walls of touching boxes, 000 Fig. 6): no ray can reach them, so area sampling counts them
+  // occluded without tracing (an occlusion ray leaving one starts inside the neighbour).
+  std::vector<std::uint8_t> buried;
 };
 FacetTable build_facet_table(const Microsurface& s, const DirectionBinning& binning);
 DirectionBinning g1_normal_binning(const G1Options& options);
 
-// v must have v.n > 0. Throws UsageError otherwise. `table` (from build_facet_table with
-// g1_normal_binning(options)) saves recomputing the facets for every direction.
+// v.n > 0: the surface seen from above. v.n < 0 (meshes only; UsageError for heightfields and
+// for v.n = 0): the undersurface, measured explicitly on undersurface(s) at mirror_z(v) (000
+// "Inherent Assumptions"); pass `under` (a Tracer of undersurface(s)) to reuse it across
+// directions. `table` (from build_facet_table with g1_normal_binning(options)) saves
+// recomputing the facets of the traced surface for every direction.
 G1Result measure_g1(const Tracer& tracer, const Vec3& v, const G1Options& options,
-                    const FacetTable* table = nullptr);
+                    const FacetTable* table = nullptr, const Tracer* under = nullptr);
 
+// One JSON row. Per normal bin: g1 (area sampling) and g1_raycast with standard errors, and the
+// two models evaluated on the bin's own facets: smith_numeric = chi+(v.m)/(1 + Lambda_facets(v))
+// and vcavity_numeric = sum A_f (v.m_f)+ G1_vcavity(v, m_f) / sum A_f (v.m_f)+ (001 eq. 24).
+// Row summaries over the bins with samples, weighted by front-facing projected area w_b:
+// bins_mad_* = sum_b w_b |g1_b - model_b| (noise floor bins_mad_noise = sum_b w_b se_b sqrt(2/pi))
+// and bins_chi2_* = sum_b ((g1_b - model_b) / se_b)^2 over bins_dof bins.
 Json g1_row_json(const G1Result& r, const Microsurface& s);
 
 }  // namespace microsim

@@ -28,4 +28,24 @@ double gaussian_memory_estimate(int resolution);
 // fluctuates around it, which is the between-surface error DESIGN.md asks to report.
 Microsurface generate_gaussian(const GaussianParams& p);
 
+// gaussian-ggx: a periodic heightfield whose pooled NDF is GGX(alpha), from the identity
+// GGX(alpha) = int_0^inf Beckmann(alpha / sqrt(E)) e^-E dE (the GGX slope density is this
+// scale mixture of Gaussians). A Gaussian field g of unit Beckmann roughness (short correlation
+// length l) is multiplied by a local roughness alpha / sqrt(E(x)) that varies slowly (correlation
+// length L >> l); E(x) is the rank transform of a smooth Gaussian field onto the exact Exp(1)
+// quantiles, so that over the tile E has exactly the Exp(1) distribution. E is floored at
+// -ln(1 - tail_fraction): the roughest tail_fraction of the area has its local roughness capped
+// (GGX has infinite slope variance; a finite tile cannot). The product adds the slope term
+// g grad(alpha_local), of relative size ~ l / L.
+struct GaussianGgxParams {
+  int resolution = 1024;
+  double size = 1.0;
+  double correlation_length = 0.0;            // l of g; 0 = 4 cells
+  double roughness_correlation_length = 0.0;  // L of E(x); 0 = min(16 l, size/4)
+  double alpha_x = 0.5, alpha_y = 0.5;
+  double tail_fraction = 1e-3;
+  std::uint64_t seed = 1;
+};
+Microsurface generate_gaussian_ggx(const GaussianGgxParams& p);
+
 }  // namespace microsim

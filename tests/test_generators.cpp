@@ -1,0 +1,571 @@
+// Structured and non-heightfield microsurfaces (issue 3): exact geometric cases measured by the
+// estimators (box, tiled boxes, V-groove, square wave, ellipsoid, undersurface, parallelepiped),
+// the explicit V-cavity ensemble against its model, mesh validation, and the generators'
+// identities (000 eq. 1b/1c). Every statistical test has a check that it can fail.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cstdio>
+#include <fstream>
+
+#include "microsim/measure/g1_measure.hpp"
+#include "microsim/measure/ndf_measure.hpp"
+#include "microsim/measure/vcavity_measure.hpp"
+#include "microsim/models/ndf.hpp"
+#include "microsim/surface/gaussian.hpp"
+#include "microsim/surface/generators.hpp"
+#include "microsim/surface/mesh_check.hpp"
+#include "microsim/surface/surface_io.hpp"
+#include "microsim/surface/undersurface.hpp"
+
+using namespace microsim;
+
+namespace {
+
+double sidak_z(double alpha, int k) {
+  double per = 1 - std::pow(1 - alpha, 1.0 / k);
+  double lo = 0, hi = 10;
+  for (int i = 0; i < 100; ++i) {
+    double z = 0.5 * (lo + hi);
+    if (std::erfc(z / std::sqrt(2.0)) > per) lo = z; else hi = z;
+  }
+  return 0.5 * (lo + hi);
+}
+
+// Upper quantile of chi^2 with k degrees of freedom (Wilson-Hilferty), z = normal quantile.
+double chi2_quantile(int k, double z) {
+  double a = 2.0 / (9.0 * k);
+  return k * std::pow(1 - a + z * std::sqrt(a), 3);
+}
+
+G1Options opts(std::uint64_t rays, std::uint64_t seed = 1) {
+  G1Options o;
+  o.rays = rays;
+  o.seed = seed;
+  return o;
+}
+
+std::string tmp(const std::string& name) { return ::testing::TempDir() + "microsim_gen_" + name; }
+
+void write_file(const std::string& path, const std::string& text) {
+  std::ofstream f(path);
+  f << text;
+}
+
+// 001 eq. (24) in the cross-section plane: facet at signed angle tm, view at signed angle to.
+double vgroove_g1(double to, double tm) {
+  if (std::cos(to - tm) <= 0) return 0.0;
+  return std::min(1.0, 2 * std::cos(tm) * std::cos(to) / std::cos(to - tm));
+}
+
+// The bin of a G1 result that holds the facet normal m.
+int bin_with(const G1Result& r, const Vec3& m) { return r.binning.bin_of(m.normalized()); }
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Identities of the generators
+// ---------------------------------------------------------------------------------------------
+
+TEST(Generators, EveryKindSatisfiesEq1bAnd1cAndPassesMeshValidation) {
+  BoxParams bp;
+  bp.height = 0.7;
+  BoxParams tp = bp;
+  tp.tiles = 5;
+  ParallelepipedParams pp;
+  pp.tiles = 2;
+  SquareWaveParams sw, sw2;
+  sw2.two_d = true;
+  sw2.duty = 0.3;
+  VGrooveParams vg, pyr;
+  pyr.two_d = true;
+  EllipsoidParams el;
+  el.rings = 16;
+  el.segments = 64;
+  el.alpha_y = 0.3;
+  VCavityParams vc;
+  vc.grooves = 64;
+  std::vector<std::pair<std::string, Microsurface>> all = {
+      {"box", generate_box(bp)},
+      {"tiled-boxes", generate_tiled_boxes(tp)},
+      {"parallelepiped", generate_parallelepiped(pp)},
+      {"square-wave", generate_square_wave(sw)},
+      {"square-wave-2d", generate_square_wave(sw2)},
+      {"vgroove", generate_vgroove(vg)},
+      {"pyramids", generate_vgroove(pyr)},
+      {"ellipsoid", generate_ellipsoid(el)},
+      {"vcavity", generate_vcavity(vc)}};
+  for (const auto& [name, s] : all) {
+    FacetSums f = facet_sums(s);
+    // 000 eq. 1b: sum_f A_f m_f = n A;  eq. 1c: sum_f (n.m_f) A_f = A.
+    EXPECT_LT((f.sum_area_normal / s.macro().area - Vec3::UnitZ()).norm(), 1e-9) << name;
+    EXPECT_NEAR(f.sum_area_cos / s.macro().area, 1.0, 1e-9) << name;
+    EXPECT_NO_THROW(check_mesh(s, name)) << name;
+  }
+  // The box's macro area is its base; the tiled boxes have the box's NDF (same facet areas per
+  // normal, 000 Fig. 6) and the ellipsoid's rim polygon tends to pi / (ax ay).
+  EXPECT_DOUBLE_EQ(all[0].second.macro().area, 1.0);
+  EXPECT_NEAR(facet_sums(all[1].second).total_area, facet_sums(all[0].second).total_area, 1e-6);
+  EXPECT_NEAR(all[7].second.macro().area, kPi / (0.5 * 0.3), 0.01 * kPi / 0.15);
+}
+
+TEST(Generators, ParallelepipedHasDownwardFacetsAndEq1bToRounding) {
+  ParallelepipedParams p;
+  p.width = 1.3;
+  p.depth = 0.7;
+  p.height = 0.9;
+  const double L[9] = {1.1, 0.2, 0.8, -0.1, 0.9, -0.6, 0, 0, 1.2};
+  std::copy(L, L + 9, p.matrix);
+  Microsurface s = generate_parallelepiped(p);
+  double down = 0;
+  for (std::size_t k = 0; k < s.num_facets(); ++k)
+    if (s.facet(k).normal().z() < -1e-3) down += s.facet(k).area();
+  EXPECT_GT(down, 0.1);  // n.m < 0 present (000 Fig. 3)
+  FacetSums f = facet_sums(s);
+  EXPECT_LT((f.sum_area_normal / s.macro().area - Vec3::UnitZ()).norm(), 1e-9);
+  // The macro area is the mapped base: |det of the xy block| W D (up to float vertices).
+  EXPECT_NEAR(s.macro().area, (1.1 * 0.9 + 0.2 * 0.1) * 1.3 * 0.7, 1e-6);
+  p.matrix[6] = 0.1;
+  EXPECT_THROW(generate_parallelepiped(p), UsageError);
+}
+
+TEST(Generators, BadParametersAreUsageErrors) {
+  BoxParams b;
+  b.height = 0;
+  EXPECT_THROW(generate_box(b), UsageError);
+  b = BoxParams{};
+  b.tiles = 0;
+  EXPECT_THROW(generate_tiled_boxes(b), UsageError);
+  SquareWaveParams sw;
+  sw.duty = 1.0;
+  EXPECT_THROW(generate_square_wave(sw), UsageError);
+  VGrooveParams vg;
+  vg.facet_angle_deg = 90;
+  EXPECT_THROW(generate_vgroove(vg), UsageError);
+  EllipsoidParams el;
+  el.alpha_x = -1;
+  EXPECT_THROW(generate_ellipsoid(el), UsageError);
+  VCavityParams vc;
+  vc.ndf = "phong";
+  EXPECT_THROW(generate_vcavity(vc), UsageError);
+  GaussianGgxParams gg;
+  gg.tail_fraction = 0;
+  EXPECT_THROW(generate_gaussian_ggx(gg), UsageError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Exact geometric cases, to 3 standard errors with standard error <= 1e-3
+// ---------------------------------------------------------------------------------------------
+
+TEST(ExactCases, BoxVisibleAreaRatioAcrossAFace) {
+  // 000 "Inherent Assumptions", Fig. 5: seen across a face (phi = 0), the visible projected
+  // area is W D cos(theta) + H D sin(theta): ratio 1 + (H/W) tan(theta).
+  BoxParams p;
+  p.width = 1.0;
+  p.depth = 0.8;
+  p.height = 0.5;
+  Microsurface s = generate_box(p);
+  Tracer tracer(s);
+  for (double t : {30.0, 60.0, 80.0}) {
+    G1Result r = measure_g1(tracer, direction_from_angles(rad(t), 0), opts(400000));
+    Estimate e = r.visible_area_ratio();
+    const double exact = 1 + 0.5 * std::tan(rad(t));
+    EXPECT_LE(e.stderr_, 1e-3) << t;
+    EXPECT_LT(std::abs(e.mean - exact), 3 * e.stderr_) << t << ": " << e.mean << " vs " << exact;
+    // Power: the formula with sin instead of tan is refused.
+    EXPECT_GT(std::abs(e.mean - (1 + 0.5 * std::sin(rad(t)))), 3 * e.stderr_) << t;
+    // Every facet of a single box is visible from above (no masking).
+    EXPECT_EQ(r.g1_area_sampling().mean, 1.0);
+  }
+}
+
+TEST(ExactCases, TiledBoxesVisibleAreaRatioTendsToOne) {
+  // 000 Fig. 6: N x N copies scaled by 1/N: ratio 1 + (H/(N W)) tan(theta). Of the walls facing
+  // v (normal +x) only the last column's is visible: G1(v, +x) = 1/N, by both estimators (the
+  // interior walls are pressed against their neighbours: buried twins).
+  for (int n : {1, 4}) {
+    BoxParams p;
+    p.tiles = n;
+    Microsurface s = generate_tiled_boxes(p);
+    Tracer tracer(s);
+    G1Result r = measure_g1(tracer, direction_from_angles(rad(60), 0), opts(200000));
+    Estimate e = r.visible_area_ratio();
+    EXPECT_LT(std::abs(e.mean - (1 + std::tan(rad(60)) / n)), 3 * e.stderr_ + 1e-12) << n;
+    const int b = bin_with(r, Vec3::UnitX());
+    Estimate g = r.bin_g1_area_sampling(b), gr = r.bin_g1_raycast(b);
+    EXPECT_LT(std::abs(g.mean - 1.0 / n), 3 * g.stderr_ + 1e-12) << n;
+    EXPECT_LT(std::abs(gr.mean - 1.0 / n), 3 * gr.stderr_ + 1e-6) << n;
+  }
+}
+
+TEST(ExactCases, VGroovePerFacetG1IsEq24) {
+  // 001 eq. (24) is exact on periodic V-grooves, per facet, in the cross-section plane.
+  VGrooveParams p;
+  p.facet_angle_deg = 45;
+  Microsurface s = generate_vgroove(p);
+  Tracer tracer(s);
+  int tested = 0;
+  for (double t : {50.0, 60.0, 70.0, 80.0}) {
+    G1Result r = measure_g1(tracer, direction_from_angles(rad(t), 0), opts(300000));
+    for (double sign : {1.0, -1.0}) {
+      const double tm = sign * rad(45);
+      const Vec3 m(std::sin(tm), 0, std::cos(tm));
+      const int b = bin_with(r, m);
+      const double exact = vgroove_g1(rad(t), tm);
+      if (exact == 0.0) {
+        EXPECT_EQ(r.bins[b].samples, 0u);  // back-facing: no sample, G1 = 0 by definition
+        continue;
+      }
+      Estimate e = r.bin_g1_area_sampling(b), ea = r.bin_g1_raycast(b);
+      EXPECT_LE(e.stderr_, 1e-3);
+      // Floor 1e-6: the geometry is float (the facet angle is 45 deg to ~1e-7); the ray-cast
+      // estimate is exact (error 0) when every ray lands on the one front-facing facet.
+      EXPECT_LT(std::abs(e.mean - exact), 3 * std::max(e.stderr_, 1e-6)) << t << " " << sign;
+      EXPECT_LT(std::abs(ea.mean - exact), 3 * std::max(ea.stderr_, 1e-6)) << t << " " << sign;
+      // Power: the same data refuse eq. (24) with cos(theta_o) replaced by 1.01 cos(theta_o).
+      if (exact < 1) EXPECT_GT(std::abs(e.mean - 1.01 * exact), 3 * e.stderr_);
+      ++tested;
+    }
+  }
+  EXPECT_EQ(tested, 4);
+}
+
+TEST(ExactCases, SquareWaveG1OfTheNormalNArea) {
+  // Horizontal faces (tops and floors, normal n): the tops are all visible, a floor of width
+  // (1-F)P loses a strip H tan(theta) |cos(phi)| in the shadow of the wall:
+  // G1(v, n) = F + max(0, 1 - F - (H/P) tan(theta) |cos(phi)|).
+  SquareWaveParams p;
+  p.duty = 0.4;
+  p.height = 0.3;
+  Microsurface s = generate_square_wave(p);
+  Tracer tracer(s);
+  for (auto [t, ph] : {std::pair{20.0, 0.0}, {45.0, 0.0}, {60.0, 30.0}, {75.0, 0.0}}) {
+    G1Result r = measure_g1(tracer, direction_from_angles(rad(t), rad(ph)), opts(800000));
+    const int b = bin_with(r, Vec3::UnitZ());
+    Estimate e = r.bin_g1_area_sampling(b);
+    const double exact = 0.4 + std::max(0.0, 0.6 - 0.3 * std::tan(rad(t)) * std::abs(std::cos(rad(ph))));
+    EXPECT_LE(e.stderr_, 1e-3);
+    EXPECT_LT(std::abs(e.mean - exact), 3 * e.stderr_) << t << " " << ph;
+    EXPECT_GT(std::abs(e.mean - (exact + 0.01)), 3 * e.stderr_);  // power
+    // A periodic surface: every ray hits once, the visible area ratio is exactly 1.
+    EXPECT_EQ(r.counters.lost_below + r.counters.unresolved, 0u);
+    EXPECT_NEAR(r.visible_area_ratio().mean, 1.0, 1e-12);
+  }
+}
+
+TEST(ExactCases, EllipsoidDIsGgxByChiSquare) {
+  // 002: the upper half ellipsoid's normals are GGX(ax, ay). Vertical rays sample its normals
+  // with density (n.m) D(m) (a heightfield over its base: G1(n, m) = 1), so the first-hit
+  // histogram is multinomial with cell probabilities (A/W) int_B (n.m) D(m) dm, and a miss
+  // probability 1 - A/W. Pearson chi^2 against GGX; the same counts refuse a 3% wrong alpha.
+  EllipsoidParams p;
+  p.alpha_x = 0.5;
+  p.alpha_y = 0.35;
+  p.rings = 192;  // the faceted D tends to GGX as (step)^2; at 96 x 384 chi^2 sees the bias
+  p.segments = 768;
+  Microsurface s = generate_ellipsoid(p);
+  Tracer tracer(s);
+  G1Options o = opts(3000000);
+  o.normal_theta_bins = 18;  // 10 degree rings over the sphere, 45 degree sectors
+  G1Result r = measure_g1(tracer, Vec3::UnitZ(), o);
+  auto chi2 = [&](const models::Ndf& ndf, int& dof) {
+    const double n = static_cast<double>(r.raycast_rays), aw = s.macro().area / r.window_area_perp;
+    double c = 0, e_rest = 0, o_rest = 0;
+    std::uint64_t hits = 0;
+    dof = 0;
+    for (int b = 0; b < r.binning.size(); ++b) {
+      const double e = n * aw * r.binning.solid_angle(b) *
+                       r.binning.bin_average(b, [&](const Vec3& m) { return m.z() * ndf.D(m); });
+      const double obs = static_cast<double>(r.bins[b].raycast_hits);
+      hits += r.bins[b].raycast_hits;
+      if (e < 20) {
+        e_rest += e;
+        o_rest += obs;
+        continue;
+      }
+      c += (obs - e) * (obs - e) / e;
+      ++dof;
+    }
+    const double miss = n - static_cast<double>(hits), e_miss = n * (1 - aw);
+    c += (miss - e_miss) * (miss - e_miss) / e_miss;
+    if (e_rest > 0) c += (o_rest - e_rest) * (o_rest - e_rest) / e_rest;
+    return c;
+  };
+  int dof = 0;
+  const double c = chi2(models::Ndf::ggx(0.5, 0.35), dof);
+  ASSERT_GT(dof, 40);
+  EXPECT_LT(c, chi2_quantile(dof, 3.09)) << "chi2 " << c << " dof " << dof;
+  int dof2 = 0;
+  const double c2 = chi2(models::Ndf::ggx(0.5 * 1.03, 0.35 * 1.03), dof2);
+  EXPECT_GT(c2, chi2_quantile(dof2, 3.09));
+}
+
+TEST(ExactCases, EllipsoidLambdaIsGgxLambda) {
+  // A convex object masks none of its front faces: its visible projected area along v is the
+  // front-facing projected area, (v.n) A (1 + Lambda_GGX(v)) (002 "G1 from projected areas").
+  EllipsoidParams p;
+  p.alpha_x = p.alpha_y = 0.6;
+  p.rings = 64;
+  p.segments = 256;
+  Microsurface s = generate_ellipsoid(p);
+  Tracer tracer(s);
+  const models::Ndf ggx = models::Ndf::ggx(0.6, 0.6);
+  // Rays for a binomial standard error <= 1e-3 (it grows as 1/cos(theta)).
+  for (auto [t, rays] : {std::pair{45.0, 600000}, {60.0, 800000}, {70.0, 1200000}}) {
+    const Vec3 v = direction_from_angles(rad(t), rad(20));
+    G1Result r = measure_g1(tracer, v, opts(rays));
+    Estimate e = r.visible_area_ratio();
+    EXPECT_LE(e.stderr_, 1e-3) << t;
+    EXPECT_LT(std::abs(e.mean - 1 - ggx.Lambda(v)), 3 * e.stderr_) << t;
+    EXPECT_GT(std::abs(e.mean - 1 - models::Ndf::ggx(0.63, 0.63).Lambda(v)), 3 * e.stderr_) << t;
+    EXPECT_EQ(r.g1_area_sampling().mean, 1.0);  // convex: no masking
+  }
+}
+
+TEST(ExactCases, BoxUndersurfaceVersusReverseAndReflectApproximations) {
+  // From below (theta > 90) the box's undersurface is the inside of a box-shaped cavity: its
+  // visible projected area is the opening, W D |cos(theta)|, of a front-facing projected area
+  // W D |cos| + H D sin, so G1 = 1 / (1 + (H/W) tan(pi - theta)); both approximations of 000
+  // "Inherent Assumptions" use the box seen from above, where G1 = 1.
+  BoxParams p;
+  p.height = 0.5;
+  Microsurface s = generate_box(p);
+  Tracer tracer(s);
+  const Vec3 v = direction_from_angles(rad(120), 0);
+  G1Result under = measure_g1(tracer, v, opts(400000));
+  EXPECT_TRUE(under.undersurface);
+  Estimate e = under.g1_area_sampling();
+  const double exact = 1 / (1 + 0.5 * std::tan(rad(60)));
+  EXPECT_LE(e.stderr_, 1e-3);
+  EXPECT_LT(std::abs(e.mean - exact), 3 * e.stderr_);
+  EXPECT_NEAR(under.visible_area_ratio().mean, 1.0, 3 * under.visible_area_ratio().stderr_);
+  EXPECT_EQ(measure_g1(tracer, -v, opts(100000)).g1_area_sampling().mean, 1.0);
+  EXPECT_EQ(measure_g1(tracer, mirror_z(v), opts(100000)).g1_area_sampling().mean, 1.0);
+  // Heightfields keep refusing views from below.
+  Microsurface flat = generate_flat(FlatParams{});
+  Tracer tf(flat);
+  EXPECT_THROW(measure_g1(tf, v, opts(1000)), UsageError);
+  EXPECT_THROW(measure_g1(tf, Vec3(1, 0, 0), opts(1000)), UsageError);
+}
+
+TEST(ExactCases, TiledParallelepipedsAreMaskedFromAbove) {
+  // Sheared N x N tiles: the upward-facing slanted walls (normal ~ (-1, 0, s)) of all but the
+  // first column lie against a neighbour: G1(n, m) = 1/N (not 1 as on a heightfield). A single
+  // sheared box sticks out of its base: eq. 2b, the visible area ratio at v = n, is 1 + s H / W.
+  ParallelepipedParams p;
+  p.tiles = 3;  // shear x += 0.5 z by default
+  Microsurface s = generate_parallelepiped(p);
+  Tracer tracer(s);
+  G1Result r = measure_g1(tracer, Vec3::UnitZ(), opts(400000));
+  const int b = bin_with(r, Vec3(-1, 0, 0.5));
+  Estimate e = r.bin_g1_area_sampling(b);
+  EXPECT_LT(std::abs(e.mean - 1.0 / 3), 3 * e.stderr_);
+  p.tiles = 1;
+  Microsurface one = generate_parallelepiped(p);
+  Tracer t1(one);
+  Estimate ratio = measure_g1(t1, Vec3::UnitZ(), opts(400000)).visible_area_ratio();
+  EXPECT_LT(std::abs(ratio.mean - 1.5), 3 * ratio.stderr_ + 1e-12);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The explicit V-cavity ensemble
+// ---------------------------------------------------------------------------------------------
+
+TEST(VCavity, EnsembleMatchesTheVCavityModelPerNormalBinNotSmith) {
+  VCavityParams p;
+  p.alpha_x = p.alpha_y = 0.6;
+  p.grooves = 512;
+  Microsurface s = generate_vcavity(p);
+  // The stored strips carry the ensemble's D: Beckmann(0.6) sampled by projected area.
+  std::vector<G1Result> res = measure_vcavity_g1(s, {direction_from_angles(rad(70), rad(10)),
+                                                     direction_from_angles(rad(80), 0)},
+                                                 opts(1000000));
+  for (const G1Result& r : res) {
+    std::vector<double> z_vc, z_smith;
+    for (int b = 0; b < r.binning.size(); ++b) {
+      const G1NormalBin& nb = r.bins[b];
+      if (nb.samples < 2000) continue;
+      Estimate e = r.bin_g1_area_sampling(b);
+      const double se = std::max(e.stderr_, 1.0 / nb.samples);
+      z_vc.push_back((e.mean - nb.vcavity_weighted / nb.front_projected) / se);
+      z_smith.push_back((e.mean - 1 / (1 + r.lambda_numeric)) / se);
+    }
+    ASSERT_GT(z_vc.size(), 10u);
+    const double zmax = sidak_z(0.01, static_cast<int>(z_vc.size()));
+    double worst_smith = 0;
+    for (std::size_t k = 0; k < z_vc.size(); ++k) {
+      EXPECT_LT(std::abs(z_vc[k]), zmax);
+      worst_smith = std::max(worst_smith, std::abs(z_smith[k]));
+    }
+    EXPECT_GT(worst_smith, 10 * zmax);  // the ensemble is not Smith-masked per normal
+    // Pooled over normals the visible area is (v.n) A: the averaged G1 equals Smith's exactly.
+    EXPECT_NEAR(r.visible_area_ratio().mean, 1.0, 1e-12);
+    Estimate g = r.g1_area_sampling();
+    EXPECT_LT(std::abs(g.mean - 1 / (1 + r.lambda_numeric)), 3 * g.stderr_);
+  }
+}
+
+TEST(VCavity, IdenticalForAnyThreadCount) {
+  VCavityParams p;
+  p.grooves = 64;
+  Microsurface s = generate_vcavity(p);
+  const std::vector<Vec3> views = {direction_from_angles(rad(75), rad(30))};
+  std::vector<G1Result> a = measure_vcavity_g1(s, views, opts(50000));
+  std::vector<G1Result> b;
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    b = measure_vcavity_g1(s, views, opts(50000));
+  }
+  EXPECT_EQ(a[0].raycast_hits, b[0].raycast_hits);
+  EXPECT_EQ(a[0].sample_visible, b[0].sample_visible);
+  for (int k = 0; k < a[0].binning.size(); ++k) EXPECT_EQ(a[0].bins[k].visible, b[0].bins[k].visible);
+}
+
+// ---------------------------------------------------------------------------------------------
+// gaussian-ggx
+// ---------------------------------------------------------------------------------------------
+
+TEST(GaussianGgx, TheScaleMixtureIdentityHolds) {
+  // GGX(alpha) = int_0^inf Beckmann(alpha / sqrt(E)) e^-E dE, checked on D (the generator's
+  // construction principle) by Gauss-Laguerre-like quadrature on a fine grid in E.
+  const double alpha = 0.4;
+  const models::Ndf ggx = models::Ndf::ggx(alpha, alpha);
+  for (double t : {0.0, 15.0, 40.0, 70.0}) {
+    const Vec3 m = direction_from_angles(rad(t), 0.3);
+    double sum = 0;
+    const int n = 200000;
+    for (int k = 0; k < n; ++k) {  // substitution E = -ln(u): int_0^1 Beckmann(alpha/sqrt(E)) du
+      const double u = (k + 0.5) / n, e = -std::log(u);
+      sum += models::Ndf::beckmann(alpha / std::sqrt(e), alpha / std::sqrt(e)).D(m) / n;
+    }
+    EXPECT_NEAR(sum / ggx.D(m), 1.0, 2e-3) << t;
+  }
+}
+
+TEST(GaussianGgx, TileHasHeavierTailsThanBeckmannWithTheSameCore) {
+  GaussianGgxParams p;
+  p.resolution = 256;
+  p.alpha_x = p.alpha_y = 0.3;
+  Microsurface s = generate_gaussian_ggx(p);
+  ASSERT_TRUE(s.nominal.has_value());
+  EXPECT_EQ(s.nominal->kind, models::Distribution::GGX);
+  // Projected-area fraction with slope beyond 3 alpha: GGX 1/(1+9) = 0.10, Beckmann e^-9.
+  double beyond = 0, total = 0;
+  for (std::size_t k = 0; k < s.num_facets(); ++k) {
+    Triangle t = s.facet(k);
+    const Vec3 m = t.normal();
+    const double w = t.area() * m.z();
+    total += w;
+    if (std::hypot(m.x(), m.y()) / m.z() > 0.9) beyond += w;
+  }
+  EXPECT_GT(beyond / total, 0.05);
+  EXPECT_LT(beyond / total, 0.15);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Mesh files: validation and round trips
+// ---------------------------------------------------------------------------------------------
+
+TEST(MeshFiles, RoundTripKeepsFacetsMacrosurfaceAndKind) {
+  BoxParams bp;
+  bp.tiles = 2;
+  VCavityParams vp;
+  vp.grooves = 10;
+  for (const Microsurface& s : {generate_tiled_boxes(bp), generate_vcavity(vp), generate_square_wave({})}) {
+    for (const char* ext : {"ply", "obj", "off"}) {
+      const std::string path = tmp(std::string("rt.") + ext);
+      save_surface(s, path);
+      Microsurface t = load_surface(path);
+      ASSERT_EQ(t.num_facets(), s.num_facets()) << ext;
+      for (std::size_t k = 0; k < s.num_facets(); ++k)
+        EXPECT_LT((t.facet(k).p0 - s.facet(k).p0).norm(), 1e-6) << ext;
+      EXPECT_EQ(t.macro().periodic, s.macro().periodic);
+      EXPECT_DOUBLE_EQ(t.macro().area, s.macro().area);
+      EXPECT_EQ(is_vcavity(t), is_vcavity(s));
+      std::remove(path.c_str());
+      std::remove((path + ".json").c_str());
+    }
+  }
+}
+
+TEST(MeshFiles, BadMeshesAreRefusedWithOneLine) {
+  struct Case {
+    const char* name;
+    const char* off;
+    const char* needle;
+  };
+  const Case cases[] = {
+      // Three triangles on one edge.
+      {"nonmanifold", "OFF\n5 3 0\n0 0 1\n1 0 1\n0 1 1\n0 -1 1\n0 0 2\n3 0 1 2\n3 1 0 3\n3 0 1 4\n",
+       "non-manifold"},
+      // Two triangles running their shared edge the same way.
+      {"flipped", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 0 1 3\n", "non-manifold"},
+      {"repeated", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 0 1\n", "degenerate"},
+      {"zero-area", "OFF\n3 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n", "degenerate"},
+      // A box without its top: open where it must be closed.
+      {"open", "OFF\n8 8 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+               "3 1 2 6\n3 1 6 5\n3 0 4 7\n3 0 7 3\n3 3 7 6\n3 3 6 2\n3 0 1 5\n3 0 5 4\n",
+       "open mesh"},
+      // A closed tetrahedron has no rim: zero signed projected area.
+      {"closed", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n",
+       "closed mesh"},
+      {"notamesh", "hello\n", "not a readable mesh"},
+  };
+  for (const Case& c : cases) {
+    const std::string path = tmp(std::string(c.name) + ".off");
+    write_file(path, c.off);
+    MeshImportParams p;
+    p.input = path;
+    try {
+      import_mesh(p);
+      ADD_FAILURE() << c.name << " was accepted";
+    } catch (const UsageError& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find(c.needle), std::string::npos) << c.name << ": " << msg;
+      EXPECT_EQ(msg.find('\n'), std::string::npos) << c.name;
+    }
+    std::remove(path.c_str());
+  }
+}
+
+TEST(MeshFiles, ImportOfAPeriodicTileChecksItsBorders) {
+  // The square wave without its sidecar, declared periodic: accepted with the right tile,
+  // refused when the tile is too small (vertices outside) or too large (boundary off the border).
+  const std::string path = tmp("tile.ply");
+  save_surface(generate_square_wave({}), path);
+  std::remove((path + ".json").c_str());
+  MeshImportParams p;
+  p.input = path;
+  p.periodic = true;
+  p.tile_x = p.tile_y = 1.0;
+  Microsurface s = import_mesh(p);
+  EXPECT_TRUE(s.macro().periodic);
+  EXPECT_DOUBLE_EQ(s.macro().area, 1.0);
+  p.tile_x = 0.9;
+  EXPECT_THROW(import_mesh(p), UsageError);
+  p.tile_x = 1.2;
+  EXPECT_THROW(import_mesh(p), UsageError);
+  std::remove(path.c_str());
+}
+
+TEST(MeshFiles, ImportRotatesTheDeclaredNormalAndFindsTheArea) {
+  // An open unit cube standing on the plane x = 0 (its rim), outward normals: declared n = -x
+  // ... becomes a box on z = 0 with A = 1 and eq. 1b exact.
+  const std::string path = tmp("sideways.off");
+  // Box [0,1]^3 without its x = 0 face, oriented outward.
+  write_file(path,
+             "OFF\n8 10 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+             "3 0 2 1\n3 0 3 2\n3 4 5 6\n3 4 6 7\n3 1 2 6\n3 1 6 5\n3 0 1 5\n3 0 5 4\n"
+             "3 3 7 6\n3 3 6 2\n");
+  MeshImportParams p;
+  p.input = path;
+  p.normal = Vec3(1, 0, 0);
+  Microsurface s = import_mesh(p);
+  EXPECT_NEAR(s.macro().area, 1.0, 1e-6);
+  EXPECT_FALSE(s.macro().periodic);
+  EXPECT_NEAR(s.bounds().min().z(), 0.0, 1e-6);
+  EXPECT_NEAR(s.bounds().max().z(), 1.0, 1e-6);
+  p.normal = Vec3(-1, 0, 0);  // wrong side: the mesh is inside-out for this normal
+  EXPECT_THROW(import_mesh(p), UsageError);
+  std::remove(path.c_str());
+}
