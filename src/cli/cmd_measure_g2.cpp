@@ -37,6 +37,10 @@ Json g2_ensemble_row(const std::vector<const Json*>& rows) {
   for (const char* f : kForms) spec.emplace_back(std::string("smith_") + f, Field::MeanStderr);
   spec.emplace_back("vcavity", Field::MeanStderr);
   for (const char* f : kForms) spec.emplace_back(std::string("smith_") + f + "_nominal", Field::Copy);
+  for (const char* f : kForms) {
+    spec.emplace_back(std::string(f) + "_from_g1", Field::MeanStderr);
+    spec.emplace_back(std::string(f) + "_from_g1_diff", Field::Measured);
+  }
   Json e = ensemble_row(rows, spec,
                         {{"theta_m_range_deg", Field::Key},
                          {"phi_m_range_deg", Field::Key},
@@ -61,6 +65,11 @@ Json g2_ensemble_row(const std::vector<const Json*>& rows) {
     e[std::string("z_") + f + "_nominal"] =
         model.is_number() && se > 0 ? Json((g2 - model.get<double>()) / se) : Json(nullptr);
   }
+  for (const char* f : kForms) {
+    const double d = e[std::string(f) + "_from_g1_diff"].get<double>();
+    const double sd = e[std::string(f) + "_from_g1_diff_stderr_rays"].get<double>();
+    e[std::string("z_") + f + "_from_g1"] = sd > 0 ? d / sd : 0.0;
+  }
   e["bins"] = bins;
   return e;
 }
@@ -70,8 +79,10 @@ void print_g2_table(const Json& rows, bool ensemble) {
             << std::setw(6) << "ph_i" << std::setw(9) << "g2" << std::setw(9) << "stderr"
             << std::setw(9) << "g1o*g1i" << std::setw(9) << "separ" << std::setw(9) << "height"
             << std::setw(9) << "dir" << std::setw(9) << "ht-dir" << std::setw(9) << "vcavity"
-            << "   (Smith with Lambda from " << (ensemble ? "each surface's" : "the surface's")
-            << " facets)\n";
+            << " |" << std::setw(8) << "sep" << std::setw(8) << "height" << std::setw(8) << "dir"
+            << std::setw(8) << "ht-dir" << "\n"
+            << "  Smith forms with Lambda from " << (ensemble ? "each surface's" : "the surface's")
+            << " facets | z of the forms built per normal bin from the measured G1s\n";
   for (const auto& row : rows) {
     std::cout << std::setw(6) << fmt(row["theta_o_deg"].get<double>(), 1) << std::setw(6)
               << fmt(row["phi_o_deg"].get<double>(), 0) << std::setw(6)
@@ -82,7 +93,10 @@ void print_g2_table(const Json& rows, bool ensemble) {
               << fmt(row["g1_o"].get<double>() * row["g1_i"].get<double>());
     for (const char* f : kForms)
       std::cout << std::setw(9) << fmt(row[std::string("smith_") + f].get<double>());
-    std::cout << std::setw(9) << fmt(row["vcavity"].get<double>()) << "\n";
+    std::cout << std::setw(9) << fmt(row["vcavity"].get<double>()) << " |";
+    for (const char* f : kForms)
+      std::cout << std::setw(8) << fmt(row[std::string("z_") + f + "_from_g1"].get<double>(), 1);
+    std::cout << "\n";
   }
 }
 
@@ -118,6 +132,11 @@ int run_measure_g2(const G2CliOptions& o, const GlobalOptions& g) {
                   "(4.41 phi + 1) and Lambda from the surface's facets, sum_f A_f max(0,-v.m_f) / "
                   "((v.n) A); they do not depend on m, so they equal their own area average"},
       {"smith_*_nominal", "the same with the closed-form Lambda of the surface's nominal NDF"},
+      {"*_from_g1", "the four forms built in each normal bin from the bin's measured g1_o and g1_i "
+                    "(Lambda = 1/G1 - 1, 001 eq. 10), averaged over bins with the bins' area facing "
+                    "both; *_from_g1_diff = average of (g2 - form), *_diff_stderr its standard "
+                    "error (delta method on each bin's counts both/o only/i only/neither); they "
+                    "test the correlation each form assumes, free of the m-dependence of G1"},
       {"vcavity", "V-cavity G2 (Cook-Torrance) averaged over the surface's facets facing both, "
                   "weighted by area A_f like the measurement"},
       {"z_*", "(g2 - model) / stderr; for models from the facets the ray-count error "

@@ -5,6 +5,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 
@@ -26,6 +27,79 @@ constexpr std::uint64_t kChunk = 1 << 13;
 
 models::G2Forms G2Result::smith_numeric() const {
   return models::g2_forms_from_lambda(lambda_o, lambda_i, models::azimuth_difference(o, i));
+}
+
+namespace {
+// Fields of G2Forms as an array (for the delta method).
+std::array<double, 4> as_array(const models::G2Forms& f) {
+  return {f.separable, f.height_correlated, f.direction_correlated, f.height_direction_correlated};
+}
+models::G2Forms from_array(const std::array<double, 4>& a) {
+  return {a[0], a[1], a[2], a[3]};
+}
+}  // namespace
+
+G2Result::FormsFromG1 G2Result::bin_forms_from_g1(int b) const {
+  FormsFromG1 out;
+  const G2NormalBin& nb = bins[b];
+  if (nb.samples == 0) return out;
+  const double n = static_cast<double>(nb.samples);
+  // Multinomial cell probabilities: both, o only, i only.
+  const double p11 = nb.visible_both / n, p10 = (nb.visible_o - nb.visible_both) / n,
+               p01 = (nb.visible_i - nb.visible_both) / n;
+  const double phi = models::azimuth_difference(o, i);
+  auto forms = [&](double a11, double a10, double a01) {
+    return as_array(models::g2_forms_from_g1(a11 + a10, a11 + a01, phi));
+  };
+  const std::array<double, 4> f = forms(p11, p10, p01);
+  std::array<double, 4> diff{}, se{};
+  // Gradient of D = p11 - F(p11 + p10, p11 + p01) by central differences (F is smooth apart
+  // from the min/max kinks of eq. 22-23, where a one-sided slope is as good as any).
+  const double h = 1e-6;
+  std::array<std::array<double, 4>, 3> grad{};
+  for (int c = 0; c < 3; ++c) {
+    double d[3] = {0, 0, 0};
+    d[c] = h;
+    const auto fp = forms(p11 + d[0], p10 + d[1], p01 + d[2]);
+    const auto fm = forms(p11 - d[0], p10 - d[1], p01 - d[2]);
+    for (int k = 0; k < 4; ++k) grad[c][k] = (c == 0 ? 1.0 : 0.0) - (fp[k] - fm[k]) / (2 * h);
+  }
+  const double p[3] = {p11, p10, p01};
+  for (int k = 0; k < 4; ++k) {
+    diff[k] = p11 - f[k];
+    // Var = g^T (diag(p) - p p^T) g / n
+    double gp = 0, gdg = 0;
+    for (int c = 0; c < 3; ++c) {
+      gp += grad[c][k] * p[c];
+      gdg += grad[c][k] * grad[c][k] * p[c];
+    }
+    se[k] = std::sqrt(std::max(0.0, gdg - gp * gp) / n);
+  }
+  out.value = from_array(f);
+  out.diff = from_array(diff);
+  out.diff_stderr = from_array(se);
+  return out;
+}
+
+G2Result::FormsFromG1 G2Result::forms_from_g1() const {
+  std::array<double, 4> value{}, diff{}, var{};
+  for (int b = 0; b < binning.size(); ++b) {
+    if (bins[b].front_area <= 0 || bins[b].samples == 0) continue;
+    const double w = bins[b].front_area / front_area;
+    const FormsFromG1 f = bin_forms_from_g1(b);
+    const auto v = as_array(f.value), d = as_array(f.diff), s = as_array(f.diff_stderr);
+    for (int k = 0; k < 4; ++k) {
+      value[k] += w * v[k];
+      diff[k] += w * d[k];
+      var[k] += w * w * s[k] * s[k];
+    }
+  }
+  FormsFromG1 out;
+  out.value = from_array(value);
+  out.diff = from_array(diff);
+  for (auto& x : var) x = std::sqrt(x);
+  out.diff_stderr = from_array(var);
+  return out;
 }
 
 DirectionBinning g2_normal_binning(const G2Options& o) {
@@ -214,6 +288,18 @@ Json g2_row_json(const G2Result& r, const Microsurface& s) {
                           "smith_height_direction_correlated_nominal"})
       row[k] = nullptr;
   }
+  // The forms built per bin from the measured G1s (correlation assumption alone), their
+  // difference to g2 with its standard error (delta method) and z-score.
+  const G2Result::FormsFromG1 fg = r.forms_from_g1();
+  const auto fv = as_array(fg.value), fd = as_array(fg.diff), fs = as_array(fg.diff_stderr);
+  const char* names[] = {"separable", "height_correlated", "direction_correlated",
+                         "height_direction_correlated"};
+  for (int k = 0; k < 4; ++k) {
+    row[std::string(names[k]) + "_from_g1"] = fv[k];
+    row[std::string(names[k]) + "_from_g1_diff"] = fd[k];
+    row[std::string(names[k]) + "_from_g1_diff_stderr"] = fs[k];
+    row[std::string("z_") + names[k] + "_from_g1"] = fs[k] > 0 ? fd[k] / fs[k] : 0.0;
+  }
   row["area_samples"] = r.samples;
   row["occlusion_rays"] = r.counters.rays;
   row["lost_rays"] = r.counters.lost_below + r.counters.unresolved;
@@ -239,6 +325,9 @@ Json g2_row_json(const G2Result& r, const Microsurface& s) {
       jb["g1_i"] = ei.mean;
       jb["g1_i_stderr"] = ei.stderr_;
       jb["vcavity"] = nb.vcavity_sum / nb.front_area;
+      const G2Result::FormsFromG1 bf = r.bin_forms_from_g1(b);
+      jb["separable_from_g1"] = bf.value.separable;
+      jb["height_correlated_from_g1"] = bf.value.height_correlated;
       jb["samples"] = nb.samples;
     } else {  // no facet of the bin faces both directions: G2 = 0 by definition
       for (const char* k : {"g2", "g2_stderr", "g1_o", "g1_o_stderr", "g1_i", "g1_i_stderr",

@@ -11,6 +11,9 @@
 //    their area average over the facets facing both is their value; they are evaluated with
 //    Lambda from the surface's own facets (DESIGN.md) and, when the surface has one, with its
 //    nominal NDF (001 sec. 3);
+//  * the same four forms built per bin from the measured G1(o, m) and G1(i, m) of the bin
+//    (Lambda = 1/G1 - 1): they isolate the correlation each form assumes between the two
+//    visibilities from the m-dependence of masking that Smith ignores;
 //  * the V-cavity G2 depends on m: it is averaged over the surface's own facets facing both,
 //    with weights A_f, exactly like the measurement.
 #pragma once
@@ -62,6 +65,16 @@ struct G2Result {
   Estimate bin_g1_i(int b) const { return binomial_estimate(bins[b].visible_i, bins[b].samples); }
   // 001 eq. 20-23 with Lambda from the surface's facets.
   models::G2Forms smith_numeric() const;
+
+  // The four forms built per normal bin from the bin's measured g1_o and g1_i
+  // (models::g2_forms_from_g1), averaged over bins with the estimator's weights (the bins' area
+  // facing both), with the standard error of the mean difference g2 - form (delta method on
+  // each bin's multinomial counts: both / o only / i only / neither).
+  struct FormsFromG1 {
+    models::G2Forms value, diff, diff_stderr;
+  };
+  FormsFromG1 bin_forms_from_g1(int b) const;
+  FormsFromG1 forms_from_g1() const;
 };
 
 DirectionBinning g2_normal_binning(const G2Options& options);

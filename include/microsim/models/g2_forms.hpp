@@ -29,6 +29,7 @@ struct G2Forms {
 inline G2Forms g2_forms_from_lambda(double lambda_o, double lambda_i, double phi) {
   G2Forms f;
   if (std::isinf(lambda_o) || std::isinf(lambda_i)) return f;  // a direction at/below horizon
+  // (lambda slightly below 0 is accepted: g2_forms_from_g1 differentiates at G1 = 1.)
   const double go = 1.0 / (1.0 + lambda_o), gi = 1.0 / (1.0 + lambda_i);  // 001 eq. (10)
   const double l = van_ginneken_lambda(phi);  // 001 sec. 5: 4.41 phi / (4.41 phi + 1)
   f.separable = go * gi;                                   // 001 eq. (20)
@@ -37,6 +38,15 @@ inline G2Forms g2_forms_from_lambda(double lambda_o, double lambda_i, double phi
   f.height_direction_correlated =
       1.0 / (1.0 + std::max(lambda_o, lambda_i) + l * std::min(lambda_o, lambda_i));  // eq. (23)
   return f;
+}
+
+// The same four forms built from given masking values G1(o) and G1(i) instead of Lambda, through
+// 001 eq. (10) inverted, Lambda = 1/G1 - 1. With the measured G1 of a set of facets this isolates
+// what the forms assume about the correlation of the two visibilities from the masking
+// magnitude itself. g1 <= 0 gives 0 (fully masked).
+inline G2Forms g2_forms_from_g1(double g1_o, double g1_i, double phi) {
+  if (!(g1_o > 0) || !(g1_i > 0)) return G2Forms{};
+  return g2_forms_from_lambda(1.0 / g1_o - 1.0, 1.0 / g1_i - 1.0, phi);
 }
 
 // 001 sec. 3.4 "Vertical Shearing and Non-Centered Distributions": a surface whose slopes are
