@@ -160,6 +160,7 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
   std::size_t done = 0;
   vo.progress = [&](double f) { progress.update((done + f) / total); };
   TraceCounters counters;
+  std::uint64_t lost = 0;
   std::vector<Json> per_surface = measure_over_surfaces(o.files, [&](const Microsurface& s, std::size_t k) {
     if (k == 0) j["surface"] = s.description;
     Tracer tracer(s);
@@ -171,6 +172,7 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
         const Vec3 v = direction_from_angles(rad(t), rad(p));
         VndfResult r = measure_vndf(tracer, v, vo, &table);
         counters += r.counters;
+        lost += s.macro().periodic ? r.counters.lost_below + r.counters.unresolved : r.counters.unresolved;
         std::optional<SamplerTest> sampler;
         // The sampler does not depend on the surface: tested once, with the first one.
         if (s.nominal && vo.sampler_samples > 0 && k == 0)
@@ -191,7 +193,7 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   j["wall_seconds"] = wall;
   j["total_rays"] = counters.rays;
-  j["lost_rays"] = counters.lost_below + counters.unresolved;
+  j["lost_rays"] = lost;
   j["backface_hits"] = counters.backface_hits;
   write_record(o.output, j);
   if (!g.quiet) {
@@ -200,7 +202,7 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
               << "  (" << vo.rays << " rays per direction; " << o.theta_bins << " x "
               << o.phi_bins << " normal bins)\n";
     print_vndf_table(j["rows"], o.files.size() > 1);
-    std::cout << "rays lost " << counters.lost_below + counters.unresolved << ", back-face hits "
+    std::cout << "rays lost " << lost << ", back-face hits "
               << counters.backface_hits << "; wrote " << o.output << "\n";
   }
   return 0;

@@ -233,7 +233,11 @@ Json vndf_row_json(const VndfResult& r, const Microsurface& s, const VndfOptions
     row["sampler_max_abs_z"] = sampler->gof.max_abs_z;
     row["sampler_pass"] = sampler->gof.pass();
   }
-  row["lost_rays"] = r.counters.lost_below + r.counters.unresolved;
+  // A finite object is missed by the rays of its window that pass beside it (they leave the
+  // slab downward): those are misses, not lost rays.
+  const std::uint64_t gone = r.counters.lost_below + r.counters.unresolved;
+  row["lost_rays"] = s.macro().periodic ? gone : r.counters.unresolved;
+  row["missed_rays"] = s.macro().periodic ? 0 : r.counters.lost_below;
   row["backface_hits"] = r.counters.backface_hits;
   row["seconds"] = r.seconds;
   Json bins = Json::array();
