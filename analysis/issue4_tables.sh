@@ -4,7 +4,7 @@
 # Usage: analysis/issue4_tables.sh [BUILD_DIR] [WORK_DIR]   (about 10 minutes on 2 cores)
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
-BUILD="${1:-$ROOT/build}"
+BUILD="$(cd "${1:-$ROOT/build}" && pwd)"
 WORK="${2:-${TMPDIR:-/tmp}/microsim_issue4}"
 BIN="$BUILD/microsim"
 mkdir -p "$WORK"
@@ -12,9 +12,9 @@ cd "$WORK"
 PY=/usr/bin/python3
 RAYS="${RAYS:-1000000}"
 
-echo "== 1. Square wave (period 1, top 0.5, trench 0.5, height 0.25): G2 of the normal-n area =="
+echo "== 1. Square wave (period 1, top 0.5, trench 0.5, height 0.25): G2 of the normal-n area (tops + trench bottoms) =="
 $PY "$ROOT/analysis/issue4_shapes.py" square_wave square.obj 1 0.5 0.25 4
-"$BIN" -q measure g2 square.obj --theta-o 60,80,85 --theta-i 80,85 --phi-i 0,180 --rays "$RAYS" -o square_g2.json
+"$BIN" -q measure g2 square.obj --theta-o 30,60,80,85 --theta-i 20,40,80,85 --phi-i 0,180 --rays "$RAYS" -o square_g2.json
 $PY - <<'PY'
 import json, math
 j = json.load(open("square_g2.json"))

@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
 
 #include <atomic>
 #include <chrono>
@@ -143,15 +144,39 @@ VndfResult measure_vndf(const Tracer& tracer, const Vec3& v_in, const VndfOption
 
   const RayWindow w = make_ray_window(tracer, v);
   r.window_area_perp = w.area_perp;
-  const Strata strata(o.rays);
-  r.rays = strata.total();
+  // Origins i.i.d. uniform over the window (not stratified): the bin counts are then exactly
+  // multinomial, so the binomial standard errors and the chi-square p-values are calibrated
+  // (stratified origins would make them conservative bounds, with chi-square far below its
+  // degrees of freedom and no power). Coherence is kept by tracing the rays in Morton order of
+  // their origins (the order does not change the statistics).
+  r.rays = o.rays;
   const std::uint64_t stream = 0xD000 + direction_stream_key(v);
+  std::vector<std::pair<std::uint64_t, Vec2>> origins(r.rays);
+  tbb::parallel_for(std::uint64_t(0), r.rays, [&](std::uint64_t j) {
+    CounterRng rng(o.seed, stream, j);
+    const double a = rng.uniform(), b = rng.uniform();
+    const auto spread = [](std::uint64_t x) {  // interleave the 21 bits of x with zeros
+      x &= 0x1FFFFF;
+      x = (x | (x << 32)) & 0x1F00000000FFFFull;
+      x = (x | (x << 16)) & 0x1F0000FF0000FFull;
+      x = (x | (x << 8)) & 0x100F00F00F00F00Full;
+      x = (x | (x << 4)) & 0x10C30C30C30C30C3ull;
+      x = (x | (x << 2)) & 0x1249249249249249ull;
+      return x;
+    };
+    const std::uint64_t key = spread(static_cast<std::uint64_t>(a * (1 << 21))) |
+                              (spread(static_cast<std::uint64_t>(b * (1 << 21))) << 1);
+    origins[j] = {key, Vec2(a, b)};
+  });
+  tbb::parallel_sort(origins.begin(), origins.end(), [](const auto& x, const auto& y) {
+    return x.first < y.first || (x.first == y.first && (x.second.x() < y.second.x() ||
+                                                        (x.second.x() == y.second.x() && x.second.y() < y.second.y())));
+  });
   std::vector<std::uint64_t> counts;
   std::vector<std::uint64_t> misses(1, 0);
   histogram_chunks(r.rays, nbins, counts, r.counters,
                    [&](std::uint64_t j, std::vector<std::uint64_t>& c, TraceCounters& tc) {
-                     CounterRng rng(o.seed, stream, j);
-                     const Vec2 ab = strata.point(j, rng);
+                     const Vec2& ab = origins[j].second;
                      const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
                      const TraceHit h = tracer.first_hit(org, -v, nullptr, tc);
                      if (!h.hit || h.backface) return;  // back faces: rounding gaps (counted)
