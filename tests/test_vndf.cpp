@@ -2,6 +2,7 @@
 // the histogram of first-hit normals against the exact GGX of the ellipsoid, the Smith
 // independence assumption on a Beckmann tile, and the measure vndf command.
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <fstream>
 #include <sys/wait.h>
@@ -144,6 +145,23 @@ TEST(VndfMeasure, HeightfieldAtNormalIncidenceIsSmithWithItsFacetsButNotAtGrazin
   VndfResult r8 = measure_vndf(tracer, dir(80, 0), opts(1000000, 2), &table);
   GofResult g8 = histogram_gof(r8.bin_hits, r8.hits, r8.smith_numeric_probabilities(), 0.0027);
   EXPECT_LT(g8.p_value, 1e-6) << g8.chi2 << "/" << g8.dof;
+}
+
+TEST(VndfMeasure, ResultsDoNotDependOnThreadCount) {
+  GaussianParams gp;
+  gp.resolution = 64;
+  Microsurface s = generate_gaussian(gp);
+  Tracer tracer(s);
+  auto go = [&](int threads) {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, threads);
+    VndfOptions o = opts(100000, 3);
+    return std::pair{measure_vndf(tracer, dir(70, 20), o),
+                     test_vndf_sampler(*s.nominal, dir(70, 20), 50000, vndf_binning(o), 3)};
+  };
+  auto [a, sa] = go(1);
+  auto [b, sb] = go(2);
+  EXPECT_EQ(a.bin_hits, b.bin_hits);
+  EXPECT_EQ(sa.counts, sb.counts);
 }
 
 namespace {
