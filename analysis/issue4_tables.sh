@@ -47,7 +47,8 @@ j = json.load(open("beck_g2.json"))
 F = ["separable", "height_correlated", "direction_correlated", "height_direction_correlated"]
 print("(a) measured G2 (mean of 4 tiles, between-tile stderr) and the Smith forms with the nominal Beckmann 0.5;")
 print("    z = (G2 - form) / stderr. Closest form marked *.")
-print(f"{'th_o':>5} {'th_i':>5} {'dphi':>5} | {'G2':>7} {'stderr':>7} {'G1o':>7} | " + " ".join(f"{n[:10]:>10}" for n in F) + " |  z sep   z hc   z dc  z hdc")
+print("    G2(h): G2 of the normal bin holding the half vector (what a specular BRDF uses).")
+print(f"{'th_o':>5} {'th_i':>5} {'dphi':>5} | {'G2':>7} {'stderr':>7} {'G1o':>7} {'G2(h)':>7} {'stderr':>7} | " + " ".join(f"{n[:10]:>10}" for n in F) + " |  z sep   z hc   z dc  z hdc")
 for r in j["rows"]:
     if r["theta_i_deg"] < r["theta_o_deg"]: continue
     g, se = r["g2"], r["g2_stderr"]
@@ -55,7 +56,8 @@ for r in j["rows"]:
     best = min(range(4), key=lambda k: abs(g - vals[k]))
     cells = " ".join(f"{v:9.4f}{'*' if k == best else ' '}" for k, v in enumerate(vals))
     zs = " ".join(f"{r[f'z_{f}_nominal']:6.1f}" for f in F)
-    print(f"{r['theta_o_deg']:5.0f} {r['theta_i_deg']:5.0f} {r['delta_phi_deg']:5.0f} | {g:7.4f} {se:7.4f} {r['g1_o']:7.4f} | {cells} | {zs}")
+    gh = f"{r['g2_half']:7.4f} {r['g2_half_stderr']:7.4f}" if r["g2_half"] is not None else f"{'-':>7} {'-':>7}"
+    print(f"{r['theta_o_deg']:5.0f} {r['theta_i_deg']:5.0f} {r['delta_phi_deg']:5.0f} | {g:7.4f} {se:7.4f} {r['g1_o']:7.4f} {gh} | {cells} | {zs}")
 print()
 print("(b) the forms built per normal bin from the measured G1(o,m), G1(i,m) (correlation assumption alone):")
 print("    g2 - form (ray-count stderr in parentheses is per-surface; z uses it).")

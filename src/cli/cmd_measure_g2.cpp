@@ -32,7 +32,9 @@ Json g2_ensemble_row(const std::vector<const Json*>& rows) {
                     {"theta_i_deg", Field::Copy}, {"phi_i_deg", Field::Copy},
                     {"delta_phi_deg", Field::Copy}, {"surfaces", Field::Count},
                     {"g2", Field::Measured},        {"g1_o", Field::Measured},
-                    {"g1_i", Field::Measured},      {"lambda_o_numeric", Field::MeanStderr},
+                    {"g1_i", Field::Measured},      {"half_bin_theta_m_range_deg", Field::Copy},
+                    {"half_bin_phi_m_range_deg", Field::Copy}, {"g2_half", Field::Measured},
+                    {"lambda_o_numeric", Field::MeanStderr},
                     {"lambda_i_numeric", Field::MeanStderr}};
   for (const char* f : kForms) spec.emplace_back(std::string("smith_") + f, Field::MeanStderr);
   spec.emplace_back("vcavity", Field::MeanStderr);
@@ -125,6 +127,9 @@ int run_measure_g2(const G2CliOptions& o, const GlobalOptions& g) {
              "by area, that is unoccluded toward o and toward i (two occlusion rays per point; "
              "000 eq. 16a, DESIGN.md)"},
       {"g1_o", "fraction of the same points unoccluded toward o (g1_i: toward i)"},
+      {"g2_half", "g2 of the normal bin holding the half vector (o+i)/|o+i| (half_bin_*_range_deg): "
+                  "the G2(o, h, i) of a specular microfacet BRDF, to compare with the Smith forms "
+                  "as they are"},
       {"bins", "per normal bin, the same ratios over the bin's area facing both; front_fraction = "
                "that area / the bin's area (multiply g2 by it for the fraction of the whole bin)"},
       {"smith_*", "001 eq. 20 (separable), 21 (height correlated), 22 (direction correlated), 23 "

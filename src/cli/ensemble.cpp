@@ -35,6 +35,14 @@ void apply(Json& out, const std::vector<const Json*>& rows, const FieldSpec& spe
       case Field::Measured:
       case Field::MeanStderr:
       case Field::Mean: {
+        bool any = false;
+        for (const Json* r : rows) any = any || (r->contains(key) && (*r)[key].is_number());
+        if (!any) {  // no surface has a value (e.g. an empty bin): null, not a made-up 0
+          out[key] = nullptr;
+          if (how != Field::Mean) out[key + "_stderr"] = nullptr;
+          if (how == Field::Measured) out[key + "_stderr_rays"] = nullptr;
+          break;
+        }
         auto [mean, se] = ensemble_stat(rows, key);
         out[key] = mean;
         if (how == Field::Mean) break;

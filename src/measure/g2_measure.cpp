@@ -260,6 +260,20 @@ Json g2_row_json(const G2Result& r, const Microsurface& s) {
   row["g1_o_stderr"] = go.stderr_;
   row["g1_i"] = gi.mean;
   row["g1_i_stderr"] = gi.stderr_;
+  // The bin holding the half vector h = (o + i)/|o + i|: the G2(o, h, i) that a specular
+  // microfacet BRDF uses (001 eq. 17 with G2), where the Smith forms apply as they are.
+  const int hb = r.binning.bin_of((r.o + r.i).normalized());
+  const G2NormalBin& hbin = r.bins[hb];
+  const int hit = hb / r.binning.n_phi(), hip = hb % r.binning.n_phi();
+  row["half_bin_theta_m_range_deg"] = {deg(r.binning.theta_lo(hit)), deg(r.binning.theta_hi(hit))};
+  row["half_bin_phi_m_range_deg"] = {deg(r.binning.phi_lo(hip)), deg(r.binning.phi_hi(hip))};
+  if (hbin.samples > 0) {
+    row["g2_half"] = r.bin_g2(hb).mean;
+    row["g2_half_stderr"] = r.bin_g2(hb).stderr_;
+  } else {
+    row["g2_half"] = nullptr;
+    row["g2_half_stderr"] = nullptr;
+  }
   row["lambda_o_numeric"] = r.lambda_o;
   row["lambda_i_numeric"] = r.lambda_i;
   const models::G2Forms f = r.smith_numeric();
