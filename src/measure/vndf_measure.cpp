@@ -151,42 +151,51 @@ VndfResult measure_vndf(const Tracer& tracer, const Vec3& v_in, const VndfOption
   // their origins (the order does not change the statistics).
   r.rays = o.rays;
   const std::uint64_t stream = 0xD000 + direction_stream_key(v);
-  std::vector<std::pair<std::uint64_t, Vec2>> origins(r.rays);
-  tbb::parallel_for(std::uint64_t(0), r.rays, [&](std::uint64_t j) {
-    CounterRng rng(o.seed, stream, j);
-    const double a = rng.uniform(), b = rng.uniform();
-    const auto spread = [](std::uint64_t x) {  // interleave the 21 bits of x with zeros
-      x &= 0x1FFFFF;
-      x = (x | (x << 32)) & 0x1F00000000FFFFull;
-      x = (x | (x << 16)) & 0x1F0000FF0000FFull;
-      x = (x | (x << 8)) & 0x100F00F00F00F00Full;
-      x = (x | (x << 4)) & 0x10C30C30C30C30C3ull;
-      x = (x | (x << 2)) & 0x1249249249249249ull;
-      return x;
-    };
-    const std::uint64_t key = spread(static_cast<std::uint64_t>(a * (1 << 21))) |
-                              (spread(static_cast<std::uint64_t>(b * (1 << 21))) << 1);
-    origins[j] = {key, Vec2(a, b)};
-  });
-  tbb::parallel_sort(origins.begin(), origins.end(), [](const auto& x, const auto& y) {
-    return x.first < y.first || (x.first == y.first && (x.second.x() < y.second.x() ||
-                                                        (x.second.x() == y.second.x() && x.second.y() < y.second.y())));
-  });
-  std::vector<std::uint64_t> counts;
-  std::vector<std::uint64_t> misses(1, 0);
-  histogram_chunks(r.rays, nbins, counts, r.counters,
-                   [&](std::uint64_t j, std::vector<std::uint64_t>& c, TraceCounters& tc) {
-                     const Vec2& ab = origins[j].second;
-                     const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
-                     const TraceHit h = tracer.first_hit(org, -v, nullptr, tc);
-                     if (!h.hit || h.backface) return;  // back faces: rounding gaps (counted)
-                     const int b = r.binning.bin_of(h.normal);
-                     ++c[b >= 0 ? b : nbins];
-                   });
+  // Batches of at most 2^22 rays bound the memory (24 bytes per origin); every origin is an
+  // independent draw, so batching changes nothing statistically.
+  const std::uint64_t batch = std::uint64_t(1) << 22;
+  std::vector<std::uint64_t> counts(nbins + 1, 0);
+  std::vector<std::pair<std::uint64_t, Vec2>> origins;
+  for (std::uint64_t first = 0; first < r.rays; first += batch) {
+    const std::uint64_t n = std::min(batch, r.rays - first);
+    origins.resize(n);
+    tbb::parallel_for(std::uint64_t(0), n, [&](std::uint64_t j) {
+      CounterRng rng(o.seed, stream, first + j);
+      const double a = rng.uniform(), b = rng.uniform();
+      const auto spread = [](std::uint64_t x) {  // interleave the 21 bits of x with zeros
+        x &= 0x1FFFFF;
+        x = (x | (x << 32)) & 0x1F00000000FFFFull;
+        x = (x | (x << 16)) & 0x1F0000FF0000FFull;
+        x = (x | (x << 8)) & 0x100F00F00F00F00Full;
+        x = (x | (x << 4)) & 0x10C30C30C30C30C3ull;
+        x = (x | (x << 2)) & 0x1249249249249249ull;
+        return x;
+      };
+      const std::uint64_t key = spread(static_cast<std::uint64_t>(a * (1 << 21))) |
+                                (spread(static_cast<std::uint64_t>(b * (1 << 21))) << 1);
+      origins[j] = {key, Vec2(a, b)};
+    });
+    tbb::parallel_sort(origins.begin(), origins.end(), [](const auto& x, const auto& y) {
+      return x.first < y.first ||
+             (x.first == y.first && (x.second.x() < y.second.x() ||
+                                     (x.second.x() == y.second.x() && x.second.y() < y.second.y())));
+    });
+    std::vector<std::uint64_t> part;
+    histogram_chunks(n, nbins, part, r.counters,
+                     [&](std::uint64_t j, std::vector<std::uint64_t>& c, TraceCounters& tc) {
+                       const Vec2& ab = origins[j].second;
+                       const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
+                       const TraceHit h = tracer.first_hit(org, -v, nullptr, tc);
+                       if (!h.hit || h.backface) return;  // back faces: rounding gaps (counted)
+                       const int b = r.binning.bin_of(h.normal);
+                       ++c[b >= 0 ? b : nbins];
+                     });
+    for (int b = 0; b <= nbins; ++b) counts[b] += part[b];
+    if (o.progress) o.progress(static_cast<double>(first + n) / r.rays);
+  }
   r.bin_hits.assign(counts.begin(), counts.begin() + nbins);
   r.hits_below = counts[nbins];
   for (auto c : counts) r.hits += c;
-  if (o.progress) o.progress(1.0);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }
