@@ -129,7 +129,7 @@ int run_measure_g2(const G2CliOptions& o, const GlobalOptions& g) {
       {"g1_o", "fraction of the same points unoccluded toward o (g1_i: toward i)"},
       {"g2_half", "g2 of the normal bin holding the half vector (o+i)/|o+i| (half_bin_*_range_deg): "
                   "the G2(o, h, i) of a specular microfacet BRDF, to compare with the Smith forms "
-                  "as they are"},
+                  "as they are (null when the bin holds fewer than 100 samples)"},
       {"bins", "per normal bin, the same ratios over the bin's area facing both; front_fraction = "
                "that area / the bin's area (multiply g2 by it for the fraction of the whole bin)"},
       {"smith_*", "001 eq. 20 (separable), 21 (height correlated), 22 (direction correlated), 23 "

@@ -267,7 +267,9 @@ Json g2_row_json(const G2Result& r, const Microsurface& s) {
   const int hit = hb / r.binning.n_phi(), hip = hb % r.binning.n_phi();
   row["half_bin_theta_m_range_deg"] = {deg(r.binning.theta_lo(hit)), deg(r.binning.theta_hi(hit))};
   row["half_bin_phi_m_range_deg"] = {deg(r.binning.phi_lo(hip)), deg(r.binning.phi_hi(hip))};
-  if (hbin.samples > 0) {
+  // (At least 100 samples: a nearly empty bin gives no usable value, and identical 0/2 or 2/2
+  // counts on every surface of an ensemble would fake a zero between-surface error.)
+  if (hbin.samples >= 100) {
     row["g2_half"] = r.bin_g2(hb).mean;
     row["g2_half_stderr"] = r.bin_g2(hb).stderr_;
   } else {
