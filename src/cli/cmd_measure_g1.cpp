@@ -5,6 +5,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "ensemble.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/measure/vcavity_measure.hpp"
@@ -17,45 +18,19 @@ namespace microsim::cli {
 
 namespace {
 
-// Mean over surfaces of a numeric field, with the between-surface standard error sd / sqrt(K).
-std::pair<double, double> ensemble_stat(const std::vector<const Json*>& rows, const char* key) {
-  double sum = 0, sum2 = 0;
-  int k = 0;
-  for (const Json* r : rows) {
-    auto it = r->find(key);
-    if (it == r->end() || !it->is_number()) continue;
-    double x = it->get<double>();
-    sum += x;
-    sum2 += x * x;
-    ++k;
-  }
-  if (k == 0) return {0.0, 0.0};
-  double mean = sum / k;
-  double var = k > 1 ? std::max(0.0, (sum2 - k * mean * mean) / (k - 1)) : 0.0;
-  return {mean, std::sqrt(var / k)};
-}
-
 // Ensemble rows (DESIGN.md "Two kinds of error bar"): every field is the mean over surfaces;
 // g1_stderr etc. are the between-surface standard errors, the ray-count ones are kept as
 // *_stderr_rays. Bins are matched by their normal ranges.
-Json ensemble_row(const std::vector<const Json*>& rows) {
-  Json e;
-  e["theta_deg"] = (*rows[0])["theta_deg"];
-  e["phi_deg"] = (*rows[0])["phi_deg"];
-  e["surfaces"] = rows.size();
-  for (const char* key : {"g1", "g1_raycast", "visible_area_ratio", "smith_numeric"}) {
-    auto [mean, se] = ensemble_stat(rows, key);
-    e[key] = mean;
-    e[std::string(key) + "_stderr"] = se;
-    double rays2 = 0;
-    for (const Json* r : rows) {
-      auto it = r->find(std::string(key) + "_stderr");
-      if (it != r->end()) rays2 += std::pow(it->get<double>(), 2);
-    }
-    if (key != std::string("smith_numeric"))
-      e[std::string(key) + "_stderr_rays"] = std::sqrt(rays2) / rows.size();
-  }
-  e["smith_nominal"] = (*rows[0])["smith_nominal"];
+Json g1_ensemble_row(const std::vector<const Json*>& rows) {
+  Json e = ensemble_row(rows,
+                        {{"theta_deg", Field::Copy},
+                         {"phi_deg", Field::Copy},
+                         {"surfaces", Field::Count},
+                         {"g1", Field::Measured},
+                         {"g1_raycast", Field::Measured},
+                         {"visible_area_ratio", Field::Measured},
+                         {"smith_numeric", Field::MeanStderr},
+                         {"smith_nominal", Field::Copy}});
   if (e["smith_nominal"].is_number()) {
     double model = e["smith_nominal"].get<double>(), se = e["g1_stderr"].get<double>();
     e["z_nominal"] = se > 0 ? (e["g1"].get<double>() - model) / se : 0.0;
@@ -66,29 +41,12 @@ Json ensemble_row(const std::vector<const Json*>& rows) {
   }
   double se_num = e["g1_stderr"].get<double>();
   e["z_numeric"] = se_num > 0 ? (e["g1"].get<double>() - e["smith_numeric"].get<double>()) / se_num : 0.0;
-  Json bins = Json::array();
-  for (const auto& b0 : (*rows[0])["bins"]) {
-    std::vector<const Json*> same;
-    for (const Json* r : rows)
-      for (const auto& b : (*r)["bins"])
-        if (b["theta_m_range_deg"] == b0["theta_m_range_deg"] &&
-            b["phi_m_range_deg"] == b0["phi_m_range_deg"])
-          same.push_back(&b);
-    Json eb;
-    eb["theta_m_range_deg"] = b0["theta_m_range_deg"];
-    eb["phi_m_range_deg"] = b0["phi_m_range_deg"];
-    Vec3 m = Vec3::Zero();
-    for (const Json* b : same) m += Vec3((*b)["m"][0], (*b)["m"][1], (*b)["m"][2]);
-    m.normalize();
-    eb["m"] = {m.x(), m.y(), m.z()};
-    for (const char* key : {"area_fraction", "g1", "g1_raycast"}) {
-      auto [mean, se] = ensemble_stat(same, key);
-      eb[key] = mean;
-      if (key != std::string("area_fraction")) eb[std::string(key) + "_stderr"] = se;
-    }
-    eb["surfaces"] = same.size();
-    bins.push_back(eb);
-  }
+  Json bins = ensemble_row(rows, {}, {{"theta_m_range_deg", Field::Key},
+                                      {"phi_m_range_deg", Field::Key},
+                                      {"m", Field::Normal},
+                                      {"area_fraction", Field::Mean},
+                                      {"g1", Field::MeanStderr},
+                                      {"g1_raycast", Field::MeanStderr}})["bins"];
   e["bins"] = bins;
   return e;
 }
@@ -269,7 +227,7 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
     for (std::size_t d = 0; d < per_surface[0].size(); ++d) {
       std::vector<const Json*> same;
       for (const auto& ps : per_surface) same.push_back(&ps[d]);
-      rows.push_back(ensemble_row(same));
+      rows.push_back(g1_ensemble_row(same));
     }
     j["rows"] = rows;
     Json ps = Json::array();

@@ -62,6 +62,8 @@ int main(int argc, char** argv) {
   measure->require_subcommand(1);
   register_measure_ndf(*measure, g);
   register_measure_g1(*measure, g);
+  register_measure_g2(*measure, g);
+  register_measure_vndf(*measure, g);
   register_validate(app, g);
 
   if (!check_command_words(app, argc, argv)) return 2;

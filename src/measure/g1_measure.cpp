@@ -1,5 +1,6 @@
 #include "microsim/measure/g1_measure.hpp"
 
+#include "microsim/measure/sampling.hpp"
 #include "microsim/surface/undersurface.hpp"
 
 #include <tbb/blocked_range.h>
@@ -14,65 +15,6 @@
 namespace microsim {
 
 namespace {
-
-// Stratified origins: a G x G grid of strata (G a power of two, G^2 <= n) visited in Morton
-// order, r rays per stratum; the ray count is rounded up to r G^2.
-struct Strata {
-  std::uint32_t grid = 1;
-  std::uint64_t per_stratum = 1;
-  explicit Strata(std::uint64_t n) {
-    while (static_cast<std::uint64_t>(grid) * 2 * grid * 2 <= n && grid < (1u << 15)) grid *= 2;
-    std::uint64_t cells = static_cast<std::uint64_t>(grid) * grid;
-    per_stratum = (n + cells - 1) / cells;
-  }
-  std::uint64_t total() const { return per_stratum * grid * grid; }
-  Vec2 point(std::uint64_t i, CounterRng& rng) const {
-    std::uint32_t sx, sy;
-    morton_decode(i / per_stratum, sx, sy);
-    return Vec2((sx + rng.uniform()) / grid, (sy + rng.uniform()) / grid);
-  }
-};
-
-// The window the parallel rays start from: origin0 + a e1 + b e2, (a, b) in [0,1]^2.
-struct RayWindow {
-  Vec3 origin0, e1, e2;
-  double area_perp = 0;  // |(e1 x e2) . v|
-};
-
-RayWindow make_window(const Tracer& tracer, const Vec3& v) {
-  const Macrosurface& m = tracer.surface().macro();
-  RayWindow w;
-  if (m.periodic) {
-    // Horizontal tile at the top of the slab; wrap-around makes every ray equivalent.
-    w.origin0 = Vec3(-0.5 * m.size_x, -0.5 * m.size_y, tracer.z_top());
-    w.e1 = Vec3(m.size_x, 0, 0);
-    w.e2 = Vec3(0, m.size_y, 0);
-  } else {
-    // Finite object: a rectangle perpendicular to v covering the projection of its bounds.
-    Eigen::AlignedBox3d box = tracer.surface().bounds();
-    Vec3 t1 = std::abs(v.z()) < 0.9 ? v.cross(Vec3::UnitZ()).normalized()
-                                     : v.cross(Vec3::UnitX()).normalized();
-    Vec3 t2 = v.cross(t1);
-    Vec3 c = box.center();
-    double lo1 = 1e300, hi1 = -1e300, lo2 = 1e300, hi2 = -1e300;
-    // The projection of the vertices (tighter than the bounding box's corners: fewer missed
-    // rays, a smaller binomial error for the same ray count).
-    for (const auto& vf : tracer.surface().vertices()) {
-      Vec3 q = vf.cast<double>() - c;
-      lo1 = std::min(lo1, q.dot(t1));
-      hi1 = std::max(hi1, q.dot(t1));
-      lo2 = std::min(lo2, q.dot(t2));
-      hi2 = std::max(hi2, q.dot(t2));
-    }
-    double pad = 1e-3 * box.sizes().norm();
-    double far = box.sizes().norm() + 1.0;
-    w.origin0 = c + (lo1 - pad) * t1 + (lo2 - pad) * t2 + far * v;
-    w.e1 = (hi1 - lo1 + 2 * pad) * t1;
-    w.e2 = (hi2 - lo2 + 2 * pad) * t2;
-  }
-  w.area_perp = std::abs(w.e1.cross(w.e2).dot(v));
-  return w;
-}
 
 struct Tally {
   std::vector<std::uint64_t> hits, samples, visible;
@@ -275,7 +217,7 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   r.facet_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_facets).count();
 
-  const RayWindow w = make_window(tracer, v);
+  const RayWindow w = make_ray_window(tracer, v);
   r.window_area_perp = w.area_perp;
   const Strata strata(o.rays);
   r.raycast_rays = strata.total();

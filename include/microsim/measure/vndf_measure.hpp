@@ -1,0 +1,103 @@
+// Distribution of visible normals (000 eq. 3b, 001 eq. 13) measured on an explicit surface:
+// parallel rays along -v from the ray window, the first-hit normals histogrammed over
+// direction bins of m. The estimate of the bin average of D_v is
+//   D_v(B) = (hits in B / front-face hits) / solid_angle(B),
+// a probability density over visible normals (normalized by the hits, which for a periodic
+// heightfield are all the rays; for a finite object such as the ellipsoid the normalization
+// is that of 001 eq. 13 by construction).
+//
+// Beside it: the analytic D_v of the surface's nominal NDF (bin integrals by quadrature), and
+// Smith's D_v with the surface's own facets, (v.m)+ D_facets / int (v.m)+ D_facets (visibility
+// independent of m). A chi-square goodness-of-fit test and per-bin z-scores (Sidak-corrected
+// threshold) compare the histogram with each.
+//
+// The VNDF sampler of models/ndf.hpp (Beckmann and GGX, anisotropic) is tested the same way:
+// its samples histogrammed over the same bins against the bin integrals of D_v.
+#pragma once
+#include <functional>
+#include <optional>
+
+#include <nlohmann/json.hpp>
+
+#include "microsim/measure/binning.hpp"
+#include "microsim/measure/g1_measure.hpp"
+#include "microsim/models/ndf.hpp"
+#include "microsim/trace/tracer.hpp"
+
+namespace microsim {
+
+struct VndfOptions {
+  std::uint64_t rays = 1000000;
+  std::uint64_t seed = 1;
+  int theta_bins = 18;  // over theta_m in [0, 90] degrees (5 degree rings)
+  int phi_bins = 16;    // 22.5 degree sectors
+  // Samples for the chi-square test of the nominal NDF's VNDF sampler (0: no sampler test).
+  std::uint64_t sampler_samples = 0;
+  // Family-wise false-alarm rate of the per-bin z test: 0.0027 is "3 sigma" for one bin,
+  // Sidak-corrected over the bins tested.
+  double family_alpha = 0.0027;
+  std::function<void(double)> progress;
+};
+
+DirectionBinning vndf_binning(const VndfOptions& options);
+
+// Bin integrals P_B = int_B f(m) dm of a density over the bins' solid angles: each bin cut into
+// 4 x 4 sub-bins with 8 x 8 Gauss-Legendre points (DirectionBinning::bin_average).
+std::vector<double> bin_integrals(const DirectionBinning& bins,
+                                  const std::function<double(const Vec3&)>& f);
+
+// Goodness of fit of a histogram (counts of `total` draws) against bin probabilities.
+struct GofResult {
+  double chi2 = 0;
+  int dof = 0;
+  double p_value = 1;
+  int cells = 0;          // bins with expected count >= 5, plus the pooled rest when >= 1
+  int bins_tested = 0;    // bins in the per-bin z test (expected count >= 5)
+  double max_abs_z = 0;   // |count - N p| / sqrt(N p (1-p)) over those bins
+  double sidak_z = 0;     // threshold for the family-wise rate
+  bool pass() const { return max_abs_z < sidak_z; }
+};
+GofResult histogram_gof(const std::vector<std::uint64_t>& counts, std::uint64_t total,
+                        const std::vector<double>& probabilities, double family_alpha);
+
+struct VndfResult {
+  Vec3 v;
+  DirectionBinning binning{1, 1, kPi / 2};
+  std::uint64_t rays = 0;
+  std::uint64_t hits = 0;           // front-face first hits (the normalization)
+  std::uint64_t hits_below = 0;     // of which with a normal below the horizon (no bin)
+  std::vector<std::uint64_t> bin_hits;
+  std::vector<double> front_projected;  // sum_f A_f max(0, v.m_f) per bin
+  double front_projected_total = 0;     // over all facets
+  double window_area_perp = 0;
+  double macro_area = 1;
+  TraceCounters counters;
+  double seconds = 0;
+
+  Estimate dv(int b) const;                // histogram density in bin b
+  double dv_smith_numeric(int b) const;    // Smith with the surface's own facets
+  // Bin probabilities of the Smith-numeric VNDF (sum = mass of the binned normals).
+  std::vector<double> smith_numeric_probabilities() const;
+};
+
+VndfResult measure_vndf(const Tracer& tracer, const Vec3& v, const VndfOptions& options,
+                        const FacetTable* table = nullptr);
+
+// The VNDF sampler of `ndf` for view v: `n` samples histogrammed over `bins`, against the bin
+// integrals of ndf.D_visible(v, .).
+struct SamplerTest {
+  std::vector<std::uint64_t> counts;
+  std::uint64_t n = 0, outside = 0;  // samples that fell in no bin
+  std::vector<double> probabilities;
+  GofResult gof;
+};
+SamplerTest test_vndf_sampler(const models::Ndf& ndf, const Vec3& v, std::uint64_t n,
+                              const DirectionBinning& bins, std::uint64_t seed,
+                              double family_alpha = 0.0027);
+
+// JSON row: direction, tests against the nominal and Smith-numeric VNDF, the sampler's test
+// (when run), and the bins.
+Json vndf_row_json(const VndfResult& r, const Microsurface& s, const VndfOptions& options,
+                   const std::optional<SamplerTest>& sampler);
+
+}  // namespace microsim

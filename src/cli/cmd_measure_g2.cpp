@@ -1,0 +1,232 @@
+// microsim measure g2 FILE... : masking-shadowing by area sampling with two occlusion rays,
+// beside the four Smith forms (001 eq. 20-23) and the V-cavity model.
+#include <iomanip>
+#include <iostream>
+
+#include "cli_common.hpp"
+#include "ensemble.hpp"
+#include "microsim/io/output.hpp"
+#include "microsim/measure/g2_measure.hpp"
+#include "microsim/trace/tracer.hpp"
+
+namespace microsim::cli {
+
+namespace {
+
+struct G2CliOptions {
+  std::vector<std::string> files;
+  std::string output;
+  std::string theta_o, phi_o = "0", theta_i, phi_i = "0";
+  long long rays = 1000000;
+  std::uint64_t seed = 1;
+};
+
+const char* kForms[] = {"separable", "height_correlated", "direction_correlated",
+                        "height_direction_correlated"};
+
+// Ensemble row: means over surfaces with between-surface standard errors. Models from each
+// surface's own facets are compared with the ray-count error (the difference g2 - model is
+// per surface, its spread is the ray noise); nominal models with the between-surface error.
+Json g2_ensemble_row(const std::vector<const Json*>& rows) {
+  FieldSpec spec = {{"theta_o_deg", Field::Copy}, {"phi_o_deg", Field::Copy},
+                    {"theta_i_deg", Field::Copy}, {"phi_i_deg", Field::Copy},
+                    {"delta_phi_deg", Field::Copy}, {"surfaces", Field::Count},
+                    {"g2", Field::Measured},        {"g1_o", Field::Measured},
+                    {"g1_i", Field::Measured},      {"half_bin_theta_m_range_deg", Field::Copy},
+                    {"half_bin_phi_m_range_deg", Field::Copy}, {"g2_half", Field::Measured},
+                    {"lambda_o_numeric", Field::MeanStderr},
+                    {"lambda_i_numeric", Field::MeanStderr}};
+  for (const char* f : kForms) spec.emplace_back(std::string("smith_") + f, Field::MeanStderr);
+  spec.emplace_back("vcavity", Field::MeanStderr);
+  for (const char* f : kForms) spec.emplace_back(std::string("smith_") + f + "_nominal", Field::Copy);
+  for (const char* f : kForms) {
+    spec.emplace_back(std::string(f) + "_from_g1", Field::MeanStderr);
+    spec.emplace_back(std::string(f) + "_from_g1_diff", Field::Measured);
+  }
+  Json e = ensemble_row(rows, spec,
+                        {{"theta_m_range_deg", Field::Key},
+                         {"phi_m_range_deg", Field::Key},
+                         {"m", Field::Normal},
+                         {"area_fraction", Field::Mean},
+                         {"front_fraction", Field::Mean},
+                         {"g2", Field::MeanStderr},
+                         {"g1_o", Field::MeanStderr},
+                         {"g1_i", Field::MeanStderr},
+                         {"vcavity", Field::Mean}});
+  Json bins = e["bins"];
+  e.erase("bins");
+  const double g2 = e["g2"].get<double>();
+  const double se_rays = e["g2_stderr_rays"].get<double>(), se = e["g2_stderr"].get<double>();
+  for (const char* f : kForms) {
+    const double model = e[std::string("smith_") + f].get<double>();
+    e[std::string("z_") + f] = se_rays > 0 ? (g2 - model) / se_rays : 0.0;
+  }
+  e["z_vcavity"] = se_rays > 0 ? (g2 - e["vcavity"].get<double>()) / se_rays : 0.0;
+  for (const char* f : kForms) {
+    const Json& model = e[std::string("smith_") + f + "_nominal"];
+    e[std::string("z_") + f + "_nominal"] =
+        model.is_number() && se > 0 ? Json((g2 - model.get<double>()) / se) : Json(nullptr);
+  }
+  for (const char* f : kForms) {
+    const double d = e[std::string(f) + "_from_g1_diff"].get<double>();
+    const double sd = e[std::string(f) + "_from_g1_diff_stderr_rays"].get<double>();
+    e[std::string("z_") + f + "_from_g1"] = sd > 0 ? d / sd : 0.0;
+  }
+  e["bins"] = bins;
+  return e;
+}
+
+void print_g2_table(const Json& rows, bool ensemble) {
+  std::cout << std::setw(6) << "th_o" << std::setw(6) << "ph_o" << std::setw(6) << "th_i"
+            << std::setw(6) << "ph_i" << std::setw(9) << "g2" << std::setw(9) << "stderr"
+            << std::setw(9) << "g1o*g1i" << std::setw(9) << "separ" << std::setw(9) << "height"
+            << std::setw(9) << "dir" << std::setw(9) << "ht-dir" << std::setw(9) << "vcavity"
+            << " |" << std::setw(8) << "sep" << std::setw(8) << "height" << std::setw(8) << "dir"
+            << std::setw(8) << "ht-dir" << "\n"
+            << "  Smith forms with Lambda from " << (ensemble ? "each surface's" : "the surface's")
+            << " facets | z of the forms built per normal bin from the measured G1s\n";
+  for (const auto& row : rows) {
+    std::cout << std::setw(6) << fmt(row["theta_o_deg"].get<double>(), 1) << std::setw(6)
+              << fmt(row["phi_o_deg"].get<double>(), 0) << std::setw(6)
+              << fmt(row["theta_i_deg"].get<double>(), 1) << std::setw(6)
+              << fmt(row["phi_i_deg"].get<double>(), 0) << std::setw(9)
+              << fmt(row["g2"].get<double>()) << std::setw(9)
+              << fmt(row["g2_stderr"].get<double>(), 5) << std::setw(9)
+              << fmt(row["g1_o"].get<double>() * row["g1_i"].get<double>());
+    for (const char* f : kForms)
+      std::cout << std::setw(9) << fmt(row[std::string("smith_") + f].get<double>());
+    std::cout << std::setw(9) << fmt(row["vcavity"].get<double>()) << " |";
+    for (const char* f : kForms)
+      std::cout << std::setw(8) << fmt(row[std::string("z_") + f + "_from_g1"].get<double>(), 1);
+    std::cout << "\n";
+  }
+}
+
+int run_measure_g2(const G2CliOptions& o, const GlobalOptions& g) {
+  require_extension(o.output, {"json", "csv"});
+  const std::vector<double> to = parse_angle_list(o.theta_o, "--theta-o");
+  const std::vector<double> po = parse_angle_list(o.phi_o, "--phi-o");
+  const std::vector<double> ti = parse_angle_list(o.theta_i, "--theta-i");
+  const std::vector<double> pi = parse_angle_list(o.phi_i, "--phi-i");
+  require_above_horizon(to, "--theta-o");
+  require_above_horizon(ti, "--theta-i");
+  if (o.rays <= 0)
+    throw UsageError("--rays must be a positive integer (got " + std::to_string(o.rays) + ")");
+  auto t0 = std::chrono::steady_clock::now();
+
+  G2Options go;
+  go.rays = static_cast<std::uint64_t>(o.rays);
+  go.seed = o.seed;
+  Json j = run_header("measure g2", g);
+  j["file"] = o.files.size() == 1 ? Json(o.files[0]) : Json(o.files);
+  j["parameters"] = {{"theta_o", o.theta_o}, {"phi_o", o.phi_o},     {"theta_i", o.theta_i},
+                     {"phi_i", o.phi_i},     {"rays", o.rays},       {"seed", o.seed},
+                     {"normal_bins", {{"theta", go.normal_theta_bins}, {"phi", go.normal_phi_bins}}}};
+  j["definitions"] = {
+      {"g2", "fraction of the area facing both o and i (o.m_f > 0, i.m_f > 0), sampled uniformly "
+             "by area, that is unoccluded toward o and toward i (two occlusion rays per point; "
+             "000 eq. 16a, DESIGN.md)"},
+      {"g1_o", "fraction of the same points unoccluded toward o (g1_i: toward i)"},
+      {"g2_half", "g2 of the normal bin holding the half vector (o+i)/|o+i| (half_bin_*_range_deg): "
+                  "the G2(o, h, i) of a specular microfacet BRDF, to compare with the Smith forms "
+                  "as they are (null when the bin holds fewer than 100 samples)"},
+      {"bins", "per normal bin, the same ratios over the bin's area facing both; front_fraction = "
+               "that area / the bin's area (multiply g2 by it for the fraction of the whole bin)"},
+      {"smith_*", "001 eq. 20 (separable), 21 (height correlated), 22 (direction correlated), 23 "
+                  "(height-direction correlated) with the van Ginneken lambda(phi) = 4.41 phi / "
+                  "(4.41 phi + 1) and Lambda from the surface's facets, sum_f A_f max(0,-v.m_f) / "
+                  "((v.n) A); they do not depend on m, so they equal their own area average"},
+      {"smith_*_nominal", "the same with the closed-form Lambda of the surface's nominal NDF"},
+      {"*_from_g1", "the four forms built in each normal bin from the bin's measured g1_o and g1_i "
+                    "(Lambda = 1/G1 - 1, 001 eq. 10), averaged over bins with the bins' area facing "
+                    "both; *_from_g1_diff = average of (g2 - form), *_diff_stderr its standard "
+                    "error (delta method on each bin's counts both/o only/i only/neither); they "
+                    "test the correlation each form assumes, free of the m-dependence of G1"},
+      {"vcavity", "V-cavity G2 (Cook-Torrance) averaged over the surface's facets facing both, "
+                  "weighted by area A_f like the measurement"},
+      {"z_*", "(g2 - model) / stderr; for models from the facets the ray-count error "
+              "(g2_stderr, or g2_stderr_rays for ensembles), for nominal models the between-"
+              "surface error g2_stderr of an ensemble"},
+      {"stderr", o.files.size() == 1
+                     ? "ray-count standard error of this one surface (binomial bound; stratified "
+                       "sampling only lowers it)"
+                     : "between-surface standard error (sd over surfaces / sqrt(K)); the ray-count "
+                       "one is *_stderr_rays; per_surface holds each surface's own rows"}};
+  Progress progress("measure g2", g.quiet);
+  const std::size_t total = o.files.size() * to.size() * po.size() * ti.size() * pi.size();
+  std::size_t done = 0;
+  go.progress = [&](double f) { progress.update((done + f) / total); };
+  TraceCounters counters;
+  double build_seconds = 0;
+  std::vector<Json> per_surface = measure_over_surfaces(o.files, [&](const Microsurface& s, std::size_t k) {
+    if (k == 0) j["surface"] = s.description;
+    Tracer tracer(s);
+    build_seconds += tracer.build_seconds();
+    const FacetTable table = build_facet_table(s, g2_normal_binning(go));
+    Json rows = Json::array();
+    for (double p_o : po)
+      for (double t_o : to)
+        for (double p_i : pi)
+          for (double t_i : ti) {
+            G2Result r = measure_g2(tracer, direction_from_angles(rad(t_o), rad(p_o)),
+                                    direction_from_angles(rad(t_i), rad(p_i)), go, &table);
+            counters += r.counters;
+            Json row = g2_row_json(r, s);
+            row["theta_o_deg"] = t_o;  // exactly as requested
+            row["phi_o_deg"] = p_o;
+            row["theta_i_deg"] = t_i;
+            row["phi_i_deg"] = p_i;
+            rows.push_back(row);
+            ++done;
+          }
+    return rows;
+  });
+  progress.finish();
+  j["build_seconds"] = build_seconds;
+  put_rows(j, o.files, per_surface, g2_ensemble_row);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  j["wall_seconds"] = wall;
+  j["total_rays"] = counters.rays;
+  j["rays_per_second"] = counters.rays / wall;
+  j["lost_rays"] = counters.lost_below + counters.unresolved;
+  j["backface_hits"] = counters.backface_hits;
+  write_record(o.output, j);
+  if (!g.quiet) {
+    std::cout << "G2 of "
+              << (o.files.size() == 1 ? o.files[0] : std::to_string(o.files.size()) + " surfaces")
+              << "  (" << go.rays << " area samples per direction pair"
+              << (o.files.size() > 1 ? "; stderr between surfaces" : "") << ")\n";
+    print_g2_table(j["rows"], o.files.size() > 1);
+    std::cout << "rays lost " << counters.lost_below + counters.unresolved << ", back-face hits "
+              << counters.backface_hits << ", " << fmt(counters.rays / wall / 1e6, 2)
+              << " Mrays/s; wrote " << o.output << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+void register_measure_g2(CLI::App& measure, const GlobalOptions& g) {
+  auto* cmd = measure.add_subcommand(
+      "g2", "Masking-shadowing G2(o, m, i) by area sampling with two occlusion rays, beside the "
+            "four Smith forms and the V-cavity model");
+  auto o = std::make_shared<G2CliOptions>();
+  cmd->add_option("surfaces", o->files,
+                  "Surface file(s). Several independent surfaces of the same statistics give rows "
+                  "averaged over them with the between-surface standard error")
+      ->required();
+  cmd->add_option("-o,--output", o->output, "Output (.json or .csv)")->required();
+  cmd->add_option("--theta-o", o->theta_o,
+                  "View (outgoing) zenith angles in degrees, [0, 90): a, a,b,c or start:stop:step")
+      ->required();
+  cmd->add_option("--phi-o", o->phi_o, "View azimuths in degrees, same syntax")->capture_default_str();
+  cmd->add_option("--theta-i", o->theta_i, "Light (incoming) zenith angles in degrees, [0, 90)")
+      ->required();
+  cmd->add_option("--phi-i", o->phi_i, "Light azimuths in degrees")->capture_default_str();
+  cmd->add_option("--rays", o->rays, "Area samples per direction pair (two occlusion rays each)")
+      ->capture_default_str();
+  cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str();
+  cmd->callback([o, &g] { run_measure_g2(*o, g); });
+}
+
+}  // namespace microsim::cli

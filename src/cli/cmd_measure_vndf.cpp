@@ -1,0 +1,237 @@
+// microsim measure vndf FILE... : histogram of first-hit normals of rays along -v against the
+// analytic distribution of visible normals (001 eq. 13), and a chi-square test of the VNDF
+// sampler of the surface's nominal NDF.
+#include <iomanip>
+#include <iostream>
+
+#include "cli_common.hpp"
+#include "ensemble.hpp"
+#include "microsim/io/output.hpp"
+#include "microsim/measure/stats.hpp"
+#include "microsim/measure/vndf_measure.hpp"
+#include "microsim/trace/tracer.hpp"
+
+namespace microsim::cli {
+
+namespace {
+
+struct VndfCliOptions {
+  std::vector<std::string> files;
+  std::string output;
+  std::string theta = "0:80:20", phi = "0";
+  long long rays = 1000000;
+  long long sampler_samples = 1000000;
+  std::uint64_t seed = 1;
+  int theta_bins = 18, phi_bins = 16;
+};
+
+// Ensemble row: per-bin D_v averaged over surfaces with the between-surface standard error,
+// and the per-bin z against the nominal model with that error (Sidak threshold over the bins
+// holding at least 0.2% of the visible normals).
+Json vndf_ensemble_row(const std::vector<const Json*>& rows, double family_alpha) {
+  Json e = ensemble_row(rows,
+                        {{"theta_deg", Field::Copy},
+                         {"phi_deg", Field::Copy},
+                         {"surfaces", Field::Count},
+                         {"rays", Field::Mean},
+                         {"visible_area_ratio", Field::MeanStderr},
+                         {"tv_distance", Field::MeanStderr},
+                         {"chi2_smith_numeric", Field::Mean},
+                         {"sampler_samples", Field::Copy},
+                         {"sampler_chi2", Field::Copy},
+                         {"sampler_dof", Field::Copy},
+                         {"sampler_p_value", Field::Copy},
+                         {"sampler_max_abs_z", Field::Copy},
+                         {"sampler_pass", Field::Copy}},
+                        {{"theta_m_range_deg", Field::Key},
+                         {"phi_m_range_deg", Field::Key},
+                         {"dv", Field::MeanStderr},
+                         {"dv_smith_numeric", Field::MeanStderr},
+                         {"dv_model", Field::Copy}});
+  Json bins = e["bins"];
+  e.erase("bins");
+  double max_abs_z = 0;
+  int tested = 0;
+  for (auto& b : bins) {
+    if (!b["dv_model"].is_number()) {
+      b["z"] = nullptr;
+      b["rel_dev"] = nullptr;
+      continue;
+    }
+    const double dv = b["dv"].get<double>(), se = b["dv_stderr"].get<double>();
+    const double model = b["dv_model"].get<double>();
+    const double w = (std::cos(rad(b["theta_m_range_deg"][0].get<double>())) -
+                      std::cos(rad(b["theta_m_range_deg"][1].get<double>()))) *
+                     rad(b["phi_m_range_deg"][1].get<double>() - b["phi_m_range_deg"][0].get<double>());
+    const double z = se > 0 ? (dv - model) / se : 0.0;
+    b["z"] = z;
+    b["rel_dev"] = model > 0 ? (dv - model) / model : 0.0;
+    if (model * w >= 0.002 && se > 0) {
+      max_abs_z = std::max(max_abs_z, std::abs(z));
+      ++tested;
+    }
+  }
+  if (!bins.empty() && bins[0]["dv_model"].is_number()) {
+    e["bins_tested"] = tested;
+    e["max_abs_z"] = max_abs_z;
+    e["sidak_z"] = sidak_z(family_alpha, std::max(1, tested));
+    e["pass"] = max_abs_z < e["sidak_z"].get<double>();
+  }
+  e["bins"] = bins;
+  return e;
+}
+
+void print_vndf_table(const Json& rows, bool ensemble) {
+  std::cout << std::setw(7) << "theta" << std::setw(6) << "phi" << std::setw(11) << "chi2/dof"
+            << std::setw(10) << "p" << std::setw(9) << "max|z|" << std::setw(8) << "sidak"
+            << std::setw(9) << "tv_dist" << std::setw(14) << "smith_num p" << std::setw(14)
+            << "sampler p" << "\n";
+  auto num = [](const Json& x, int prec) {
+    return x.is_number() ? fmt(x.get<double>(), prec) : std::string("-");
+  };
+  for (const auto& row : rows) {
+    std::cout << std::setw(7) << fmt(row["theta_deg"].get<double>(), 1) << std::setw(6)
+              << fmt(row["phi_deg"].get<double>(), 0);
+    if (!ensemble && row["chi2"].is_number())
+      std::cout << std::setw(11)
+                << (fmt(row["chi2"].get<double>(), 0) + "/" + std::to_string(row["dof"].get<int>()))
+                << std::setw(10) << num(row["p_value"], 4);
+    else
+      std::cout << std::setw(11) << "-" << std::setw(10) << "-";
+    std::cout << std::setw(9) << num(row.value("max_abs_z", Json()), 2) << std::setw(8)
+              << num(row.value("sidak_z", Json()), 2) << std::setw(9)
+              << num(row.value("tv_distance", Json()), 4) << std::setw(14)
+              << num(row.value("p_value_smith_numeric", Json()), 4) << std::setw(14)
+              << num(row.value("sampler_p_value", Json()), 4) << "\n";
+  }
+}
+
+int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
+  require_extension(o.output, {"json", "csv"});
+  const std::vector<double> thetas = parse_angle_list(o.theta, "--theta");
+  const std::vector<double> phis = parse_angle_list(o.phi, "--phi");
+  require_above_horizon(thetas, "--theta");
+  if (o.rays <= 0)
+    throw UsageError("--rays must be a positive integer (got " + std::to_string(o.rays) + ")");
+  if (o.sampler_samples < 0)
+    throw UsageError("--sampler-samples must be >= 0 (got " + std::to_string(o.sampler_samples) + ")");
+  if (o.theta_bins < 1 || o.theta_bins > 360)
+    throw UsageError("--theta-bins must be in [1, 360] (got " + std::to_string(o.theta_bins) + ")");
+  if (o.phi_bins < 1 || o.phi_bins > 720)
+    throw UsageError("--phi-bins must be in [1, 720] (got " + std::to_string(o.phi_bins) + ")");
+  auto t0 = std::chrono::steady_clock::now();
+
+  VndfOptions vo;
+  vo.rays = static_cast<std::uint64_t>(o.rays);
+  vo.seed = o.seed;
+  vo.theta_bins = o.theta_bins;
+  vo.phi_bins = o.phi_bins;
+  vo.sampler_samples = static_cast<std::uint64_t>(o.sampler_samples);
+  Json j = run_header("measure vndf", g);
+  j["file"] = o.files.size() == 1 ? Json(o.files[0]) : Json(o.files);
+  j["parameters"] = {{"theta", o.theta},
+                     {"phi", o.phi},
+                     {"rays", o.rays},
+                     {"sampler_samples", o.sampler_samples},
+                     {"seed", o.seed},
+                     {"normal_bins", {{"theta", o.theta_bins}, {"phi", o.phi_bins}, {"theta_max_deg", 90}}},
+                     {"family_alpha", vo.family_alpha}};
+  j["definitions"] = {
+      {"dv", "histogram of the normals of front-face first hits of parallel rays along -v: "
+             "(hits in bin / hits) / solid angle of the bin (000 eq. 3b, 001 eq. 13)"},
+      {"dv_model", "bin average of the nominal NDF's D_v(m) = G1(v) max(0,v.m) D(m) / (v.n) "
+                   "(001 eq. 13), by quadrature"},
+      {"dv_smith_numeric", "Smith's D_v with the surface's own facets: sum_f in bin A_f "
+                           "max(0,v.m_f) / sum_f A_f max(0,v.m_f) / solid angle"},
+      {"z", "per bin (dv - dv_model) / stderr, the binomial stderr under the model (ensembles: "
+            "the between-surface stderr); max_abs_z over bins holding >= 5 expected hits "
+            "(ensembles: >= 0.2% of the visible normals) against sidak_z, the two-sided threshold "
+            "for family_alpha Sidak-corrected over bins_tested"},
+      {"chi2", "Pearson chi-square of the hit histogram against the nominal bin probabilities "
+               "(bins with >= 5 expected hits, the rest pooled), p_value its upper tail; "
+               "*_smith_numeric the same against dv_smith_numeric"},
+      {"sampler_*", "the same chi-square test for sampler_samples normals drawn by the nominal "
+                    "NDF's VNDF sampler (models/ndf.hpp sample_visible_normal)"},
+      {"stderr", o.files.size() == 1 ? "ray-count (binomial) standard error of this one surface"
+                                     : "between-surface standard error (sd / sqrt(K)); "
+                                       "per_surface holds each surface's rows"}};
+  Progress progress("measure vndf", g.quiet);
+  const std::size_t total = o.files.size() * thetas.size() * phis.size();
+  std::size_t done = 0;
+  vo.progress = [&](double f) { progress.update((done + f) / total); };
+  TraceCounters counters;
+  std::uint64_t lost = 0;
+  std::vector<Json> per_surface = measure_over_surfaces(o.files, [&](const Microsurface& s, std::size_t k) {
+    if (k == 0) j["surface"] = s.description;
+    Tracer tracer(s);
+    const DirectionBinning bins = vndf_binning(vo);
+    const FacetTable table = build_facet_table(s, bins);
+    Json rows = Json::array();
+    for (double p : phis)
+      for (double t : thetas) {
+        const Vec3 v = direction_from_angles(rad(t), rad(p));
+        VndfResult r = measure_vndf(tracer, v, vo, &table);
+        counters += r.counters;
+        lost += s.macro().periodic ? r.counters.lost_below + r.counters.unresolved : r.counters.unresolved;
+        std::optional<SamplerTest> sampler;
+        // The sampler does not depend on the surface: tested once, with the first one.
+        if (s.nominal && vo.sampler_samples > 0 && k == 0)
+          sampler = test_vndf_sampler(*s.nominal, v, vo.sampler_samples, bins, vo.seed,
+                                      vo.family_alpha);
+        Json row = vndf_row_json(r, s, vo, sampler);
+        row["theta_deg"] = t;
+        row["phi_deg"] = p;
+        rows.push_back(row);
+        ++done;
+      }
+    return rows;
+  });
+  progress.finish();
+  put_rows(j, o.files, per_surface, [&](const std::vector<const Json*>& same) {
+    return vndf_ensemble_row(same, vo.family_alpha);
+  });
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  j["wall_seconds"] = wall;
+  j["total_rays"] = counters.rays;
+  j["lost_rays"] = lost;
+  j["backface_hits"] = counters.backface_hits;
+  write_record(o.output, j);
+  if (!g.quiet) {
+    std::cout << "VNDF of "
+              << (o.files.size() == 1 ? o.files[0] : std::to_string(o.files.size()) + " surfaces")
+              << "  (" << vo.rays << " rays per direction; " << o.theta_bins << " x "
+              << o.phi_bins << " normal bins)\n";
+    print_vndf_table(j["rows"], o.files.size() > 1);
+    std::cout << "rays lost " << lost << ", back-face hits "
+              << counters.backface_hits << "; wrote " << o.output << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+void register_measure_vndf(CLI::App& measure, const GlobalOptions& g) {
+  auto* cmd = measure.add_subcommand(
+      "vndf", "Distribution of visible normals: first-hit normals of rays along -v against the "
+              "analytic D_v, and a chi-square test of the nominal NDF's VNDF sampler");
+  auto o = std::make_shared<VndfCliOptions>();
+  cmd->add_option("surfaces", o->files,
+                  "Surface file(s); several independent surfaces give between-surface errors")
+      ->required();
+  cmd->add_option("-o,--output", o->output, "Output (.json or .csv)")->required();
+  cmd->add_option("--theta", o->theta, "View zenith angles in degrees, [0, 90): a, a,b,c or start:stop:step")
+      ->capture_default_str();
+  cmd->add_option("--phi", o->phi, "View azimuths in degrees, same syntax")->capture_default_str();
+  cmd->add_option("--rays", o->rays, "Rays per direction")->capture_default_str();
+  cmd->add_option("--sampler-samples", o->sampler_samples,
+                  "Samples for the chi-square test of the nominal NDF's VNDF sampler (0: skip)")
+      ->capture_default_str();
+  cmd->add_option("--theta-bins", o->theta_bins, "Normal bins in theta_m over [0, 90] degrees")
+      ->capture_default_str();
+  cmd->add_option("--phi-bins", o->phi_bins, "Normal bins in phi_m over [0, 360) degrees")
+      ->capture_default_str();
+  cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str();
+  cmd->callback([o, &g] { run_measure_vndf(*o, g); });
+}
+
+}  // namespace microsim::cli

@@ -1,0 +1,360 @@
+#include "microsim/measure/g2_measure.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <chrono>
+
+#include "microsim/measure/sampling.hpp"
+
+namespace microsim {
+
+namespace {
+
+struct Tally {
+  std::vector<std::uint64_t> samples, vis_o, vis_i, vis_both;
+  TraceCounters counters;
+  explicit Tally(int nbins = 0) : samples(nbins), vis_o(nbins), vis_i(nbins), vis_both(nbins) {}
+};
+
+constexpr std::uint64_t kChunk = 1 << 13;
+
+}  // namespace
+
+models::G2Forms G2Result::smith_numeric() const {
+  return models::g2_forms_from_lambda(lambda_o, lambda_i, models::azimuth_difference(o, i));
+}
+
+namespace {
+// Fields of G2Forms as an array (for the delta method).
+std::array<double, 4> as_array(const models::G2Forms& f) {
+  return {f.separable, f.height_correlated, f.direction_correlated, f.height_direction_correlated};
+}
+models::G2Forms from_array(const std::array<double, 4>& a) {
+  return {a[0], a[1], a[2], a[3]};
+}
+}  // namespace
+
+G2Result::FormsFromG1 G2Result::bin_forms_from_g1(int b) const {
+  FormsFromG1 out;
+  const G2NormalBin& nb = bins[b];
+  if (nb.samples == 0) return out;
+  const double n = static_cast<double>(nb.samples);
+  // Multinomial cell probabilities: both, o only, i only.
+  const double p11 = nb.visible_both / n, p10 = (nb.visible_o - nb.visible_both) / n,
+               p01 = (nb.visible_i - nb.visible_both) / n;
+  const double phi = models::azimuth_difference(o, i);
+  auto forms = [&](double a11, double a10, double a01) {
+    return as_array(models::g2_forms_from_g1(a11 + a10, a11 + a01, phi));
+  };
+  const std::array<double, 4> f = forms(p11, p10, p01);
+  std::array<double, 4> diff{}, se{};
+  // Gradient of D = p11 - F(p11 + p10, p11 + p01) by central differences (F is smooth apart
+  // from the min/max kinks of eq. 22-23, where a one-sided slope is as good as any).
+  const double h = 1e-6;
+  std::array<std::array<double, 4>, 3> grad{};
+  for (int c = 0; c < 3; ++c) {
+    double d[3] = {0, 0, 0};
+    d[c] = h;
+    const auto fp = forms(p11 + d[0], p10 + d[1], p01 + d[2]);
+    const auto fm = forms(p11 - d[0], p10 - d[1], p01 - d[2]);
+    for (int k = 0; k < 4; ++k) grad[c][k] = (c == 0 ? 1.0 : 0.0) - (fp[k] - fm[k]) / (2 * h);
+  }
+  const double p[3] = {p11, p10, p01};
+  for (int k = 0; k < 4; ++k) {
+    diff[k] = p11 - f[k];
+    // Var = g^T (diag(p) - p p^T) g / n
+    double gp = 0, gdg = 0;
+    for (int c = 0; c < 3; ++c) {
+      gp += grad[c][k] * p[c];
+      gdg += grad[c][k] * grad[c][k] * p[c];
+    }
+    se[k] = std::sqrt(std::max(0.0, gdg - gp * gp) / n);
+  }
+  out.value = from_array(f);
+  out.diff = from_array(diff);
+  out.diff_stderr = from_array(se);
+  return out;
+}
+
+G2Result::FormsFromG1 G2Result::forms_from_g1() const {
+  std::array<double, 4> value{}, diff{}, var{};
+  for (int b = 0; b < binning.size(); ++b) {
+    if (bins[b].front_area <= 0 || bins[b].samples == 0) continue;
+    const double w = bins[b].front_area / front_area;
+    const FormsFromG1 f = bin_forms_from_g1(b);
+    const auto v = as_array(f.value), d = as_array(f.diff), s = as_array(f.diff_stderr);
+    for (int k = 0; k < 4; ++k) {
+      value[k] += w * v[k];
+      diff[k] += w * d[k];
+      var[k] += w * w * s[k] * s[k];
+    }
+  }
+  FormsFromG1 out;
+  out.value = from_array(value);
+  out.diff = from_array(diff);
+  for (auto& x : var) x = std::sqrt(x);
+  out.diff_stderr = from_array(var);
+  return out;
+}
+
+DirectionBinning g2_normal_binning(const G2Options& o) {
+  return DirectionBinning(o.normal_theta_bins, o.normal_phi_bins, kPi);
+}
+
+G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, const G2Options& opt,
+                    const FacetTable* table) {
+  const Microsurface& s = tracer.surface();
+  if (!(o_in.z() > 0)) throw UsageError("--theta-o must be in [0, 90) degrees");
+  if (!(i_in.z() > 0)) throw UsageError("--theta-i must be in [0, 90) degrees");
+  if (opt.rays == 0) throw UsageError("--rays must be positive");
+  auto t0 = std::chrono::steady_clock::now();
+  G2Result r;
+  r.o = o_in.normalized();
+  r.i = i_in.normalized();
+  r.macro_area = s.macro().area;
+  r.binning = g2_normal_binning(opt);
+  const int nbins = r.binning.size();
+  r.bins.assign(nbins, G2NormalBin{});
+  const Vec3 o = r.o, i = r.i;
+
+  FacetTable own;
+  if (!table) {
+    own = build_facet_table(s, r.binning);
+    table = &own;
+  }
+  const FacetTable& ft = *table;
+  const std::size_t nf = s.num_facets();
+  if (ft.area.size() != nf) throw RuntimeFailure("facet table does not match the surface");
+
+  // Exact facet sums. Per bin: area, area facing both, area-weighted normal (3), V-cavity sum;
+  // then the back-facing projected areas toward o and toward i (Smith Lambda from facets).
+  std::vector<double> cdf(nf);
+  using Sums = std::vector<double>;
+  const std::size_t width = 6 * static_cast<std::size_t>(nbins) + 2;
+  Sums sums = tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<std::size_t>(0, nf, std::max<std::size_t>(1 << 15, nf / 64)), Sums{},
+      [&](const tbb::blocked_range<std::size_t>& range, Sums acc) {
+        if (acc.empty()) acc.assign(width, 0.0);
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+          const double a = ft.area[k];
+          const Vec3 m = ft.normal[k].cast<double>();
+          const double om = o.dot(m), im = i.dot(m);
+          const bool front = om > 0 && im > 0;
+          cdf[k] = front ? a : 0.0;
+          double* bin = acc.data() + 6 * static_cast<std::size_t>(ft.bin[k]);
+          bin[0] += a;
+          if (front) {
+            bin[1] += a;
+            bin[2] += a * m.x();
+            bin[3] += a * m.y();
+            bin[4] += a * m.z();
+            bin[5] += a * models::vcavity_G2(o, i, m);
+          }
+          acc[width - 2] += a * std::max(0.0, -om);
+          acc[width - 1] += a * std::max(0.0, -im);
+        }
+        return acc;
+      },
+      [](Sums a, const Sums& b) {
+        if (a.empty()) return b;
+        for (std::size_t k = 0; k < b.size(); ++k) a[k] += b[k];
+        return a;
+      });
+  if (sums.empty()) sums.assign(width, 0.0);
+  double vcav_total = 0;
+  for (int b = 0; b < nbins; ++b) {
+    const double* bin = sums.data() + 6 * static_cast<std::size_t>(b);
+    G2NormalBin& nb = r.bins[b];
+    nb.area = bin[0];
+    nb.front_area = bin[1];
+    nb.mean_normal = Vec3(bin[2], bin[3], bin[4]);
+    if (nb.mean_normal.norm() > 0) nb.mean_normal.normalize();
+    nb.vcavity_sum = bin[5];
+    r.total_area += bin[0];
+    vcav_total += bin[5];
+  }
+  // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   (DESIGN.md, 001 App. A)
+  const Vec3 n = s.macro().normal;
+  r.lambda_o = sums[width - 2] / (o.dot(n) * s.macro().area);
+  r.lambda_i = sums[width - 1] / (i.dot(n) * s.macro().area);
+  for (std::size_t k = 1; k < nf; ++k) cdf[k] += cdf[k - 1];  // sequential: deterministic
+  r.front_area = nf ? cdf[nf - 1] : 0.0;
+  if (!(r.front_area > 0)) throw RuntimeFailure("no facet faces both directions");
+  r.vcavity = vcav_total / r.front_area;
+
+  // Random stream from the unordered pair {o, i}: swapping the directions traces the same points.
+  const std::uint64_t ko = direction_stream_key(o), ki = direction_stream_key(i);
+  const std::uint64_t stream = 0xC2000000ull ^ mix64(std::min(ko, ki) ^ mix64(std::max(ko, ki)));
+  const Strata strata(opt.rays);
+  const std::uint64_t total = strata.total();
+  r.samples = total;
+  const std::uint64_t nchunks = (total + kChunk - 1) / kChunk;
+  std::vector<Tally> parts(nchunks, Tally(nbins));
+  std::atomic<std::uint64_t> done{0};
+  const double front = r.front_area;
+  // The progress callback runs on the calling thread only: between two halves of the work.
+  auto run = [&](std::uint64_t c0, std::uint64_t c1) {
+    tbb::parallel_for(c0, c1, [&](std::uint64_t c) {
+      Tally& t = parts[c];
+      const std::uint64_t end = std::min(total, (c + 1) * kChunk);
+      for (std::uint64_t j = c * kChunk; j < end; ++j) {
+        CounterRng rng(opt.seed, stream, j);
+        // Strata along the area CDF (facet order is spatially coherent).
+        const double u = (static_cast<double>(j) + rng.uniform()) / total * front;
+        std::size_t k = std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin();
+        k = std::min(k, nf - 1);
+        while (k > 0 && cdf[k] == cdf[k - 1]) --k;  // never land on a zero-weight facet
+        const Triangle f = s.facet(k);
+        const double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
+        const Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
+        const SourcePlane plane = SourcePlane::of(f);
+        const int b = ft.bin[k];
+        const bool vo = !tracer.occluded(p, o, &plane, t.counters);
+        const bool vi = !tracer.occluded(p, i, &plane, t.counters);
+        ++t.samples[b];
+        t.vis_o[b] += vo;
+        t.vis_i[b] += vi;
+        t.vis_both[b] += vo && vi;
+      }
+      done += end - c * kChunk;
+    });
+    if (opt.progress) opt.progress(static_cast<double>(done.load()) / total);
+  };
+  run(0, nchunks / 2);
+  run(nchunks / 2, nchunks);
+  for (const Tally& t : parts) {  // merged in chunk order: identical for any thread count
+    for (int b = 0; b < nbins; ++b) {
+      r.bins[b].samples += t.samples[b];
+      r.bins[b].visible_o += t.vis_o[b];
+      r.bins[b].visible_i += t.vis_i[b];
+      r.bins[b].visible_both += t.vis_both[b];
+    }
+    r.counters += t.counters;
+  }
+  for (const G2NormalBin& nb : r.bins) {
+    r.visible_o += nb.visible_o;
+    r.visible_i += nb.visible_i;
+    r.visible_both += nb.visible_both;
+  }
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+Json g2_row_json(const G2Result& r, const Microsurface& s) {
+  Json row;
+  row["theta_o_deg"] = deg(theta_of(r.o));
+  row["phi_o_deg"] = deg(phi_of(r.o));
+  row["theta_i_deg"] = deg(theta_of(r.i));
+  row["phi_i_deg"] = deg(phi_of(r.i));
+  const double dphi = models::azimuth_difference(r.o, r.i);
+  row["delta_phi_deg"] = deg(dphi);
+  const Estimate g2 = r.g2(), go = r.g1_o(), gi = r.g1_i();
+  row["g2"] = g2.mean;
+  row["g2_stderr"] = g2.stderr_;
+  row["g1_o"] = go.mean;
+  row["g1_o_stderr"] = go.stderr_;
+  row["g1_i"] = gi.mean;
+  row["g1_i_stderr"] = gi.stderr_;
+  // The bin holding the half vector h = (o + i)/|o + i|: the G2(o, h, i) that a specular
+  // microfacet BRDF uses (001 eq. 17 with G2), where the Smith forms apply as they are.
+  const int hb = r.binning.bin_of((r.o + r.i).normalized());
+  const G2NormalBin& hbin = r.bins[hb];
+  const int hit = hb / r.binning.n_phi(), hip = hb % r.binning.n_phi();
+  row["half_bin_theta_m_range_deg"] = {deg(r.binning.theta_lo(hit)), deg(r.binning.theta_hi(hit))};
+  row["half_bin_phi_m_range_deg"] = {deg(r.binning.phi_lo(hip)), deg(r.binning.phi_hi(hip))};
+  // (At least 100 samples: a nearly empty bin gives no usable value, and identical 0/2 or 2/2
+  // counts on every surface of an ensemble would fake a zero between-surface error.)
+  if (hbin.samples >= 100) {
+    row["g2_half"] = r.bin_g2(hb).mean;
+    row["g2_half_stderr"] = r.bin_g2(hb).stderr_;
+  } else {
+    row["g2_half"] = nullptr;
+    row["g2_half_stderr"] = nullptr;
+  }
+  row["lambda_o_numeric"] = r.lambda_o;
+  row["lambda_i_numeric"] = r.lambda_i;
+  const models::G2Forms f = r.smith_numeric();
+  const std::pair<const char*, double> forms[] = {
+      {"smith_separable", f.separable},
+      {"smith_height_correlated", f.height_correlated},
+      {"smith_direction_correlated", f.direction_correlated},
+      {"smith_height_direction_correlated", f.height_direction_correlated},
+      {"vcavity", r.vcavity}};
+  for (const auto& [name, value] : forms) row[name] = value;
+  // z-scores against the models computed from this surface's own facets: the ray-count
+  // standard error is the right one (the model is exact for this surface's facets).
+  for (const auto& [name, value] : forms)
+    row[std::string("z_") + (std::string(name).rfind("smith_", 0) == 0 ? name + 6 : name)] =
+        g2.stderr_ > 0 ? (g2.mean - value) / g2.stderr_ : 0.0;
+  if (s.nominal) {
+    const models::Ndf& ndf = *s.nominal;
+    const models::G2Forms fn = models::g2_forms_from_lambda(ndf.Lambda(r.o), ndf.Lambda(r.i), dphi);
+    row["smith_separable_nominal"] = fn.separable;
+    row["smith_height_correlated_nominal"] = fn.height_correlated;
+    row["smith_direction_correlated_nominal"] = fn.direction_correlated;
+    row["smith_height_direction_correlated_nominal"] = fn.height_direction_correlated;
+  } else {
+    for (const char* k : {"smith_separable_nominal", "smith_height_correlated_nominal",
+                          "smith_direction_correlated_nominal",
+                          "smith_height_direction_correlated_nominal"})
+      row[k] = nullptr;
+  }
+  // The forms built per bin from the measured G1s (correlation assumption alone), their
+  // difference to g2 with its standard error (delta method) and z-score.
+  const G2Result::FormsFromG1 fg = r.forms_from_g1();
+  const auto fv = as_array(fg.value), fd = as_array(fg.diff), fs = as_array(fg.diff_stderr);
+  const char* names[] = {"separable", "height_correlated", "direction_correlated",
+                         "height_direction_correlated"};
+  for (int k = 0; k < 4; ++k) {
+    row[std::string(names[k]) + "_from_g1"] = fv[k];
+    row[std::string(names[k]) + "_from_g1_diff"] = fd[k];
+    row[std::string(names[k]) + "_from_g1_diff_stderr"] = fs[k];
+    row[std::string("z_") + names[k] + "_from_g1"] = fs[k] > 0 ? fd[k] / fs[k] : 0.0;
+  }
+  row["area_samples"] = r.samples;
+  row["occlusion_rays"] = r.counters.rays;
+  row["lost_rays"] = r.counters.lost_below + r.counters.unresolved;
+  row["backface_hits"] = r.counters.backface_hits;
+  row["seconds"] = r.seconds;
+  Json bins = Json::array();
+  for (int b = 0; b < r.binning.size(); ++b) {
+    const G2NormalBin& nb = r.bins[b];
+    if (nb.area <= 0) continue;
+    Json jb;
+    jb["m"] = {nb.mean_normal.x(), nb.mean_normal.y(), nb.mean_normal.z()};
+    const int it = b / r.binning.n_phi(), ip = b % r.binning.n_phi();
+    jb["theta_m_range_deg"] = {deg(r.binning.theta_lo(it)), deg(r.binning.theta_hi(it))};
+    jb["phi_m_range_deg"] = {deg(r.binning.phi_lo(ip)), deg(r.binning.phi_hi(ip))};
+    jb["area_fraction"] = nb.area / r.total_area;
+    jb["front_fraction"] = nb.front_area / nb.area;
+    if (nb.front_area > 0 && nb.samples > 0) {
+      const Estimate e2 = r.bin_g2(b), eo = r.bin_g1_o(b), ei = r.bin_g1_i(b);
+      jb["g2"] = e2.mean;
+      jb["g2_stderr"] = e2.stderr_;
+      jb["g1_o"] = eo.mean;
+      jb["g1_o_stderr"] = eo.stderr_;
+      jb["g1_i"] = ei.mean;
+      jb["g1_i_stderr"] = ei.stderr_;
+      jb["vcavity"] = nb.vcavity_sum / nb.front_area;
+      const G2Result::FormsFromG1 bf = r.bin_forms_from_g1(b);
+      jb["separable_from_g1"] = bf.value.separable;
+      jb["height_correlated_from_g1"] = bf.value.height_correlated;
+      jb["samples"] = nb.samples;
+    } else {  // no facet of the bin faces both directions: G2 = 0 by definition
+      for (const char* k : {"g2", "g2_stderr", "g1_o", "g1_o_stderr", "g1_i", "g1_i_stderr",
+                            "vcavity"})
+        jb[k] = 0.0;
+      jb["samples"] = nb.samples;
+    }
+    bins.push_back(jb);
+  }
+  row["bins"] = bins;
+  return row;
+}
+
+}  // namespace microsim

@@ -1,0 +1,307 @@
+#include "microsim/measure/vndf_measure.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
+
+#include <atomic>
+#include <chrono>
+
+#include "microsim/measure/sampling.hpp"
+#include "microsim/measure/stats.hpp"
+
+namespace microsim {
+
+namespace {
+constexpr std::uint64_t kChunk = 1 << 14;
+
+// Runs body(j, counts, counters) for j in [0, n) in parallel chunks; per-chunk integer counts
+// merged in chunk order (identical for any thread count).
+template <class Body>
+void histogram_chunks(std::uint64_t n, int nbins, std::vector<std::uint64_t>& counts,
+                      TraceCounters& counters, Body&& body) {
+  const std::uint64_t nchunks = (n + kChunk - 1) / kChunk;
+  std::vector<std::vector<std::uint64_t>> parts(nchunks);
+  std::vector<TraceCounters> cparts(nchunks);
+  tbb::parallel_for(std::uint64_t(0), nchunks, [&](std::uint64_t c) {
+    parts[c].assign(nbins + 1, 0);  // last slot: outside every bin
+    const std::uint64_t end = std::min(n, (c + 1) * kChunk);
+    for (std::uint64_t j = c * kChunk; j < end; ++j) body(j, parts[c], cparts[c]);
+  });
+  counts.assign(nbins + 1, 0);
+  for (std::uint64_t c = 0; c < nchunks; ++c) {
+    for (int b = 0; b <= nbins; ++b) counts[b] += parts[c][b];
+    counters += cparts[c];
+  }
+}
+}  // namespace
+
+DirectionBinning vndf_binning(const VndfOptions& o) {
+  return DirectionBinning(o.theta_bins, o.phi_bins, kPi / 2);
+}
+
+std::vector<double> bin_integrals(const DirectionBinning& bins,
+                                  const std::function<double(const Vec3&)>& f) {
+  const int sub = 4;
+  const double theta_max = bins.theta_hi(bins.n_theta() - 1);
+  DirectionBinning fine(bins.n_theta() * sub, bins.n_phi() * sub, theta_max);
+  std::vector<double> p(bins.size(), 0.0);
+  for (int it = 0; it < fine.n_theta(); ++it)
+    for (int ip = 0; ip < fine.n_phi(); ++ip) {
+      const int fb = fine.index(it, ip);
+      p[bins.index(it / sub, ip / sub)] += fine.bin_average(fb, f) * fine.solid_angle(fb);
+    }
+  return p;
+}
+
+GofResult histogram_gof(const std::vector<std::uint64_t>& counts, std::uint64_t total,
+                        const std::vector<double>& probs, double family_alpha) {
+  GofResult g;
+  const double n = static_cast<double>(total);
+  double rest_p = 1.0, rest_c = n;
+  for (std::size_t b = 0; b < probs.size(); ++b) {
+    const double e = n * probs[b];
+    if (e < 5) continue;
+    const double c = static_cast<double>(counts[b]);
+    g.chi2 += (c - e) * (c - e) / e;
+    ++g.cells;
+    rest_p -= probs[b];
+    rest_c -= c;
+    const double z = (c - e) / std::sqrt(e * (1 - probs[b]));
+    g.max_abs_z = std::max(g.max_abs_z, std::abs(z));
+    ++g.bins_tested;
+  }
+  // Everything else (small bins, outside the binned range) pooled into one cell.
+  const double e_rest = n * std::max(0.0, rest_p);
+  if (e_rest >= 1) {
+    g.chi2 += (rest_c - e_rest) * (rest_c - e_rest) / e_rest;
+    ++g.cells;
+  }
+  g.dof = std::max(0, g.cells - 1);
+  g.p_value = chi2_p_value(g.chi2, g.dof);
+  g.sidak_z = sidak_z(family_alpha, std::max(1, g.bins_tested));
+  return g;
+}
+
+Estimate VndfResult::dv(int b) const {
+  Estimate p = binomial_estimate(bin_hits[b], hits);
+  const double w = binning.solid_angle(b);
+  return {p.mean / w, p.stderr_ / w, bin_hits[b]};
+}
+
+double VndfResult::dv_smith_numeric(int b) const {
+  return front_projected[b] / front_projected_total / binning.solid_angle(b);
+}
+
+std::vector<double> VndfResult::smith_numeric_probabilities() const {
+  std::vector<double> p(binning.size());
+  for (int b = 0; b < binning.size(); ++b) p[b] = front_projected[b] / front_projected_total;
+  return p;
+}
+
+VndfResult measure_vndf(const Tracer& tracer, const Vec3& v_in, const VndfOptions& o,
+                        const FacetTable* table) {
+  const Microsurface& s = tracer.surface();
+  if (!(v_in.z() > 0)) throw UsageError("--theta must be in [0, 90) degrees");
+  if (o.rays == 0) throw UsageError("--rays must be positive");
+  auto t0 = std::chrono::steady_clock::now();
+  VndfResult r;
+  r.v = v_in.normalized();
+  r.binning = vndf_binning(o);
+  r.macro_area = s.macro().area;
+  const Vec3 v = r.v;
+  const int nbins = r.binning.size();
+
+  FacetTable own;
+  if (!table) {
+    own = build_facet_table(s, r.binning);
+    table = &own;
+  }
+  const FacetTable& ft = *table;
+  const std::size_t nf = s.num_facets();
+  if (ft.area.size() != nf) throw RuntimeFailure("facet table does not match the surface");
+  using Sums = std::vector<double>;
+  Sums sums = tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<std::size_t>(0, nf, std::max<std::size_t>(1 << 15, nf / 64)), Sums{},
+      [&](const tbb::blocked_range<std::size_t>& range, Sums acc) {
+        if (acc.empty()) acc.assign(nbins + 1, 0.0);
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+          const double proj = std::max(0.0, ft.area[k] * ft.normal[k].cast<double>().dot(v));
+          acc[ft.bin[k] >= 0 ? ft.bin[k] : nbins] += proj;
+        }
+        return acc;
+      },
+      [](Sums a, const Sums& b) {
+        if (a.empty()) return b;
+        for (std::size_t k = 0; k < b.size(); ++k) a[k] += b[k];
+        return a;
+      });
+  if (sums.empty()) sums.assign(nbins + 1, 0.0);
+  r.front_projected.assign(sums.begin(), sums.begin() + nbins);
+  for (double x : sums) r.front_projected_total += x;
+  if (!(r.front_projected_total > 0)) throw RuntimeFailure("no facet faces the direction");
+
+  const RayWindow w = make_ray_window(tracer, v);
+  r.window_area_perp = w.area_perp;
+  // Origins i.i.d. uniform over the window (not stratified): the bin counts are then exactly
+  // multinomial, so the binomial standard errors and the chi-square p-values are calibrated
+  // (stratified origins would make them conservative bounds, with chi-square far below its
+  // degrees of freedom and no power). Coherence is kept by tracing the rays in Morton order of
+  // their origins (the order does not change the statistics).
+  r.rays = o.rays;
+  const std::uint64_t stream = 0xD000 + direction_stream_key(v);
+  // Batches of at most 2^22 rays bound the memory (24 bytes per origin); every origin is an
+  // independent draw, so batching changes nothing statistically.
+  const std::uint64_t batch = std::uint64_t(1) << 22;
+  std::vector<std::uint64_t> counts(nbins + 1, 0);
+  std::vector<std::pair<std::uint64_t, Vec2>> origins;
+  for (std::uint64_t first = 0; first < r.rays; first += batch) {
+    const std::uint64_t n = std::min(batch, r.rays - first);
+    origins.resize(n);
+    tbb::parallel_for(std::uint64_t(0), n, [&](std::uint64_t j) {
+      CounterRng rng(o.seed, stream, first + j);
+      const double a = rng.uniform(), b = rng.uniform();
+      const auto spread = [](std::uint64_t x) {  // interleave the 21 bits of x with zeros
+        x &= 0x1FFFFF;
+        x = (x | (x << 32)) & 0x1F00000000FFFFull;
+        x = (x | (x << 16)) & 0x1F0000FF0000FFull;
+        x = (x | (x << 8)) & 0x100F00F00F00F00Full;
+        x = (x | (x << 4)) & 0x10C30C30C30C30C3ull;
+        x = (x | (x << 2)) & 0x1249249249249249ull;
+        return x;
+      };
+      const std::uint64_t key = spread(static_cast<std::uint64_t>(a * (1 << 21))) |
+                                (spread(static_cast<std::uint64_t>(b * (1 << 21))) << 1);
+      origins[j] = {key, Vec2(a, b)};
+    });
+    tbb::parallel_sort(origins.begin(), origins.end(), [](const auto& x, const auto& y) {
+      return x.first < y.first ||
+             (x.first == y.first && (x.second.x() < y.second.x() ||
+                                     (x.second.x() == y.second.x() && x.second.y() < y.second.y())));
+    });
+    std::vector<std::uint64_t> part;
+    histogram_chunks(n, nbins, part, r.counters,
+                     [&](std::uint64_t j, std::vector<std::uint64_t>& c, TraceCounters& tc) {
+                       const Vec2& ab = origins[j].second;
+                       const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
+                       const TraceHit h = tracer.first_hit(org, -v, nullptr, tc);
+                       if (!h.hit || h.backface) return;  // back faces: rounding gaps (counted)
+                       const int b = r.binning.bin_of(h.normal);
+                       ++c[b >= 0 ? b : nbins];
+                     });
+    for (int b = 0; b <= nbins; ++b) counts[b] += part[b];
+    if (o.progress) o.progress(static_cast<double>(first + n) / r.rays);
+  }
+  r.bin_hits.assign(counts.begin(), counts.begin() + nbins);
+  r.hits_below = counts[nbins];
+  for (auto c : counts) r.hits += c;
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+SamplerTest test_vndf_sampler(const models::Ndf& ndf, const Vec3& v_in, std::uint64_t n,
+                              const DirectionBinning& bins, std::uint64_t seed,
+                              double family_alpha) {
+  SamplerTest t;
+  const Vec3 v = v_in.normalized();
+  t.n = n;
+  const std::uint64_t stream = 0xE000 + direction_stream_key(v);
+  TraceCounters unused;
+  std::vector<std::uint64_t> counts;
+  histogram_chunks(n, bins.size(), counts, unused,
+                   [&](std::uint64_t j, std::vector<std::uint64_t>& c, TraceCounters&) {
+                     CounterRng rng(seed, stream, j);
+                     const double u1 = rng.uniform(), u2 = rng.uniform();
+                     const int b = bins.bin_of(ndf.sample_visible_normal(v, u1, u2));
+                     ++c[b >= 0 ? b : bins.size()];
+                   });
+  t.counts.assign(counts.begin(), counts.begin() + bins.size());
+  t.outside = counts[bins.size()];
+  t.probabilities = bin_integrals(bins, [&](const Vec3& m) { return ndf.D_visible(v, m); });  // 001 eq. (13)
+  t.gof = histogram_gof(t.counts, n, t.probabilities, family_alpha);
+  return t;
+}
+
+Json vndf_row_json(const VndfResult& r, const Microsurface& s, const VndfOptions& o,
+                   const std::optional<SamplerTest>& sampler) {
+  Json row;
+  row["theta_deg"] = deg(theta_of(r.v));
+  row["phi_deg"] = deg(phi_of(r.v));
+  row["rays"] = r.rays;
+  row["hits"] = r.hits;
+  row["hits_below_horizon"] = r.hits_below;
+  row["visible_area_ratio"] = r.macro_area > 0 ? static_cast<double>(r.hits) / r.rays *
+                                                     r.window_area_perp / (r.v.z() * r.macro_area)
+                                               : 0.0;
+  std::vector<double> model;
+  auto put_gof = [&](const std::string& suffix, const GofResult& g) {
+    row["chi2" + suffix] = g.chi2;
+    row["dof" + suffix] = g.dof;
+    row["p_value" + suffix] = g.p_value;
+    row["max_abs_z" + suffix] = g.max_abs_z;
+    row["bins_tested" + suffix] = g.bins_tested;
+    row["sidak_z" + suffix] = g.sidak_z;
+    row["pass" + suffix] = g.pass();
+  };
+  if (s.nominal) {
+    model = bin_integrals(r.binning, [&](const Vec3& m) { return s.nominal->D_visible(r.v, m); });
+    put_gof("", histogram_gof(r.bin_hits, r.hits, model, o.family_alpha));
+    // Total variation distance between the measured and nominal bin probabilities.
+    double tv = 0;
+    for (int b = 0; b < r.binning.size(); ++b)
+      tv += std::abs(static_cast<double>(r.bin_hits[b]) / r.hits - model[b]);
+    row["tv_distance"] = 0.5 * tv;
+  } else {
+    for (const char* k : {"chi2", "dof", "p_value", "max_abs_z", "bins_tested", "sidak_z", "pass",
+                          "tv_distance"})
+      row[k] = nullptr;
+  }
+  put_gof("_smith_numeric",
+          histogram_gof(r.bin_hits, r.hits, r.smith_numeric_probabilities(), o.family_alpha));
+  if (sampler) {
+    row["sampler_samples"] = sampler->n;
+    row["sampler_chi2"] = sampler->gof.chi2;
+    row["sampler_dof"] = sampler->gof.dof;
+    row["sampler_p_value"] = sampler->gof.p_value;
+    row["sampler_max_abs_z"] = sampler->gof.max_abs_z;
+    row["sampler_pass"] = sampler->gof.pass();
+  }
+  // A finite object is missed by the rays of its window that pass beside it (they leave the
+  // slab downward): those are misses, not lost rays.
+  const std::uint64_t gone = r.counters.lost_below + r.counters.unresolved;
+  row["lost_rays"] = s.macro().periodic ? gone : r.counters.unresolved;
+  row["missed_rays"] = s.macro().periodic ? 0 : r.counters.lost_below;
+  row["backface_hits"] = r.counters.backface_hits;
+  row["seconds"] = r.seconds;
+  Json bins = Json::array();
+  for (int b = 0; b < r.binning.size(); ++b) {
+    const int it = b / r.binning.n_phi(), ip = b % r.binning.n_phi();
+    Json jb;
+    jb["theta_m_range_deg"] = {deg(r.binning.theta_lo(it)), deg(r.binning.theta_hi(it))};
+    jb["phi_m_range_deg"] = {deg(r.binning.phi_lo(ip)), deg(r.binning.phi_hi(ip))};
+    const Estimate d = r.dv(b);
+    jb["dv"] = d.mean;
+    jb["dv_stderr"] = d.stderr_;
+    jb["hits"] = r.bin_hits[b];
+    jb["dv_smith_numeric"] = r.dv_smith_numeric(b);
+    if (s.nominal) {
+      const double w = r.binning.solid_angle(b);
+      const double dm = model[b] / w;
+      jb["dv_model"] = dm;
+      // z under the model's own binomial variance (defined also where no ray landed).
+      const double se = std::sqrt(model[b] * (1 - model[b]) / r.hits) / w;
+      jb["z"] = se > 0 ? (d.mean - dm) / se : 0.0;
+      jb["rel_dev"] = dm > 0 ? (d.mean - dm) / dm : 0.0;
+    } else {
+      jb["dv_model"] = nullptr;
+      jb["z"] = nullptr;
+      jb["rel_dev"] = nullptr;
+    }
+    bins.push_back(jb);
+  }
+  row["bins"] = bins;
+  return row;
+}
+
+}  // namespace microsim
