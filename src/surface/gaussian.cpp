@@ -115,6 +115,41 @@ GaussianField gaussian_field(int n, double size, double ell_x, double ell_y, dou
   f.var_dy_scaled = var_dy * scale * scale / (dx * dx);
   return f;
 }
+
+// Correlation lengths (l_x, l_y) giving expected finite-difference slope variances in the ratio
+// alpha_x^2 : alpha_y^2 on this grid. The spectrum exp(-(kx^2 lx^2 + ky^2 ly^2)/4) is
+// separable, so Var[dh_y] / Var[dh_x] = g(l_y) / g(l_x) with
+//   g(l) = sum_k e^{-k^2 l^2/4} 4 sin^2(k dx/2) / sum_k e^{-k^2 l^2/4},
+// decreasing in l. The rougher axis keeps l (at least 4 cells by default: well resolved); the
+// smoother axis gets the longer length that solves the ratio (bisection). A continuum rule such
+// as l_y = l alpha_x/alpha_y is not enough: a short length is under-resolved by the grid.
+std::pair<double, double> anisotropic_lengths(int n, double size, double ell, double alpha_x,
+                                              double alpha_y) {
+  if (alpha_x == alpha_y) return {ell, ell};
+  const double dx = size / n;
+  auto g = [&](double l) {
+    double num = 0, den = 0;
+    for (int i = 0; i < n; ++i) {
+      double k = 2 * kPi * ((i <= n / 2) ? i : i - n) / size;
+      double w = std::exp(-k * k * l * l / 4), s = std::sin(k * dx / 2);
+      num += w * 4 * s * s;
+      den += w;
+    }
+    return num / den;
+  };
+  const double rough = std::max(alpha_x, alpha_y), smooth = std::min(alpha_x, alpha_y);
+  const double target = g(ell) * (smooth * smooth) / (rough * rough);
+  double lo = ell, hi = 0.5 * size;
+  if (g(hi) > target)
+    throw UsageError("--alpha-x/--alpha-y: anisotropy " + std::to_string(rough / smooth) +
+                     " too strong for this tile and correlation length");
+  for (int it = 0; it < 200 && hi - lo > 1e-12 * hi; ++it) {
+    double mid = 0.5 * (lo + hi);
+    if (g(mid) > target) lo = mid; else hi = mid;
+  }
+  const double longer = 0.5 * (lo + hi);
+  return alpha_x > alpha_y ? std::make_pair(ell, longer) : std::make_pair(longer, ell);
+}
 }  // namespace
 
 Microsurface generate_gaussian(const GaussianParams& p) {
@@ -122,9 +157,8 @@ Microsurface generate_gaussian(const GaussianParams& p) {
   const int n = p.resolution;
   const double dx = p.size / n;
   const double ell = p.correlation_length > 0 ? p.correlation_length : 4.0 * dx;
-  // Anisotropy by the spectrum's shape: correlation lengths l_x = l, l_y = l alpha_x/alpha_y
-  // give slope variances in the ratio alpha_x^2 : alpha_y^2; the x scale fixes the amplitude.
-  const double ell_x = ell, ell_y = ell * p.alpha_x / p.alpha_y;
+  // Anisotropy by the spectrum's shape (exact on the grid); the x scale fixes the amplitude.
+  const auto [ell_x, ell_y] = anisotropic_lengths(n, p.size, ell, p.alpha_x, p.alpha_y);
   GaussianField f = gaussian_field(n, p.size, ell_x, ell_y, p.alpha_x, p.seed, 0x6A05);
   std::vector<float> h(f.h.size());
   for (std::size_t k = 0; k < h.size(); ++k) h[k] = static_cast<float>(f.h[k]);
@@ -134,6 +168,8 @@ Microsurface generate_gaussian(const GaussianParams& p) {
                    {"resolution", n},
                    {"size", p.size},
                    {"correlation_length", ell},
+                   {"correlation_length_x", ell_x},
+                   {"correlation_length_y", ell_y},
                    {"alpha_x", p.alpha_x},
                    {"alpha_y", p.alpha_y},
                    {"seed", p.seed},
@@ -163,7 +199,8 @@ Microsurface generate_gaussian_ggx(const GaussianGgxParams& p) {
     throw UsageError("--tail-fraction must be in (0, 0.5) (got " + std::to_string(p.tail_fraction) + ")");
 
   // g: Beckmann(alpha_x, alpha_y) field, exactly as generate_gaussian.
-  GaussianField g = gaussian_field(n, p.size, ell, ell * p.alpha_x / p.alpha_y, p.alpha_x, p.seed, 0x6A05);
+  const auto [ell_x, ell_y] = anisotropic_lengths(n, p.size, ell, p.alpha_x, p.alpha_y);
+  GaussianField g = gaussian_field(n, p.size, ell_x, ell_y, p.alpha_x, p.seed, 0x6A05);
   // z: smooth isotropic field of correlation length L; only its ranks are used.
   GaussianField z = gaussian_field(n, p.size, big, big, 1.0, p.seed, 0x6A06);
   const std::size_t count = g.h.size();
