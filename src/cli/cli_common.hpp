@@ -52,6 +52,7 @@ void register_info(CLI::App& app, const GlobalOptions& g);
 void register_convert(CLI::App& app, const GlobalOptions& g);
 void register_measure_ndf(CLI::App& measure, const GlobalOptions& g);
 void register_measure_g1(CLI::App& measure, const GlobalOptions& g);
+void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g);
 void register_demo(CLI::App& app, const GlobalOptions& g);
 
 }  // namespace microsim::cli

@@ -62,6 +62,7 @@ int main(int argc, char** argv) {
   measure->require_subcommand(1);
   register_measure_ndf(*measure, g);
   register_measure_g1(*measure, g);
+  register_measure_bsdf(*measure, g);
 
   if (!check_command_words(app, argc, argv)) return 2;
   try {
