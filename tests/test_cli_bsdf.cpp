@@ -1,6 +1,7 @@
 // microsim measure bsdf as users and scripts see it: the output files and the fields the issue
 // names, and bad input answered with one line on stderr, exit code 2 and no output file.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <fstream>
@@ -17,7 +18,10 @@ struct Result {
   int code;
   std::string out, err;
 };
-std::string tmp(const std::string& name) { return ::testing::TempDir() + "microsim_cli_bsdf_" + name; }
+// Per-process names: CTest runs test cases as separate processes in parallel.
+std::string tmp(const std::string& name) {
+  return ::testing::TempDir() + "microsim_cli_bsdf_" + std::to_string(getpid()) + "_" + name;
+}
 std::string slurp(const std::string& p) {
   std::ifstream f(p);
   std::stringstream ss;
