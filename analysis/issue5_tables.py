@@ -99,50 +99,76 @@ if any(len(v) > 1 for v in runs.values()):
 # ---------------------------------------------------------------------------------------------
 print()
 print("== 3. 001 Table 4: in-plane order-1 lobe, mirror Beckmann, theta_i = 1.5 rad (85.94 deg),")
-print("   4194304 rays, 32 bins of 5.625 deg, band +-2.8 deg; f = radiance BRDF")
+print("   4194304 rays per tile, 32 bins of 5.625 deg, band +-2.8 deg; f = radiance BRDF. Mean over the")
+print("   ensemble of tiles; se_tiles = between-surface standard error (at grazing incidence a few")
+print("   lit facets dominate each bin: one tile differs from the next by far more than its ray error)")
+
+
+def ensemble(js, get):
+    xs = [get(j) for j in js]
+    K = len(xs)
+    m = sum(xs) / K
+    sd = math.sqrt(sum((x - m) ** 2 for x in xs) / (K - 1)) if K > 1 else 0.0
+    return m, sd / math.sqrt(K)
+
+
 verdicts = []
 for a in ["0.1", "0.4", "0.7", "1.0", "1.3"]:
-    name = f"table4_a{a}.json"
-    if not os.path.exists(os.path.join(out, name)):
+    names = sorted(glob.glob(os.path.join(out, f"table4_a{a}_s*.json")))
+    if not names:
         continue
-    j = load(name)
-    rows = [r for r in j["in_plane"] if r["side"] == "reflected"]
-    print(f"-- alpha = {a}: order-1 albedo {j['albedo']['reflected']['order_1']:.4f}, "
-          f"smith_single {j['albedo_models']['smith_single']['reflected']:.4f}, "
-          f"vcavity_single {j['albedo_models']['vcavity_single']['reflected']:.4f}; "
-          f"total {j['albedo']['reflected']['total']:.5f}")
-    print(f"   {'theta_o':>8} {'f_order_1':>10} {'+-':>8} {'smith':>10} {'z':>7} {'vcavity':>10} {'z':>7} {'f_total':>9} {'smith_mult':>10}")
+    js = [load(os.path.basename(n)) for n in names]
+    K = len(js)
+    j0 = js[0]
+    a1, a1se = ensemble(js, lambda j: j["albedo"]["reflected"]["order_1"])
+    print(f"-- alpha = {a} ({K} tiles): order-1 albedo {a1:.4f} +- {a1se:.4f}, "
+          f"smith_single {j0['albedo_models']['smith_single']['reflected']:.4f}, "
+          f"vcavity_single {j0['albedo_models']['vcavity_single']['reflected']:.4f}")
+    print(f"   {'theta_o':>8} {'f_order_1':>10} {'se_tiles':>8} {'se_rays':>8} {'smith':>10} {'z':>7} {'vcavity':>10} {'z':>7} "
+          f"{'f_total':>9} {'smith_mult':>10}")
+    nb = len([r for r in j0["in_plane"] if r["side"] == "reflected"])
     chi_s = chi_v = 0.0
     n = 0
     num_s = num_v = den = 0.0
-    for r in rows:
-        f1, s1 = r["f_order_1"], r["f_order_1_stderr"]
-        sm, vc = r["smith_single"], r["vcavity_single"]
-        show = f1 > 3 * s1 or sm > 0.01 * max(x["smith_single"] for x in rows)
-        if show:
-            print(f"   {r['theta_o_deg']:8.2f} {f1:10.4f} {s1:8.4f} {sm:10.4f} {fmt_z(z(f1, sm, s1)):>7} "
-                  f"{vc:10.4f} {fmt_z(z(f1, vc, s1)):>7} {r['f_total']:9.4f} {r['smith_multiple']:10.4f}")
-        if s1 > 0 and f1 > 5 * s1:
-            chi_s += z(f1, sm, s1) ** 2
-            chi_v += z(f1, vc, s1) ** 2
+    means = []
+    top = max(r["smith_single"] for r in j0["in_plane"])
+    for b in range(nb):
+        r0 = j0["in_plane"][b]
+        f1, se = ensemble(js, lambda j: j["in_plane"][b]["f_order_1"])
+        se_r = math.sqrt(sum(j["in_plane"][b]["f_order_1_stderr"] ** 2 for j in js)) / K
+        ft, _ = ensemble(js, lambda j: j["in_plane"][b]["f_total"])
+        smm, _ = ensemble(js, lambda j: j["in_plane"][b]["smith_multiple"])
+        sm, vc = r0["smith_single"], r0["vcavity_single"]
+        means.append((r0["theta_o_deg"], f1, sm, vc))
+        if f1 > 3 * se or sm > 0.01 * top:
+            print(f"   {r0['theta_o_deg']:8.2f} {f1:10.4f} {se:8.4f} {se_r:8.4f} {sm:10.4f} {fmt_z(z(f1, sm, se)):>7} "
+                  f"{vc:10.4f} {fmt_z(z(f1, vc, se)):>7} {ft:9.4f} {smm:10.4f}")
+        if se > 0 and f1 > 5 * se:
+            chi_s += z(f1, sm, se) ** 2
+            chi_v += z(f1, vc, se) ** 2
             n += 1
-        w = math.cos(math.radians(r["theta_o_deg"]))
+        w = math.cos(math.radians(r0["theta_o_deg"]))
         num_s += w * (f1 - sm) ** 2
         num_v += w * (f1 - vc) ** 2
         den += w * f1 ** 2
-    peak = max(rows, key=lambda r: r["f_order_1"])
-    peak_s = max(rows, key=lambda r: r["smith_single"])
-    peak_v = max(rows, key=lambda r: r["vcavity_single"])
+    pm = max(means, key=lambda t: t[1])[0]
+    ps = max(means, key=lambda t: t[2])[0]
+    pv = max(means, key=lambda t: t[3])[0]
+    # mean of theta_o over the lobe (cos-weighted), a shape measure: backscattering pulls it down
+    cm = sum(t[1] * math.cos(math.radians(t[0])) * t[0] for t in means) / sum(t[1] * math.cos(math.radians(t[0])) for t in means)
+    cs = sum(t[2] * math.cos(math.radians(t[0])) * t[0] for t in means) / sum(t[2] * math.cos(math.radians(t[0])) for t in means)
+    cv = sum(t[3] * math.cos(math.radians(t[0])) * t[0] for t in means) / sum(t[3] * math.cos(math.radians(t[0])) for t in means)
     ds, dv = math.sqrt(num_s / den), math.sqrt(num_v / den)
-    follows = "Smith" if ds < dv else "V-cavity"
-    verdicts.append((a, ds, dv, chi_s / max(n, 1), chi_v / max(n, 1), peak["theta_o_deg"], peak_s["theta_o_deg"],
-                     peak_v["theta_o_deg"], follows))
+    verdicts.append((a, ds, dv, chi_s / max(n, 1), chi_v / max(n, 1), pm, ps, pv, cm, cs, cv,
+                     "Smith" if ds < dv else "V-cavity"))
 print()
-print("Summary: relative L2 distance of the measured order-1 lobe to each model (cos-weighted over the")
-print("in-plane bins), chi^2 per bin over bins with f > 5 stderr, and the peak bins")
-print(f"{'alpha':>5} {'L2 smith':>9} {'L2 vcav':>9} {'chi2/n smith':>12} {'chi2/n vcav':>12} {'peak meas':>9} {'smith':>7} {'vcav':>7}  follows")
-for a, ds, dv, cs, cv, pm, ps, pv, fol in verdicts:
-    print(f"{float(a):5.1f} {ds:9.4f} {dv:9.4f} {cs:12.1f} {cv:12.1f} {pm:9.2f} {ps:7.2f} {pv:7.2f}  {fol}")
+print("Summary: relative L2 distance of the measured order-1 lobe (ensemble mean) to each model,")
+print("cos-weighted over the in-plane bins; chi^2 per bin (between-surface errors, bins with f > 5 se);")
+print("peak bin; lobe centroid (mean signed theta_o weighted by f cos theta_o)")
+print(f"{'alpha':>5} {'L2 smith':>9} {'L2 vcav':>9} {'chi2/n smith':>12} {'chi2/n vcav':>12} {'peak':>6} {'centroid meas':>13} "
+      f"{'smith':>7} {'vcav':>7}  follows")
+for a, ds, dv, cs2, cv2, pm, ps, pv, cm, cs, cv, fol in verdicts:
+    print(f"{float(a):5.1f} {ds:9.4f} {dv:9.4f} {cs2:12.1f} {cv2:12.1f} {pm:6.2f} {cm:13.2f} {cs:7.2f} {cv:7.2f}  {fol}")
 
 # ---------------------------------------------------------------------------------------------
 print()
@@ -158,24 +184,35 @@ for name in sorted(glob.glob(os.path.join(out, "diel_*.json"))):
           f"{j['albedo_models']['smith_multiple']['reflected']['total']:.5f}, T "
           f"{j['albedo_models']['smith_multiple']['transmitted']['total']:.5f})")
 
-for name, label in [("diel_e1.5_t53_p0.json", "eta 1.5, theta_i 53.44 (into glass)"),
-                    ("diel_e0.6666666666666666_t31_p0.json", "eta 1/1.5, theta_i 30.94 (into the less dense medium)")]:
-    if not os.path.exists(os.path.join(out, name)):
+for stem, label in [("diel_e1.5_t53_p0", "eta 1.5, theta_i 53.44 (into glass)"),
+                    ("diel_e0.6666666666666666_t31_p0", "eta 1/1.5, theta_i 30.94 (into the less dense medium)")]:
+    names = sorted(glob.glob(os.path.join(out, stem + "_s*.json")))
+    if not names:
         continue
-    j = load(name)
+    js = [load(os.path.basename(n)) for n in names]
+    K, j0 = len(js), js[0]
+    t1, t1se = ensemble(js, lambda j: j["albedo"]["transmitted"]["order_1"])
+    rt, rtse = ensemble(js, lambda j: j["reflected_plus_transmitted"])
     print()
-    print(f"Order-1 transmission lobe, {label}: albedo T1 {j['albedo']['transmitted']['order_1']:.5f} +- "
-          f"{j['transmitted_stderr']['order_1']:.5f}, smith_single {j['albedo_models']['smith_single']['transmitted']:.5f}, "
-          f"vcavity_single {j['albedo_models']['vcavity_single']['transmitted']:.5f}")
-    print(f"   {'theta_o':>8} {'f_order_1':>10} {'+-':>8} {'smith_BTDF':>10} {'z':>7} {'rel':>7} {'vcav_BTDF':>10} {'z':>7} {'f_total':>9} {'smith_mult':>10}")
-    rows = [r for r in j["in_plane"] if r["side"] == "transmitted"]
-    top = max(r["smith_single"] for r in rows)
-    for r in rows:
-        f1, s1, sm, vc = r["f_order_1"], r["f_order_1_stderr"], r["smith_single"], r["vcavity_single"]
-        if f1 > 3 * s1 or sm > 0.02 * top:
+    print(f"Order-1 transmission lobe, {label}, {K} tiles: albedo T1 {t1:.5f} +- {t1se:.5f} (tiles), "
+          f"smith_single {j0['albedo_models']['smith_single']['transmitted']:.5f}, "
+          f"vcavity_single {j0['albedo_models']['vcavity_single']['transmitted']:.5f}; R+T {rt:.7f}")
+    print(f"   {'theta_o':>8} {'f_order_1':>10} {'se_tiles':>8} {'se_rays':>8} {'smith_BTDF':>10} {'z':>7} {'rel':>7} "
+          f"{'vcav_BTDF':>10} {'z':>7} {'f_total':>9} {'smith_mult':>10}")
+    rows0 = j0["in_plane"]
+    top = max(r["smith_single"] for r in rows0 if r["side"] == "transmitted")
+    for b, r0 in enumerate(rows0):
+        if r0["side"] != "transmitted":
+            continue
+        f1, se = ensemble(js, lambda j: j["in_plane"][b]["f_order_1"])
+        se_r = math.sqrt(sum(j["in_plane"][b]["f_order_1_stderr"] ** 2 for j in js)) / K
+        ft, _ = ensemble(js, lambda j: j["in_plane"][b]["f_total"])
+        smm, _ = ensemble(js, lambda j: j["in_plane"][b]["smith_multiple"])
+        sm, vc = r0["smith_single"], r0["vcavity_single"]
+        if f1 > 3 * se or sm > 0.02 * top:
             rel = (f1 - sm) / sm if sm > 0 else float("nan")
-            print(f"   {r['theta_o_deg']:8.2f} {f1:10.4f} {s1:8.4f} {sm:10.4f} {fmt_z(z(f1, sm, s1)):>7} {100 * rel:6.1f}% "
-                  f"{vc:10.4f} {fmt_z(z(f1, vc, s1)):>7} {r['f_total']:9.4f} {r['smith_multiple']:10.4f}")
+            print(f"   {r0['theta_o_deg']:8.2f} {f1:10.4f} {se:8.4f} {se_r:8.4f} {sm:10.4f} {fmt_z(z(f1, sm, se)):>7} {100 * rel:6.1f}% "
+                  f"{vc:10.4f} {fmt_z(z(f1, vc, se)):>7} {ft:9.4f} {smm:10.4f}")
 
 
 def bin_row(j, side, theta):
@@ -190,9 +227,9 @@ print(f"{'path':>44} {'f(o<-i)':>10} {'+-':>8} {'f(i<-o)':>10} {'+-':>8} {'eta_o
 checks = [
     ("reflection 14.06 -> 53.44 (eta 1.5)", "diel_e1.5_t14_p0.json", "reflected", 53.4375,
      "diel_e1.5_t53_p180.json", "reflected", 14.0625, 1.0),
-    ("transmission 53.44 above -> 30.94 below (1.5)", "diel_e1.5_t53_p0.json", "transmitted", 30.9375,
+    ("transmission 53.44 above -> 30.94 below (1.5)", "diel_e1.5_t53_p0_s1.json", "transmitted", 30.9375,
      "diel_flip_e0.6666666666666666_t31_p180.json", "transmitted", 53.4375, 1.5 ** 2),
-    ("transmission 30.94 above -> 53.44 below (1/1.5)", "diel_e0.6666666666666666_t31_p0.json", "transmitted", 53.4375,
+    ("transmission 30.94 above -> 53.44 below (1/1.5)", "diel_e0.6666666666666666_t31_p0_s1.json", "transmitted", 53.4375,
      "diel_flip_e1.5_t53_p180.json", "transmitted", 30.9375, (1 / 1.5) ** 2),
 ]
 for label, fa, sa, ta, fb, sb, tb, ratio in checks:
