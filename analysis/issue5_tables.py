@@ -94,6 +94,8 @@ if any(len(v) > 1 for v in runs.values()):
             if k == "order_1":
                 ss = per_seed[min(per_seed)]["albedo_models"]["smith_single"]["reflected"]
                 line += f" {ss:12.5f} {fmt_z(z(mean, ss, se)):>7} {100 * (mean - ss) / ss:7.2f}%"
+            if k == "total":
+                line += f"   lost paths per tile: {[per_seed[s]['lost_paths'] for s in sorted(per_seed)]}"
             print(line)
 
 # ---------------------------------------------------------------------------------------------
@@ -172,7 +174,8 @@ for a, ds, dv, cs2, cv2, pm, ps, pv, cm, cs, cv, fol in verdicts:
 
 # ---------------------------------------------------------------------------------------------
 print()
-print("== 4. Dielectric Beckmann alpha 0.5 (seed-1 tile), 4194304 rays per run")
+print("== 4. Dielectric Beckmann alpha 0.5, 4194304 rays per run (lobes: the ensemble of tiles;")
+print("   reciprocity: the seed-1 tile and the same tile seen from below)")
 print("R + T (each path leaves up or down):")
 for name in sorted(glob.glob(os.path.join(out, "diel_*.json"))):
     j = load(os.path.basename(name))

@@ -475,6 +475,109 @@ TEST(SmithWalk, OrderOneRejectsTheWrongShadowing) {
   EXPECT_GT(std::abs(a.mean(0, 0) - s) / a.stderr_(0, 0), 10.0);
 }
 
+// f of the walk averaged over a cone of half-angle `cone` around d (exits of orders >= min_order
+// on the side of d), from n walks: p / int_cone |cos| d omega, with its standard error.
+std::pair<double, double> walk_f_in_cone(const mm::SmithRandomWalk& w, const Vec3& wi, const Vec3& d, double cone,
+                                         int min_order, int n, std::uint64_t stream) {
+  int hits = 0;
+  for (int k = 0; k < n; ++k) {
+    Rng rng{CounterRng(17, stream, k)};
+    const mm::WalkExit e = w.walk(wi, rng);
+    if (e.lost || e.order < min_order) continue;
+    if (e.direction.dot(d) >= std::cos(cone)) ++hits;
+  }
+  // int over the cone of |cos theta| d omega, by the midpoint rule in the cone's polar coordinates
+  Vec3 a, b;
+  tangents(d, a, b);
+  double ci = 0.0;
+  const int nr = 200, np = 200;
+  for (int i = 0; i < nr; ++i)
+    for (int j = 0; j < np; ++j) {
+      const double r = (i + 0.5) / nr * cone, ph = 2 * kPi * (j + 0.5) / np;
+      const Vec3 v = std::cos(r) * d + std::sin(r) * (std::cos(ph) * a + std::sin(ph) * b);
+      ci += std::abs(v.z()) * std::sin(r);
+    }
+  ci *= (cone / nr) * (2 * kPi / np);
+  const double p = static_cast<double>(hits) / n;
+  return {p / ci, std::sqrt(p * (1 - p) / n) / ci};
+}
+
+TEST(SmithWalk, MultipleScatteringIsReciprocal) {
+  // 000 eq. 4c for the walk's orders >= 2 (mirror) and all orders of the transmission (light
+  // from below = the same Smith surface mirrored with the inverse index): an independent check
+  // of the height and direction sampling beyond order 1.
+  const Ndf ndf = Ndf::beckmann(1.0, 1.0);
+  const double cone = rad(6);
+  const int n = 600000;
+  std::vector<double> zs;
+  {
+    const mm::SmithRandomWalk w(ndf, Material::mirror());
+    const Vec3 a = dir(rad(30), 0.0), b = dir(rad(65), kPi);
+    const auto f1 = walk_f_in_cone(w, a, b, cone, 2, n, 1);
+    const auto f2 = walk_f_in_cone(w, b, a, cone, 2, n, 2);
+    zs.push_back((f1.first - f2.first) / std::hypot(f1.second, f2.second));
+    EXPECT_GT(f1.first, 20 * f1.second);
+  }
+  {
+    const double eta = 1.5;
+    const mm::SmithRandomWalk down(ndf, Material::dielectric(eta)), up(ndf, Material::dielectric(1 / eta));
+    const Vec3 a = dir(rad(40), 0.0), b = mm::mirror_z(dir(rad(20), kPi));  // above -> below
+    const auto f1 = walk_f_in_cone(down, a, b, cone, 1, n, 3);
+    // reverse: light from b (below) toward a: in the mirrored frame light from mirror(b) above,
+    // leaving toward mirror(a) below
+    const auto f2 = walk_f_in_cone(up, mm::mirror_z(b), mm::mirror_z(a), cone, 1, n, 4);
+    // f(b <- a) / eta_b^2 = f(a <- b) / eta_a^2
+    zs.push_back((f1.first / (eta * eta) - f2.first) / std::hypot(f1.second / (eta * eta), f2.second));
+    EXPECT_GT(f1.first, 20 * f1.second);
+  }
+  for (double z : zs) EXPECT_LT(std::abs(z), sidak_z(0.01, 2)) << z;
+}
+
+TEST(SmithWalk, OrderTwoMatchesAnIndependentEstimator) {
+  // Order 2 of the mirror walk against an estimator that draws the second intersection height
+  // from a different (tempered) proposal and weights by the Smith intersection density, instead
+  // of inverting that density as the walk does. Densities in c = C1(h): upward ray from c1,
+  // p(c) = L c1^L c^(-L-1) on (c1, 1) (mass 1 - c1^L; it escapes otherwise), proposal with L/2;
+  // downward ray, p(c) = (1+L') c^L' / c1^(1+L') on (0, c1), proposal with (1+L')/2.
+  // With a = -(L/2) ln c1 the upward weight p/q is 2 ((1-u) + u e^-a)(1 - e^-a), the downward 2u.
+  for (const auto& [alpha, tdeg] : {std::pair{1.0, 60.0}, std::pair{0.5, 0.0}, std::pair{1.0, 0.0}}) {
+    const Ndf ndf = Ndf::beckmann(alpha, alpha);
+    const Vec3 wi = dir(rad(tdeg), 0.0);
+    const int n = 300000;
+    double sum = 0.0, sum2 = 0.0;
+    for (int k = 0; k < n; ++k) {
+      CounterRng rng(23, 1, k);
+      const double c1 = std::pow(1.0 - rng.uniform(), 1.0 / (1.0 + ndf.Lambda(wi)));
+      const Vec3 m1 = ndf.sample_visible_normal(wi, rng.uniform(), rng.uniform());
+      const Vec3 w1 = mm::reflect(wi, m1);
+      const double u = rng.uniform();
+      double c2, weight;
+      if (w1.z() > 0) {
+        const double L = ndf.Lambda(w1);
+        const double a = -0.5 * L * std::log(c1);
+        const double g = (1.0 - u) + u * std::exp(-a);
+        c2 = std::isinf(L) ? c1 : L > 1e-200 ? std::exp(-(2.0 / L) * (a + std::log(g))) : 1.0;
+        weight = 2.0 * g * (1.0 - std::exp(-a));
+      } else {
+        const double L = ndf.Lambda(-w1);
+        c2 = c1 * std::pow(u, 2.0 / (1.0 + L));
+        weight = 2.0 * u;
+      }
+      const Vec3 m2 = mm::sample_visible_normal_any(ndf, -w1, rng.uniform(), rng.uniform());
+      const Vec3 w2 = mm::reflect(-w1, m2);
+      const double x = w2.z() > 0 ? weight * std::pow(c2, ndf.Lambda(w2)) : 0.0;
+      sum += x;
+      sum2 += x * x;
+    }
+    const double mean = sum / n, se = std::sqrt((sum2 / n - mean * mean) / (n - 1));
+    const auto a = mm::smith_walk_albedos(mm::SmithRandomWalk(ndf, Material::mirror()), wi, n, 4, rng_factory(29, 1));
+    std::printf("order 2: walk %.5f +- %.5f, weighted %.5f +- %.5f\n", a.mean(0, 1), a.stderr_(0, 1), mean, se);
+    EXPECT_LT(std::abs(a.mean(0, 1) - mean) / std::hypot(a.stderr_(0, 1), se), sidak_z(0.01, 3))
+        << alpha << " " << tdeg << ": walk " << a.mean(0, 1) << " +- " << a.stderr_(0, 1) << ", weighted " << mean
+        << " +- " << se;
+  }
+}
+
 TEST(SmithWalk, EnergyConservation) {
   const int n = 50000;
   const Vec3 wi = dir(rad(60), 0.0);
