@@ -65,6 +65,7 @@ int main(int argc, char** argv) {
   register_measure_g2(*measure, g);
   register_measure_vndf(*measure, g);
   register_validate(app, g);
+  register_measure_bsdf(*measure, g);
 
   if (!check_command_words(app, argc, argv)) return 2;
   try {

@@ -10,8 +10,9 @@ namespace {
 // Embree context extended with the plane the ray leaves (read by the filter functions).
 struct PlaneContext {
   RTCIntersectContext context;
-  const SourcePlane* source;
+  const SourcePlane* source;  // may be null (Back-side rays without a source plane)
   double scale;
+  bool back_side;             // the ray travels below the surface (RaySide::Back)
 };
 
 // For rays that leave a facet: rejects back-face hits and hits on the plane the ray leaves
@@ -30,11 +31,12 @@ void reject_source_plane(const RTCFilterFunctionNArguments* args) {
              RTCRayN_dir_z(args->ray, args->N, i));
     // A ray leaving the surface enters the solid through a front face first; a back face
     // first means its float origin rounded to just below a neighbouring facet (concave edge).
-    if (ng.dot(dir) > 0) {
+    // A ray travelling inside the solid (Back side) leaves it through a back face first.
+    if (ctx->back_side ? ng.dot(dir) < 0 : ng.dot(dir) > 0) {
       args->valid[i] = 0;
       continue;
     }
-    if (std::abs(ng.dot(ctx->source->normal)) / len < 1.0 - 1e-6) continue;
+    if (!ctx->source || std::abs(ng.dot(ctx->source->normal)) / len < 1.0 - 1e-6) continue;
     float t = RTCRayN_tfar(args->ray, args->N, i);
     Vec3 p(RTCRayN_org_x(args->ray, args->N, i) + t * RTCRayN_dir_x(args->ray, args->N, i),
            RTCRayN_org_y(args->ray, args->N, i) + t * RTCRayN_dir_y(args->ray, args->N, i),
@@ -213,14 +215,16 @@ std::size_t Tracer::facet_of_hit(unsigned prim_id, float u, float v, const Vec3&
 
 template <bool kOcclusion>
 bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
-                   TraceCounters& c, TraceHit* out) const {
+                   TraceCounters& c, TraceHit* out, RaySide side) const {
   ++c.rays;
   const Macrosurface& macro = surface_.macro();
+  const bool back = side == RaySide::Back;
   PlaneContext ctx;
   rtcInitIntersectContext(&ctx.context);
   ctx.source = source;
   ctx.scale = scale_;
-  if (source) ctx.context.filter = reject_source_plane;
+  ctx.back_side = back;
+  if (source || back) ctx.context.filter = reject_source_plane;
 
   Vec3 o = org;
   const double hx = 0.5 * macro.size_x, hy = 0.5 * macro.size_y;
@@ -248,7 +252,10 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
     if (dir.z() < 0) t_slab = (z_bottom_ - o.z()) / dir.z();
     if (t_slab < 0) {
       // Already outside the slab and moving away from it.
-      if (dir.z() < 0) ++c.lost_below;
+      if (dir.z() < 0) {
+        if (back && out) out->exit_below = true;
+        else ++c.lost_below;
+      }
       return false;
     }
     double tfar = std::min(t_exit + margin, t_slab);
@@ -285,13 +292,17 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
         }
         out->facet = facet_of_hit(rh.hit.primID, rh.hit.u, rh.hit.v, ng, &out->normal);
         out->backface = out->normal.dot(dir) > 0;
-        if (out->backface) ++c.backface_hits;
+        if (out->backface != back) ++c.backface_hits;
         return true;
       }
     }
     if (t_slab <= t_exit) {
-      // Leaves the slab inside this tile: upward it escapes, downward it was lost.
-      if (dir.z() < 0) ++c.lost_below;
+      // Leaves the slab inside this tile: upward it escapes; downward it was lost, or, for a
+      // ray inside the solid, it leaves through the bottom (transmitted).
+      if (dir.z() < 0) {
+        if (back && out) out->exit_below = true;
+        else ++c.lost_below;
+      }
       return false;
     }
     if (!macro.periodic) return false;
@@ -309,9 +320,9 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
 }
 
 TraceHit Tracer::first_hit(const Vec3& org, const Vec3& dir, const SourcePlane* source,
-                           TraceCounters& counters) const {
+                           TraceCounters& counters, RaySide side) const {
   TraceHit h;
-  trace<false>(org, dir, source, counters, &h);
+  trace<false>(org, dir, source, counters, &h, side);
   return h;
 }
 

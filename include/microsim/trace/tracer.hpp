@@ -21,8 +21,16 @@ struct SourcePlane {
   }
 };
 
+// The side of the surface a ray travels on. Front: above the surface / outside a solid (every
+// ray of D, G1, and the BSDF of opaque materials); hits are expected on front faces. Back: below
+// the surface / inside a solid (light refracted into a dielectric); hits are expected on back
+// faces (the underside), and leaving the slab downward is an exit (TraceHit::exit_below), not a
+// loss.
+enum class RaySide { Front, Back };
+
 struct TraceHit {
   bool hit = false;
+  bool exit_below = false;  // Back-side ray: left the slab downward without a hit (transmitted)
   Vec3 point;           // periodic surfaces: the copy inside the tile
   Vec3 normal;          // unit facet normal (exact, from the surface's own facet)
   std::size_t facet = 0;
@@ -34,7 +42,8 @@ struct TraceCounters {
   std::uint64_t rays = 0;
   std::uint64_t border_crossings = 0;  // periodic wrap-arounds
   std::uint64_t lost_below = 0;        // left the surface's slab downward without a hit
-  std::uint64_t backface_hits = 0;     // first hit on a back face
+  std::uint64_t backface_hits = 0;     // first hit on the unexpected side (a back face for a
+                                       // Front ray, a front face for a Back ray)
   std::uint64_t unresolved = 0;        // still inside the slab after the wrap limit
   TraceCounters& operator+=(const TraceCounters& o) {
     rays += o.rays;
@@ -54,9 +63,9 @@ class Tracer {
   Tracer& operator=(const Tracer&) = delete;
 
   // First hit along org + t dir, t > 0, following periodic wrap-around. `source`, when given,
-  // is the plane the ray leaves.
+  // is the plane the ray leaves. `side`: see RaySide (Back rays should always pass `source`).
   TraceHit first_hit(const Vec3& org, const Vec3& dir, const SourcePlane* source,
-                     TraceCounters& counters) const;
+                     TraceCounters& counters, RaySide side = RaySide::Front) const;
   // True when anything blocks the ray before it leaves the surface's slab upward (or, for a
   // finite object, before infinity).
   bool occluded(const Vec3& org, const Vec3& dir, const SourcePlane* source,
@@ -76,7 +85,7 @@ class Tracer {
  private:
   template <bool kOcclusion>
   bool trace(const Vec3& org, const Vec3& dir, const SourcePlane* source, TraceCounters& c,
-             TraceHit* out) const;
+             TraceHit* out, RaySide side = RaySide::Front) const;
 
   const Microsurface& surface_;
   RTCDevice device_ = nullptr;

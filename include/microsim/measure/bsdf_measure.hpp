@@ -1,0 +1,160 @@
+// The full BSDF of an explicit microsurface, per scattering order, by random walks (DESIGN.md
+// "BSDF"): light arrives from l; rays are traced along -l from stratified points of the periodic
+// tile; at each hit a mirror reflects, a conductor reflects with weight F (complex index, 000 eq.
+// 8), a dielectric reflects with probability F and otherwise refracts (000 eq. 15a; total internal
+// reflection; both sides of the interface). A ray that leaves upward is reflected, one that
+// leaves the slab downward (inside a dielectric) is transmitted. Light is unpolarized.
+//
+// Tallies per side (reflected / transmitted) and scattering order (1, 2, ..., K-1, K+ and total):
+//  * albedo: the mean over rays of the weight that leaves in that cell (with its standard error);
+//  * the outgoing hemispheres on an equal-area R x R grid (HemisphereMap), f = p / int_B |cos| dw;
+//  * in-plane rows: a narrow band around the plane of incidence (InPlaneBins), f likewise.
+// The same tallies for the Smith random-walk model (models/smith_random_walk.hpp) of the
+// surface's nominal NDF, and the single-scattering models (models/microfacet_bsdf.hpp) averaged
+// over the same bins, go beside them.
+//
+// Random numbers: CounterRng(seed, stream, ray index); tallies are summed per chunk and merged
+// by a deterministic reduction: results do not depend on the number of threads.
+#pragma once
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "microsim/io/output.hpp"
+#include "microsim/models/microfacet_bsdf.hpp"
+#include "microsim/models/smith_random_walk.hpp"
+#include "microsim/trace/tracer.hpp"
+
+namespace microsim {
+
+// Equal-area map of a hemisphere onto the square [-1, 1]^2, pixelated R x R:
+// square (a, b) -> unit disk by the concentric map of Shirley and Chiu (r = max(|a|, |b|),
+// phi = pi/4 b/a on |a| >= |b|, pi/2 - pi/4 a/b otherwise; area ratio pi/4 everywhere), then
+// disk -> hemisphere by Lambert's azimuthal equal-area map (|z| = 1 - r^2, the horizontal part
+// r sqrt(2 - r^2) (cos phi, sin phi)). Every pixel subtends 2 pi / R^2 sr. Pixel (i, j): column i
+// covers a in [-1 + 2i/R, -1 + 2(i+1)/R], row j covers b likewise; x = +a direction is azimuth
+// 0 (+x), b the azimuth 90 degrees (+y). The lower hemisphere uses the same map on (x, y, -z).
+class HemisphereMap {
+ public:
+  explicit HemisphereMap(int resolution = 64);
+  int resolution() const { return res_; }
+  int size() const { return res_ * res_; }
+  // Pixel of a direction (its |z| is used): j * R + i.
+  int pixel_of(const Vec3& d) const;
+  // Square coordinates (a, b) of a direction and back (z >= 0 returned).
+  Vec2 to_square(const Vec3& d) const;
+  Vec3 from_square(double a, double b) const;
+  double pixel_solid_angle() const { return 2.0 * kPi / (static_cast<double>(res_) * res_); }
+  // Exact int_pixel |cos theta| d omega (the integrand is piecewise quadratic in (a, b)).
+  double pixel_cos_integral(int pixel) const { return cos_integral_[pixel]; }
+
+ private:
+  int res_;
+  std::vector<double> cos_integral_;
+};
+
+// A narrow band around the plane of incidence, cut into bins of signed polar angle.
+// A direction d (either hemisphere; the lower one measured from -n) is written
+// d = cos(beta) (sin(psi) s + cos(psi) n') + sin(beta) p, with n' = +-z toward d's side, s the
+// horizontal unit vector toward azimuth phi_i + pi (the specular side: psi > 0) and p = n x s.
+// Bin b: psi in [-90 + b w, -90 + (b + 1) w] degrees, w = 180 / n_bins, |beta| <= w / 2.
+// Exact: int_bin |cos theta| d omega = (delta + sin(delta) cos(delta)) (sin psi1 - sin psi0),
+// delta = w / 2 (|cos theta| = cos(beta) cos(psi), d omega = cos(beta) d beta d psi).
+class InPlaneBins {
+ public:
+  InPlaneBins(double phi_i, int n_bins);
+  int size() const { return n_; }
+  int bin_of(const Vec3& d) const;  // -1 outside the band
+  double psi_lo(int b) const { return -0.5 * kPi + b * width_; }
+  double psi_hi(int b) const { return -0.5 * kPi + (b + 1) * width_; }
+  double psi_center(int b) const { return -0.5 * kPi + (b + 0.5) * width_; }
+  double half_width() const { return delta_; }
+  double cos_integral(int b) const;
+  // Direction at (psi, beta) on the upper (above = true) or lower side.
+  Vec3 direction(double psi, double beta, bool above) const;
+  // Average of f over the bin weighted by |cos theta| (6 x 6 Gauss-Legendre in (psi, beta)).
+  double cos_weighted_average(int b, bool above, const std::function<double(const Vec3&)>& f) const;
+
+ private:
+  int n_;
+  double width_, delta_;
+  Vec3 s_, p_;
+};
+
+struct BsdfOptions {
+  models::Material material = models::Material::mirror();
+  double theta_i = 0.0, phi_i = 0.0;  // incidence, radians (light direction l)
+  int orders = 4;                     // K: orders 1 .. K-1 separately, K and above together
+  std::uint64_t rays = 1000000;
+  std::uint64_t seed = 1;
+  int resolution = 64;  // hemisphere map R (R x R pixels); also the number of in-plane bins
+  int max_events = 10000;  // a walk longer than this is counted unterminated (lost)
+  // Smith random-walk model: walks of the nominal NDF (0 = none); same seed, own stream.
+  std::uint64_t model_walks = 0;
+  // Called from the calling thread with the fraction of work done (progress display).
+  std::function<void(double)> progress;
+};
+
+// Mergeable sums. Index conventions: side s (0 reflected, 1 transmitted), slot k (0 .. K-1 for
+// orders 1 .. K+, K for the total).
+struct BsdfTally {
+  int orders = 4, pixels = 0, plane_bins = 0;
+  std::vector<double> albedo, albedo2;  // [s][k]
+  std::vector<double> pix, pix2;        // [s][k][pixel]
+  std::vector<double> plane, plane2;    // [s][k][bin]
+  std::uint64_t paths = 0;              // rays (walks) started
+  std::uint64_t lost = 0;               // ended without leaving (tracer loss, wrong-side hit)
+  std::uint64_t unterminated = 0;       // more than max_events scattering events
+  std::uint64_t events = 0;             // scattering events, all paths
+  TraceCounters counters;
+
+  BsdfTally() = default;
+  BsdfTally(int K, int npix, int nplane);
+  int slots() const { return orders + 1; }
+  std::size_t a_index(int s, int k) const { return static_cast<std::size_t>(s) * slots() + k; }
+  std::size_t p_index(int s, int k, int px) const {
+    return (static_cast<std::size_t>(s) * slots() + k) * pixels + px;
+  }
+  std::size_t b_index(int s, int k, int b) const {
+    return (static_cast<std::size_t>(s) * slots() + k) * plane_bins + b;
+  }
+  // A path that left on side s after `order` >= 1 events, with weight w, pixel px (or -1) and
+  // in-plane bin b (or -1).
+  void add_exit(int s, int order, double w, int px, int b);
+  BsdfTally& operator+=(const BsdfTally& o);
+};
+
+// Mean and standard error of the per-path contribution X (0 or the path's weight) times `scale`.
+Estimate tally_estimate(double sum, double sum2, std::uint64_t n, double scale = 1.0);
+
+struct BsdfResult {
+  BsdfOptions options;  // as run (progress callback dropped)
+  Vec3 wi;              // light direction l
+  HemisphereMap map;
+  InPlaneBins plane{0.0, 1};
+  BsdfTally measured;
+  std::optional<BsdfTally> smith_walk;  // the model's tallies (nominal NDF available)
+  std::optional<models::Ndf> nominal;
+  double seconds = 0, model_seconds = 0;
+
+  Estimate albedo(int side, int k) const;
+  Estimate f_pixel(int side, int k, int px) const;
+  Estimate f_plane(int side, int k, int b) const;
+  Estimate model_albedo(int side, int k) const;
+  Estimate model_f_plane(int side, int k, int b) const;
+};
+
+// Throws UsageError for a non-periodic surface, theta_i outside [0, 90), bad counts.
+BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& options);
+
+// Key of slot k: "order_1", ..., "order_<K>plus", "total".
+std::string order_key(int k, int orders);
+
+// The JSON summary fields of the issue (albedo, reflected_stderr, transmitted_stderr, in_plane,
+// models beside them), without the run header.
+Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s);
+// The EXR table: per side and slot f and its standard error on the hemisphere map, every
+// parameter in the header (`attributes` are added to it).
+ExrTable bsdf_exr_table(const BsdfResult& r, const Json& attributes);
+
+}  // namespace microsim

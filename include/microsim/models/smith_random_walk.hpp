@@ -1,0 +1,305 @@
+// The Smith random-walk multiple-scattering model: a stochastic walk on the Smith microsurface
+// (normals and heights independent, 001 sec. 2.3 and App. A), which gives every scattering order
+// of the BSDF that the single-scattering model (microfacet_bsdf.hpp) leaves out (001 sec. 4.3 and
+// 7: rho = rho_1 + rho_2+). Conductors (weight multiplied by the unpolarized Fresnel reflectance)
+// and dielectrics (reflection with probability F, else refraction by 000 eq. 15a; total internal
+// reflection; both sides of the interface).
+//
+// Header-only, depends on Eigen and the other model headers only. Randomness comes from the
+// caller's generator (any object with `double uniform()` in [0, 1)).
+//
+// The walk, derived from the Smith assumption:
+//   * Heights. Let C1 be the CDF of the height distribution. Seen along an upward direction w
+//     (w.z > 0) a point at height h is unoccluded with probability G1(w, h) = C1(h)^Lambda(w)
+//     (001 App. A: masking of the Smith surface conditioned on height; its average over the
+//     visible heights is 1/(1 + Lambda)). Hence a ray travelling upward from height h passes
+//     height h' > h without meeting the surface with probability (C1(h)/C1(h'))^Lambda(w); it
+//     escapes with probability C1(h)^Lambda(w), otherwise its next intersection is at
+//     C1(h') = C1(h) U^(-1/Lambda(w)) for U uniform in (G1, 1]. A ray travelling downward
+//     (w.z < 0) meets the surface at the rate of the front-facing projected area, 1 + Lambda(-w)
+//     per unit of crossed signed area (000 eq. 3Xc), so it passes h' < h with probability
+//     (C1(h')/C1(h))^(1 + Lambda(-w)): the next intersection is at C1(h') = C1(h) U^(1/(1 + Lambda(-w))).
+//     A ray arriving from outside starts at h = +inf (C1 = 1).
+//   * Normals. At an intersection the facet normal is distributed as the visible normals of the
+//     direction the ray came from, D_{-w}(m) ~ max(0, -w.m) D(m) (001 eq. 13); for an upward ray
+//     -w points below the horizon (sample_visible_normal_any extends the exact samplers of
+//     ndf.hpp to that case).
+//   * Scattering. Mirror: reflect (000 eq. 13a). Conductor: reflect, weight *= F (complex index).
+//     Dielectric: reflect with probability F, else refract (000 eq. 15a) into the other medium.
+//     The medium below is the same Smith surface seen from below (heights -h, normals mirrored,
+//     000 "Inherent Assumptions"), so the walk continues in a mirrored frame: z -> -z, h -> -h.
+//     In every frame "up" is away from the interface: escaping up in the frame of the medium
+//     above is reflection, in the frame of the medium below transmission.
+//   * Under Smith the walk depends on the heights only through C1(h): any continuous height
+//     distribution gives the same BSDF. Uniform and Gaussian distributions are provided (the
+//     tests check that they agree).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+#include "microsim/models/microfacet_bsdf.hpp"
+#include "microsim/models/ndf.hpp"
+
+namespace microsim::models {
+
+// ---------------------------------------------------------------------------------------------
+// Height distributions
+// ---------------------------------------------------------------------------------------------
+
+enum class HeightDistribution { Uniform, Gaussian };
+
+inline const char* to_string(HeightDistribution h) {
+  return h == HeightDistribution::Uniform ? "uniform" : "gaussian";
+}
+
+struct SmithHeights {
+  HeightDistribution kind = HeightDistribution::Uniform;
+
+  // CDF C1(h). Uniform on [-1, 1]; Gaussian: standard normal.
+  double C1(double h) const {
+    if (kind == HeightDistribution::Uniform) return std::clamp(0.5 * (h + 1.0), 0.0, 1.0);
+    return 0.5 * std::erfc(-h / std::sqrt(2.0));
+  }
+  // Inverse CDF. C1^-1(0) = -inf only for the Gaussian; uniform heights stay in [-1, 1].
+  double invC1(double u) const {
+    if (kind == HeightDistribution::Uniform) return 2.0 * std::clamp(u, 0.0, 1.0) - 1.0;
+    return normal_quantile(u);
+  }
+
+  // Standard normal quantile: Abramowitz & Stegun 26.2.23 as a start, then Newton steps on
+  // erfc (converges to full double precision in 2-3 steps from that start).
+  static double normal_quantile(double u) {
+    if (!(u > 0.0)) return -std::numeric_limits<double>::infinity();
+    if (!(u < 1.0)) return std::numeric_limits<double>::infinity();
+    const double p = std::min(u, 1.0 - u);
+    const double t = std::sqrt(-2.0 * std::log(p));
+    double x = t - (2.515517 + 0.802853 * t + 0.010328 * t * t) /
+                       (1.0 + 1.432788 * t + 0.189269 * t * t + 0.001308 * t * t * t);
+    x = (u < 0.5) ? -x : x;
+    for (int it = 0; it < 4; ++it) {
+      const double c = 0.5 * std::erfc(-x / std::sqrt(2.0));
+      const double pdf = std::exp(-0.5 * x * x) / std::sqrt(2.0 * detail::kPi);
+      if (!(pdf > 0.0)) break;
+      // Newton on the smaller tail for relative accuracy
+      const double dx = (u < 0.5) ? (c - u) / pdf : ((1.0 - u) - 0.5 * std::erfc(x / std::sqrt(2.0))) / pdf;
+      x -= dx;
+      if (std::abs(dx) < 1e-15 * (1.0 + std::abs(x))) break;
+    }
+    return x;
+  }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Visible normals for any direction (also below the horizon)
+// ---------------------------------------------------------------------------------------------
+
+// Samples m with density max(0, u.m) D(m) / int max(0, u.m) D(m) dm for any unit u with a
+// nonzero visible area (for u.z < 0 that area is |u.z| Lambda(-u): the downward-facing view sees
+// the backs of the slopes that face it). u.z >= 0: Ndf::sample_visible_normal (exact). u.z < 0:
+// the same constructions continued below the horizon:
+//   GGX: alpha = 1 GGX is the normal distribution of a hemisphere; seen from below the horizon
+//     its visible part projects onto the disk perpendicular to the stretched view as the lune
+//     between the half disk and the half ellipse compressed by |vs.z|, i.e. the same linear map
+//     p2 -> (1 - s) h + s p2, s = (1 + vs.z)/2, which now maps [-h, h] onto [|vs.z| h, h].
+//   Beckmann: the visible slope density (mu - x)+ P2(x) P2(y) with mu = cot(theta') < 0 (the
+//     same closed-form CDF, detail::beckmann_visible_slope_quantile).
+inline Vec3 sample_visible_normal_any(const Ndf& ndf, const Vec3& u, double u1, double u2) {
+  if (u.z() >= 0.0) return ndf.sample_visible_normal(u, u1, u2);
+  constexpr double one_minus = 1.0 - 0x1p-53;
+  u1 = std::clamp(u1, 0.0, one_minus);
+  u2 = std::clamp(u2, 0.0, one_minus);
+  const Vec3 vs = Vec3(ndf.alpha_x * u.x(), ndf.alpha_y * u.y(), u.z()).normalized();
+  const double lensq = vs.x() * vs.x() + vs.y() * vs.y();
+  if (!(lensq > 0.0)) return Vec3(0.0, 0.0, 1.0);  // straight down: nothing visible (never hit)
+  const double len = std::sqrt(lensq);
+  if (ndf.kind == Distribution::GGX) {
+    const Vec3 t1 = Vec3(-vs.y(), vs.x(), 0.0) / len;
+    const Vec3 t2 = vs.cross(t1);
+    const double r = std::sqrt(u1), phi = 2.0 * detail::kPi * u2;
+    const double p1 = r * std::cos(phi);
+    double p2 = r * std::sin(phi);
+    const double h = std::sqrt(std::max(0.0, 1.0 - p1 * p1));
+    const double s = 0.5 * (1.0 + vs.z());
+    p2 = (1.0 - s) * h + s * p2;
+    const double p3 = std::sqrt(std::max(0.0, 1.0 - p1 * p1 - p2 * p2));
+    const Vec3 nh = p1 * t1 + p2 * t2 + p3 * vs;
+    return Vec3(ndf.alpha_x * nh.x(), ndf.alpha_y * nh.y(), std::max(0.0, nh.z())).normalized();
+  }
+  const double cphi = vs.x() / len, sphi = vs.y() / len;
+  // mu < -20: the walk never hits from such directions (Lambda < 1e-170); clamp for safety.
+  const double mu = std::max(vs.z() / len, -20.0);
+  const double xt = detail::beckmann_visible_slope_quantile(mu, std::max(u1, 1e-300));
+  const double yt = detail::beckmann_visible_slope_quantile(detail::kInf, std::max(u2, 1e-300));
+  const double sx = ndf.alpha_x * (cphi * xt - sphi * yt);
+  const double sy = ndf.alpha_y * (sphi * xt + cphi * yt);
+  return Vec3(-sx, -sy, 1.0).normalized();
+}
+
+// ---------------------------------------------------------------------------------------------
+// The walk
+// ---------------------------------------------------------------------------------------------
+
+struct WalkExit {
+  bool lost = false;        // exceeded max_order scattering events
+  bool reflected = true;    // left upward (true) or into the material below (false)
+  int order = 0;            // number of scattering events
+  Vec3 direction = Vec3::UnitZ();  // outgoing direction (unit, real frame)
+  double weight = 1.0;      // product of conductor Fresnel factors (1 for mirror/dielectric)
+};
+
+class SmithRandomWalk {
+ public:
+  SmithRandomWalk(const Ndf& ndf, const Material& material,
+                  HeightDistribution heights = HeightDistribution::Uniform, int max_order = 100000)
+      : ndf_(ndf), material_(material), heights_{heights}, max_order_(max_order) {}
+
+  const Ndf& ndf() const { return ndf_; }
+  const Material& material() const { return material_; }
+  HeightDistribution heights() const { return heights_.kind; }
+
+  // One walk for light arriving from direction wi (pointing away from the surface, wi.z > 0).
+  template <class Rng>
+  WalkExit walk(const Vec3& wi, Rng& rng) const {
+    WalkExit out;
+    Vec3 w = -wi;       // propagation direction in the current frame
+    double h = detail::kInf;
+    bool above = true;  // current frame: the medium above (true) or the mirrored medium below
+    for (int order = 0;; ++order) {
+      // --- next intersection height (or escape)
+      const double c = (h == detail::kInf) ? 1.0 : heights_.C1(h);
+      double c_next;
+      if (w.z() > 0.0) {
+        const double lambda = ndf_.Lambda(w);
+        const double g1 = (lambda == 0.0) ? 1.0 : std::pow(c, lambda);
+        const double U = rng.uniform();
+        if (U < g1) {  // escapes
+          out.reflected = above;
+          out.order = order;
+          out.direction = above ? w : mirror_z(w);
+          return out;
+        }
+        c_next = c * std::pow(U, -1.0 / lambda);
+      } else if (w.z() < 0.0) {
+        const double lambda = ndf_.Lambda(-w);
+        const double U = 1.0 - rng.uniform();  // (0, 1]
+        c_next = c * std::pow(U, 1.0 / (1.0 + lambda));
+      } else {
+        c_next = c;  // horizontal: Lambda = inf, hits where it is
+      }
+      c_next = std::clamp(c_next, 0.0, 1.0);
+      h = heights_.invC1(c_next);
+      if (order + 1 > max_order_) {
+        out.lost = true;
+        out.order = order;
+        return out;
+      }
+      // --- facet normal: visible normals of the direction the ray came from (001 eq. 13)
+      const Vec3 v = -w;  // toward where the ray came from
+      Vec3 m;
+      double vm = 0.0;
+      // v.m > 0 by construction; a rounding-level v.m <= 0 (grazing visible normal) is redrawn.
+      for (int tries = 0; tries < 16 && !(vm > 0.0); ++tries) {
+        const double u1 = rng.uniform(), u2 = rng.uniform();
+        m = sample_visible_normal_any(ndf_, v, u1, u2);
+        vm = v.dot(m);
+      }
+      if (!(vm > 0.0)) {
+        out.lost = true;
+        out.order = order;
+        return out;
+      }
+      // --- scattering
+      switch (material_.kind) {
+        case MaterialKind::Mirror:
+          w = reflect(v, m);  // 000 eq. 13a
+          break;
+        case MaterialKind::Conductor:
+          out.weight *= material_.reflectance(vm, true);
+          w = reflect(v, m);
+          break;
+        case MaterialKind::Dielectric: {
+          const double F = material_.reflectance(vm, above);
+          if (rng.uniform() < F) {
+            w = reflect(v, m);
+          } else {
+            Vec3 t;
+            const double n = above ? material_.eta : 1.0 / material_.eta;  // far / near
+            if (!refract(v, m, 1.0 / n, &t)) {  // cannot happen when F < 1 (TIR gives F = 1)
+              w = reflect(v, m);
+            } else {
+              // 000 eq. 15a, then continue in the other medium's mirrored frame
+              w = mirror_z(t).normalized();
+              h = -h;
+              above = !above;
+            }
+          }
+          break;
+        }
+      }
+      w.normalize();
+    }
+  }
+
+ private:
+  Ndf ndf_;
+  Material material_;
+  SmithHeights heights_;
+  int max_order_;
+};
+
+// Per-order albedos of n walks (serial; the measure layer runs the parallel, binned version).
+// orders = K: orders 1 .. K-1 separately, K and above together in the last slot.
+struct WalkAlbedos {
+  int orders = 4;
+  std::uint64_t n = 0, lost = 0;
+  // [side][k], side 0 reflected, 1 transmitted; k = 0 .. K-1 orders, k = K total.
+  std::vector<double> sum[2], sum2[2];
+  explicit WalkAlbedos(int K = 4) : orders(K) {
+    for (int s = 0; s < 2; ++s) {
+      sum[s].assign(K + 1, 0.0);
+      sum2[s].assign(K + 1, 0.0);
+    }
+  }
+  void add(const WalkExit& e) {
+    ++n;
+    if (e.lost) {
+      ++lost;
+      return;
+    }
+    const int s = e.reflected ? 0 : 1;
+    const int k = std::min(e.order, orders) - 1;
+    if (k < 0) return;
+    sum[s][k] += e.weight;
+    sum2[s][k] += e.weight * e.weight;
+    sum[s][orders] += e.weight;
+    sum2[s][orders] += e.weight * e.weight;
+  }
+  double mean(int side, int k) const { return n ? sum[side][k] / n : 0.0; }
+  // Standard error of the mean of the per-walk contribution (0 or the walk's weight).
+  double stderr_(int side, int k) const {
+    if (n < 2) return 0.0;
+    const double m = mean(side, k);
+    return std::sqrt(std::max(0.0, sum2[side][k] / n - m * m) / (n - 1));
+  }
+};
+
+template <class RngFactory>
+WalkAlbedos smith_walk_albedos(const SmithRandomWalk& model, const Vec3& wi, std::uint64_t n,
+                               int orders, RngFactory make_rng) {
+  WalkAlbedos a(orders);
+  for (std::uint64_t k = 0; k < n; ++k) {
+    auto rng = make_rng(k);
+    a.add(model.walk(wi, rng));
+  }
+  return a;
+}
+
+}  // namespace microsim::models

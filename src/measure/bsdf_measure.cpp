@@ -1,0 +1,643 @@
+#include "microsim/measure/bsdf_measure.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+
+namespace microsim {
+
+// ---------------------------------------------------------------------------------------------
+// HemisphereMap
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+
+// Exact integral of 1 - max(a^2, b^2) over a triangle on which max(a^2, b^2) is one of the two
+// squares (decided at the centroid): the edge-midpoint rule is exact for quadratics.
+double triangle_integral(const Vec2& p0, const Vec2& p1, const Vec2& p2) {
+  const Vec2 c = (p0 + p1 + p2) / 3.0;
+  const bool use_a = std::abs(c.x()) >= std::abs(c.y());
+  auto g = [&](const Vec2& q) { return 1.0 - (use_a ? q.x() * q.x() : q.y() * q.y()); };
+  const double area = 0.5 * std::abs((p1 - p0).x() * (p2 - p0).y() - (p1 - p0).y() * (p2 - p0).x());
+  return area * (g(0.5 * (p0 + p1)) + g(0.5 * (p1 + p2)) + g(0.5 * (p2 + p0))) / 3.0;
+}
+
+}  // namespace
+
+HemisphereMap::HemisphereMap(int resolution) : res_(resolution) {
+  if (resolution < 1) throw UsageError("--resolution must be at least 1");
+  cos_integral_.resize(static_cast<std::size_t>(res_) * res_);
+  const double h = 2.0 / res_;
+  for (int j = 0; j < res_; ++j)
+    for (int i = 0; i < res_; ++i) {
+      // The global diagonals |a| = |b| run along pixel diagonals only, so splitting every pixel
+      // by its two diagonals leaves triangles on which the integrand is one quadratic.
+      const Vec2 p00(-1 + i * h, -1 + j * h), p10(-1 + (i + 1) * h, -1 + j * h);
+      const Vec2 p01(-1 + i * h, -1 + (j + 1) * h), p11(-1 + (i + 1) * h, -1 + (j + 1) * h);
+      const Vec2 c = 0.25 * (p00 + p10 + p01 + p11);
+      const double sum = triangle_integral(p00, p10, c) + triangle_integral(p10, p11, c) +
+                         triangle_integral(p11, p01, c) + triangle_integral(p01, p00, c);
+      cos_integral_[static_cast<std::size_t>(j) * res_ + i] = 0.5 * kPi * sum;  // d omega = pi/2 da db
+    }
+}
+
+Vec2 HemisphereMap::to_square(const Vec3& d) const {
+  const double z = std::min(1.0, std::abs(d.z()) / d.norm());
+  const double r = std::sqrt(std::max(0.0, 1.0 - z));
+  if (r == 0.0) return Vec2(0.0, 0.0);
+  double phi = std::atan2(d.y(), d.x());  // (-pi, pi]
+  if (phi < -0.25 * kPi) phi += 2 * kPi;  // [-pi/4, 7pi/4)
+  const double q = 4.0 / kPi;
+  if (phi < 0.25 * kPi) return Vec2(r, r * phi * q);
+  if (phi < 0.75 * kPi) return Vec2(r * (0.5 * kPi - phi) * q, r);
+  if (phi < 1.25 * kPi) return Vec2(-r, -r * (phi - kPi) * q);
+  return Vec2(-r * (1.5 * kPi - phi) * q, -r);
+}
+
+Vec3 HemisphereMap::from_square(double a, double b) const {
+  double r, phi;
+  if (a == 0.0 && b == 0.0) return Vec3(0, 0, 1);
+  if (std::abs(a) >= std::abs(b)) {
+    r = a;
+    phi = 0.25 * kPi * b / a;
+  } else {
+    r = b;
+    phi = 0.5 * kPi - 0.25 * kPi * a / b;
+  }
+  const double s = r * std::sqrt(std::max(0.0, 2.0 - r * r));
+  return Vec3(s * std::cos(phi), s * std::sin(phi), 1.0 - r * r);
+}
+
+int HemisphereMap::pixel_of(const Vec3& d) const {
+  const Vec2 sq = to_square(d);
+  const int i = std::clamp(static_cast<int>(std::floor((sq.x() + 1.0) * 0.5 * res_)), 0, res_ - 1);
+  const int j = std::clamp(static_cast<int>(std::floor((sq.y() + 1.0) * 0.5 * res_)), 0, res_ - 1);
+  return j * res_ + i;
+}
+
+// ---------------------------------------------------------------------------------------------
+// InPlaneBins
+// ---------------------------------------------------------------------------------------------
+
+InPlaneBins::InPlaneBins(double phi_i, int n_bins)
+    : n_(n_bins), width_(kPi / std::max(1, n_bins)), delta_(0.5 * kPi / std::max(1, n_bins)) {
+  s_ = Vec3(-std::cos(phi_i), -std::sin(phi_i), 0.0);
+  p_ = Vec3::UnitZ().cross(s_);
+}
+
+int InPlaneBins::bin_of(const Vec3& d0) const {
+  const Vec3 d = d0.normalized();
+  const double sb = d.dot(p_);
+  if (std::abs(sb) > std::sin(delta_)) return -1;
+  const double psi = std::atan2(d.dot(s_), std::abs(d.z()));
+  const int b = static_cast<int>(std::floor((psi + 0.5 * kPi) / width_));
+  return std::clamp(b, 0, n_ - 1);
+}
+
+double InPlaneBins::cos_integral(int b) const {
+  return (delta_ + std::sin(delta_) * std::cos(delta_)) * (std::sin(psi_hi(b)) - std::sin(psi_lo(b)));
+}
+
+Vec3 InPlaneBins::direction(double psi, double beta, bool above) const {
+  const Vec3 n = above ? Vec3::UnitZ() : Vec3(-Vec3::UnitZ());
+  return std::cos(beta) * (std::sin(psi) * s_ + std::cos(psi) * n) + std::sin(beta) * p_;
+}
+
+double InPlaneBins::cos_weighted_average(int b, bool above,
+                                         const std::function<double(const Vec3&)>& f) const {
+  static const double x6[6] = {-0.9324695142031521, -0.6612093864662645, -0.2386191860831969,
+                               0.2386191860831969,  0.6612093864662645,  0.9324695142031521};
+  static const double w6[6] = {0.1713244923791704, 0.3607615730481386, 0.4679139345726910,
+                               0.4679139345726910, 0.3607615730481386, 0.1713244923791704};
+  const double p0 = psi_lo(b), p1 = psi_hi(b);
+  double num = 0.0, den = 0.0;
+  for (int u = 0; u < 6; ++u) {
+    const double psi = 0.5 * (p0 + p1) + 0.5 * (p1 - p0) * x6[u];
+    for (int v = 0; v < 6; ++v) {
+      const double beta = delta_ * x6[v];
+      const double w = w6[u] * w6[v] * std::cos(beta) * std::cos(beta) * std::cos(psi);
+      num += w * f(direction(psi, beta, above));
+      den += w;
+    }
+  }
+  return den > 0 ? num / den : 0.0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tallies
+// ---------------------------------------------------------------------------------------------
+
+BsdfTally::BsdfTally(int K, int npix, int nplane) : orders(K), pixels(npix), plane_bins(nplane) {
+  const std::size_t s = 2 * static_cast<std::size_t>(K + 1);
+  albedo.assign(s, 0.0);
+  albedo2.assign(s, 0.0);
+  pix.assign(s * npix, 0.0);
+  pix2.assign(s * npix, 0.0);
+  plane.assign(s * nplane, 0.0);
+  plane2.assign(s * nplane, 0.0);
+}
+
+void BsdfTally::add_exit(int s, int order, double w, int px, int b) {
+  const int k = std::min(order, orders) - 1;
+  const double w2 = w * w;
+  for (int slot : {k, orders}) {
+    albedo[a_index(s, slot)] += w;
+    albedo2[a_index(s, slot)] += w2;
+    if (px >= 0) {
+      pix[p_index(s, slot, px)] += w;
+      pix2[p_index(s, slot, px)] += w2;
+    }
+    if (b >= 0) {
+      plane[b_index(s, slot, b)] += w;
+      plane2[b_index(s, slot, b)] += w2;
+    }
+  }
+}
+
+BsdfTally& BsdfTally::operator+=(const BsdfTally& o) {
+  if (albedo.empty()) return *this = o;
+  if (o.albedo.empty()) return *this;
+  auto add = [](std::vector<double>& a, const std::vector<double>& b) {
+    for (std::size_t k = 0; k < a.size(); ++k) a[k] += b[k];
+  };
+  add(albedo, o.albedo);
+  add(albedo2, o.albedo2);
+  add(pix, o.pix);
+  add(pix2, o.pix2);
+  add(plane, o.plane);
+  add(plane2, o.plane2);
+  paths += o.paths;
+  lost += o.lost;
+  unterminated += o.unterminated;
+  events += o.events;
+  counters += o.counters;
+  return *this;
+}
+
+Estimate tally_estimate(double sum, double sum2, std::uint64_t n, double scale) {
+  Estimate e;
+  e.n = n;
+  if (n == 0) return e;
+  const double m = sum / static_cast<double>(n);
+  e.mean = m * scale;
+  if (n > 1) {
+    const double var = std::max(0.0, sum2 / static_cast<double>(n) - m * m);
+    e.stderr_ = std::sqrt(var / static_cast<double>(n - 1)) * scale;
+  }
+  return e;
+}
+
+Estimate BsdfResult::albedo(int s, int k) const {
+  const auto i = measured.a_index(s, k);
+  return tally_estimate(measured.albedo[i], measured.albedo2[i], measured.paths);
+}
+Estimate BsdfResult::f_pixel(int s, int k, int px) const {
+  const auto i = measured.p_index(s, k, px);
+  return tally_estimate(measured.pix[i], measured.pix2[i], measured.paths, 1.0 / map.pixel_cos_integral(px));
+}
+Estimate BsdfResult::f_plane(int s, int k, int b) const {
+  const auto i = measured.b_index(s, k, b);
+  return tally_estimate(measured.plane[i], measured.plane2[i], measured.paths, 1.0 / plane.cos_integral(b));
+}
+Estimate BsdfResult::model_albedo(int s, int k) const {
+  if (!smith_walk) return {};
+  const auto i = smith_walk->a_index(s, k);
+  return tally_estimate(smith_walk->albedo[i], smith_walk->albedo2[i], smith_walk->paths);
+}
+Estimate BsdfResult::model_f_plane(int s, int k, int b) const {
+  if (!smith_walk) return {};
+  const auto i = smith_walk->b_index(s, k, b);
+  return tally_estimate(smith_walk->plane[i], smith_walk->plane2[i], smith_walk->paths, 1.0 / plane.cos_integral(b));
+}
+
+std::string order_key(int k, int orders) {
+  if (k == orders) return "total";
+  if (k == orders - 1) return "order_" + std::to_string(orders) + "plus";
+  return "order_" + std::to_string(k + 1);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The random walk on the explicit surface
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+
+constexpr std::uint64_t kChunk = 1 << 13;
+
+// Stratified origins on the tile: G x G strata (G a power of two, G^2 <= n) in Morton order,
+// r per stratum; the ray count is rounded up to r G^2 (as in g1_measure.cpp).
+struct Strata {
+  std::uint32_t grid = 1;
+  std::uint64_t per_stratum = 1;
+  explicit Strata(std::uint64_t n) {
+    while (static_cast<std::uint64_t>(grid) * 2 * grid * 2 <= n && grid < (1u << 15)) grid *= 2;
+    const std::uint64_t cells = static_cast<std::uint64_t>(grid) * grid;
+    per_stratum = (n + cells - 1) / cells;
+  }
+  std::uint64_t total() const { return per_stratum * grid * grid; }
+  Vec2 point(std::uint64_t i, CounterRng& rng) const {
+    std::uint32_t sx, sy;
+    morton_decode(i / per_stratum, sx, sy);
+    return Vec2((sx + rng.uniform()) / grid, (sy + rng.uniform()) / grid);
+  }
+};
+
+std::uint64_t direction_stream(std::uint64_t base, double theta, double phi) {
+  return base + static_cast<std::uint64_t>(theta * 1e6) * 7919 + static_cast<std::uint64_t>(phi * 1e6);
+}
+
+// Runs body(i, tally) for i in [0, n) in chunks, `batches` sequential parallel passes (progress
+// between them), each reduced deterministically; the merge order is fixed, so the sums are
+// identical for any thread count.
+template <class Body>
+BsdfTally run_paths(std::uint64_t n, int K, int npix, int nplane,
+                    const std::function<void(double)>& progress, double progress0, double progress_span,
+                    Body&& body) {
+  const std::uint64_t nchunks = (n + kChunk - 1) / kChunk;
+  const std::uint64_t batches = std::min<std::uint64_t>(nchunks, 64);
+  BsdfTally total(K, npix, nplane);
+  for (std::uint64_t bt = 0; bt < batches; ++bt) {
+    const std::uint64_t c0 = nchunks * bt / batches, c1 = nchunks * (bt + 1) / batches;
+    BsdfTally part = tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<std::uint64_t>(c0, c1, 1), BsdfTally(),
+        [&](const tbb::blocked_range<std::uint64_t>& range, BsdfTally acc) {
+          if (acc.albedo.empty()) acc = BsdfTally(K, npix, nplane);
+          for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
+            const std::uint64_t end = std::min(n, (c + 1) * kChunk);
+            for (std::uint64_t i = c * kChunk; i < end; ++i) body(i, acc);
+          }
+          return acc;
+        },
+        [](BsdfTally a, const BsdfTally& b) {
+          a += b;
+          return a;
+        });
+    total += part;
+    if (progress) progress(progress0 + progress_span * static_cast<double>(bt + 1) / batches);
+  }
+  return total;
+}
+
+}  // namespace
+
+BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
+  using namespace microsim::models;
+  const Microsurface& s = tracer.surface();
+  if (!s.macro().periodic)
+    throw UsageError("measure bsdf needs a periodic tile (the surface is a finite object)");
+  if (!(o.theta_i >= 0.0 && o.theta_i < 0.5 * kPi))
+    throw UsageError("--theta-i must be in [0, 90) degrees");
+  if (!std::isfinite(o.phi_i)) throw UsageError("--phi-i must be finite");
+  if (o.rays == 0) throw UsageError("--rays must be positive");
+  if (o.orders < 1 || o.orders > 64) throw UsageError("--orders must be in [1, 64]");
+  if (o.resolution < 1 || o.resolution > 4096) throw UsageError("--resolution must be in [1, 4096]");
+  const auto t0 = std::chrono::steady_clock::now();
+
+  BsdfResult r;
+  r.options = o;
+  r.options.progress = nullptr;
+  r.wi = direction_from_angles(o.theta_i, o.phi_i);
+  r.map = HemisphereMap(o.resolution);
+  r.plane = InPlaneBins(o.phi_i, o.resolution);
+  r.nominal = s.nominal;
+  const int K = o.orders, npix = r.map.size(), nplane = r.plane.size();
+  const Material mat = o.material;
+  const Vec3 wi = r.wi;
+  const Strata strata(o.rays);
+  const Macrosurface& macro = s.macro();
+  const Vec3 corner(-0.5 * macro.size_x, -0.5 * macro.size_y, tracer.z_top());
+  const std::uint64_t stream = direction_stream(0xB5DF0000ull, o.theta_i, o.phi_i);
+  const bool with_model = s.nominal && o.model_walks > 0;
+  const double share = with_model ? 0.8 : 1.0;
+
+  auto leave = [&](BsdfTally& t, bool reflected, int order, double w, const Vec3& d) {
+    t.add_exit(reflected ? 0 : 1, order, w, r.map.pixel_of(d), r.plane.bin_of(d));
+  };
+
+  r.measured = run_paths(strata.total(), K, npix, nplane, o.progress, 0.0, share,
+                         [&](std::uint64_t i, BsdfTally& t) {
+    CounterRng rng(o.seed, stream, i);
+    ++t.paths;
+    const Vec2 ab = strata.point(i, rng);
+    Vec3 dir = -wi;
+    RaySide side = RaySide::Front;
+    double weight = 1.0;
+    TraceHit hit = tracer.first_hit(corner + Vec3(ab.x() * macro.size_x, ab.y() * macro.size_y, 0.0), dir,
+                                    nullptr, t.counters);
+    for (int order = 0;; ++order) {
+      if (!hit.hit) {
+        if (side == RaySide::Front && dir.z() > 0.0 && order > 0) leave(t, true, order, weight, dir);
+        else if (side == RaySide::Back && hit.exit_below) leave(t, false, order, weight, dir);
+        else ++t.lost;  // lost below / unresolved (tracer counters), or left the solid upward
+        return;
+      }
+      // A hit on the unexpected side crossed the surface through a rounding gap.
+      if (hit.backface != (side == RaySide::Back)) {
+        ++t.lost;
+        return;
+      }
+      if (order + 1 > o.max_events) {
+        ++t.unterminated;
+        return;
+      }
+      ++t.events;
+      // Normal on the side of the current medium; v toward where the ray came from.
+      const Vec3 m = side == RaySide::Front ? hit.normal : Vec3(-hit.normal);
+      const Vec3 v = -dir;
+      const double vm = std::max(0.0, v.dot(m));
+      const bool front = side == RaySide::Front;
+      switch (mat.kind) {
+        case MaterialKind::Mirror:
+          dir = reflect(v, m);  // 000 eq. 13a
+          break;
+        case MaterialKind::Conductor:
+          weight *= mat.reflectance(vm, true);  // 000 eq. 8, complex index
+          dir = reflect(v, m);
+          break;
+        case MaterialKind::Dielectric: {
+          const double F = mat.reflectance(vm, front);
+          if (rng.uniform() < F) {
+            dir = reflect(v, m);
+          } else {
+            const double n = front ? mat.eta : 1.0 / mat.eta;  // far side over near side
+            Vec3 t_dir;
+            if (refract(v, m, 1.0 / n, &t_dir)) {  // 000 eq. 15a
+              dir = t_dir;
+              side = front ? RaySide::Back : RaySide::Front;
+            } else {
+              dir = reflect(v, m);
+            }
+          }
+          break;
+        }
+      }
+      dir.normalize();
+      const SourcePlane plane = SourcePlane::of(s.facet(hit.facet));
+      hit = tracer.first_hit(hit.point, dir, &plane, t.counters, side);
+    }
+  });
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  if (with_model) {
+    const auto tm = std::chrono::steady_clock::now();
+    const SmithRandomWalk walk(*s.nominal, mat, HeightDistribution::Uniform, o.max_events);
+    const std::uint64_t mstream = direction_stream(0x5A17000000ull, o.theta_i, o.phi_i);
+    struct Rng {
+      CounterRng c;
+      double uniform() { return c.uniform(); }
+    };
+    r.smith_walk = run_paths(o.model_walks, K, npix, nplane, o.progress, share, 1.0 - share,
+                             [&](std::uint64_t i, BsdfTally& t) {
+      Rng rng{CounterRng(o.seed, mstream, i)};
+      ++t.paths;
+      const WalkExit e = walk.walk(wi, rng);
+      t.events += static_cast<std::uint64_t>(e.order);
+      if (e.lost) {
+        ++t.unterminated;
+        return;
+      }
+      leave(t, e.reflected, e.order, e.weight, e.direction);
+    });
+    r.model_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - tm).count();
+  }
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Output
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+Json z_or_null(double x, double model, double se) {
+  if (!(se > 0)) return nullptr;
+  return (x - model) / se;
+}
+}  // namespace
+
+Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
+  using namespace microsim::models;
+  const int K = r.options.orders;
+  const char* side_name[2] = {"reflected", "transmitted"};
+  const bool transmits = r.options.material.transmits();
+  Json j;
+  // --- albedos
+  Json albedo = Json::object(), stderr_[2] = {Json::object(), Json::object()};
+  for (int sd = 0; sd < 2; ++sd) {
+    Json a = Json::object();
+    for (int k = 0; k <= K; ++k) {
+      const Estimate e = r.albedo(sd, k);
+      a[order_key(k, K)] = e.mean;
+      stderr_[sd][order_key(k, K)] = e.stderr_;
+    }
+    albedo[side_name[sd]] = a;
+  }
+  j["albedo"] = albedo;
+  j["reflected_stderr"] = stderr_[0];
+  j["transmitted_stderr"] = stderr_[1];
+  {
+    const Estimate R = r.albedo(0, K), T = r.albedo(1, K);
+    // R + T per path is the path's weight when it leaves: its own standard error.
+    const auto& m = r.measured;
+    double sum = m.albedo[m.a_index(0, K)] + m.albedo[m.a_index(1, K)];
+    double sum2 = m.albedo2[m.a_index(0, K)] + m.albedo2[m.a_index(1, K)];
+    const Estimate RT = tally_estimate(sum, sum2, m.paths);
+    j["reflected_plus_transmitted"] = RT.mean;
+    j["reflected_plus_transmitted_stderr"] = RT.stderr_;
+    (void)R;
+    (void)T;
+  }
+
+  // --- models of the albedo
+  const double ci = std::cos(r.options.theta_i);
+  Json models = Json::object();
+  {
+    const Material& mat = r.options.material;
+    Json smooth;
+    if (mat.kind == MaterialKind::Mirror) {
+      smooth = {{"reflected", 1.0}, {"transmitted", 0.0}};
+    } else if (mat.kind == MaterialKind::Conductor) {
+      const auto F = fresnel_conductor(ci, mat.eta, mat.k);
+      smooth = {{"reflected", F.unpolarized()}, {"transmitted", 0.0}, {"rs", F.Rs}, {"rp", F.Rp}};
+    } else {
+      const auto F = fresnel_dielectric(ci, mat.eta);
+      smooth = {{"reflected", F.unpolarized()}, {"transmitted", 1.0 - F.unpolarized()}, {"rs", F.Rs}, {"rp", F.Rp}};
+    }
+    models["smooth_interface"] = smooth;
+  }
+  SingleScatteringAlbedo hc, vc;
+  if (r.nominal) {
+    hc = single_scattering_albedo(MicrofacetBsdf{*r.nominal, r.options.material, Masking::SmithHeightCorrelated}, r.wi);
+    vc = single_scattering_albedo(MicrofacetBsdf{*r.nominal, r.options.material, Masking::VCavity}, r.wi);
+    models["smith_single"] = {{"reflected", hc.reflected}, {"transmitted", hc.transmitted}};
+    models["vcavity_single"] = {{"reflected", vc.reflected}, {"transmitted", vc.transmitted}};
+  } else {
+    models["smith_single"] = nullptr;
+    models["vcavity_single"] = nullptr;
+  }
+  if (r.smith_walk) {
+    Json mw = Json::object(), ms[2] = {Json::object(), Json::object()};
+    for (int sd = 0; sd < 2; ++sd) {
+      Json a = Json::object();
+      for (int k = 0; k <= K; ++k) {
+        const Estimate e = r.model_albedo(sd, k);
+        a[order_key(k, K)] = e.mean;
+        ms[sd][order_key(k, K)] = e.stderr_;
+      }
+      mw[side_name[sd]] = a;
+    }
+    mw["reflected_stderr"] = ms[0];
+    mw["transmitted_stderr"] = ms[1];
+    mw["walks"] = r.smith_walk->paths;
+    mw["unterminated"] = r.smith_walk->unterminated;
+    models["smith_multiple"] = mw;
+  } else {
+    models["smith_multiple"] = nullptr;
+  }
+  j["albedo_models"] = models;
+
+  // --- comparison rows: measured vs models per side and order
+  Json rows = Json::array();
+  for (int sd = 0; sd < (transmits ? 2 : 1); ++sd)
+    for (int k = 0; k <= K; ++k) {
+      Json row;
+      row["side"] = side_name[sd];
+      row["order"] = order_key(k, K);
+      const Estimate e = r.albedo(sd, k);
+      row["albedo"] = e.mean;
+      row["albedo_stderr"] = e.stderr_;
+      if (r.smith_walk) {
+        const Estimate m = r.model_albedo(sd, k);
+        const double se = std::hypot(e.stderr_, m.stderr_);
+        row["smith_multiple"] = m.mean;
+        row["smith_multiple_stderr"] = m.stderr_;
+        row["z_smith_multiple"] = z_or_null(e.mean, m.mean, se);
+        row["rel_dev_smith_multiple"] = m.mean != 0 ? Json((e.mean - m.mean) / m.mean) : Json(nullptr);
+      }
+      if (r.nominal && k == 0) {
+        const double m = sd == 0 ? hc.reflected : hc.transmitted;
+        const double v = sd == 0 ? vc.reflected : vc.transmitted;
+        row["smith_single"] = m;
+        row["z_smith_single"] = z_or_null(e.mean, m, e.stderr_);
+        row["rel_dev_smith_single"] = m != 0 ? Json((e.mean - m) / m) : Json(nullptr);
+        row["vcavity_single"] = v;
+        row["z_vcavity_single"] = z_or_null(e.mean, v, e.stderr_);
+      }
+      if (k == K) {
+        const double sm = models["smooth_interface"][side_name[sd]].get<double>();
+        row["smooth_interface"] = sm;
+        row["z_smooth_interface"] = z_or_null(e.mean, sm, e.stderr_);
+      }
+      rows.push_back(row);
+    }
+  j["rows"] = rows;
+
+  // --- in-plane rows
+  Json in_plane = Json::array();
+  for (int sd = 0; sd < (transmits ? 2 : 1); ++sd) {
+    const bool above = sd == 0;
+    for (int b = 0; b < r.plane.size(); ++b) {
+      Json row;
+      row["side"] = side_name[sd];
+      row["theta_o_deg"] = deg(r.plane.psi_center(b));
+      row["theta_o_range_deg"] = {deg(r.plane.psi_lo(b)), deg(r.plane.psi_hi(b))};
+      for (int k = 0; k <= K; ++k) {
+        const Estimate e = r.f_plane(sd, k, b);
+        const std::string key = "f_" + order_key(k, K);
+        row[key] = e.mean;
+        row[key + "_stderr"] = e.stderr_;
+      }
+      if (r.nominal) {
+        const MicrofacetBsdf hcb{*r.nominal, r.options.material, Masking::SmithHeightCorrelated};
+        const MicrofacetBsdf vcb{*r.nominal, r.options.material, Masking::VCavity};
+        const Vec3 wi = r.wi;
+        const double sm = r.plane.cos_weighted_average(b, above, [&](const Vec3& o) { return hcb.eval(o, wi); });
+        const double vm = r.plane.cos_weighted_average(b, above, [&](const Vec3& o) { return vcb.eval(o, wi); });
+        row["smith_single"] = sm;
+        row["vcavity_single"] = vm;
+        const Estimate e1 = r.f_plane(sd, 0, b);
+        row["z_smith_single"] = z_or_null(e1.mean, sm, e1.stderr_);
+        row["z_vcavity_single"] = z_or_null(e1.mean, vm, e1.stderr_);
+      } else {
+        row["smith_single"] = nullptr;
+        row["vcavity_single"] = nullptr;
+      }
+      if (r.smith_walk) {
+        const Estimate m = r.model_f_plane(sd, K, b), m1 = r.model_f_plane(sd, 0, b);
+        row["smith_multiple"] = m.mean;
+        row["smith_multiple_stderr"] = m.stderr_;
+        row["smith_multiple_order_1"] = m1.mean;
+        row["smith_multiple_order_1_stderr"] = m1.stderr_;
+        const Estimate e = r.f_plane(sd, K, b);
+        row["z_smith_multiple"] = z_or_null(e.mean, m.mean, std::hypot(e.stderr_, m.stderr_));
+      } else {
+        row["smith_multiple"] = nullptr;
+      }
+      in_plane.push_back(row);
+    }
+  }
+  j["in_plane"] = in_plane;
+
+  // --- bookkeeping
+  const auto& m = r.measured;
+  j["paths"] = m.paths;
+  j["lost_paths"] = m.lost;
+  j["unterminated_paths"] = m.unterminated;
+  j["scattering_events"] = m.events;
+  j["mean_events_per_path"] = m.paths ? static_cast<double>(m.events) / m.paths : 0.0;
+  j["traced_rays"] = m.counters.rays;
+  j["tracer"] = {{"lost_below", m.counters.lost_below},
+                 {"unresolved", m.counters.unresolved},
+                 {"wrong_side_hits", m.counters.backface_hits},
+                 {"border_crossings", m.counters.border_crossings}};
+  j["seconds"] = r.seconds;
+  j["model_seconds"] = r.model_seconds;
+  j["rays_per_second"] = (r.seconds - r.model_seconds) > 0 ? m.counters.rays / (r.seconds - r.model_seconds) : 0.0;
+  (void)s;
+  return j;
+}
+
+ExrTable bsdf_exr_table(const BsdfResult& r, const Json& attributes) {
+  const int R = r.map.resolution(), K = r.options.orders;
+  ExrTable t;
+  t.width = R;
+  t.height = R;
+  const char* side_name[2] = {"reflected", "transmitted"};
+  const int sides = r.options.material.transmits() ? 2 : 1;
+  for (int sd = 0; sd < sides; ++sd)
+    for (int k = 0; k <= K; ++k) {
+      std::vector<float> f(static_cast<std::size_t>(R) * R), se(f.size());
+      for (int px = 0; px < R * R; ++px) {
+        const Estimate e = r.f_pixel(sd, k, px);
+        // EXR rows run top to bottom: row y holds square row j = R - 1 - y (b increases upward).
+        const int i = px % R, jrow = px / R;
+        const std::size_t out = static_cast<std::size_t>(R - 1 - jrow) * R + i;
+        f[out] = static_cast<float>(e.mean);
+        se[out] = static_cast<float>(e.stderr_);
+      }
+      const std::string base = std::string(side_name[sd]) + ".f_" + order_key(k, K);
+      t.channel_names.push_back(base);
+      t.channels.push_back(std::move(f));
+      t.channel_names.push_back(base + "_stderr");
+      t.channels.push_back(std::move(se));
+    }
+  t.attributes = attributes;
+  t.attributes["parameterization"] =
+      "equal-area hemisphere map: pixel (x, y) covers square coordinates a in [-1 + 2x/R, -1 + 2(x+1)/R], "
+      "b in [1 - 2(y+1)/R, 1 - 2y/R] (y = 0 is the top row, b = +1); (a, b) -> unit disk by the "
+      "Shirley-Chiu concentric map (r = max(|a|,|b|), phi = pi/4 b/a if |a| >= |b| else pi/2 - pi/4 "
+      "a/b), disk -> hemisphere by Lambert's equal-area map: |cos theta_o| = 1 - r^2, direction "
+      "(r sqrt(2 - r^2) cos phi, r sqrt(2 - r^2) sin phi, +-(1 - r^2)); phi = 0 is +x of the tile. "
+      "Every pixel subtends 2 pi / R^2 sr. Channels reflected.* are the upper hemisphere, "
+      "transmitted.* the lower one (z -> -z).";
+  t.attributes["value"] =
+      "f = p / int_pixel |cos theta_o| d omega (exact pixel integral): p = fraction of the incident "
+      "power leaving through the pixel after the channel's scattering orders; the radiance BSDF of "
+      "000 eq. 4a; *_stderr its standard error";
+  return t;
+}
+
+}  // namespace microsim

@@ -1,0 +1,290 @@
+// Tests of the BSDF random-walk estimator (measure/bsdf_measure.hpp) and of the tracer's
+// back-side rays it relies on: exact cases (flat plane: Fresnel; V-groove: orders by geometry),
+// conservation (no path lost, R + T = 1), the equal-area map and in-plane bins, thread-count
+// independence, and reciprocity of measured tables (000 eq. 4c, with eta^2 for transmission).
+#include <gtest/gtest.h>
+
+#include <tbb/global_control.h>
+
+#include <cmath>
+
+#include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/surface/gaussian.hpp"
+#include "microsim/surface/surface_io.hpp"
+#include "test_helpers.hpp"
+
+using namespace microsim;
+using namespace microsim::testing;
+namespace mm = microsim::models;
+
+namespace {
+
+double sidak_z(double alpha, int k) {
+  const double per = 1 - std::pow(1 - alpha, 1.0 / k);
+  double lo = 0, hi = 10;
+  for (int i = 0; i < 100; ++i) {
+    const double z = 0.5 * (lo + hi);
+    if (std::erfc(z / std::sqrt(2.0)) > per) lo = z; else hi = z;
+  }
+  return 0.5 * (lo + hi);
+}
+
+BsdfOptions options(const mm::Material& m, double theta_deg, double phi_deg, std::uint64_t rays, int res = 16) {
+  BsdfOptions o;
+  o.material = m;
+  o.theta_i = rad(theta_deg);
+  o.phi_i = rad(phi_deg);
+  o.rays = rays;
+  o.resolution = res;
+  return o;
+}
+
+// The surface seen from below: heights negated (z -> -z).
+Microsurface flipped(const Microsurface& s) {
+  std::vector<float> h = s.heights();
+  for (float& x : h) x = -x;
+  return Microsurface::heightfield(s.nx(), s.ny(), s.macro().size_x, s.macro().size_y, std::move(h));
+}
+
+}  // namespace
+
+TEST(HemisphereMap, EqualAreaAndExactCosIntegrals) {
+  for (int R : {1, 2, 7, 16}) {
+    HemisphereMap map(R);
+    double total = 0.0;
+    for (int px = 0; px < map.size(); ++px) total += map.pixel_cos_integral(px);
+    EXPECT_NEAR(total, kPi, 1e-12) << R;  // int_hemisphere cos = pi
+    // Each pixel against brute-force midpoint quadrature of |cos| (pi/2 da db).
+    for (int px = 0; px < map.size(); ++px) {
+      const int i = px % R, j = px / R, n = 400;
+      const double h = 2.0 / R;
+      double s = 0.0;
+      for (int a = 0; a < n; ++a)
+        for (int b = 0; b < n; ++b) {
+          const double u = -1 + (i + (a + 0.5) / n) * h, v = -1 + (j + (b + 0.5) / n) * h;
+          s += map.from_square(u, v).z();
+        }
+      const double brute = s * (h / n) * (h / n) * 0.5 * kPi;  // midpoint error ~1e-5 relative
+      EXPECT_NEAR(map.pixel_cos_integral(px), brute, 3e-5 * brute) << R << " " << px;
+    }
+  }
+  // Round trips and pixel lookup; the map preserves area (solid angle of a pixel = 2 pi / R^2,
+  // checked by sampling directions uniformly on the hemisphere).
+  HemisphereMap map(8);
+  CounterRng rng(1, 2, 3);
+  std::vector<int> count(map.size(), 0);
+  const int n = 400000;
+  for (int k = 0; k < n; ++k) {
+    const double z = rng.uniform(), phi = 2 * kPi * rng.uniform(), r = std::sqrt(1 - z * z);
+    const Vec3 d(r * std::cos(phi), r * std::sin(phi), z);
+    const Vec2 sq = map.to_square(d);
+    ASSERT_LT((map.from_square(sq.x(), sq.y()) - d).norm(), 1e-12);
+    ++count[map.pixel_of(d)];
+    EXPECT_EQ(map.pixel_of(d), map.pixel_of(Vec3(d.x(), d.y(), -d.z())));
+  }
+  const double p = 1.0 / map.size(), zmax = sidak_z(0.01, map.size());
+  for (int c : count) EXPECT_LT(std::abs(c - n * p) / std::sqrt(n * p * (1 - p)), zmax);
+}
+
+TEST(InPlaneBins, GeometryAndExactCosIntegral) {
+  const double phi_i = rad(30);
+  InPlaneBins bins(phi_i, 12);
+  const Vec3 l = direction_from_angles(rad(40), phi_i);
+  const Vec3 spec(-l.x(), -l.y(), l.z());
+  const int b = bins.bin_of(spec);
+  ASSERT_GE(b, 0);
+  EXPECT_GT(bins.psi_center(b), 0.0);  // specular side is positive
+  EXPECT_LE(bins.psi_lo(b), rad(40) + 1e-12);
+  EXPECT_GE(bins.psi_hi(b), rad(40) - 1e-12);
+  EXPECT_LT(bins.psi_center(bins.bin_of(l)), 0.0);  // back toward the light: negative
+  EXPECT_EQ(bins.bin_of(direction_from_angles(rad(40), phi_i + kPi / 2)), -1);  // out of the band
+  for (int k = 0; k < bins.size(); ++k) {
+    for (double beta : {-0.9, 0.0, 0.9})
+      for (bool above : {true, false}) {
+        const Vec3 d = bins.direction(bins.psi_center(k), beta * bins.half_width(), above);
+        EXPECT_EQ(bins.bin_of(d), k);
+        EXPECT_EQ(d.z() > 0, above);
+      }
+    // cos-weighted average of 1 is 1, and the exact integral matches a midpoint sum.
+    EXPECT_NEAR(bins.cos_weighted_average(k, true, [](const Vec3&) { return 1.0; }), 1.0, 1e-14);
+    const int n = 300;
+    double s = 0.0;
+    for (int a = 0; a < n; ++a)
+      for (int c = 0; c < n; ++c) {
+        const double psi = bins.psi_lo(k) + (a + 0.5) / n * (bins.psi_hi(k) - bins.psi_lo(k));
+        const double beta = -bins.half_width() + (c + 0.5) / n * 2 * bins.half_width();
+        s += std::abs(bins.direction(psi, beta, true).z()) * std::cos(beta);
+      }
+    s *= (bins.psi_hi(k) - bins.psi_lo(k)) / n * 2 * bins.half_width() / n;
+    EXPECT_NEAR(bins.cos_integral(k), s, 1e-6);
+  }
+}
+
+TEST(BsdfMeasure, FlatDielectricIsFresnel) {
+  // 000 eq. 7d / 10b: a flat interface reflects F and transmits 1 - F, all in order 1.
+  Microsurface s = flat_heightfield(16);
+  Tracer tracer(s);
+  std::vector<double> zs;
+  for (double eta : {1.5, 1.0 / 1.5})
+    for (double theta : {0.0, 30.0, 60.0, 80.0}) {
+      const BsdfResult r = measure_bsdf(tracer, options(mm::Material::dielectric(eta), theta, 10.0, 100000));
+      const double F = mm::fresnel_dielectric_unpolarized(std::cos(rad(theta)), eta);
+      EXPECT_EQ(r.measured.lost, 0u);
+      const Estimate R = r.albedo(0, 4), T = r.albedo(1, 4);
+      EXPECT_NEAR(R.mean + T.mean, 1.0, 1e-12);
+      EXPECT_EQ(r.albedo(0, 0).mean, R.mean);  // order 1 only
+      EXPECT_EQ(r.albedo(1, 0).mean, T.mean);
+      if (F == 1.0) {
+        EXPECT_EQ(R.mean, 1.0);  // total internal reflection (beyond 41.8 deg for 1/1.5)
+        continue;
+      }
+      zs.push_back((R.mean - F) / R.stderr_);
+      // The transmitted rays leave in the refracted direction (000 eq. 15a), reflected specularly.
+      Vec3 t;
+      ASSERT_TRUE(mm::refract(r.wi, Vec3::UnitZ(), 1.0 / eta, &t));
+      const int bt = r.plane.bin_of(t), br = r.plane.bin_of(Vec3(-r.wi.x(), -r.wi.y(), r.wi.z()));
+      EXPECT_NEAR(r.f_plane(1, 4, bt).mean * r.plane.cos_integral(bt), T.mean, 1e-12);
+      EXPECT_NEAR(r.f_plane(0, 4, br).mean * r.plane.cos_integral(br), R.mean, 1e-12);
+    }
+  const double zmax = sidak_z(0.01, static_cast<int>(zs.size()));
+  for (double z : zs) EXPECT_LT(std::abs(z), zmax);
+  // Power: a 1% wrong reflectance is far outside these errors.
+  EXPECT_GT(zs.size(), 5u);
+}
+
+TEST(BsdfMeasure, FlatConductorAndMirrorAreExact) {
+  Microsurface s = flat_heightfield(8);
+  Tracer tracer(s);
+  const BsdfResult c = measure_bsdf(tracer, options(mm::Material::conductor(0.2, 3.4), 50.0, 0.0, 20000));
+  const double F = mm::fresnel_conductor(std::cos(rad(50)), 0.2, 3.4).unpolarized();
+  EXPECT_NEAR(c.albedo(0, 4).mean, F, 1e-12);
+  EXPECT_NEAR(c.albedo(0, 4).stderr_, 0.0, 1e-9);
+  const BsdfResult m = measure_bsdf(tracer, options(mm::Material::mirror(), 0.0, 0.0, 20000));
+  EXPECT_EQ(m.albedo(0, 0).mean, 1.0);
+  const int px = m.map.pixel_of(Vec3::UnitZ());
+  EXPECT_NEAR(m.f_pixel(0, 4, px).mean * m.map.pixel_cos_integral(px), 1.0, 1e-12);
+}
+
+TEST(BsdfMeasure, VGrooveOrdersByGeometry) {
+  // Mirror V-grooves with facet angle t in (30, 45) deg at normal incidence: a ray hitting a
+  // facet at distance x from the valley reflects toward the other facet and hits it iff
+  // x < W (4 sin^2 t - 1) (2D geometry), then leaves: order 2 with probability 4 sin^2 t - 1.
+  for (double tdeg : {35.0, 40.0}) {
+    Microsurface s = vgroove_heightfield(16, 16, rad(tdeg));
+    Tracer tracer(s);
+    const BsdfResult r = measure_bsdf(tracer, options(mm::Material::mirror(), 0.0, 0.0, 200000));
+    const double t = rad(tdeg), p2 = 4 * std::sin(t) * std::sin(t) - 1;
+    EXPECT_EQ(r.measured.lost, 0u);
+    EXPECT_EQ(r.albedo(0, 4).mean, 1.0);
+    const Estimate e2 = r.albedo(0, 1);
+    EXPECT_LT(std::abs(e2.mean - p2) / e2.stderr_, 3.5) << tdeg << ": " << e2.mean << " vs " << p2;
+    EXPECT_EQ(r.albedo(0, 2).mean, 0.0);
+    // Order-1 rays leave at 2t from the normal, order-2 rays at 180 - 4t (symmetric on both sides).
+    const int b1 = r.plane.bin_of(direction_from_angles(2 * t, 0.0));
+    const int b1m = r.plane.bin_of(direction_from_angles(2 * t, kPi));
+    EXPECT_NEAR(r.f_plane(0, 0, b1).mean * r.plane.cos_integral(b1) +
+                    r.f_plane(0, 0, b1m).mean * r.plane.cos_integral(b1m),
+                r.albedo(0, 0).mean, 1e-12);
+    const int b2 = r.plane.bin_of(direction_from_angles(kPi - 4 * t, 0.0));
+    const int b2m = r.plane.bin_of(direction_from_angles(kPi - 4 * t, kPi));
+    EXPECT_NEAR(r.f_plane(0, 1, b2).mean * r.plane.cos_integral(b2) +
+                    r.f_plane(0, 1, b2m).mean * r.plane.cos_integral(b2m),
+                r.albedo(0, 1).mean, 1e-12);
+  }
+}
+
+TEST(BsdfMeasure, DielectricConservesEnergyOnRoughSurfaces) {
+  // Both sides of the interface, total internal reflection, exits below: no path is lost.
+  Microsurface s = bumpy_heightfield(64, 0.08);
+  Tracer tracer(s);
+  for (double eta : {1.5, 1.0 / 1.5})
+    for (double theta : {0.0, 70.0}) {
+      const BsdfResult r = measure_bsdf(tracer, options(mm::Material::dielectric(eta), theta, 20.0, 100000));
+      EXPECT_EQ(r.measured.lost, 0u);
+      EXPECT_EQ(r.measured.unterminated, 0u);
+      EXPECT_EQ(r.measured.counters.backface_hits, 0u);
+      EXPECT_NEAR(r.albedo(0, 4).mean + r.albedo(1, 4).mean, 1.0, 1e-12);
+      EXPECT_GT(r.albedo(1, 1).mean + r.albedo(0, 1).mean, 0.0);  // multiple scattering happens
+    }
+}
+
+TEST(BsdfMeasure, PeriodicMeshTracesLikeTheHeightfield) {
+  // The same facets as Embree triangles (with their periodic copies) instead of a grid: the
+  // back-side rays of a dielectric see the same faces, the albedos agree path by path up to
+  // rounding (same random numbers).
+  Microsurface h = bumpy_heightfield(32, 0.06);
+  Microsurface m = heightfield_to_mesh(h);
+  Tracer th(h), tm(m);
+  for (double eta : {1.5, 1.0 / 1.5}) {
+    const BsdfOptions o = options(mm::Material::dielectric(eta), 50.0, 30.0, 50000);
+    const BsdfResult a = measure_bsdf(th, o), b = measure_bsdf(tm, o);
+    EXPECT_EQ(b.measured.lost, 0u);
+    EXPECT_EQ(b.measured.counters.backface_hits, 0u);
+    EXPECT_NEAR(b.albedo(0, 4).mean + b.albedo(1, 4).mean, 1.0, 1e-12);
+    for (int side = 0; side < 2; ++side)
+      for (int k = 0; k <= 4; ++k) EXPECT_NEAR(a.albedo(side, k).mean, b.albedo(side, k).mean, 1e-3) << side << k;
+  }
+}
+
+TEST(BsdfMeasure, IndependentOfThreadCount) {
+  Microsurface s = bumpy_heightfield(64, 0.08);
+  Tracer tracer(s);
+  BsdfOptions o = options(mm::Material::conductor(0.2, 3.4), 45.0, 0.0, 50000);
+  BsdfResult a, b;
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    a = measure_bsdf(tracer, o);
+  }
+  b = measure_bsdf(tracer, o);
+  EXPECT_EQ(a.measured.albedo, b.measured.albedo);  // bitwise
+  EXPECT_EQ(a.measured.pix, b.measured.pix);
+  EXPECT_EQ(a.measured.plane2, b.measured.plane2);
+}
+
+TEST(BsdfMeasure, MeasuredTablesAreReciprocal) {
+  // 000 eq. 4c on the explicit surface. Reflection: f(b <- a) = f(a <- b) with both angles at
+  // in-plane bin centers. Transmission: light from below is light from above on the surface
+  // seen from below (heights negated) with the inverse index; f_t(o <- i) / eta_o^2 =
+  // f_t(i <- o) / eta_i^2.
+  GaussianParams gp;
+  gp.resolution = 128;
+  gp.alpha_x = gp.alpha_y = 0.5;
+  gp.seed = 3;
+  Microsurface s = generate_gaussian(gp);
+  Microsurface sf = flipped(s);
+  Tracer tracer(s), tracer_f(sf);
+  const int res = 32;
+  const double w = 180.0 / res;
+  auto center = [&](int b) { return -90.0 + (b + 0.5) * w; };
+  const double ta = center(16 + 3), tb = center(16 + 9);  // 14.06 and 47.81 deg
+  std::vector<double> zs;
+  // reflection: light at ta (azimuth 0), read the specular-side bin at tb (azimuth 180); and
+  // the reverse path. (The same with the light at azimuth 0 both times is a rotated, i.e.
+  // different, surface: one tile's realization differs by ~10% there.)
+  {
+    const BsdfResult r1 = measure_bsdf(tracer, options(mm::Material::mirror(), ta, 0.0, 1500000, res));
+    // reverse path: light from (tb, azimuth 180), leaving toward (ta, azimuth 0) = its specular side
+    const BsdfResult r2 = measure_bsdf(tracer, options(mm::Material::mirror(), tb, 180.0, 1500000, res));
+    const Estimate f1 = r1.f_plane(0, 4, 16 + 9), f2 = r2.f_plane(0, 4, 16 + 3);
+    zs.push_back((f1.mean - f2.mean) / std::hypot(f1.stderr_, f2.stderr_));
+    EXPECT_GT(f1.mean, 10 * f1.stderr_);
+  }
+  // transmission through glass: above (eta 1) at 50.6 deg -> below (eta 1.5) at 30.9 deg (near
+  // the refracted direction), and back from below
+  {
+    const double eta = 1.5;
+    const int ba = 25, bb = 21;
+    const BsdfResult r1 = measure_bsdf(tracer, options(mm::Material::dielectric(eta), center(ba), 0.0, 1500000, res));
+    // from below at tb, toward azimuth 0 above: on the flipped surface, light from above at tb
+    // with azimuth 180, leaving toward azimuth 0 (its specular side)
+    const BsdfResult r2 =
+        measure_bsdf(tracer_f, options(mm::Material::dielectric(1 / eta), center(bb), 180.0, 1500000, res));
+    const Estimate f1 = r1.f_plane(1, 4, bb), f2 = r2.f_plane(1, 4, ba);
+    const double c = 1.0 / (eta * eta);  // eta_i^2 / eta_o^2 for f1 (i above, o below)
+    zs.push_back((c * f1.mean - f2.mean) / std::hypot(c * f1.stderr_, f2.stderr_));
+    EXPECT_GT(f1.mean, 10 * f1.stderr_);
+    // without the eta^2 the two differ by far more than their errors (the test has power)
+    EXPECT_GT(std::abs(f1.mean - f2.mean) / std::hypot(f1.stderr_, f2.stderr_), 10.0);
+  }
+  for (double z : zs) EXPECT_LT(std::abs(z), sidak_z(0.01, 2)) << z;
+}

@@ -1,0 +1,139 @@
+// microsim measure bsdf as users and scripts see it: the output files and the fields the issue
+// names, and bad input answered with one line on stderr, exit code 2 and no output file.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+#include <nlohmann/json.hpp>
+
+#include "microsim/io/output.hpp"
+
+namespace {
+struct Result {
+  int code;
+  std::string out, err;
+};
+// Per-process names: CTest runs test cases as separate processes in parallel.
+std::string tmp(const std::string& name) {
+  return ::testing::TempDir() + "microsim_cli_bsdf_" + std::to_string(getpid()) + "_" + name;
+}
+std::string slurp(const std::string& p) {
+  std::ifstream f(p);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+bool exists(const std::string& p) {
+  struct stat st;
+  return stat(p.c_str(), &st) == 0;
+}
+Result run(const std::string& args) {
+  std::string out = tmp("stdout.txt"), err = tmp("stderr.txt");
+  std::string cmd = std::string(MICROSIM_BINARY) + " " + args + " >" + out + " 2>" + err;
+  int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+int lines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+class CliBsdf : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    surface_ = tmp("s.exr");
+    Result r = run("generate gaussian --resolution 64 --alpha 0.5 --seed 2 -o " + surface_);
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  static void expect_usage_error(const std::string& args, const std::string& output, const std::string& needle) {
+    std::remove(output.c_str());
+    Result r = run(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+    EXPECT_EQ(lines(r.err), 1) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(needle), std::string::npos) << args << "\n" << r.err;
+    EXPECT_FALSE(exists(output)) << args;
+  }
+  static std::string surface_;
+};
+std::string CliBsdf::surface_;
+
+}  // namespace
+
+TEST_F(CliBsdf, ExrTableAndJsonSummaryWithTheIssuesFields) {
+  const std::string out = tmp("d.exr"), js = tmp("d.json");
+  std::remove(out.c_str());
+  std::remove(js.c_str());
+  Result r = run("measure bsdf " + surface_ +
+                 " --material dielectric --eta 1.5 --theta-i 40 --phi-i 0 --rays 20000 --resolution 16 -q -o " + out);
+  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_TRUE(exists(out));
+  ASSERT_TRUE(exists(js));
+  const auto j = nlohmann::json::parse(slurp(js));
+  for (const char* side : {"reflected", "transmitted"})
+    for (const char* k : {"order_1", "order_2", "order_3", "order_4plus", "total"}) {
+      EXPECT_TRUE(j["albedo"][side][k].is_number()) << side << " " << k;
+      EXPECT_TRUE(j[std::string(side) + "_stderr"][k].is_number()) << side << " " << k;
+    }
+  const double R = j["albedo"]["reflected"]["total"], T = j["albedo"]["transmitted"]["total"];
+  EXPECT_NEAR(R + T, 1.0, 1e-12);
+  ASSERT_EQ(j["in_plane"].size(), 32u);  // 16 bins per side, two sides
+  for (const auto& row : j["in_plane"])
+    for (const char* k : {"theta_o_deg", "f_order_1", "f_order_1_stderr", "f_total", "f_total_stderr",
+                          "smith_single", "vcavity_single", "smith_multiple"})
+      EXPECT_TRUE(row[k].is_number()) << k;
+  EXPECT_EQ(j["parameters"]["material"], "dielectric");
+  EXPECT_EQ(j["surface"]["kind"], "gaussian");
+  EXPECT_TRUE(j["wall_seconds"].is_number());
+  // EXR: one channel per order plus total, with standard errors, both sides; parameters in the header.
+  const microsim::ExrTable t = microsim::read_exr(out);
+  EXPECT_EQ(t.width, 16);
+  EXPECT_EQ(t.channel_names.size(), 2u * 5u * 2u);
+  for (const char* c : {"reflected.f_order_1", "reflected.f_total_stderr", "transmitted.f_order_4plus"})
+    EXPECT_NE(std::find(t.channel_names.begin(), t.channel_names.end(), c), t.channel_names.end()) << c;
+  for (const char* a : {"parameters", "surface", "parameterization", "albedo"})
+    EXPECT_TRUE(t.attributes.contains(a)) << a;
+}
+
+TEST_F(CliBsdf, JsonOnlyAndMirrorHasNoTransmission) {
+  const std::string out = tmp("m.json");
+  std::remove(out.c_str());
+  Result r = run("measure bsdf " + surface_ + " --material mirror --theta-i 0 --phi-i 0 --rays 20000 --orders 3 -o " + out);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("order_3plus"), std::string::npos);  // printed table
+  const auto j = nlohmann::json::parse(slurp(out));
+  EXPECT_EQ(j["albedo"]["reflected"]["total"], 1.0);
+  EXPECT_EQ(j["albedo"]["transmitted"]["total"], 0.0);
+  EXPECT_TRUE(j["albedo"]["reflected"]["order_3plus"].is_number());
+  EXPECT_FALSE(exists(tmp("m.exr")));
+}
+
+TEST_F(CliBsdf, BadInput) {
+  const std::string out = tmp("bad.json");
+  const std::string base = "measure bsdf " + surface_ + " --theta-i 30 --phi-i 0 --rays 1000 -o " + out;
+  expect_usage_error(base + " --material plastic", out, "--material");
+  expect_usage_error(base + " --material conductor --eta 0.2", out, "--k");
+  expect_usage_error(base + " --material mirror --eta 1.5", out, "--eta");
+  expect_usage_error(base + " --material dielectric", out, "--eta");
+  expect_usage_error(base + " --material dielectric --eta 0", out, "--eta");
+  expect_usage_error(base + " --material conductor --eta 0.2 --k -1", out, "--k");
+  expect_usage_error("measure bsdf " + surface_ + " --material mirror --theta-i 90 --phi-i 0 -o " + out, out,
+                     "--theta-i");
+  expect_usage_error("measure bsdf " + surface_ + " --material mirror --theta-i -5 --phi-i 0 -o " + out, out,
+                     "--theta-i");
+  expect_usage_error(base + " --material mirror --orders 0", out, "--orders");
+  expect_usage_error(base + " --material mirror --resolution 0", out, "--resolution");
+  expect_usage_error(base + " --material mirror --resolution 100000", out, "--resolution");
+  expect_usage_error("measure bsdf " + surface_ + " --material mirror --theta-i 30 --phi-i 0 --rays 0 -o " + out,
+                     out, "--rays");
+  expect_usage_error("measure bsdf " + surface_ + " --material mirror --theta-i 30 --phi-i 0 -o " + tmp("x.png"),
+                     tmp("x.png"), "-o");
+  expect_usage_error("measure bsdf " + tmp("missing.exr") + " --material mirror --theta-i 30 --phi-i 0 -o " + out,
+                     out, "missing");
+  expect_usage_error("measure bsdf " + surface_ + " --material mirror --phi-i 0 -o " + out, out, "--theta-i");
+}
