@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 
+#include "microsim/measure/vndf_measure.hpp"
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/validate/validate.hpp"
 #include "test_helpers.hpp"
@@ -360,4 +361,67 @@ TEST(ValidateCli, BadInputIsOneLineExitTwoAndNoOutput) {
   usage("validate " + tmp("missing.exr") + " -o " + o, o, "does not exist");
   std::string bad_suite = write("typo_suite.json", R"({"entries": [{"name": "a", "generate": "sphere"}]})");
   usage("validate --suite " + bad_suite + " -o " + o, o, "sphere");
+}
+
+// G2, VNDF and BSDF albedo checks (issue 6).
+TEST(ValidateChecks, FlatPlaneG2IsOneAndSymmetricAndMirrorAlbedoIsOne) {
+  mv::Options o;
+  o.theta_deg = {0, 45};
+  o.rays = 20000;
+  o.checks = {"g2", "vndf", "bsdf_albedo"};
+  mv::Result r = mv::run({one_surface(flat_heightfield(16), "flat", o)}, 0.01);
+  EXPECT_FALSE(r.any_failure());
+  EXPECT_EQ(count_rows(r, "vndf_chi2_per_dof", "nominal"), 0u);  // no nominal NDF: not applicable
+  EXPECT_EQ(count_rows(r, "g2", "g2_swapped"), 2u);
+  EXPECT_EQ(count_rows(r, "g2_hotspot", "g1_independent"), 2u);
+  EXPECT_EQ(count_rows(r, "albedo_total", "one"), 2u);
+  for (const auto& row : r.rows) {
+    if (row.quantity == "g2" || row.quantity == "g2_hotspot") {
+      EXPECT_DOUBLE_EQ(row.measured, 1.0) << row.model_name << " " << row.condition;
+      if (row.model_name == "g2_swapped" || row.model_name == "g1_independent")
+        EXPECT_DOUBLE_EQ(*row.model, 1.0);
+    }
+    if (row.quantity == "albedo_total") {
+      EXPECT_DOUBLE_EQ(row.measured, 1.0) << row.condition;  // a mirror plane loses nothing
+      EXPECT_EQ(row.verdict, "pass");
+    }
+  }
+}
+
+TEST(ValidateChecks, BeckmannG2VndfAlbedoIdentitiesPass) {
+  mv::Options o;
+  o.theta_deg = {30, 60};
+  o.rays = 40000;
+  o.checks = {"g2", "vndf", "bsdf_albedo"};
+  mv::Result r = mv::run({one_surface(gaussian(128, 0.5, 3), "beckmann", o)}, 0.01);
+  for (const auto& row : r.rows)
+    if (row.kind == mv::Kind::Identity)
+      EXPECT_EQ(row.verdict, "pass") << row.quantity << " vs " << row.model_name << " " << row.condition
+                                     << ": " << row.measured << " +- " << row.stderr_.value_or(0)
+                                     << " model " << row.model.value_or(0);
+  EXPECT_EQ(count_rows(r, "vndf_sampler_chi2_per_dof", "sampler_model"), 2u);
+  EXPECT_EQ(count_rows(r, "vndf_chi2_per_dof", "nominal"), 2u);
+  EXPECT_EQ(count_rows(r, "g2", "height_correlated_nominal"), 2u);
+  EXPECT_EQ(count_rows(r, "albedo_order_1", "single_scattering_smith"), 2u);
+  EXPECT_EQ(count_rows(r, "albedo_total", "smith_random_walk"), 2u);
+}
+
+// The sampler identity can fail: a Beckmann 0.5 sampler tested against the D_v of alpha 0.7.
+TEST(ValidateChecks, WrongVndfModelFailsTheSamplerIdentity) {
+  const models::Ndf ok = models::Ndf::beckmann(0.5, 0.5);
+  const models::Ndf wrong = models::Ndf::beckmann(0.7, 0.7);
+  const Vec3 v = direction_from_angles(rad(40.0), 0.0);
+  VndfOptions vo;
+  const DirectionBinning bins = vndf_binning(vo);
+  const SamplerTest t = test_vndf_sampler(ok, v, 50000, bins, 7);
+  const std::vector<double> p_wrong =
+      bin_integrals(bins, [&](const Vec3& m) { return wrong.D_visible(v, m); });
+  const GofResult g_wrong = histogram_gof(t.counts, t.n, p_wrong, vo.family_alpha);
+  std::vector<mv::Row> rows(2);
+  rows[0].kind = rows[1].kind = mv::Kind::Identity;
+  mv::set_chi2(rows[0], t.gof.chi2, t.gof.dof);
+  mv::set_chi2(rows[1], g_wrong.chi2, g_wrong.dof);
+  mv::assign_verdicts(rows, 0.01);
+  EXPECT_EQ(rows[0].verdict, "pass") << rows[0].measured;
+  EXPECT_EQ(rows[1].verdict, "FAIL") << rows[1].measured;
 }

@@ -242,7 +242,8 @@ void register_validate(CLI::App& app, const GlobalOptions& g) {
                   "Family-wise false-alarm rate of the z tests (Sidak over all of them)")
       ->capture_default_str();
   cmd->add_option("--checks", o->checks, "Comma-separated checks to run (default: all applicable: "
-                                         "d_identities, d_nominal, g1)");
+                                         "d_identities, d_nominal, g1, g2, vndf (nominal NDF), "
+                                         "bsdf_albedo (periodic))");
   cmd->add_option("--surfaces-dir", o->surfaces_dir,
                   "With --suite: keep the generated surfaces in this folder (default: a temporary "
                   "folder, removed)");

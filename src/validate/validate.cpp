@@ -13,7 +13,10 @@
 #include <map>
 #include <sstream>
 
+#include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/g1_measure.hpp"
+#include "microsim/measure/g2_measure.hpp"
+#include "microsim/measure/vndf_measure.hpp"
 #include "microsim/measure/ndf_measure.hpp"
 #include "microsim/models/ndf.hpp"
 #include "microsim/trace/tracer.hpp"
@@ -51,6 +54,13 @@ Estimate proportion(std::uint64_t k, std::uint64_t n) {
   const double pt = (static_cast<double>(k) + 0.5) / (static_cast<double>(n) + 1.0);
   e.stderr_ = std::sqrt(pt * (1 - pt) / static_cast<double>(n));
   return e;
+}
+
+void set_chi2(Row& r, double chi2, int dof) {
+  const double d = std::max(1, dof);
+  r.measured = chi2 / d;
+  r.stderr_ = std::sqrt(2.0 / d);
+  r.model = 1.0;
 }
 
 double assign_verdicts(std::vector<Row>& rows, double significance) {
@@ -482,6 +492,331 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
   out.measurements = per_surface;
 }
 
+
+// ---------------------------------------------------------------------------------------------
+// Shared by the G2, VNDF and BSDF checks: ray counts derived from --rays (kept modest so that
+// every check together stays within a few times the cost of the G1 check).
+std::uint64_t share_of_rays(const Options& o, std::uint64_t divisor) {
+  return std::max<std::uint64_t>(1000, o.rays / divisor);
+}
+
+// ---------------------------------------------------------------------------------------------
+// G2 (000 eq. 16, 001 eq. 20-23): symmetry G2(o,m,i) = G2(i,m,o) and the hotspot
+// G2(v,m,v) = G1(v,m) as identities; the four Smith forms of the nominal NDF, the four forms
+// with Lambda from the facets, and the V-cavity as approximate models.
+struct G2Pair {
+  double theta_o, phi_o, theta_i, phi_i;
+};
+const std::vector<G2Pair>& g2_pairs() {
+  static const std::vector<G2Pair> pairs = {{30, 0, 60, 180}, {60, 0, 45, 90}};
+  return pairs;
+}
+const std::vector<double>& g2_hotspot_theta() {
+  static const std::vector<double> t = {30, 60};
+  return t;
+}
+
+double g2_work(const SurfaceSet& set) {
+  const double n = static_cast<double>(share_of_rays(set.options, 4));
+  double w = 0;
+  for (const auto& s : set.surfaces)
+    w += 0.1 * static_cast<double>(s.num_facets()) +
+         2.0 * n * static_cast<double>(2 * g2_pairs().size() + 2 * g2_hotspot_theta().size());
+  return w;
+}
+
+void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
+  const Options& o = set.options;
+  G2Options go;
+  go.rays = share_of_rays(o, 4);
+  go.seed = o.seed;
+  const DirectionBinning binning = g2_normal_binning(go);
+  Json per_surface = Json::array();
+  auto measure = [&](const Tracer& tracer, const Vec3& a, const Vec3& b, std::uint64_t seed,
+                     const FacetTable& table) {
+    G2Options g = go;
+    g.seed = seed;
+    const double unit = 2.0 * static_cast<double>(g.rays);
+    g.progress = [&](double f) { progress.update(f * unit); };
+    G2Result r = measure_g2(tracer, a, b, g, &table);
+    progress.completed += unit;
+    progress.update();
+    return r;
+  };
+  for (std::size_t k = 0; k < set.surfaces.size(); ++k) {
+    const Microsurface& s = set.surfaces[k];
+    const std::string label = surface_label(set, k);
+    Tracer tracer(s);
+    const FacetTable table = build_facet_table(s, binning);
+    progress.completed += 0.1 * static_cast<double>(s.num_facets());
+    Json rows = Json::array();
+    for (const G2Pair& p : g2_pairs()) {
+      const Vec3 vo = direction_from_angles(rad(p.theta_o), rad(p.phi_o));
+      const Vec3 vi = direction_from_angles(rad(p.theta_i), rad(p.phi_i));
+      const G2Result a = measure(tracer, vo, vi, o.seed, table);
+      const G2Result b = measure(tracer, vi, vo, o.seed, table);
+      const std::string dir = "o " + angle(p.theta_o) + "/" + angle(p.phi_o) + " i " +
+                              angle(p.theta_i) + "/" + angle(p.phi_i);
+      const std::string where = (label.empty() ? "" : label + ", ") + dir;
+      const Json ang = {{"theta_o_deg", p.theta_o}, {"phi_o_deg", p.phi_o},
+                        {"theta_i_deg", p.theta_i}, {"phi_i_deg", p.phi_i}};
+      const Estimate ga = proportion(a.visible_both, a.samples);
+      const Estimate gb = proportion(b.visible_both, b.samples);
+      // Symmetry (000 eq. 16b): the swapped pair traces the same points (measure_g2), so the
+      // two values agree sample for sample; the error bar is that of two independent runs.
+      Row sym = make_row(set, "", "g2", "g2_swapped", Kind::Identity, "000 eq. 16b: G2(o,m,i) = G2(i,m,o)");
+      sym.condition += " " + where;
+      sym.measured = ga.mean;
+      sym.stderr_ = std::hypot(ga.stderr_, gb.stderr_);
+      sym.model = gb.mean;
+      sym.error = "rays";
+      sym.group = set.name + "/g2_symmetry";
+      sym.extra = ang;
+      out.rows.push_back(sym);
+      // Approximate models of the averaged G2: Smith forms with Lambda from the facets, the
+      // same with the nominal NDF, and the V-cavity averaged over the same facets.
+      auto model_row = [&](const std::string& name, double value, const std::string& ref) {
+        Row r = make_row(set, "", "g2", name, Kind::Model, ref);
+        r.condition += " " + where;
+        r.measured = ga.mean;
+        r.stderr_ = ga.stderr_;
+        r.model = value;
+        r.error = "rays";
+        r.group = set.name + "/g2_" + name;
+        r.extra = ang;
+        out.rows.push_back(r);
+      };
+      const models::G2Forms fn = a.smith_numeric();
+      model_row("separable_numeric", fn.separable, "001 eq. (20), Lambda from the facets");
+      model_row("height_correlated_numeric", fn.height_correlated, "001 eq. (21), Lambda from the facets");
+      model_row("direction_correlated_numeric", fn.direction_correlated, "001 eq. (22), Lambda from the facets");
+      model_row("height_direction_correlated_numeric", fn.height_direction_correlated,
+                "001 eq. (23), Lambda from the facets");
+      model_row("vcavity", a.vcavity, "001 eq. (24)-(25), averaged over the facets facing both");
+      if (s.nominal) {
+        const double phi = std::acos(std::clamp(
+            Vec2(vo.x(), vo.y()).normalized().dot(Vec2(vi.x(), vi.y()).normalized()), -1.0, 1.0));
+        const models::G2Forms fm =
+            models::g2_forms_from_lambda(s.nominal->Lambda(vo), s.nominal->Lambda(vi), phi);
+        model_row("separable_nominal", fm.separable, "001 eq. (20), nominal NDF");
+        model_row("height_correlated_nominal", fm.height_correlated, "001 eq. (21), nominal NDF");
+        model_row("direction_correlated_nominal", fm.direction_correlated, "001 eq. (22), nominal NDF");
+        model_row("height_direction_correlated_nominal", fm.height_direction_correlated,
+                  "001 eq. (23), nominal NDF");
+      }
+      Json row = g2_row_json(a, s);
+      row["swapped_g2"] = gb.mean;
+      rows.push_back(row);
+    }
+    // Hotspot (000 eq. 16: G2(v,m,v) = G1(v,m)): G2 at o = i against G1 measured by an
+    // independent run (another seed: independent points) with the same area weights.
+    for (double t : g2_hotspot_theta()) {
+      const Vec3 v = direction_from_angles(rad(t), 0.0);
+      const G2Result h = measure(tracer, v, v, o.seed, table);
+      const G2Result g = measure(tracer, v, v, o.seed + 0x9e3779b9ULL, table);
+      const Estimate g2 = proportion(h.visible_both, h.samples);
+      const Estimate g1 = proportion(g.visible_o, g.samples);
+      Row r = make_row(set, "", "g2_hotspot", "g1_independent", Kind::Identity,
+                       "000 eq. 16: G2(v,m,v) = G1(v,m)");
+      r.condition += " " + (label.empty() ? "" : label + ", ") + "theta " + angle(t);
+      r.measured = g2.mean;
+      r.stderr_ = std::hypot(g2.stderr_, g1.stderr_);
+      r.model = g1.mean;
+      r.error = "rays";
+      r.group = set.name + "/g2_hotspot";
+      r.extra = {{"theta_deg", t}};
+      out.rows.push_back(r);
+    }
+    per_surface.push_back({{"label", set.labels[k]}, {"rows", rows}});
+  }
+  out.measurements = per_surface;
+}
+
+// ---------------------------------------------------------------------------------------------
+// VNDF (000 eq. 3b, 001 eq. 13): the histogram of first-hit normals against the nominal D_v
+// (approximate model; chi-square summary row), and the nominal NDF's VNDF sampler against its
+// own D_v (identity: the sampler must reproduce its model). Chi-square rows: measured
+// chi2/dof, model 1, stderr sqrt(2/dof) (the normal approximation of chi2/dof).
+double vndf_work(const SurfaceSet& set) {
+  const double n = static_cast<double>(share_of_rays(set.options, 4));
+  const double dirs = static_cast<double>(set.options.theta_deg.size() * set.options.phi_deg.size());
+  double w = 0;
+  for (const auto& s : set.surfaces) w += 0.1 * static_cast<double>(s.num_facets()) + dirs * 2.0 * n;
+  return w;
+}
+
+void check_vndf(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
+  const Options& o = set.options;
+  VndfOptions vo;
+  vo.rays = share_of_rays(o, 4);
+  vo.seed = o.seed;
+  const DirectionBinning binning = vndf_binning(vo);
+  Json per_surface = Json::array();
+  for (std::size_t k = 0; k < set.surfaces.size(); ++k) {
+    const Microsurface& s = set.surfaces[k];
+    const std::string label = surface_label(set, k);
+    Tracer tracer(s);
+    const FacetTable table = build_facet_table(s, binning);
+    progress.completed += 0.1 * static_cast<double>(s.num_facets());
+    Json rows = Json::array();
+    for (double p : o.phi_deg)
+      for (double t : o.theta_deg) {
+        const Vec3 v = direction_from_angles(rad(t), rad(p));
+        const double unit = static_cast<double>(vo.rays);
+        vo.progress = [&](double f) { progress.update(f * unit); };
+        const VndfResult r = measure_vndf(tracer, v, vo, &table);
+        progress.completed += unit;
+        const std::string where = (label.empty() ? "" : label + ", ") + "theta " + angle(t) + " phi " + angle(p);
+        const Json ang = {{"theta_deg", t}, {"phi_deg", p}};
+        std::optional<SamplerTest> sampler;
+        if (s.nominal) {
+          const std::vector<double> model =
+              bin_integrals(r.binning, [&](const Vec3& m) { return s.nominal->D_visible(r.v, m); });
+          const GofResult g = histogram_gof(r.bin_hits, r.hits, model, vo.family_alpha);
+          Row m = make_row(set, "", "vndf_chi2_per_dof", "nominal", Kind::Model,
+                           "001 eq. (13): D_v of the nominal NDF, bin integrals");
+          m.condition += " " + where;
+          set_chi2(m, g.chi2, g.dof);
+          m.error = "rays";
+          m.group = set.name + "/vndf_nominal";
+          m.extra = ang;
+          m.extra["chi2"] = g.chi2;
+          m.extra["dof"] = g.dof;
+          m.extra["p_value"] = g.p_value;
+          out.rows.push_back(m);
+          // The sampler only depends on the nominal NDF: tested once per direction.
+          if (k == 0) {
+            sampler = test_vndf_sampler(*s.nominal, v, vo.rays, binning, o.seed ^ 0x5a5a5a5aULL);
+            Row sr = make_row(set, "", "vndf_sampler_chi2_per_dof", "sampler_model", Kind::Identity,
+                              "models/ndf.hpp VNDF sampler vs its own D_v (001 eq. 13)");
+            sr.condition = set.name + " nominal sampler, theta " + angle(t) + " phi " + angle(p);
+            set_chi2(sr, sampler->gof.chi2, sampler->gof.dof);
+            sr.error = "samples";
+            sr.group = set.name + "/vndf_sampler";
+            sr.extra = ang;
+            sr.extra["chi2"] = sampler->gof.chi2;
+            sr.extra["dof"] = sampler->gof.dof;
+            sr.extra["p_value"] = sampler->gof.p_value;
+            out.rows.push_back(sr);
+          }
+        }
+        progress.completed += unit;
+        progress.update();
+        Json row = vndf_row_json(r, s, vo, sampler);
+        row["theta_deg"] = t;
+        row["phi_deg"] = p;
+        rows.push_back(row);
+      }
+    per_surface.push_back({{"label", set.labels[k]}, {"rows", rows}});
+  }
+  out.measurements = per_surface;
+}
+
+// ---------------------------------------------------------------------------------------------
+// BSDF albedos with a mirror material: total albedo = 1 (energy conservation, identity; the
+// error counts lost and unterminated paths), the order-1 albedo against the single-scattering
+// albedo of the nominal NDF (Smith height-correlated, models/microfacet_bsdf.hpp) and the
+// per-order albedos against the Smith random walk (models/smith_random_walk.hpp): models.
+const std::vector<double>& bsdf_theta() {
+  static const std::vector<double> t = {30, 70};
+  return t;
+}
+
+double bsdf_work(const SurfaceSet& set) {
+  const double n = static_cast<double>(share_of_rays(set.options, 4));
+  return static_cast<double>(set.surfaces.size() * bsdf_theta().size()) *
+         (set.surfaces[0].nominal ? 3.0 : 2.0) * n;
+}
+
+void check_bsdf_albedo(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
+  const Options& o = set.options;
+  Json per_surface = Json::array();
+  for (std::size_t k = 0; k < set.surfaces.size(); ++k) {
+    const Microsurface& s = set.surfaces[k];
+    const std::string label = surface_label(set, k);
+    Tracer tracer(s);
+    Json rows = Json::array();
+    for (double t : bsdf_theta()) {
+      BsdfOptions bo;
+      bo.material = models::Material::mirror();
+      bo.theta_i = rad(t);
+      bo.orders = 4;
+      bo.rays = share_of_rays(o, 4);
+      bo.seed = o.seed;
+      bo.resolution = 16;
+      bo.model_walks = s.nominal ? bo.rays : 0;
+      const double unit = (s.nominal ? 3.0 : 2.0) * static_cast<double>(bo.rays);
+      bo.progress = [&](double f) { progress.update(f * unit); };
+      const BsdfResult r = measure_bsdf(tracer, bo);
+      progress.completed += unit;
+      progress.update();
+      const int K = bo.orders;
+      const std::string where = (label.empty() ? "" : label + ", ") + "mirror, theta_i " + angle(t);
+      const Json ang = {{"theta_i_deg", t}};
+      // Energy conservation: every path of a mirror carries weight 1 and leaves (or is lost).
+      const Estimate up = r.albedo(0, K), down = r.albedo(1, K);
+      const std::uint64_t left = r.measured.paths - r.measured.lost - r.measured.unterminated;
+      Row e = make_row(set, "", "albedo_total", "one", Kind::Identity,
+                       "energy conservation of a mirror (000 eq. 21d with F = 1)");
+      e.condition += " " + where;
+      e.measured = up.mean + down.mean;
+      e.stderr_ = std::max(std::hypot(up.stderr_, down.stderr_), proportion(left, r.measured.paths).stderr_);
+      e.model = 1.0;
+      e.error = "rays (lost paths)";
+      e.group = set.name + "/albedo_total";
+      e.extra = ang;
+      e.extra["lost"] = r.measured.lost;
+      e.extra["unterminated"] = r.measured.unterminated;
+      out.rows.push_back(e);
+      Json row = {{"theta_i_deg", t}, {"paths", r.measured.paths}, {"lost", r.measured.lost},
+                  {"unterminated", r.measured.unterminated}, {"albedo", Json::array()},
+                  {"albedo_stderr", Json::array()}};
+      for (int j = 0; j <= K; ++j) {
+        row["albedo"].push_back(r.albedo(0, j).mean);
+        row["albedo_stderr"].push_back(r.albedo(0, j).stderr_);
+      }
+      if (s.nominal) {
+        models::MicrofacetBsdf ss;
+        ss.ndf = *s.nominal;
+        ss.material = bo.material;
+        ss.masking = models::Masking::SmithHeightCorrelated;
+        const double single = models::single_scattering_albedo(ss, r.wi).reflected;
+        const Estimate a1 = r.albedo(0, 0);
+        Row m = make_row(set, "", "albedo_order_1", "single_scattering_smith", Kind::Model,
+                         "models/microfacet_bsdf.hpp single_scattering_albedo (001 eq. 21 G2)");
+        m.condition += " " + where;
+        m.measured = a1.mean;
+        m.stderr_ = a1.stderr_;
+        m.model = single;
+        m.error = "rays";
+        m.group = set.name + "/albedo_single_scattering";
+        m.extra = ang;
+        out.rows.push_back(m);
+        row["single_scattering_model"] = single;
+        row["smith_walk_albedo"] = Json::array();
+        for (int j = 0; j <= K; ++j) {
+          const Estimate a = r.albedo(0, j), w = r.model_albedo(0, j);
+          Row rw = make_row(set, "", "albedo_" + order_key(j, K), "smith_random_walk", Kind::Model,
+                            "models/smith_random_walk.hpp (Heitz et al. 2016), nominal NDF");
+          rw.condition += " " + where;
+          rw.measured = a.mean;
+          rw.stderr_ = std::hypot(a.stderr_, w.stderr_);
+          rw.model = w.mean;
+          rw.error = "rays and walks";
+          rw.group = set.name + "/albedo_smith_walk";
+          rw.extra = ang;
+          rw.extra["order"] = order_key(j, K);
+          out.rows.push_back(rw);
+          row["smith_walk_albedo"].push_back(w.mean);
+        }
+      }
+      rows.push_back(row);
+    }
+    per_surface.push_back({{"label", set.labels[k]}, {"rows", rows}});
+  }
+  out.measurements = per_surface;
+}
+
 }  // namespace
 
 const std::vector<Check>& checks() {
@@ -505,6 +840,15 @@ const std::vector<Check>& checks() {
       {"g1", "G1: both estimators, visible area ratio, Smith from the facets and nominal, per-bin "
              "G1(v,m) against Smith and the V-cavity model",
        [](const SurfaceSet&) { return true; }, g1_work, check_g1},
+      {"g2", "G2: symmetry and hotspot identities; the four Smith forms (facets and nominal) and "
+             "the V-cavity model for the averaged G2",
+       [](const SurfaceSet&) { return true; }, g2_work, check_g2},
+      {"vndf", "VNDF histogram against the nominal D_v (chi-square), and the nominal NDF's VNDF "
+               "sampler against its own D_v (identity)",
+       [](const SurfaceSet& s) { return s.surfaces[0].nominal.has_value(); }, vndf_work, check_vndf},
+      {"bsdf_albedo", "mirror BSDF albedos: total = 1 (energy conservation), order 1 against the "
+                      "single-scattering model, per order against the Smith random walk",
+       [](const SurfaceSet& s) { return s.surfaces[0].macro().periodic; }, bsdf_work, check_bsdf_albedo},
   };
   return registry;
 }

@@ -1,8 +1,9 @@
 // Validation: every applicable check of a surface (or of an ensemble of surfaces with the same
 // statistics), as rows of measured vs model with standard errors, z-scores and verdicts.
 //
-// A check is one function that appends rows (see `checks()`); adding a quantity (G2, VNDF, BSDF
-// albedo...) is adding one Check to the registry in src/validate/validate.cpp.
+// A check is one function that appends rows (see `checks()`): d_identities, d_nominal, g1, g2,
+// vndf, bsdf_albedo; adding a quantity is adding one Check to the registry in
+// src/validate/validate.cpp.
 //
 // Kinds of rows and verdict rules (also written into every JSON record, "verdict_rules"):
 //   identity       an exact identity measured by Monte Carlo (two estimators of the same quantity,
@@ -63,6 +64,10 @@ double assign_verdicts(std::vector<Row>& rows, double significance);
 // a bin where all n samples were visible still carries an error of order 1/n (the plain
 // binomial error is 0 there and would turn any model difference into an infinite z).
 Estimate proportion(std::uint64_t k, std::uint64_t n);
+
+// A chi-square goodness of fit as a z-tested row: measured chi2/dof, model 1, stderr
+// sqrt(2/dof) (normal approximation of chi2/dof under the null; large dof).
+void set_chi2(Row& r, double chi2, int dof);
 
 struct Options {
   std::vector<double> theta_deg{0, 30, 60, 80};  // view zenith angles of the G1 checks
