@@ -1,4 +1,5 @@
 #include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/sampling.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
@@ -226,24 +227,6 @@ std::string order_key(int k, int orders) {
 namespace {
 
 constexpr std::uint64_t kChunk = 1 << 13;
-
-// Stratified origins on the tile: G x G strata (G a power of two, G^2 <= n) in Morton order,
-// r per stratum; the ray count is rounded up to r G^2 (as in g1_measure.cpp).
-struct Strata {
-  std::uint32_t grid = 1;
-  std::uint64_t per_stratum = 1;
-  explicit Strata(std::uint64_t n) {
-    while (static_cast<std::uint64_t>(grid) * 2 * grid * 2 <= n && grid < (1u << 15)) grid *= 2;
-    const std::uint64_t cells = static_cast<std::uint64_t>(grid) * grid;
-    per_stratum = (n + cells - 1) / cells;
-  }
-  std::uint64_t total() const { return per_stratum * grid * grid; }
-  Vec2 point(std::uint64_t i, CounterRng& rng) const {
-    std::uint32_t sx, sy;
-    morton_decode(i / per_stratum, sx, sy);
-    return Vec2((sx + rng.uniform()) / grid, (sy + rng.uniform()) / grid);
-  }
-};
 
 std::uint64_t direction_stream(std::uint64_t base, double theta, double phi) {
   return base + static_cast<std::uint64_t>(theta * 1e6) * 7919 + static_cast<std::uint64_t>(phi * 1e6);

@@ -1,4 +1,5 @@
 #include "microsim/measure/vcavity_measure.hpp"
+#include "microsim/measure/sampling.hpp"
 
 #include <tbb/parallel_for.h>
 
@@ -9,23 +10,6 @@
 namespace microsim {
 
 namespace {
-
-// Stratified points in [0,1]^2: G x G strata in Morton order, r points each (as g1_measure).
-struct Strata {
-  std::uint32_t grid = 1;
-  std::uint64_t per_stratum = 1;
-  explicit Strata(std::uint64_t n) {
-    while (static_cast<std::uint64_t>(grid) * 2 * grid * 2 <= n && grid < (1u << 15)) grid *= 2;
-    std::uint64_t cells = static_cast<std::uint64_t>(grid) * grid;
-    per_stratum = (n + cells - 1) / cells;
-  }
-  std::uint64_t total() const { return per_stratum * grid * grid; }
-  Vec2 point(std::uint64_t i, CounterRng& rng) const {
-    std::uint32_t sx, sy;
-    morton_decode(i / per_stratum, sx, sy);
-    return Vec2((sx + rng.uniform()) / grid, (sy + rng.uniform()) / grid);
-  }
-};
 
 // Per groove and view: counts for its facet m (side 1) and m' (side 0).
 struct GrooveTally {
