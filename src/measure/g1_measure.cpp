@@ -120,6 +120,17 @@ FacetTable build_facet_table(const Microsurface& s, const DirectionBinning& binn
   return t;
 }
 
+const FacetTable& facet_table_for(const Microsurface& s, const DirectionBinning& binning,
+                                  const FacetTable* given, FacetTable& own) {
+  if (!given) {
+    own = build_facet_table(s, binning);
+    return own;
+  }
+  if (given->area.size() != s.num_facets())
+    throw RuntimeFailure("facet table does not match the surface");
+  return *given;
+}
+
 G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
                     const FacetTable* table, const Tracer* under) {
   const Microsurface& s = tracer.surface();
@@ -161,13 +172,8 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   // Exact facet sums per normal bin, and the CDF of projected area for estimator (b).
   auto t_facets = std::chrono::steady_clock::now();
   FacetTable own;
-  if (!table) {
-    own = build_facet_table(s, r.binning);
-    table = &own;
-  }
-  const FacetTable& ft = *table;
+  const FacetTable& ft = facet_table_for(s, r.binning, table, own);
   const std::size_t nf = s.num_facets();
-  if (ft.area.size() != nf) throw RuntimeFailure("facet table does not match the surface");
   const std::vector<int>& facet_bin = ft.bin;
   std::vector<double> cdf(nf);
   // Per bin: area, front projected area, projected-area-weighted normal (3), V-cavity-weighted
@@ -175,31 +181,19 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   using Sums = std::vector<double>;
   const std::size_t width = 6 * static_cast<std::size_t>(nbins) + 1;
   const Eigen::Vector3f vf = v.cast<float>();
-  Sums sums = tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<std::size_t>(0, nf, std::max<std::size_t>(1 << 15, nf / 64)), Sums{},
-      [&](const tbb::blocked_range<std::size_t>& range, Sums acc) {
-        if (acc.empty()) acc.assign(width, 0.0);
-        for (std::size_t k = range.begin(); k != range.end(); ++k) {
-          const double a = ft.area[k];
-          const double proj = a * static_cast<double>(ft.normal[k].dot(vf));  // A_f (v.m_f)
-          cdf[k] = std::max(0.0, proj);
-          double* bin = acc.data() + 6 * static_cast<std::size_t>(facet_bin[k]);
-          bin[0] += a;
-          bin[1] += cdf[k];
-          bin[2] += cdf[k] * ft.normal[k].x();
-          bin[3] += cdf[k] * ft.normal[k].y();
-          bin[4] += cdf[k] * ft.normal[k].z();
-          if (cdf[k] > 0) bin[5] += cdf[k] * models::vcavity_G1(v, ft.normal[k].cast<double>());
-          acc[width - 1] += std::max(0.0, -proj);
-        }
-        return acc;
-      },
-      [](Sums a, const Sums& b) {
-        if (a.empty()) return b;
-        for (std::size_t k = 0; k < b.size(); ++k) a[k] += b[k];
-        return a;
-      });
-  if (sums.empty()) sums.assign(width, 0.0);
+  Sums sums = sum_over_facets(nf, width, [&](std::size_t k, double* acc) {
+    const double a = ft.area[k];
+    const double proj = a * static_cast<double>(ft.normal[k].dot(vf));  // A_f (v.m_f)
+    cdf[k] = std::max(0.0, proj);
+    double* bin = acc + 6 * static_cast<std::size_t>(facet_bin[k]);
+    bin[0] += a;
+    bin[1] += cdf[k];
+    bin[2] += cdf[k] * ft.normal[k].x();
+    bin[3] += cdf[k] * ft.normal[k].y();
+    bin[4] += cdf[k] * ft.normal[k].z();
+    if (cdf[k] > 0) bin[5] += cdf[k] * models::vcavity_G1(v, ft.normal[k].cast<double>());
+    acc[width - 1] += std::max(0.0, -proj);
+  });
   for (int b = 0; b < nbins; ++b) {
     const double* bin = sums.data() + 6 * static_cast<std::size_t>(b);
     r.bins[b].area = bin[0];

@@ -123,49 +123,32 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
   const Vec3 o = r.o, i = r.i;
 
   FacetTable own;
-  if (!table) {
-    own = build_facet_table(s, r.binning);
-    table = &own;
-  }
-  const FacetTable& ft = *table;
+  const FacetTable& ft = facet_table_for(s, r.binning, table, own);
   const std::size_t nf = s.num_facets();
-  if (ft.area.size() != nf) throw RuntimeFailure("facet table does not match the surface");
 
   // Exact facet sums. Per bin: area, area facing both, area-weighted normal (3), V-cavity sum;
   // then the back-facing projected areas toward o and toward i (Smith Lambda from facets).
   std::vector<double> cdf(nf);
   using Sums = std::vector<double>;
   const std::size_t width = 6 * static_cast<std::size_t>(nbins) + 2;
-  Sums sums = tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<std::size_t>(0, nf, std::max<std::size_t>(1 << 15, nf / 64)), Sums{},
-      [&](const tbb::blocked_range<std::size_t>& range, Sums acc) {
-        if (acc.empty()) acc.assign(width, 0.0);
-        for (std::size_t k = range.begin(); k != range.end(); ++k) {
-          const double a = ft.area[k];
-          const Vec3 m = ft.normal[k].cast<double>();
-          const double om = o.dot(m), im = i.dot(m);
-          const bool front = om > 0 && im > 0;
-          cdf[k] = front ? a : 0.0;
-          double* bin = acc.data() + 6 * static_cast<std::size_t>(ft.bin[k]);
-          bin[0] += a;
-          if (front) {
-            bin[1] += a;
-            bin[2] += a * m.x();
-            bin[3] += a * m.y();
-            bin[4] += a * m.z();
-            bin[5] += a * models::vcavity_G2(o, i, m);
-          }
-          acc[width - 2] += a * std::max(0.0, -om);
-          acc[width - 1] += a * std::max(0.0, -im);
-        }
-        return acc;
-      },
-      [](Sums a, const Sums& b) {
-        if (a.empty()) return b;
-        for (std::size_t k = 0; k < b.size(); ++k) a[k] += b[k];
-        return a;
-      });
-  if (sums.empty()) sums.assign(width, 0.0);
+  Sums sums = sum_over_facets(nf, width, [&](std::size_t k, double* acc) {
+    const double a = ft.area[k];
+    const Vec3 m = ft.normal[k].cast<double>();
+    const double om = o.dot(m), im = i.dot(m);
+    const bool front = om > 0 && im > 0;
+    cdf[k] = front ? a : 0.0;
+    double* bin = acc + 6 * static_cast<std::size_t>(ft.bin[k]);
+    bin[0] += a;
+    if (front) {
+      bin[1] += a;
+      bin[2] += a * m.x();
+      bin[3] += a * m.y();
+      bin[4] += a * m.z();
+      bin[5] += a * models::vcavity_G2(o, i, m);
+    }
+    acc[width - 2] += a * std::max(0.0, -om);
+    acc[width - 1] += a * std::max(0.0, -im);
+  });
   double vcav_total = 0;
   for (int b = 0; b < nbins; ++b) {
     const double* bin = sums.data() + 6 * static_cast<std::size_t>(b);

@@ -114,30 +114,13 @@ VndfResult measure_vndf(const Tracer& tracer, const Vec3& v_in, const VndfOption
   const int nbins = r.binning.size();
 
   FacetTable own;
-  if (!table) {
-    own = build_facet_table(s, r.binning);
-    table = &own;
-  }
-  const FacetTable& ft = *table;
+  const FacetTable& ft = facet_table_for(s, r.binning, table, own);
   const std::size_t nf = s.num_facets();
-  if (ft.area.size() != nf) throw RuntimeFailure("facet table does not match the surface");
   using Sums = std::vector<double>;
-  Sums sums = tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<std::size_t>(0, nf, std::max<std::size_t>(1 << 15, nf / 64)), Sums{},
-      [&](const tbb::blocked_range<std::size_t>& range, Sums acc) {
-        if (acc.empty()) acc.assign(nbins + 1, 0.0);
-        for (std::size_t k = range.begin(); k != range.end(); ++k) {
-          const double proj = std::max(0.0, ft.area[k] * ft.normal[k].cast<double>().dot(v));
-          acc[ft.bin[k] >= 0 ? ft.bin[k] : nbins] += proj;
-        }
-        return acc;
-      },
-      [](Sums a, const Sums& b) {
-        if (a.empty()) return b;
-        for (std::size_t k = 0; k < b.size(); ++k) a[k] += b[k];
-        return a;
-      });
-  if (sums.empty()) sums.assign(nbins + 1, 0.0);
+  Sums sums = sum_over_facets(nf, nbins + 1, [&](std::size_t k, double* acc) {
+    const double proj = std::max(0.0, ft.area[k] * ft.normal[k].cast<double>().dot(v));
+    acc[ft.bin[k] >= 0 ? ft.bin[k] : nbins] += proj;
+  });
   r.front_projected.assign(sums.begin(), sums.begin() + nbins);
   for (double x : sums) r.front_projected_total += x;
   if (!(r.front_projected_total > 0)) throw RuntimeFailure("no facet faces the direction");

@@ -8,6 +8,9 @@
 #pragma once
 #include <functional>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 #include <nlohmann/json.hpp>
 
 #include "microsim/measure/binning.hpp"
@@ -77,6 +80,31 @@ struct FacetTable {
 };
 FacetTable build_facet_table(const Microsurface& s, const DirectionBinning& binning);
 DirectionBinning g1_normal_binning(const G1Options& options);
+// The caller's table when given (checked against the surface), else one built into `own`.
+const FacetTable& facet_table_for(const Microsurface& s, const DirectionBinning& binning,
+                                  const FacetTable* given, FacetTable& own);
+// Deterministic parallel sums over the facets: body(k, acc) adds facet k's terms into
+// acc[0 .. width); the result does not depend on the thread count.
+template <class Body>
+std::vector<double> sum_over_facets(std::size_t num_facets, std::size_t width, Body&& body) {
+  using Sums = std::vector<double>;
+  Sums sums = tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<std::size_t>(0, num_facets,
+                                      std::max<std::size_t>(1 << 15, num_facets / 64)),
+      Sums{},
+      [&](const tbb::blocked_range<std::size_t>& range, Sums acc) {
+        if (acc.empty()) acc.assign(width, 0.0);
+        for (std::size_t k = range.begin(); k != range.end(); ++k) body(k, acc.data());
+        return acc;
+      },
+      [](Sums a, const Sums& b) {
+        if (a.empty()) return b;
+        for (std::size_t k = 0; k < b.size(); ++k) a[k] += b[k];
+        return a;
+      });
+  if (sums.empty()) sums.assign(width, 0.0);
+  return sums;
+}
 
 // v.n > 0: the surface seen from above. v.n < 0 (meshes only; UsageError for heightfields and
 // for v.n = 0): the undersurface, measured explicitly on undersurface(s) at mirror_z(v) (000
