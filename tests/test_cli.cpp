@@ -12,36 +12,12 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli_helpers.hpp"
+
 namespace {
-struct Result {
-  int code;
-  std::string out, err;
-};
-// Per-process names: CTest runs test cases as separate processes in parallel.
-std::string tmp(const std::string& name) {
-  return ::testing::TempDir() + "microsim_cli_" + std::to_string(getpid()) + "_" + name;
-}
-std::string slurp(const std::string& p) {
-  std::ifstream f(p);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-bool exists(const std::string& p) {
-  struct stat st;
-  return stat(p.c_str(), &st) == 0;
-}
-Result run(const std::string& args) {
-  std::string out = tmp("stdout.txt"), err = tmp("stderr.txt");
-  std::string cmd = std::string(MICROSIM_BINARY) + " " + args + " >" + out + " 2>" + err;
-  int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
-}
-int lines(const std::string& s) {
-  int n = 0;
-  for (char c : s) n += c == '\n';
-  return n;
-}
+using namespace microsim::testing;
+std::string tmp(const std::string& name) { return temp_path("cli", name); }
+Result run(const std::string& args) { return run_microsim(args); }
 
 class Cli : public ::testing::Test {
  protected:

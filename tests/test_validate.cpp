@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 
+#include "cli_helpers.hpp"
 #include "microsim/measure/vndf_measure.hpp"
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/validate/validate.hpp"
@@ -201,7 +202,7 @@ TEST(ValidateChecks, UnknownCheckNameIsAUsageError) {
 // Suites
 
 namespace {
-std::string tmp(const std::string& name) { return ::testing::TempDir() + "microsim_validate_" + name; }
+std::string tmp(const std::string& name) { return microsim::testing::temp_path("validate", name); }
 std::string write(const std::string& name, const std::string& text) {
   std::string p = tmp(name);
   std::ofstream(p) << text;
@@ -253,29 +254,11 @@ TEST(ValidateSuite, MalformedSuitesAreRefusedWithTheField) {
 // The command line
 
 namespace {
-struct Result {
-  int code;
-  std::string out, err;
-};
-std::string slurp(const std::string& p) {
-  std::ifstream f(p);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-bool exists(const std::string& p) {
-  struct stat st;
-  return stat(p.c_str(), &st) == 0;
-}
-// Per-test capture files: ctest -j runs the tests of this file as parallel processes.
-Result run(const std::string& args) {
-  const std::string test = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-  std::string out = tmp(test + "_stdout.txt"), err = tmp(test + "_stderr.txt");
-  std::string cmd = std::string(MICROSIM_BINARY) + " " + args + " >" + out + " 2>" + err;
-  int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
-}
-int lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+using microsim::testing::exists;
+using microsim::testing::lines;
+using microsim::testing::Result;
+using microsim::testing::slurp;
+Result run(const std::string& args) { return microsim::testing::run_microsim(args); }
 }  // namespace
 
 TEST(ValidateCli, BeckmannTilePrintsTheTableAndWritesRows) {
