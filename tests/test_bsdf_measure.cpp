@@ -4,6 +4,8 @@
 // independence, and reciprocity of measured tables (000 eq. 4c, with eta^2 for transmission).
 #include <gtest/gtest.h>
 
+#include "microsim/measure/stats.hpp"
+
 #include <tbb/global_control.h>
 
 #include <cmath>
@@ -19,15 +21,7 @@ namespace mm = microsim::models;
 
 namespace {
 
-double sidak_z(double alpha, int k) {
-  const double per = 1 - std::pow(1 - alpha, 1.0 / k);
-  double lo = 0, hi = 10;
-  for (int i = 0; i < 100; ++i) {
-    const double z = 0.5 * (lo + hi);
-    if (std::erfc(z / std::sqrt(2.0)) > per) lo = z; else hi = z;
-  }
-  return 0.5 * (lo + hi);
-}
+using microsim::sidak_z;  // microsim/measure/stats.hpp
 
 BsdfOptions options(const mm::Material& m, double theta_deg, double phi_deg, std::uint64_t rays, int res = 16) {
   BsdfOptions o;

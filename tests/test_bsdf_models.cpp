@@ -8,6 +8,8 @@
 // its own standard error with fixed seeds (Sidak-corrected where several are tested together).
 #include <gtest/gtest.h>
 
+#include "microsim/measure/stats.hpp"
+
 #include <microsim/common.hpp>
 #include <microsim/models/fresnel.hpp>
 #include <microsim/models/microfacet_bsdf.hpp>
@@ -33,15 +35,7 @@ Vec3 dir(double theta, double phi) {
 }
 double rad(double d) { return d * kPi / 180.0; }
 
-double sidak_z(double alpha, int k) {
-  const double per = 1 - std::pow(1 - alpha, 1.0 / k);
-  double lo = 0, hi = 10;
-  for (int i = 0; i < 100; ++i) {
-    const double z = 0.5 * (lo + hi);
-    if (std::erfc(z / std::sqrt(2.0)) > per) lo = z; else hi = z;
-  }
-  return 0.5 * (lo + hi);
-}
+using microsim::sidak_z;  // microsim/measure/stats.hpp
 
 // Orthonormal tangents of a unit vector.
 void tangents(const Vec3& c, Vec3& a, Vec3& b) {

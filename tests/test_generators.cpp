@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <fstream>
 
+#include "microsim/measure/stats.hpp"
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/measure/ndf_measure.hpp"
 #include "microsim/measure/vcavity_measure.hpp"
@@ -22,15 +23,7 @@ using namespace microsim;
 
 namespace {
 
-double sidak_z(double alpha, int k) {
-  double per = 1 - std::pow(1 - alpha, 1.0 / k);
-  double lo = 0, hi = 10;
-  for (int i = 0; i < 100; ++i) {
-    double z = 0.5 * (lo + hi);
-    if (std::erfc(z / std::sqrt(2.0)) > per) lo = z; else hi = z;
-  }
-  return 0.5 * (lo + hi);
-}
+using microsim::sidak_z;  // microsim/measure/stats.hpp
 
 // Upper quantile of chi^2 with k degrees of freedom (Wilson-Hilferty), z = normal quantile.
 double chi2_quantile(int k, double z) {

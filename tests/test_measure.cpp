@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include "microsim/measure/stats.hpp"
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/measure/ndf_measure.hpp"
 #include "microsim/models/ndf.hpp"
@@ -14,17 +15,7 @@ using namespace microsim;
 using namespace microsim::testing;
 
 namespace {
-// Two-sided z threshold with a Sidak correction: family-wise false-alarm rate `alpha` over
-// `k` independent comparisons. Phi^-1 by bisection on erfc.
-double sidak_z(double alpha, int k) {
-  double per = 1 - std::pow(1 - alpha, 1.0 / k);
-  double lo = 0, hi = 10;
-  for (int i = 0; i < 100; ++i) {
-    double z = 0.5 * (lo + hi);
-    if (std::erfc(z / std::sqrt(2.0)) > per) lo = z; else hi = z;
-  }
-  return 0.5 * (lo + hi);
-}
+using microsim::sidak_z;  // microsim/measure/stats.hpp
 
 G1Options opts(std::uint64_t rays, std::uint64_t seed = 1) {
   G1Options o;

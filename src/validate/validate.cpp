@@ -1,4 +1,5 @@
 #include "microsim/validate/validate.hpp"
+#include "microsim/measure/stats.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
@@ -34,16 +35,7 @@ const char* to_string(Kind k) {
 }
 
 double sidak_z(double alpha, std::size_t k) {
-  if (k == 0) k = 1;
-  // Per-comparison two-sided rate 1 - (1 - alpha)^(1/k), computed without cancellation.
-  const double per = -std::expm1(std::log1p(-alpha) / static_cast<double>(k));
-  double lo = 0, hi = 40;
-  for (int i = 0; i < 200; ++i) {
-    const double z = 0.5 * (lo + hi);
-    if (std::erfc(z / std::sqrt(2.0)) > per) lo = z;
-    else hi = z;
-  }
-  return 0.5 * (lo + hi);
+  return microsim::sidak_z(alpha, static_cast<int>(std::min<std::size_t>(k, 1u << 30)));
 }
 
 Estimate proportion(std::uint64_t k, std::uint64_t n) {
