@@ -1,68 +1,21 @@
 // Benchmark (not a test): rays/s of the G1 measurement against a bare rtcIntersect1 loop over
 // the same scene and rays, scene build time and peak memory, for several tile resolutions.
 //   microsim_bench [resolution...]    (default 1024 2048 4096)
-#include <sys/resource.h>
 
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <vector>
 
-#include <tbb/parallel_for.h>
 
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/trace/tracer.hpp"
+#include "bench_common.hpp"
 
 using namespace microsim;
 
-namespace {
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-double peak_rss_mib() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return u.ru_maxrss / 1024.0;
-}
-
-// The same primary rays as estimator (a) (stratified, Morton-ordered origins on the top of the
-// tile, direction -v), but one plain rtcIntersect1 each: no wrap-around, no filter, no binning.
-double bare_loop_rays_per_second(const Tracer& tracer, const Vec3& v, std::uint64_t n) {
-  const Macrosurface& m = tracer.surface().macro();
-  std::uint32_t grid = 1;
-  while (std::uint64_t(grid) * 2 * grid * 2 <= n) grid *= 2;
-  std::uint64_t per = (n + std::uint64_t(grid) * grid - 1) / (std::uint64_t(grid) * grid);
-  std::uint64_t total = per * grid * grid;
-  std::vector<unsigned> hits(total / 16384 + 1);
-  auto t0 = std::chrono::steady_clock::now();
-  tbb::parallel_for(std::uint64_t(0), (total + 16383) / 16384, [&](std::uint64_t c) {
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    unsigned count = 0;
-    for (std::uint64_t i = c * 16384; i < std::min(total, (c + 1) * 16384); ++i) {
-      CounterRng rng(1, 0xA000, i);
-      std::uint32_t sx, sy;
-      morton_decode(i / per, sx, sy);
-      double a = (sx + rng.uniform()) / grid, b = (sy + rng.uniform()) / grid;
-      RTCRayHit rh{};
-      rh.ray.org_x = float(-0.5 * m.size_x + a * m.size_x);
-      rh.ray.org_y = float(-0.5 * m.size_y + b * m.size_y);
-      rh.ray.org_z = float(tracer.z_top());
-      rh.ray.dir_x = float(-v.x());
-      rh.ray.dir_y = float(-v.y());
-      rh.ray.dir_z = float(-v.z());
-      rh.ray.tfar = 1e30f;
-      rh.ray.mask = ~0u;
-      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-      rtcIntersect1(tracer.scene(), &ctx, &rh);
-      count += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-    }
-    hits[c] = count;
-  });
-  return total / seconds_since(t0);
-}
-}  // namespace
+using namespace microsim::bench;
 
 int main(int argc, char** argv) {
   std::vector<int> resolutions;
@@ -91,7 +44,7 @@ int main(int argc, char** argv) {
       double g1_rate = r.counters.rays / (r.seconds - r.facet_seconds);
       double raycast_rate = r.raycast_rays / r.raycast_seconds;
       double sample_rate = r.sample_rays / r.sample_seconds;
-      double bare = bare_loop_rays_per_second(tracer, v, rays);
+      double bare = bare_loop_rays_per_second(tracer, v, rays, 0xA000);
       std::printf("%4d^2 %3.0fdeg %6.2f %8.2f %8.3f %10.2f %10.2f %10.2f %10.2f %8.2f %9.0f\n",
                   res, theta_deg, gen, tracer.build_seconds(), r.facet_seconds, g1_rate / 1e6,
                   raycast_rate / 1e6, sample_rate / 1e6, bare / 1e6, raycast_rate / bare,
