@@ -131,6 +131,21 @@ Row make_row(const SurfaceSet& set, const std::string& label, const std::string&
   return r;
 }
 
+// Completes a row with its measurement (where, measured, stderr, model, error kind, group,
+// plot fields) and appends it.
+void push_measured(CheckOutput& out, Row r, const std::string& where, double measured,
+                   double stderr_, double model, const char* error, const std::string& group,
+                   const Json& extra) {
+  r.condition += " " + where;
+  r.measured = measured;
+  r.stderr_ = stderr_;
+  r.model = model;
+  r.error = error;
+  r.group = group;
+  r.extra = extra;
+  out.rows.push_back(std::move(r));
+}
+
 std::string surface_label(const SurfaceSet& set, std::size_t k) {
   return set.surfaces.size() > 1 || !set.labels[k].empty() ? set.labels[k] : "";
 }
@@ -361,14 +376,9 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         const double scale_a = r.window_area_perp / r.front_projected;
         Row est = make_row(set, "", "g1", "g1_raycast", Kind::Identity,
                            "DESIGN.md G1 estimators (a) = (b)");
-        est.condition += " " + where;
-        est.measured = gb.mean;
-        est.stderr_ = std::hypot(gb.stderr_, hit.stderr_ * scale_a);
-        est.model = hit.mean * scale_a;
-        est.error = "rays";
-        est.group = set.name + "/g1_raycast/" + dir;
-        est.extra = ang;
-        out.rows.push_back(est);
+        push_measured(out, std::move(est), where, gb.mean,
+                      std::hypot(gb.stderr_, hit.stderr_ * scale_a), hit.mean * scale_a, "rays",
+                      set.name + "/g1_raycast/" + dir, ang);
 
         // Averaged G1 against 1/(1 + Lambda) from the facets: on a periodic tile the visible
         // projected area is (v.n) A (000 eq. 2a-2b), so the projected-area average
@@ -377,14 +387,9 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         // infinitesimally thick, 000 "Inherent Assumptions").
         Row sn = make_row(set, "", "g1", "smith_numeric", periodic ? Kind::Identity : Kind::Model,
                           "000 eq. 3Xc-3Xd (exact for the projected-area average on a periodic tile)");
-        sn.condition += " " + where;
-        sn.measured = gb.mean;
-        sn.stderr_ = gb.stderr_;
-        sn.model = smith_numeric;
-        sn.error = "rays";
-        sn.group = set.name + "/smith_numeric/" + dir;
-        sn.extra = ang;
-        out.rows.push_back(sn);
+        push_measured(out, std::move(sn), where, gb.mean,
+                      gb.stderr_, smith_numeric, "rays",
+                      set.name + "/smith_numeric/" + dir, ang);
 
         // Per normal bin G1(v, m).
         for (int b = 0; b < binning.size(); ++b) {
@@ -406,35 +411,20 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
           const double sa = r.window_area_perp / nb.front_projected;
           Row a = make_row(set, "", "g1_bin", "g1_bin_raycast", Kind::Identity,
                            "DESIGN.md G1(v,m) estimators (a) = (b)");
-          a.condition += " " + bin_where;
-          a.measured = eb.mean;
-          a.stderr_ = std::hypot(eb.stderr_, ha.stderr_ * sa);
-          a.model = ha.mean * sa;
-          a.error = "rays";
-          a.group = set.name + "/g1_bin_raycast/" + dir;
-          a.extra = bx;
-          out.rows.push_back(a);
+          push_measured(out, std::move(a), bin_where, eb.mean,
+                        std::hypot(eb.stderr_, ha.stderr_ * sa), ha.mean * sa, "rays",
+                        set.name + "/g1_bin_raycast/" + dir, bx);
           // Smith: G1(v, m) = chi+(v.m) G1(v), independent of m (001 eq. 9-10).
           Row sm = make_row(set, "", "g1_bin", "smith_numeric", Kind::Model,
                             "001 eq. (9)-(10): Smith G1(v,m) = chi+(v.m) G1(v)");
-          sm.condition += " " + bin_where;
-          sm.measured = eb.mean;
-          sm.stderr_ = eb.stderr_;
-          sm.model = smith_numeric;
-          sm.error = "rays";
-          sm.group = set.name + "/g1_bin_smith/" + dir;
-          sm.extra = bx;
-          out.rows.push_back(sm);
+          push_measured(out, std::move(sm), bin_where, eb.mean,
+                        eb.stderr_, smith_numeric, "rays",
+                        set.name + "/g1_bin_smith/" + dir, bx);
           Row vc = make_row(set, "", "g1_bin", "vcavity", Kind::Model,
                             "001 eq. (24), averaged over the bin's facets");
-          vc.condition += " " + bin_where;
-          vc.measured = eb.mean;
-          vc.stderr_ = eb.stderr_;
-          vc.model = vcav[b];
-          vc.error = "rays";
-          vc.group = set.name + "/g1_bin_vcavity/" + dir;
-          vc.extra = bx;
-          out.rows.push_back(vc);
+          push_measured(out, std::move(vc), bin_where, eb.mean,
+                        eb.stderr_, vcav[b], "rays",
+                        set.name + "/g1_bin_vcavity/" + dir, bx);
         }
 
         Json row = g1_row_json(r, s);
@@ -557,26 +547,16 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
       // Symmetry (000 eq. 16b): the swapped pair traces the same points (measure_g2), so the
       // two values agree sample for sample; the error bar is that of two independent runs.
       Row sym = make_row(set, "", "g2", "g2_swapped", Kind::Identity, "000 eq. 16b: G2(o,m,i) = G2(i,m,o)");
-      sym.condition += " " + where;
-      sym.measured = ga.mean;
-      sym.stderr_ = std::hypot(ga.stderr_, gb.stderr_);
-      sym.model = gb.mean;
-      sym.error = "rays";
-      sym.group = set.name + "/g2_symmetry";
-      sym.extra = ang;
-      out.rows.push_back(sym);
+      push_measured(out, std::move(sym), where, ga.mean,
+                    std::hypot(ga.stderr_, gb.stderr_), gb.mean, "rays",
+                    set.name + "/g2_symmetry", ang);
       // Approximate models of the averaged G2: Smith forms with Lambda from the facets, the
       // same with the nominal NDF, and the V-cavity averaged over the same facets.
       auto model_row = [&](const std::string& name, double value, const std::string& ref) {
         Row r = make_row(set, "", "g2", name, Kind::Model, ref);
-        r.condition += " " + where;
-        r.measured = ga.mean;
-        r.stderr_ = ga.stderr_;
-        r.model = value;
-        r.error = "rays";
-        r.group = set.name + "/g2_" + name;
-        r.extra = ang;
-        out.rows.push_back(r);
+        push_measured(out, std::move(r), where, ga.mean,
+                      ga.stderr_, value, "rays",
+                      set.name + "/g2_" + name, ang);
       };
       const models::G2Forms fn = a.smith_numeric();
       model_row("separable_numeric", fn.separable, "001 eq. (20), Lambda from the facets");
@@ -776,14 +756,9 @@ void check_bsdf_albedo(const SurfaceSet& set, Progress& progress, CheckOutput& o
         const Estimate a1 = r.albedo(0, 0);
         Row m = make_row(set, "", "albedo_order_1", "single_scattering_smith", Kind::Model,
                          "models/microfacet_bsdf.hpp single_scattering_albedo (001 eq. 21 G2)");
-        m.condition += " " + where;
-        m.measured = a1.mean;
-        m.stderr_ = a1.stderr_;
-        m.model = single;
-        m.error = "rays";
-        m.group = set.name + "/albedo_single_scattering";
-        m.extra = ang;
-        out.rows.push_back(m);
+        push_measured(out, std::move(m), where, a1.mean,
+                      a1.stderr_, single, "rays",
+                      set.name + "/albedo_single_scattering", ang);
         row["single_scattering_model"] = single;
         row["smith_walk_albedo"] = Json::array();
         for (int j = 0; j <= K; ++j) {
