@@ -1,0 +1,97 @@
+#include "microsim/measure/groove_models.hpp"
+
+#include "microsim/models/vgroove_multiple.hpp"
+#include "microsim/surface/generators.hpp"
+
+namespace microsim {
+
+namespace {
+
+bool is_vgroove_1d(const Microsurface& s) {
+  return s.description.is_object() && s.description.value("kind", std::string()) == "vgroove" &&
+         !s.description.value("two_d", false);
+}
+
+}  // namespace
+
+std::optional<std::vector<double>> groove_model_albedo(const Microsurface& s, const BsdfOptions& o,
+                                                      const std::string& which,
+                                                      std::vector<double>* stderr_out) {
+  const Vec3 wi = direction_from_angles(o.theta_i, o.phi_i);
+  const int K = o.orders;
+  if (which == "vgroove_multiple") {
+    if (!is_vgroove_1d(s)) return std::nullopt;
+    // The ridges run along y: the world frame is the groove frame.
+    return models::vgroove_albedo(rad(s.description.at("facet_angle_deg").get<double>()), wi, o.material, K);
+  }
+  if (!is_vcavity(s)) return std::nullopt;
+  if (which == "vcavity_multiple") {
+    if (!s.nominal) return std::nullopt;
+    return models::vcavity_multiple_albedo(*s.nominal, wi, o.material, K);
+  }
+  if (which != "vcavity_multiple_grooves") return std::nullopt;
+  const std::size_t G = s.num_facets() / 4;
+  std::vector<double> sum(K + 1, 0.0), sum2(K + 1, 0.0);
+  for (std::size_t g = 0; g < G; ++g) {
+    const models::GrooveFrame f(vcavity_groove_normal(s, g));
+    const std::vector<double> a = models::vgroove_albedo(f.facet_angle, f.to_local(wi), o.material, K);
+    for (int k = 0; k <= K; ++k) {
+      sum[k] += a[k];
+      sum2[k] += a[k] * a[k];
+    }
+  }
+  std::vector<double> mean(K + 1);
+  if (stderr_out) stderr_out->assign(K + 1, 0.0);
+  for (int k = 0; k <= K; ++k) {
+    mean[k] = sum[k] / G;
+    if (stderr_out && G > 1)
+      (*stderr_out)[k] = std::sqrt(std::max(0.0, sum2[k] / G - mean[k] * mean[k]) / (G - 1));
+  }
+  return mean;
+}
+
+void add_groove_models(Json& j, const BsdfResult& r, const Microsurface& s) {
+  const int K = r.options.orders;
+  const bool dielectric = r.options.material.transmits();
+  for (const std::string name : {"vgroove_multiple", "vcavity_multiple", "vcavity_multiple_grooves"}) {
+    std::vector<double> se;
+    const auto a = groove_model_albedo(s, r.options, name, &se);
+    if (!a) {
+      j["albedo_models"][name] = nullptr;
+      continue;
+    }
+    Json refl = Json::object();
+    for (int k = 0; k <= K; ++k) refl[order_key(k, K)] = (*a)[k];
+    Json m = {{"reflected", refl}, {"transmitted", nullptr}};
+    if (!se.empty()) {
+      Json e = Json::object();
+      for (int k = 0; k <= K; ++k) e[order_key(k, K)] = se[k];
+      m["reflected_stderr"] = e;
+    }
+    if (dielectric)
+      m["note"] = "dielectric: only light reflected at every bounce (refracted light is not "
+                  "followed); lower bounds of the reflected orders";
+    j["albedo_models"][name] = m;
+    // Rows: the model beside the reflected albedo per order; z against the measurement's error
+    // (and the groove average's, for the nominal V-cavity model).
+    for (Json& row : j["rows"]) {
+      if (row.value("side", std::string()) != "reflected") continue;
+      const std::string key = row.value("order", std::string());
+      int k = -1;
+      for (int q = 0; q <= K; ++q)
+        if (order_key(q, K) == key) k = q;
+      if (k < 0) continue;
+      row[name] = (*a)[k];
+      if (dielectric) continue;
+      double err = row.value("albedo_stderr", 0.0);
+      if (name == "vcavity_multiple") {
+        std::vector<double> ge;
+        groove_model_albedo(s, r.options, "vcavity_multiple_grooves", &ge);
+        err = std::hypot(err, ge[k]);
+      }
+      row["z_" + name] = err > 0 ? Json((row.value("albedo", 0.0) - (*a)[k]) / err) : Json(nullptr);
+    }
+  }
+}
+
+}  // namespace microsim
