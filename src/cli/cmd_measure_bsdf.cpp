@@ -108,8 +108,6 @@ int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
                        " GiB of tallies, more than half of this machine's memory");
   }
   Microsurface s = load_surface(o.surface);
-  if (!s.macro().periodic)
-    throw UsageError(o.surface + ": measure bsdf needs a periodic tile (this surface is a finite object)");
   const auto t0 = std::chrono::steady_clock::now();
 
   BsdfOptions bo;
@@ -199,7 +197,7 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
       "bsdf", "BSDF per scattering order by random walks on the surface (mirror, conductor, "
               "dielectric), beside the single-scattering models and the Smith random walk");
   auto o = std::make_shared<BsdfCliOptions>();
-  cmd->add_option("surface", o->surface, "Surface file (a periodic tile)")->required();
+  cmd->add_option("surface", o->surface, "Surface file (a periodic tile, a finite object or a vcavity ensemble)")->required();
   cmd->add_option("-o,--output", o->output,
                   "Output: .exr (hemisphere tables; the JSON summary goes beside it, same name "
                   ".json) or .json (summary only)")

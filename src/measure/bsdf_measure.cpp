@@ -479,6 +479,7 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
     }
   j["rows"] = rows;
   add_groove_models(j, r, s);  // closed-form V-groove / V-cavity models beside the rows
+  add_macro_normalization(j, r, s);
 
   // --- in-plane rows
   Json in_plane = Json::array();

@@ -94,4 +94,26 @@ void add_groove_models(Json& j, const BsdfResult& r, const Microsurface& s) {
   }
 }
 
+void add_macro_normalization(Json& j, const BsdfResult& r, const Microsurface& s) {
+  const Macrosurface& m = s.macro();
+  Json n = {{"macro_area", m.area}};
+  if (is_vcavity(s)) {
+    n["kind"] = "vcavity ensemble: every groove traced on its own as an infinite periodic groove "
+                "with the same number of rays; per unit macro area (the V-cavity model's)";
+  } else if (m.periodic) {
+    n["kind"] = "periodic tile: per unit macro area (= per unit visible area)";
+  } else {
+    // Rays over a window covering the projection; weight W_perp / (A cos theta_i) each.
+    double w_up = 0.0;  // reflected albedo binned upward (the rest left below the base plane)
+    const int K = r.options.orders;
+    for (int px = 0; px < r.map.size(); ++px) w_up += r.measured.pix[r.measured.p_index(0, K, px)];
+    const double total = r.measured.albedo[r.measured.a_index(0, K)];
+    n["kind"] = "finite object: per unit of the flux falling on the macrosurface (000 eq. 4a with "
+                "the declared area A); a convex mirror object's total albedo is its visible area "
+                "ratio. Divide by the visible area ratio for albedos per unit visible area.";
+    n["reflected_below_base_plane"] = r.measured.paths ? (total - w_up) / r.measured.paths : 0.0;
+  }
+  j["normalization"] = n;
+}
+
 }  // namespace microsim

@@ -23,4 +23,9 @@ std::optional<std::vector<double>> groove_model_albedo(const Microsurface& s, co
 // without a closed form get null fields.
 void add_groove_models(Json& summary, const BsdfResult& r, const Microsurface& s);
 
+// Adds `normalization` to a bsdf summary: what the albedos are per unit of (macro area for tiles
+// and V-cavity ensembles; the flux falling on the macrosurface for finite objects, with the share
+// of the reflected albedo that leaves below the base plane, not binned in the hemisphere maps).
+void add_macro_normalization(Json& summary, const BsdfResult& r, const Microsurface& s);
+
 }  // namespace microsim
