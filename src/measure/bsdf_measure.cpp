@@ -478,8 +478,6 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
       rows.push_back(row);
     }
   j["rows"] = rows;
-  add_groove_models(j, r, s);  // closed-form V-groove / V-cavity models beside the rows
-  add_macro_normalization(j, r, s);
 
   // --- in-plane rows
   Json in_plane = Json::array();
@@ -526,6 +524,8 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
     }
   }
   j["in_plane"] = in_plane;
+  add_groove_models(j, r, s);  // closed-form V-groove / V-cavity models beside rows and lobes
+  add_macro_normalization(j, r, s);
 
   // --- bookkeeping
   const auto& m = r.measured;

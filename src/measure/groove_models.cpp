@@ -1,6 +1,8 @@
 #include "microsim/measure/groove_models.hpp"
 
 #include "microsim/models/vgroove_multiple.hpp"
+
+#include <algorithm>
 #include "microsim/surface/generators.hpp"
 
 namespace microsim {
@@ -10,6 +12,70 @@ namespace {
 bool is_vgroove_1d(const Microsurface& s) {
   return s.description.is_object() && s.description.value("kind", std::string()) == "vgroove" &&
          !s.description.value("two_d", false);
+}
+
+// In-plane reflected lobes of the closed forms, per slot and bin: sums of the beams' weights
+// (fraction x reflectance) whose exit direction falls in the bin, and their squares per sample.
+struct PlaneLobes {
+  std::vector<double> sum, sum2;  // [slot * bins + b]
+  std::uint64_t samples = 0;
+};
+
+void add_beams(PlaneLobes& p, const std::vector<models::GrooveBeam>& beams, const models::GrooveFrame* f,
+               const InPlaneBins& plane, int K) {
+  const int nb = plane.size();
+  std::vector<std::pair<std::size_t, double>> here;
+  for (const auto& b : beams) {
+    const Vec3 d = f ? f->to_world(b.direction) : b.direction;
+    if (!(d.z() > 0)) continue;
+    const int bin = plane.bin_of(d);
+    if (bin < 0) continue;
+    const double w = b.fraction * b.reflectance;
+    here.push_back({static_cast<std::size_t>(std::min(b.bounces, K) - 1) * nb + bin, w});
+    here.push_back({static_cast<std::size_t>(K) * nb + bin, w});
+  }
+  // Squares per sample: beams of one groove landing in the same cell add before squaring.
+  std::sort(here.begin(), here.end());
+  for (std::size_t i = 0; i < here.size();) {
+    double w = 0;
+    std::size_t j = i;
+    for (; j < here.size() && here[j].first == here[i].first; ++j) w += here[j].second;
+    p.sum[here[i].first] += w;
+    p.sum2[here[i].first] += w * w;
+    i = j;
+  }
+  ++p.samples;
+}
+
+// The lobes of the model for this surface: a periodic V-groove's beams (exact), or Monte Carlo
+// over grooves of the nominal D (slopes drawn from P22: (n.m) D(m) dm, 001 App. A; stratified in
+// the slope radius).
+std::optional<PlaneLobes> groove_model_lobes(const Microsurface& s, const BsdfResult& r, const std::string& which) {
+  const int K = r.options.orders, nb = r.plane.size();
+  PlaneLobes p;
+  p.sum.assign(static_cast<std::size_t>(K + 1) * nb, 0.0);
+  p.sum2 = p.sum;
+  if (which == "vgroove_multiple") {
+    if (!is_vgroove_1d(s)) return std::nullopt;
+    add_beams(p, models::vgroove_beams(rad(s.description.at("facet_angle_deg").get<double>()), r.wi,
+                                       r.options.material),
+              nullptr, r.plane, K);
+    return p;
+  }
+  if (which != "vcavity_multiple" || !is_vcavity(s) || !s.nominal) return std::nullopt;
+  const models::Ndf& ndf = *s.nominal;
+  const std::uint64_t n = 1 << 18;
+  for (std::uint64_t i = 0; i < n; ++i) {
+    CounterRng rng(r.options.seed, 0x7CAF1000ull, i);
+    const double u1 = (static_cast<double>(i) + rng.uniform()) / n, u2 = rng.uniform();
+    const double rr = ndf.kind == models::Distribution::Beckmann ? std::sqrt(-std::log1p(-u1))
+                                                                 : std::sqrt(u1 / (1 - u1));
+    const Vec3 m = Vec3(-ndf.alpha_x * rr * std::cos(2 * kPi * u2), -ndf.alpha_y * rr * std::sin(2 * kPi * u2), 1.0)
+                       .normalized();
+    const models::GrooveFrame f(m);
+    add_beams(p, models::vgroove_beams(f.facet_angle, f.to_local(r.wi), r.options.material), &f, r.plane, K);
+  }
+  return p;
 }
 
 }  // namespace
@@ -90,6 +156,26 @@ void add_groove_models(Json& j, const BsdfResult& r, const Microsurface& s) {
         err = std::hypot(err, ge[k]);
       }
       row["z_" + name] = err > 0 ? Json((row.value("albedo", 0.0) - (*a)[k]) / err) : Json(nullptr);
+    }
+  }
+  // In-plane reflected lobes: f of the model per bin (total and per order), its Monte Carlo
+  // error for the V-cavity average over D (the V-groove beams are exact deltas, binned).
+  for (const std::string name : {"vgroove_multiple", "vcavity_multiple"}) {
+    const auto lobes = groove_model_lobes(s, r, name);
+    if (!lobes || !j.contains("in_plane")) continue;
+    const int nb = r.plane.size();
+    for (Json& row : j["in_plane"]) {
+      if (row.value("side", std::string()) != "reflected") continue;
+      const double psi = rad(row.value("theta_o_deg", 0.0));
+      int b = static_cast<int>(std::floor((psi + 0.5 * kPi) / (kPi / nb)));
+      b = std::clamp(b, 0, nb - 1);
+      const double ci = r.plane.cos_integral(b);
+      for (int k = 0; k <= K; ++k) {
+        const Estimate e = tally_estimate(lobes->sum[k * nb + b], lobes->sum2[k * nb + b], lobes->samples, 1.0 / ci);
+        const std::string key = k == K ? name : name + "_" + order_key(k, K);
+        row[key] = e.mean;
+        if (name == "vcavity_multiple") row[key + "_stderr"] = e.stderr_;
+      }
     }
   }
 }
