@@ -1,4 +1,5 @@
 #include "microsim/surface/mesh_check.hpp"
+#include "microsim/surface/mesh_header.hpp"
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
@@ -165,6 +166,8 @@ void read_mesh_file(const std::string& path, std::vector<Eigen::Vector3f>& verts
                     std::vector<std::array<std::uint32_t, 3>>& tris) {
   using OMesh = OpenMesh::TriMesh_ArrayKernelT<>;
   if (!std::ifstream(path).good()) throw UsageError("mesh file " + path + " does not exist or cannot be read");
+  check_mesh_header(path);  // declared counts against the file's length and memory, before reading
+
   // OpenMesh reports problems on omerr and repairs non-manifold faces by duplicating their
   // vertices; capture its messages and read the repair flags instead.
   std::ostringstream captured;
