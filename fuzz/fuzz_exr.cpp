@@ -6,9 +6,6 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string path = microsim::fuzz::write_file(
       "surface.exr", {reinterpret_cast<const char*>(data), size});
-  try {
-    microsim::load_surface(path);
-  } catch (const microsim::UsageError&) {
-  }
+  microsim::fuzz::expect_only<microsim::UsageError>([&] { microsim::load_surface(path); });
   return 0;
 }

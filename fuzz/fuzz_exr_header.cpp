@@ -24,9 +24,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   t.attributes["microsim_description"] = std::string(description);
   const std::string path = (microsim::fuzz::work_dir() / "header.exr").string();
   microsim::write_exr(path, t);
-  try {
-    microsim::load_surface(path);
-  } catch (const microsim::UsageError&) {
-  }
+  microsim::fuzz::expect_only<microsim::UsageError>([&] { microsim::load_surface(path); });
   return 0;
 }

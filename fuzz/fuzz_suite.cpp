@@ -5,9 +5,6 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string path = microsim::fuzz::write_file(
       "suite.json", {reinterpret_cast<const char*>(data), size});
-  try {
-    microsim::validation::load_suite(path);
-  } catch (const microsim::UsageError&) {
-  }
+  microsim::fuzz::expect_only<microsim::UsageError>([&] { microsim::validation::load_suite(path); });
   return 0;
 }
