@@ -17,6 +17,7 @@
 #include <iomanip>
 
 #include "microsim/common.hpp"
+#include "microsim/io/exr_header.hpp"
 
 namespace microsim {
 
@@ -111,6 +112,7 @@ void write_exr(const std::string& path, const ExrTable& t) {
 
 ExrTable read_exr(const std::string& path) {
   ExrTable t;
+  check_exr_header_sizes(path);  // before OpenEXR allocates what a corrupt header declares
   try {
     Imf::InputFile file(path.c_str());
     const Imf::Header& h = file.header();
