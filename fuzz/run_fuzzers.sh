@@ -4,6 +4,8 @@
 #   BUILD_DIR configured with MICROSIM_FUZZ=ON; defaults: 10 s and 5000 runs per target (the CI
 #   smoke run). New inputs go to BUILD_DIR/fuzz-corpus/<target>/ (the committed corpus is only
 #   read); a crashing input is saved as BUILD_DIR/fuzz-artifacts/<target>/crash-* and fails the run.
+#   MICROSIM_FUZZ_SEED=N fixes libFuzzer's random seed: with a RUNS bound (and SECONDS only as a
+#   safety cap) the run is then the same on every machine, as CI needs.
 set -euo pipefail
 build=$(cd "${1:?usage: fuzz/run_fuzzers.sh BUILD_DIR [SECONDS [RUNS [TARGET...]]]}" && pwd)
 seconds=${2:-10}
@@ -24,7 +26,7 @@ for t in "${targets[@]}"; do
   start=$(date +%s)
   # -runs stops after RUNS inputs, -max_total_time after SECONDS, whichever comes first; one
   # worker (the CPU is shared); 2 GB memory cap and 10 s per input count as crashes.
-  "$build/fuzz/$t" -runs="$runs" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+  "$build/fuzz/$t" ${MICROSIM_FUZZ_SEED:+-seed=$MICROSIM_FUZZ_SEED} -runs="$runs" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
       -malloc_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$art/" \
       "$out" "$src/fuzz/corpus/$t" 2> "$build/fuzz-$t.log" || {
     tail -n 60 "$build/fuzz-$t.log" >&2

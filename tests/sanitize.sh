@@ -14,8 +14,6 @@ export ASAN_SYMBOLIZER_PATH=$symbolizer
 export ASAN_OPTIONS=detect_leaks=1:halt_on_error=1:exitcode=86:strict_init_order=1:detect_stack_use_after_return=1:log_path=$logs/asan
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1:exitcode=87:log_path=$logs/ubsan
 export LSAN_OPTIONS=suppressions=$src/tests/lsan.supp:print_suppressions=0
-# Statistical tests read this to use smaller configurations (same assertions, fewer rays).
-export MICROSIM_SANITIZE=1
 status=0
 ctest --test-dir "$build" --output-on-failure "$@" || status=$?
 if compgen -G "$logs/*" > /dev/null; then
