@@ -95,3 +95,35 @@ TEST(Output, ExtensionIsCaseInsensitiveAndIgnoresFolders) {
   EXPECT_EQ(extension_of("a/b.c/file.JSON"), "json");
   EXPECT_EQ(extension_of("a/b.c/file"), "");
 }
+
+// A corrupt EXR header declaring a string attribute larger than the file (here 2 GB in a file
+// of a few hundred bytes) is refused before OpenEXR allocates the declared size; the same file
+// with its true size reads.
+TEST(Output, ExrAttributeLargerThanTheFileIsRefused) {
+  ExrTable t;
+  t.width = 2;
+  t.height = 2;
+  t.channel_names = {"Z"};
+  t.channels = {{0, 1, 2, 3}};
+  t.attributes = {{"note", "abcdefgh"}};
+  const std::string path = tmp("huge-attribute.exr");
+  write_exr(path, t);
+  EXPECT_EQ(read_exr(path).attributes["note"], "abcdefgh");
+  std::string bytes = slurp(path);
+  const std::string key("note\0string\0", 12);
+  const std::size_t at = bytes.find(key);
+  ASSERT_NE(at, std::string::npos);
+  ASSERT_EQ(bytes[at + 12], 8);  // little-endian int32 size of "abcdefgh"
+  bytes[at + 12] = '\xf0';
+  bytes[at + 13] = bytes[at + 14] = '\xff';
+  bytes[at + 15] = '\x7f';
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+  try {
+    read_exr(path);
+    ADD_FAILURE() << "a 2 GB attribute in a short file was accepted";
+  } catch (const UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("attribute 'note' declares 2147483632 bytes"), std::string::npos)
+        << e.what();
+  }
+  std::remove(path.c_str());
+}

@@ -25,6 +25,7 @@
 
 #include "microsim/common.hpp"
 #include "microsim/io/checks.hpp"
+#include "microsim/io/exr_header.hpp"
 
 namespace microsim {
 
@@ -243,6 +244,7 @@ void write_exr(const std::string& path, const ExrTable& t) {
 
 ExrTable read_exr(const std::string& path, const std::function<void(const ExrTable&)>& check_header) {
   ExrTable t;
+  check_exr_header_sizes(path);  // before OpenEXR allocates what a corrupt header declares
   try {
     Imf::InputFile file(path.c_str());
     const Imf::Header& h = file.header();
