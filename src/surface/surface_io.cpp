@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 
 #include "microsim/io/output.hpp"
+#include "microsim/surface/heightmap_import.hpp"
 #include "microsim/surface/mesh_check.hpp"
 
 namespace microsim {
@@ -65,15 +66,21 @@ void save_heightfield_exr(const Microsurface& s, const std::string& path) {
   t.attributes = s.description;
   t.attributes["microsim_surface"] = "heightfield";
   t.attributes["microsim_description"] = s.description.dump();
-  t.attributes["microsim_macrosurface"] = macro_to_json(s.macro()).dump();
+  // A measured patch imported as a non-periodic window keeps that in its header: the
+  // estimators refuse it on loading (load_surface), metrology reads it.
+  const bool window = s.description.is_object() && s.description.value("boundary", std::string()) == "window";
+  Json macro = macro_to_json(s.macro());
+  if (window) macro["periodic"] = false;
+  t.attributes["microsim_macrosurface"] = macro.dump();
   t.attributes["parameterization"] =
       "Z(i,j) = height of grid vertex x = -size_x/2 + i size_x/width, y = -size_y/2 + j "
-      "size_y/height (row j = y index); periodic tile; cell split along its (i+1,j)-(i,j+1) "
-      "diagonal";
+      "size_y/height (row j = y index); " +
+      std::string(window ? "non-periodic measured window" : "periodic tile") +
+      "; cell split along its (i+1,j)-(i,j+1) diagonal";
   write_exr(path, t);
 }
 
-Microsurface load_heightfield_exr(const std::string& path) {
+Microsurface load_heightfield_exr(const std::string& path, bool allow_window) {
   ExrTable t = read_exr(path);
   if (!t.attributes.contains("microsim_surface") || !t.attributes.contains("microsim_macrosurface"))
     throw UsageError(path + " is an EXR file but not a microsim heightfield (no microsim header)");
@@ -82,6 +89,11 @@ Microsurface load_heightfield_exr(const std::string& path) {
   try {
     Macrosurface m = macro_from_json(Json::parse(
         t.attributes["microsim_macrosurface"].get<std::string>()));
+    if (!m.periodic && !allow_window)
+      throw UsageError(path + " is a non-periodic measured window: the estimators need a periodic "
+                       "tile (a guard-band window is not supported); microsim info reports its "
+                       "metrology; import periodic data with generate heightmap --periodic");
+    // In memory a window is a grid like a tile; its description's "boundary" says "window".
     Microsurface s = Microsurface::heightfield(t.width, t.height, m.size_x, m.size_y,
                                                t.channels[it - t.channel_names.begin()]);
     s.description = Json::parse(t.attributes["microsim_description"].get<std::string>());
@@ -202,10 +214,12 @@ void save_surface(const Microsurface& s, const std::string& path) {
   }
 }
 
-Microsurface load_surface(const std::string& path) {
+Microsurface load_surface(const std::string& path) { return load_surface_or_window(path); }
+
+Microsurface load_surface_or_window(const std::string& path, bool allow_window) {
   if (!file_exists(path)) throw UsageError("surface file " + path + " does not exist");
   std::string ext = extension_of(path);
-  if (ext == "exr") return load_heightfield_exr(path);
+  if (ext == "exr") return load_heightfield_exr(path, allow_window);
   if (ext == "ply" || ext == "obj" || ext == "off") return load_mesh(path);
   throw UsageError("surface file " + path + ": unknown format (expected .exr, .ply, .obj or .off)");
 }
