@@ -44,7 +44,8 @@ void print_metrology(const Metrology& m, const Microsurface& s) {
             << fmt(m.cells_per_gaussian_length, 3)
             << " per Gaussian correlation length l = Sal / sqrt(ln 5)"
             << (m.cells_per_gaussian_length < 4
-                    ? "  WARNING: under 4 cells per l the triangulated surface is far from converged"
+                    ? "  WARNING: coarser than generate gaussian's default (4 cells per l): D, G1 and the "
+                      "multiple scattering of the triangles are far from the continuous surface's"
                     : m.cells_per_gaussian_length < 16
                           ? " (multiple scattering converges by 8-16 cells per l: see the convergence table)"
                           : "")
