@@ -104,9 +104,9 @@ void register_generate_heightmap(CLI::App& gen, const GlobalOptions& g) {
               << s.macro().size_y << (p->length_unit.empty() ? "" : " " + p->length_unit) << "; detrend "
               << d["detrend"].get<std::string>() << ", " << d["missing_filled"].get<std::size_t>()
               << " missing heights filled\n"
-              << "Sq " << fmt(m.sq) << ", Sdq " << fmt(m.slopes.sdq) << ", Beckmann alpha ("
+              << "Sq " << m.sq << ", Sdq " << fmt(m.slopes.sdq) << ", Beckmann alpha ("
               << fmt(m.slopes.beckmann_alpha_x) << ", " << fmt(m.slopes.beckmann_alpha_y) << "), Sal "
-              << fmt(m.acf.sal) << " (" << fmt(m.cells_per_correlation_length, 3)
+              << m.acf.sal << " (" << fmt(m.cells_per_correlation_length, 3)
               << " cells); microsim info " << *out << " for the full report\n";
   });
 }

@@ -1,5 +1,7 @@
 // microsim info FILE and microsim convert FILE -o OUT.
+#include <iomanip>
 #include <iostream>
+#include <sstream>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
@@ -21,10 +23,17 @@ int run_convert(const std::string& input, const std::string& output, const Globa
 }
 
 // The areal texture parameters (ISO 25178-2 style) and slope-model fits of a heightfield.
+// 4 significant digits: heights and lengths of any scale (nm to mm) stay readable.
+std::string sig(double x) {
+  std::ostringstream o;
+  o << std::setprecision(4) << x;
+  return o.str();
+}
+
 void print_metrology(const Metrology& m, const Microsurface& s) {
   const std::string unit = s.description.value("length_unit", std::string());
   const std::string u = unit.empty() || unit == "unspecified" ? "" : " " + unit;
-  std::cout << "metrology    Sq " << fmt(m.sq) << u << ", Sa " << fmt(m.sa) << u << ", Sz " << fmt(m.sz)
+  std::cout << "metrology    Sq " << sig(m.sq) << u << ", Sa " << sig(m.sa) << u << ", Sz " << sig(m.sz)
             << u << ", Ssk " << fmt(m.skewness, 3) << ", Sku " << fmt(m.kurtosis, 3) << "\n";
   if (!m.textured) {
     std::cout << "             constant heights: no texture\n";
@@ -36,7 +45,7 @@ void print_metrology(const Metrology& m, const Microsurface& s) {
             << "alpha        Beckmann (sqrt 2 RMS slope) x " << fmt(sl.beckmann_alpha_x) << ", y "
             << fmt(sl.beckmann_alpha_y) << "; GGX (max. likelihood) x " << fmt(sl.ggx_alpha_x) << ", y "
             << fmt(sl.ggx_alpha_y) << ", isotropic " << fmt(sl.ggx_alpha) << "\n"
-            << "ACF          Sal " << fmt(m.acf.sal) << u << " (decay to " << m.acf.threshold << "), Str "
+            << "ACF          Sal " << sig(m.acf.sal) << u << " (decay to " << m.acf.threshold << "), Str "
             << fmt(m.acf.str, 3) << ", slowest decay at " << fmt(m.acf.slowest_direction_deg, 3)
             << " deg" << (m.acf.decayed_in_every_direction ? "" : " (not reached within half the grid)")
             << "\n"
