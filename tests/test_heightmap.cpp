@@ -500,6 +500,15 @@ TEST(HeightmapCli, NonPeriodicWindowIsRefusedByEstimatorsButNotByInfo) {
   Result info = run_microsim("info " + w);
   EXPECT_EQ(info.code, 0) << info.err;
   EXPECT_NE(info.out.find("non-periodic measured window"), std::string::npos);
+  // Forcing --periodic on a crop (not periodic) warns about the seam; the whole tile does not.
+  Result crop = run_microsim("generate heightmap --input " + tmp("wz.exr") + " --pixel-size 0.015625 --crop 4,4,40,40 "
+                             "--periodic -o " + tmp("wc.exr"));
+  EXPECT_EQ(crop.code, 0) << crop.err;
+  EXPECT_NE(crop.err.find("does not look periodic"), std::string::npos) << crop.err;
+  Result whole = run_microsim("generate heightmap --input " + tmp("wz.exr") + " --pixel-size 0.015625 --periodic -o " +
+                              tmp("wt.exr"));
+  EXPECT_EQ(whole.code, 0) << whole.err;
+  EXPECT_EQ(whole.err, "");
 }
 
 TEST(HeightmapCli, BadInputIsRefusedWithOneLine) {

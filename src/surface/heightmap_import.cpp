@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "microsim/io/output.hpp"
+#include "microsim/surface/metrology.hpp"
 
 namespace microsim {
 
@@ -436,6 +437,17 @@ Microsurface import_heightmap(const HeightmapImportParams& p) {
   d["detrend"] = to_string(p.detrend);
   d["detrend_coefficients"] = coef;
   d["detrend_basis"] = "1, x, y, x^2, x y, y^2 with x = i pixel_size_x, y = j pixel_size_y (first terms)";
+  if (p.periodic) {
+    // Data that is not periodic gets a cliff where the tile wraps: compare the RMS slopes with
+    // and without the wrap-around cells (equal for a truly periodic map, up to 1/n noise).
+    HeightGridView v = grid_view(s);
+    v.periodic = false;
+    const SlopeStats inner = slope_stats(facet_slopes(v), 2);
+    v.periodic = true;
+    const SlopeStats all = slope_stats(facet_slopes(v), 2);
+    d["seam_check"] = {{"slope_rms_x_tile", all.rms_x}, {"slope_rms_y_tile", all.rms_y},
+                       {"slope_rms_x_without_wrap", inner.rms_x}, {"slope_rms_y_without_wrap", inner.rms_y}};
+  }
   s.description = d;
   return s;
 }
