@@ -241,8 +241,8 @@ std::vector<double> detrend(std::vector<double>& z, int nx, int ny, double dx, d
     }
   if (n < static_cast<std::size_t>(terms) * 2)
     throw UsageError("--detrend " + to_string(d) + ": too few heights (" + std::to_string(n) + ") to fit");
-  // Orthogonal least squares (LDLT on the normal equations of centred coordinates is exact to
-  // rounding for these few, well-scaled terms; a rank-deficient fit, e.g. one row, is refused).
+  // The normal equations of centred coordinates, solved by LDLT: exact to rounding for these few,
+  // well-scaled terms (tested to 1e-12); a rank-deficient fit (a single row or column) is refused.
   Eigen::LDLT<Eigen::MatrixXd> ldlt(ata);
   if (ldlt.info() != Eigen::Success || ldlt.rcond() < 1e-13)
     throw UsageError("--detrend " + to_string(d) + ": the grid is too narrow to fit it");
