@@ -43,8 +43,11 @@ void print_metrology(const Metrology& m, const Microsurface& s) {
   std::cout << "slopes       Sdq (RMS slope) " << fmt(sl.sdq) << ", RMS x " << fmt(sl.rms_x) << ", y "
             << fmt(sl.rms_y) << "\n"
             << "alpha        Beckmann (sqrt 2 RMS slope) x " << fmt(sl.beckmann_alpha_x) << ", y "
-            << fmt(sl.beckmann_alpha_y) << "; GGX (max. likelihood) x " << fmt(sl.ggx_alpha_x) << ", y "
-            << fmt(sl.ggx_alpha_y) << ", isotropic " << fmt(sl.ggx_alpha) << "\n"
+            << fmt(sl.beckmann_alpha_y) << "; GGX (max. likelihood) "
+            << (sl.ggx_alpha_x > 0 ? "x " + fmt(sl.ggx_alpha_x) + ", y " + fmt(sl.ggx_alpha_y) + ", isotropic " +
+                                         fmt(sl.ggx_alpha)
+                                   : std::string("n/a (slopes along one axis only)"))
+            << "\n"
             << "ACF          Sal " << sig(m.acf.sal) << u << " (decay to " << m.acf.threshold << "), Str "
             << fmt(m.acf.str, 3) << ", slowest decay at " << fmt(m.acf.slowest_direction_deg, 3)
             << " deg" << (m.acf.decayed_in_every_direction ? "" : " (not reached within half the grid)")
@@ -52,16 +55,18 @@ void print_metrology(const Metrology& m, const Microsurface& s) {
             << "grid         " << fmt(m.cells_per_correlation_length, 3) << " cells per Sal, "
             << fmt(m.cells_per_gaussian_length, 3)
             << " per Gaussian correlation length l = Sal / sqrt(ln 5)"
-            << (m.cells_per_gaussian_length < 4
-                    ? "  WARNING: coarser than generate gaussian's default (4 cells per l): D, G1 and the "
+            << (!m.acf.decayed_in_every_direction ? ""
+                : m.cells_per_gaussian_length < 3.5
+                    ? "  WARNING: well under generate gaussian's default of 4 cells per l: D, G1 and the "
                       "multiple scattering of the triangles are far from the continuous surface's"
                     : m.cells_per_gaussian_length < 16
                           ? " (multiple scattering converges by 8-16 cells per l: see the convergence table)"
                           : "")
             << "\n"
             << "fit chi2/dof heights vs Gaussian " << fmt(m.height_fit.chi2_per_dof(), 3)
-            << "; slopes vs Beckmann " << fmt(sl.beckmann_fit.chi2_per_dof(), 3) << ", vs GGX "
-            << fmt(sl.ggx_fit.chi2_per_dof(), 3) << " (" << m.height_fit.observed.size()
+            << "; slopes vs Beckmann "
+            << (sl.beckmann_fit.model.empty() ? "n/a" : fmt(sl.beckmann_fit.chi2_per_dof(), 3)) << ", vs GGX "
+            << (sl.ggx_fit.model.empty() ? "n/a" : fmt(sl.ggx_fit.chi2_per_dof(), 3)) << " (" << m.height_fit.observed.size()
             << " equal-probability bins; neighbouring pixels are correlated, so compare models "
                "rather than read absolute values)\n";
 }
