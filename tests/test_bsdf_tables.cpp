@@ -1,0 +1,250 @@
+// BSDF tables for renderers: the multi-incidence measurement (measure/bsdf_table.hpp), the RGL
+// tensor file (io/rgl_bsdf.hpp) and the MERL file (io/merl.hpp), checked through readers written
+// from the format descriptions (table_readers.hpp): the files give back the measured f within
+// its standard errors, a mirror's table conserves energy (white furnace), and the RGL importance
+// sampling draws directions with the density it reports (chi-square) and weights eval / pdf.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+
+#include "microsim/io/merl.hpp"
+#include "microsim/io/rgl_bsdf.hpp"
+#include "microsim/measure/bsdf_table.hpp"
+#include "microsim/measure/stats.hpp"
+#include "microsim/surface/gaussian.hpp"
+#include "table_readers.hpp"
+
+using namespace microsim;
+using namespace microsim::testing;
+namespace mm = microsim::models;
+
+namespace {
+
+const Microsurface& surface() {
+  static const Microsurface s = [] {
+    GaussianParams g;
+    g.resolution = 128;
+    g.alpha_x = g.alpha_y = 0.5;
+    g.seed = 7;
+    return generate_gaussian(g);
+  }();
+  return s;
+}
+
+BsdfTable measure(const mm::Material& m, const std::vector<double>& thetas_deg, std::uint64_t rays, int res,
+                  std::vector<double> phis_deg = {0.0}) {
+  static const Tracer tracer(surface());
+  BsdfTableOptions o;
+  o.base.material = m;
+  o.base.orders = 3;
+  o.base.rays = rays;
+  o.base.resolution = res;
+  o.base.seed = 11;
+  for (double t : thetas_deg) o.theta_i.push_back(rad(t));
+  for (double p : phis_deg) o.phi_i.push_back(rad(p));
+  return measure_bsdf_table(tracer, o);
+}
+
+std::string temp(const std::string& name) { return ::testing::TempDir() + "microsim_tables_" + name; }
+
+const mm::Material kGold = mm::Material::conductor(0.47, 2.4);
+
+// z-scores of a reader's f against the measured pixel f at the pixel centres (pixels that
+// received paths and lie inside the reader's range).
+struct Agreement {
+  double max_abs_z = 0, chi2 = 0;
+  int n = 0;
+};
+template <class F>
+Agreement agreement(const BsdfResult& r, F&& reader_f) {
+  Agreement a;
+  const int R = r.map.resolution(), K = r.options.orders;
+  for (int px = 0; px < r.map.size(); ++px) {
+    const Estimate e = r.f_pixel(0, K, px);
+    if (!(e.stderr_ > 0)) continue;
+    const int i = px % R, j = px / R;
+    const Vec3 wo = r.map.from_square(-1 + (i + 0.5) * 2.0 / R, -1 + (j + 0.5) * 2.0 / R);
+    const double z = (reader_f(wo) - e.mean) / e.stderr_;
+    a.max_abs_z = std::max(a.max_abs_z, std::abs(z));
+    a.chi2 += z * z;
+    ++a.n;
+  }
+  return a;
+}
+
+}  // namespace
+
+TEST(BsdfTable, EveryIncidenceEqualsItsSingleRun) {
+  const BsdfTable t = measure(kGold, {10, 50}, 4000, 8, {0, 90});
+  ASSERT_EQ(t.incidences(), 4);
+  const Tracer tracer(surface());
+  for (int p = 0; p < 2; ++p)
+    for (int q = 0; q < 2; ++q) {
+      BsdfOptions o = t.at(p, q).options;
+      EXPECT_DOUBLE_EQ(o.theta_i, t.theta_i[q]);
+      EXPECT_DOUBLE_EQ(o.phi_i, t.phi_i[p]);
+      const BsdfResult one = measure_bsdf(tracer, o);
+      EXPECT_EQ(one.measured.albedo, t.at(p, q).measured.albedo);
+      EXPECT_EQ(one.measured.pix, t.at(p, q).measured.pix);
+    }
+  const Json j = bsdf_incidences_json(t, surface());
+  ASSERT_EQ(j.size(), 4u);
+  EXPECT_DOUBLE_EQ(j[3]["theta_i_deg"].get<double>(), 50.0);
+  EXPECT_DOUBLE_EQ(j[3]["phi_i_deg"].get<double>(), 90.0);
+  EXPECT_TRUE(j[3].contains("albedo") && j[3].contains("in_plane") && j[3].contains("albedo_models"));
+  const ExrTable exr = bsdf_table_exr(t, Json::object());
+  EXPECT_EQ(exr.channel_names.front(), "incidence_0.reflected.f_order_1");
+  EXPECT_EQ(exr.channels.size(), 4u * 4u * 2u);
+}
+
+TEST(BilinearWarp, MapsUniformSamplesToItsDensity) {
+  // The writer's warp against the test reader's bisection inverse, and its density.
+  std::vector<double> v = {0.1, 2, 3, 0.5, 1, 4, 0, 1, 2, 0.3, 5, 1};
+  std::vector<float> vf(v.begin(), v.end());
+  const BilinearWarp w(v, 4, 3);
+  const Warp2 ref(Bilinear2{vf.data(), 4, 3});
+  for (double sx : {0.05, 0.3, 0.77})
+    for (double sy : {0.1, 0.5, 0.93}) {
+      const Vec2 p = w.sample(Vec2(sx, sy));
+      const Vec2 back = ref.invert(p);
+      EXPECT_NEAR(back.x(), sx, 1e-6);
+      EXPECT_NEAR(back.y(), sy, 1e-6);
+      EXPECT_NEAR(w.pdf(p), ref.pdf(p), 1e-5 * ref.pdf(p));
+    }
+}
+
+TEST(RglFile, ReaderGivesBackTheMeasuredF) {
+  const BsdfTable t = measure(kGold, {0, 40}, 200000, 12);
+  RglOptions o;
+  o.description = "test";
+  const std::string path = temp("gold.bsdf");
+  write_rgl_bsdf(path, build_rgl_table(t, surface(), o));
+  for (int q = 0; q < 2; ++q) {
+    RglReader reader(path, 0, q);
+    const BsdfResult& r = t.at(0, q);
+    const auto f = [&](const Vec3& wo) { return reader.eval(wo) / wo.z(); };
+    const Agreement a = agreement(r, f);
+    ASSERT_GT(a.n, 100);
+    const double zc = sidak_z(1e-3, a.n);
+    EXPECT_LT(a.max_abs_z, zc) << "theta_i " << deg(t.theta_i[q]);
+    EXPECT_GT(chi2_p_value(a.chi2, a.n), 1e-3) << "chi2 " << a.chi2 << " over " << a.n << " pixels";
+    // Power: the same file with spectra scaled by 1.05 is rejected.
+    reader.scale_spectra(1.05);
+    const Agreement b = agreement(r, f);
+    EXPECT_LT(chi2_p_value(b.chi2, b.n), 1e-3) << "chi2 " << b.chi2 << " over " << b.n << " pixels";
+  }
+  std::remove(path.c_str());
+}
+
+TEST(RglFile, MirrorWhiteFurnace) {
+  const BsdfTable t = measure(mm::Material::mirror(), {0, 30, 60}, 100000, 16);
+  RglOptions o;
+  const std::string path = temp("mirror.bsdf");
+  write_rgl_bsdf(path, build_rgl_table(t, surface(), o));
+  const HemisphereMap map(256);
+  for (int q = 0; q < 3; ++q) {
+    RglReader reader(path, 0, q);
+    auto furnace = [&] {
+      double sum = 0.0;  // int f cos d omega over the equal-area map's pixel centres
+      for (int j = 0; j < map.resolution(); ++j)
+        for (int i = 0; i < map.resolution(); ++i)
+          sum += reader.eval(map.from_square(-1 + (i + 0.5) * 2.0 / map.resolution(), -1 + (j + 0.5) * 2.0 / map.resolution()));
+      return sum * map.pixel_solid_angle();
+    };
+    const double measured = t.at(0, q).albedo(0, t.at(0, q).options.orders).mean;
+    EXPECT_NEAR(measured, 1.0, 1e-3);  // a mirror loses no power (few lost paths)
+    const double a = furnace();
+    EXPECT_NEAR(a, 1.0, 0.02) << "theta_i " << deg(t.theta_i[q]);
+    reader.scale_spectra(1.05);
+    EXPECT_GT(std::abs(furnace() - 1.0), 0.02) << "power check";
+  }
+  std::remove(path.c_str());
+}
+
+TEST(RglFile, ImportanceSamplingMatchesItsDensityAndEval) {
+  const BsdfTable t = measure(kGold, {30}, 50000, 12);
+  RglOptions o;
+  const std::string path = temp("gold_sampling.bsdf");
+  write_rgl_bsdf(path, build_rgl_table(t, surface(), o));
+  const RglReader reader(path, 0, 0);
+  // Histogram of sampled directions on an 8 x 8 equal-area map plus a "below the horizon" cell,
+  // against N int_bin pdf d omega (6 x 6 midpoint quadrature per bin).
+  const int R = 8, N = 40000;
+  const HemisphereMap map(R);
+  std::vector<double> observed(R * R + 1, 0.0), expected(R * R + 1, 0.0);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  double max_rel = 0.0;
+  for (int n = 0; n < N; ++n) {
+    Vec3 wo;
+    double pdf;
+    if (!reader.sample(Vec2(U(rng), U(rng)), &wo, &pdf)) {
+      observed[R * R] += 1;
+      continue;
+    }
+    observed[map.pixel_of(wo)] += 1;
+    if (n % 100 == 0) {  // the sampled density is the one pdf() reports
+      const double p2 = reader.pdf(wo);
+      max_rel = std::max(max_rel, std::abs(p2 - pdf) / pdf);
+    }
+  }
+  EXPECT_LT(max_rel, 1e-3);
+  double inside = 0.0;
+  const int q = 6;
+  for (int px = 0; px < R * R; ++px) {
+    const int i = px % R, j = px / R;
+    double s = 0.0;
+    for (int a = 0; a < q; ++a)
+      for (int b = 0; b < q; ++b)
+        s += reader.pdf(map.from_square(-1 + (i + (a + 0.5) / q) * 2.0 / R, -1 + (j + (b + 0.5) / q) * 2.0 / R));
+    expected[px] = N * s / (q * q) * map.pixel_solid_angle();
+    inside += expected[px];
+  }
+  expected[R * R] = std::max(0.0, N - inside);
+  auto chi2_of = [&](const std::vector<double>& e) {
+    double chi2 = 0.0;
+    int dof = -1;
+    for (std::size_t k = 0; k < e.size(); ++k)
+      if (e[k] >= 5) {
+        chi2 += (observed[k] - e[k]) * (observed[k] - e[k]) / e[k];
+        ++dof;
+      }
+    return chi2_p_value(chi2, dof);
+  };
+  EXPECT_GT(chi2_of(expected), 1e-3);
+  // Power: a density 5% too high on half of the sphere (and renormalized) is rejected.
+  std::vector<double> wrong = expected;
+  for (int px = 0; px < R * R / 2; ++px) wrong[px] *= 1.05;
+  double sw = 0.0;
+  for (double x : wrong) sw += x;
+  for (double& x : wrong) x *= N / sw;
+  EXPECT_LT(chi2_of(wrong), 1e-3);
+  std::remove(path.c_str());
+}
+
+TEST(MerlFile, ReaderGivesBackTheMeasuredF) {
+  const BsdfTable t = measure(kGold, {0, 30, 60}, 200000, 12);
+  const std::string path = temp("gold.binary");
+  write_merl(path, t);
+  const MerlReader merl(path);
+  for (int q = 0; q < 3; ++q) {
+    const BsdfResult& r = t.at(0, q);
+    const Vec3 wi = direction_from_angles(t.theta_i[q], 0.0);
+    for (int c = 1; c < 3; ++c) {  // wavelength independent: equal decoded channels
+      const Vec3 wo = direction_from_angles(0.3, 2.0);
+      EXPECT_NEAR(merl.f(wi, wo, c), merl.f(wi, wo, 0), 1e-12 * merl.f(wi, wo, 0));
+    }
+    const auto f = [&](const Vec3& wo) { return merl.f(wi, wo, 0); };
+    const Agreement a = agreement(r, f);
+    ASSERT_GT(a.n, 100);
+    EXPECT_LT(a.max_abs_z, sidak_z(1e-3, a.n)) << "theta_i " << deg(t.theta_i[q]);
+    EXPECT_GT(chi2_p_value(a.chi2, a.n), 1e-3) << "chi2 " << a.chi2 << " over " << a.n;
+    const Agreement b = agreement(r, [&](const Vec3& wo) { return 1.05 * f(wo); });
+    EXPECT_LT(chi2_p_value(b.chi2, b.n), 1e-3) << "power check: chi2 " << b.chi2;
+  }
+  // An azimuth grid (anisotropic table) is refused.
+  const BsdfTable aniso = measure(kGold, {30}, 1000, 4, {-180, 0, 180});
+  EXPECT_THROW(merl_cells(aniso), UsageError);
+  std::remove(path.c_str());
+}
