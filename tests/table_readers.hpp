@@ -78,46 +78,53 @@ struct Bilinear2 {
     const double a = x - i, c = y - j;
     return (1 - c) * ((1 - a) * at(i, j) + a * at(i + 1, j)) + c * ((1 - a) * at(i, j + 1) + a * at(i + 1, j + 1));
   }
-  // int_0^1 of the interpolant along x on row y (trapezoid: exact for linear pieces)
-  double row_integral(double y) const { return integral_x(1.0, y); }
-  // int_0^x of the interpolant at height y
-  double integral_x(double x, double y) const {
-    double sum = 0.0;
-    const double h = 1.0 / (nx - 1);
-    for (int i = 0; i < nx - 1; ++i) {
-      const double x0 = i * h;
-      if (x <= x0) break;
-      const double x1 = std::min(x, x0 + h);
-      const double f0 = (*this)(x0, y), f1 = (*this)(x1, y);  // linear in x on [x0, x1]
-      sum += 0.5 * (f0 + f1) * (x1 - x0);
-    }
-    return sum;
-  }
 };
 
 // The inversion-method warp of a bilinear density: the marginal in y, then x given y.
 struct Warp2 {
   Bilinear2 d;
-  std::vector<double> cum;  // int_0^{y_j} of the row integrals at the vertex rows
+  std::vector<double> rows;  // int_0^{x_i} of vertex row j, at [j * nx + i] (trapezoid: exact)
+  std::vector<double> cum;   // int_0^{y_j} of the row integrals at the vertex rows
   explicit Warp2(Bilinear2 b) : d(b) {
     if (d.ny < 2) return;
+    const double hx = 1.0 / (d.nx - 1), hy = 1.0 / (d.ny - 1);
+    rows.assign(static_cast<std::size_t>(d.nx) * d.ny, 0.0);
+    for (int j = 0; j < d.ny; ++j)
+      for (int i = 1; i < d.nx; ++i)
+        rows[static_cast<std::size_t>(j) * d.nx + i] =
+            rows[static_cast<std::size_t>(j) * d.nx + i - 1] + 0.5 * (d.at(i - 1, j) + d.at(i, j)) * hx;
     cum.assign(static_cast<std::size_t>(d.ny), 0.0);
     for (int j = 1; j < d.ny; ++j)  // row integrals are linear in y between vertex rows
-      cum[j] = cum[j - 1] + 0.5 * (d.row_integral((j - 1.0) / (d.ny - 1)) + d.row_integral(j / (d.ny - 1.0))) / (d.ny - 1);
+      cum[j] = cum[j - 1] + 0.5 * (row_total(j - 1) + row_total(j)) * hy;
   }
+  double row_total(int j) const { return rows[static_cast<std::size_t>(j + 1) * d.nx - 1]; }
   double total() const { return cum.back(); }
+  // int_0^x of the density's row at height y: the two vertex rows' integrals, blended.
+  double integral_x(double x, double y) const {
+    const double hx = 1.0 / (d.nx - 1), hy = 1.0 / (d.ny - 1);
+    const int j = std::min(static_cast<int>(y / hy), d.ny - 2);
+    const double t = y / hy - j;
+    const int i = std::min(static_cast<int>(x / hx), d.nx - 2);
+    const double x0 = i * hx;
+    auto part = [&](int row) {  // trapezoid over [x0, x] of that row (linear there)
+      const double f0 = d.at(i, row), f1 = d.at(i, row) + (d.at(i + 1, row) - d.at(i, row)) * (x - x0) / hx;
+      return rows[static_cast<std::size_t>(row) * d.nx + i] + 0.5 * (f0 + f1) * (x - x0);
+    };
+    return (1 - t) * part(j) + t * part(j + 1);
+  }
+  double row_integral(double y) const { return integral_x(1.0, y); }
   double integral_y(double y) const {
     const double h = 1.0 / (d.ny - 1);
     const int j = std::min(static_cast<int>(y / h), d.ny - 2);
-    const double r0 = d.row_integral(j * h), r1 = d.row_integral((j + 1) * h), t = y / h - j;
+    const double r0 = row_total(j), r1 = row_total(j + 1), t = y / h - j;
     return cum[j] + h * (r0 * t + 0.5 * (r1 - r0) * t * t);
   }
   double pdf(const Vec2& p) const { return d(p.x(), p.y()) / total(); }
   // Point -> uniform square (the CDFs).
   Vec2 invert(const Vec2& p) const {
     const double y = std::clamp(p.y(), 0.0, 1.0), x = std::clamp(p.x(), 0.0, 1.0);
-    const double row = d.row_integral(y);
-    return Vec2(row > 0 ? d.integral_x(x, y) / row : x, integral_y(y) / total());
+    const double row = row_integral(y);
+    return Vec2(row > 0 ? integral_x(x, y) / row : x, integral_y(y) / total());
   }
   // Uniform square -> point, by bisection of the monotone CDFs (an independent route).
   Vec2 sample(const Vec2& s) const {
@@ -126,12 +133,12 @@ struct Warp2 {
       const double mid = 0.5 * (lo + hi);
       (integral_y(mid) / total() < s.y() ? lo : hi) = mid;
     }
-    const double y = 0.5 * (lo + hi), row = d.row_integral(y);
+    const double y = 0.5 * (lo + hi), row = row_integral(y);
     lo = 0;
     hi = 1;
     for (int k = 0; k < 50; ++k) {
       const double mid = 0.5 * (lo + hi);
-      (d.integral_x(mid, y) / row < s.x() ? lo : hi) = mid;
+      (integral_x(mid, y) / row < s.x() ? lo : hi) = mid;
     }
     return Vec2(0.5 * (lo + hi), y);
   }

@@ -28,7 +28,7 @@ struct BsdfCliOptions {
   bool eta_given = false, k_given = false;
   std::string theta_i, phi_i = "0";
   int orders = 4;
-  int table_resolution = 32;
+  int table_resolution = 64;
   long long rays = 1000000;
   std::uint64_t seed = 1;
   int resolution = 64;

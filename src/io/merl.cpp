@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <utility>
 #include <cmath>
 #include <cstdint>
 #include <fstream>
@@ -46,8 +47,11 @@ std::vector<double> merl_cells(const BsdfTable& t) {
         const double pd = (ip + 0.5) / kMerlPhiD * kPi;
         const Vec3 d = direction_from_angles(td, pd);
         // wi = R_y(theta_h) d: the difference vector seen from the half vector's frame.
-        const Vec3 wi(d.x() * ch + d.z() * sh, d.y(), -d.x() * sh + d.z() * ch);
-        const Vec3 wo = 2.0 * wi.dot(h) * h - wi;
+        Vec3 wi(d.x() * ch + d.z() * sh, d.y(), -d.x() * sh + d.z() * ch);
+        Vec3 wo = 2.0 * wi.dot(h) * h - wi;
+        // Reciprocity (000 eq. 4c): read the pair with the light at the smaller zenith angle,
+        // which the measured incidences cover best.
+        if (wo.z() > wi.z()) std::swap(wi, wo);
         cells[static_cast<std::size_t>(ip) + kMerlPhiD * (id + static_cast<std::size_t>(kMerlThetaD) * ih)] =
             table_f(t, wi, wo);
       }

@@ -169,22 +169,31 @@ double bilinear(const std::vector<float>& t, int nphi, int ntheta, double ut, do
   return (1 - fy) * ((1 - fx) * v(i, j) + fx * v(i + 1, j)) + fy * ((1 - fx) * v(i, j + 1) + fx * v(i + 1, j + 1));
 }
 
-// Solid angle of the tent of theta-vertex i (u spacing h): int tent(u) 2 pi^2 u sin(theta(u)) du
-// over a full turn of azimuth (8-point Gauss-Legendre on each adjacent cell).
-double tent_solid_angle(int i, int n) {
+// The ndf's kernel in theta around vertex i: a tent of half-width w_i, the larger of the
+// vertex spacing and kMinKernel. The u-grid crowds its vertices near the pole (theta = u^2
+// pi/2: the first steps are hundredths of a degree), where a tent of one spacing would hold
+// almost no facets; the angular floor keeps every vertex's estimate on many facets.
+constexpr double kMinKernel = 1.5 * kPi / 180.0;
+double kernel_width(int i, int n) {
+  const double h = 1.0 / (n - 1);
+  const double t = u_to_theta(i * h);
+  const double lo = i > 0 ? t - u_to_theta((i - 1) * h) : 0.0, hi = i < n - 1 ? u_to_theta((i + 1) * h) - t : 0.0;
+  return std::max({lo, hi, kMinKernel});
+}
+double kernel(double theta, double center, double w) { return std::max(0.0, 1.0 - std::abs(theta - center) / w); }
+// int kernel(theta) sin(theta) d theta over [0, pi/2] (8-point Gauss-Legendre per side).
+double kernel_weight(double center, double w) {
   static const double x8[8] = {-0.9602898564975363, -0.7966664774136267, -0.5255324099163290, -0.1834346424956498,
                                0.1834346424956498,  0.5255324099163290,  0.7966664774136267,  0.9602898564975363};
   static const double w8[8] = {0.1012285362903763, 0.2223810344533745, 0.3137066458778873, 0.3626837833783620,
                                0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763};
-  const double h = 1.0 / (n - 1), uc = i * h;
   double sum = 0.0;
   for (int side : {-1, 1}) {
-    if ((side < 0 && i == 0) || (side > 0 && i == n - 1)) continue;
-    const double a = side < 0 ? uc - h : uc, b = side < 0 ? uc : uc + h;
+    const double a = side < 0 ? std::max(0.0, center - w) : center, b = side < 0 ? center : std::min(0.5 * kPi, center + w);
+    if (!(b > a)) continue;
     for (int k = 0; k < 8; ++k) {
-      const double u = 0.5 * (a + b) + 0.5 * (b - a) * x8[k];
-      const double tent = 1.0 - std::abs(u - uc) / h;
-      sum += 0.5 * (b - a) * w8[k] * tent * 2.0 * kPi * kPi * u * std::sin(u_to_theta(u));
+      const double t = 0.5 * (a + b) + 0.5 * (b - a) * x8[k];
+      sum += 0.5 * (b - a) * w8[k] * kernel(t, center, w) * std::sin(t);
     }
   }
   return sum;
@@ -254,53 +263,74 @@ RglTable build_rgl_table(const BsdfTable& t, const Microsurface& s, const RglOpt
   for (double x : t.phi_i) out.phi_i.push_back(static_cast<float>(x));
   out.wavelengths = {360.0f, 830.0f};
 
-  // --- ndf: tent-weighted u-space histogram of the facet normals.
+  // --- ndf: kernel estimate from the facet normals (tent in theta, see kernel_width; tent of one
+  // vertex spacing in phi when anisotropic): D(v) = sum_f (A_f / A) K_v(m_f) / int K_v d omega.
   const FacetNormals fn = facet_normals(s);
   const int Nt = o.ndf_resolution, Np = out.isotropic ? 2 : o.ndf_resolution;
   out.ndf_theta = Nt;
   out.ndf_phi = Np;
   {
-    std::vector<double> acc(static_cast<std::size_t>(Np) * Nt, 0.0);
-    for (std::size_t k = 0; k < fn.ax.size(); ++k) {
-      const Vec3 a(fn.ax[k], fn.ay[k], fn.az[k]);
-      const double w = a.norm();  // A_f / A
-      if (!(w > 0) || a.z() <= 0) continue;  // the format holds the upper hemisphere only
-      const Vec3 m = a / w;
-      const double x = theta_to_u(elevation(m)) * (Nt - 1);
-      const int i = std::min(static_cast<int>(x), Nt - 2);
-      const double fx = x - i;
-      if (out.isotropic) {
-        for (int row = 0; row < 2; ++row) {
-          acc[static_cast<std::size_t>(row) * Nt + i] += w * (1 - fx);
-          acc[static_cast<std::size_t>(row) * Nt + i + 1] += w * fx;
-        }
-        continue;
-      }
-      const double y = phi_to_u(std::atan2(m.y(), m.x())) * (Np - 1);
-      const int j = std::clamp(static_cast<int>(y), 0, Np - 2);
-      const double fy = std::clamp(y - j, 0.0, 1.0);
-      acc[static_cast<std::size_t>(j) * Nt + i] += w * (1 - fx) * (1 - fy);
-      acc[static_cast<std::size_t>(j) * Nt + i + 1] += w * fx * (1 - fy);
-      acc[static_cast<std::size_t>(j + 1) * Nt + i] += w * (1 - fx) * fy;
-      acc[static_cast<std::size_t>(j + 1) * Nt + i + 1] += w * fx * fy;
+    std::vector<double> width(Nt), center(Nt);
+    for (int i = 0; i < Nt; ++i) {
+      center[i] = u_to_theta(static_cast<double>(i) / (Nt - 1));
+      width[i] = kernel_width(i, Nt);
     }
-    out.ndf.assign(acc.size(), 0.0f);
+    const int rows = out.isotropic ? 1 : Np;
+    using Acc = std::vector<double>;
+    const Acc acc = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, fn.ax.size(), 1 << 12), Acc(),
+        [&](const tbb::blocked_range<std::size_t>& r, Acc a) {
+          if (a.empty()) a.assign(static_cast<std::size_t>(rows) * Nt, 0.0);
+          for (std::size_t k = r.begin(); k != r.end(); ++k) {
+            const Vec3 v(fn.ax[k], fn.ay[k], fn.az[k]);
+            const double w = v.norm();  // A_f / A
+            if (!(w > 0) || v.z() <= 0) continue;  // the format holds the upper hemisphere only
+            const Vec3 m = v / w;
+            const double th = elevation(m);
+            int j = 0;
+            double fy = 0.0;
+            if (!out.isotropic) {
+              const double y = phi_to_u(std::atan2(m.y(), m.x())) * (Np - 1);
+              j = std::clamp(static_cast<int>(y), 0, Np - 2);
+              fy = std::clamp(y - j, 0.0, 1.0);
+            }
+            for (int i = 0; i < Nt; ++i) {
+              const double kw = w * kernel(th, center[i], width[i]);
+              if (kw == 0.0) continue;
+              if (out.isotropic) {
+                a[i] += kw;
+              } else {
+                a[static_cast<std::size_t>(j) * Nt + i] += kw * (1 - fy);
+                a[static_cast<std::size_t>(j + 1) * Nt + i] += kw * fy;
+              }
+            }
+          }
+          return a;
+        },
+        [](Acc a, const Acc& b) {
+          if (a.empty()) return b;
+          for (std::size_t k = 0; k < b.size(); ++k) a[k] += b[k];
+          return a;
+        });
+    out.ndf.assign(static_cast<std::size_t>(Np) * Nt, 0.0f);
+    if (acc.empty()) throw UsageError("the surface has no upward-facing facets");
     if (out.isotropic) {
       for (int i = 0; i < Nt; ++i) {
-        const float d = static_cast<float>(acc[i] / tent_solid_angle(i, Nt));
+        const float d = static_cast<float>(acc[i] / (2.0 * kPi * kernel_weight(center[i], width[i])));
         out.ndf[i] = out.ndf[Nt + i] = d;
       }
     } else {
       // phi = -pi and +pi are one azimuth: merge the two edge rows; the tent in phi then spans
-      // a full cell, 1/(Np - 1) of the turn.
+      // a full cell, 2 pi / (Np - 1).
+      std::vector<double> a = acc;
       for (int i = 0; i < Nt; ++i) {
-        const double e = acc[i] + acc[static_cast<std::size_t>(Np - 1) * Nt + i];
-        acc[i] = acc[static_cast<std::size_t>(Np - 1) * Nt + i] = e;
+        const double e = a[i] + a[static_cast<std::size_t>(Np - 1) * Nt + i];
+        a[i] = a[static_cast<std::size_t>(Np - 1) * Nt + i] = e;
       }
       for (int j = 0; j < Np; ++j)
         for (int i = 0; i < Nt; ++i)
-          out.ndf[static_cast<std::size_t>(j) * Nt + i] =
-              static_cast<float>(acc[static_cast<std::size_t>(j) * Nt + i] * (Np - 1) / tent_solid_angle(i, Nt));
+          out.ndf[static_cast<std::size_t>(j) * Nt + i] = static_cast<float>(
+              a[static_cast<std::size_t>(j) * Nt + i] / (2.0 * kPi / (Np - 1) * kernel_weight(center[i], width[i])));
       // theta = 0 is one direction for every phi: its azimuthal mean.
       double pole = 0.0;
       for (int j = 0; j < Np - 1; ++j) pole += out.ndf[static_cast<std::size_t>(j) * Nt];
@@ -342,16 +372,33 @@ RglTable build_rgl_table(const BsdfTable& t, const Microsurface& s, const RglOpt
       auto half_vector = [&](double ut, double up) {
         return direction_from_angles(u_to_theta(ut), u_to_phi(up) + phi_ref);
       };
-      std::vector<double> vn(slice);
+      // The facets' visible normals in u-space, D <wi.m> d omega / du, and the half vectors of
+      // the measured reflected light, f cos(theta_o) d omega_o / du, and of outgoing directions
+      // uniform over the hemisphere, d omega_o / du; mixed by RglOptions' shares.
+      const int K = r.options.orders;
+      std::vector<double> vis(slice, 0.0), lit(slice, 0.0), all(slice, 0.0);
+      double sum_vis = 0.0, sum_lit = 0.0, sum_all = 0.0;
       for (int j = 0; j < R; ++j)
         for (int i = 0; i < R; ++i) {
           const double ut = static_cast<double>(i) / (R - 1), up = static_cast<double>(j) / (R - 1);
           const Vec3 m = half_vector(ut, up);
-          const double D = bilinear(out.ndf, Np, Nt, ut, up);
-          // D <wi.m> times d omega / du = 2 pi^2 u_theta sin(theta_m).
-          vn[static_cast<std::size_t>(j) * R + i] =
-              D * std::max(0.0, wi.dot(m)) * 2.0 * kPi * kPi * ut * std::sin(u_to_theta(ut));
+          const double jac = 2.0 * kPi * kPi * ut * std::sin(u_to_theta(ut));  // d omega_m / du
+          const double wm = std::max(0.0, wi.dot(m));
+          const std::size_t k = static_cast<std::size_t>(j) * R + i;
+          vis[k] = bilinear(out.ndf, Np, Nt, ut, up) * wm * jac;
+          const Vec3 wo = 2.0 * wi.dot(m) * m - wi;
+          if (wo.z() > 0) {
+            lit[k] = interpolate_f(r, 0, K, wo) * wo.z() * 4.0 * wm * jac;
+            all[k] = 4.0 * wm * jac;
+          }
+          sum_vis += vis[k];
+          sum_lit += lit[k];
+          sum_all += all[k];
         }
+      std::vector<double> vn(slice);
+      for (std::size_t k = 0; k < slice; ++k)
+        vn[k] = (1.0 - o.measured_share - o.uniform_share) * vis[k] / sum_vis +
+                (sum_lit > 0 ? o.measured_share * lit[k] / sum_lit : 0.0) + o.uniform_share * all[k] / sum_all;
       const std::size_t base = (static_cast<std::size_t>(p) * nt + q) * slice;
       for (std::size_t k = 0; k < slice; ++k) out.vndf[base + k] = static_cast<float>(vn[k]);
       // The warp as the reader builds it: from the float values in the file.
@@ -359,7 +406,6 @@ RglTable build_rgl_table(const BsdfTable& t, const Microsurface& s, const RglOpt
       for (std::size_t k = 0; k < slice; ++k) vf[k] = out.vndf[base + k];
       const BilinearWarp warp(std::move(vf), R, R);
       const double sig = bilinear(out.sigma, Sp, St, theta_to_u(t.theta_i[q]), phi_to_u(t.phi_i[p]));
-      const int K = r.options.orders;
       for (int j = 0; j < R; ++j)
         for (int i = 0; i < R; ++i) {
           const Vec2 um = warp.sample(Vec2(static_cast<double>(i) / (R - 1), static_cast<double>(j) / (R - 1)));

@@ -7,7 +7,8 @@
 //
 // Filling: each cell's value is the measured f (reflected side, all orders) at the cell centre.
 // The centre's (theta_h, theta_d, phi_d) give the pair (wi, wo) with the half vector at azimuth 0
-// (wi = R_y(theta_h) d(theta_d, phi_d), wo its mirror about the half vector); the pair is turned
+// (wi = R_y(theta_h) d(theta_d, phi_d), wo its mirror about the half vector); by reciprocity
+// (000 eq. 4c) the direction nearer the normal is taken as the light's; the pair is turned
 // about the normal so that wi has the measured azimuth, then f is read from the measured
 // hemisphere maps (interpolate_f) of the two measured incidences that bracket theta(wi) at the
 // same outgoing direction and interpolated linearly in theta_i (held constant outside the

@@ -13,14 +13,21 @@
 // sin(theta_m) 4 (wi.wm)).
 //
 // What we store:
-//   ndf    the facets' D(m) as a u-space histogram with bilinear (tent) weights: each facet adds
-//          A_f / A to the four vertices around its normal, divided by the tent's solid angle
-//          int tent(u) 2 pi^2 u_theta sin(theta(u)) du; floored at `ndf_floor` times its maximum
-//          so that every half vector has a finite spectra value. Isotropic: azimuthal average.
+//   ndf    the facets' D(m) by a kernel estimate at every vertex: sum_f (A_f / A) K(m_f) /
+//          int K d omega, K a tent in theta of half-width max(vertex spacing, 1.5 degrees) (the
+//          u-grid's first steps near the pole are far too small to hold facets) times, when
+//          anisotropic, a tent of one vertex spacing in phi; floored at `ndf_floor` times its
+//          maximum so that every half vector has a finite spectra value. Isotropic: the
+//          azimuthal average.
 //   sigma  sum_f A_f max(0, w.m_f) / A at each vertex direction: exact from the facets
 //          (isotropic: averaged over 16 azimuths).
-//   vndf   the density in u-space of D(m) max(0, wi.m) (the visible-normal distribution
-//          D_wi = D <wi.m> / sigma(wi) times the u-to-solid-angle Jacobian), from the stored ndf.
+//   vndf   a density in u-space: 50% the visible-normal distribution D_wi = D <wi.m> /
+//          sigma(wi) (from the stored ndf) times the u-to-solid-angle Jacobian, 30% the density
+//          of the half vectors of the measured reflected light, f cos(theta_o) 4 (wi.m) times
+//          the same Jacobian, 20% that of outgoing directions uniform over the hemisphere,
+//          4 (wi.m) times the Jacobian. The reader uses it only as the warp that places the
+//          sample grid (and samples); the mixture gives multiply scattered light far from the
+//          visible normals, and every outgoing direction, grid points of their own.
 //   spectra at every sample-square vertex s: wm = warp(s), wo = reflect(wi, wm); the measured
 //          f cos(theta_o) (all orders, reflected side; bilinear on the measured hemisphere map)
 //          times 4 sigma(u_wi) / ndf(u_m), both as the reader interpolates them, so that the
@@ -66,10 +73,12 @@ class BilinearWarp {
 };
 
 struct RglOptions {
-  int resolution = 32;      // vndf / luminance / spectra: resolution x resolution vertices
+  int resolution = 64;      // vndf / luminance / spectra: resolution x resolution vertices
   int ndf_resolution = 64;  // ndf: theta (and phi when anisotropic) vertices
   int sigma_resolution = 32;
   double ndf_floor = 1e-3;  // relative to the table's maximum
+  double measured_share = 0.3;  // share of the measured half-vector density in the vndf warp
+  double uniform_share = 0.2;   // share of the half vectors of uniformly spread outgoing light
   std::string description;
 };
 
