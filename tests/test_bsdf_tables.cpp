@@ -13,7 +13,10 @@
 #include "microsim/measure/bsdf_table.hpp"
 #include "microsim/measure/stats.hpp"
 #include "microsim/surface/gaussian.hpp"
+#include "microsim/surface/surface_io.hpp"
+#include "cli_helpers.hpp"
 #include "table_readers.hpp"
+#include "test_helpers.hpp"
 
 using namespace microsim;
 using namespace microsim::testing;
@@ -259,4 +262,48 @@ TEST(MerlFile, ReaderGivesBackTheMeasuredF) {
   const BsdfTable aniso = measure(kGold, {30}, 1000, 4, {-180, 0, 180});
   EXPECT_THROW(merl_cells(aniso), UsageError);
   std::remove(path.c_str());
+}
+
+TEST(MeasureBsdfCli, AngleListsAndTables) {
+  // A surface without a nominal NDF keeps the record's model columns out (fast).
+  const std::string surf = temp_path("tables", "bumpy.exr");
+  save_surface(bumpy_heightfield(32, 0.03), surf);
+  const std::string base = "measure bsdf " + surf + " --material conductor --eta 0.47 --k 2.4 --rays 2000 --resolution 8 -q ";
+  const std::string bsdf = temp_path("tables", "t.bsdf"), json = temp_path("tables", "t.json");
+  Result r = run_microsim(base + "--theta-i 0,40 --table-resolution 8 -o " + bsdf);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Json j = Json::parse(slurp(json));
+  ASSERT_EQ(j["incidences"].size(), 2u);
+  EXPECT_DOUBLE_EQ(j["incidences"][1]["theta_i_deg"].get<double>(), 40.0);
+  EXPECT_DOUBLE_EQ(j["incidences"][1]["phi_i_deg"].get<double>(), 0.0);
+  EXPECT_TRUE(j["incidences"][1].contains("albedo") && j["incidences"][1].contains("in_plane"));
+  EXPECT_FALSE(j.contains("albedo"));  // several incidences: no top-level summary
+  EXPECT_TRUE(j["table"]["isotropic"].get<bool>());
+  const auto f = read_tensor_file(bsdf);
+  EXPECT_EQ(f.at("spectra").shape, (std::vector<std::uint64_t>{1, 2, 2, 8, 8}));
+  EXPECT_EQ(f.at("rgb").shape, (std::vector<std::uint64_t>{1, 2, 3, 8, 8}));
+  EXPECT_EQ(f.at("jacobian").u8, (std::vector<std::uint8_t>{1}));
+  // One incidence: the top-level fields stay, and the incidences array has one entry.
+  const std::string one = temp_path("tables", "one.json");
+  r = run_microsim(base + "--theta-i 30 -o " + one);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Json k = Json::parse(slurp(one));
+  EXPECT_TRUE(k.contains("albedo") && k.contains("in_plane") && k.contains("rows"));
+  EXPECT_EQ(k["incidences"].size(), 1u);
+  EXPECT_DOUBLE_EQ(k["parameters"]["theta_i_deg"].get<double>(), 30.0);
+  // MERL is isotropic; an anisotropic .bsdf needs the full circle of azimuths.
+  const std::string bin = temp_path("tables", "t.binary");
+  r = run_microsim(base + "--theta-i 30 --phi-i 0,90 -o " + bin);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--phi-i"), std::string::npos) << r.err;
+  EXPECT_FALSE(exists(bin));
+  const std::string aniso = temp_path("tables", "aniso.bsdf");
+  r = run_microsim(base + "--theta-i 30 --phi-i 0,90 -o " + aniso);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("-180"), std::string::npos) << r.err;
+  EXPECT_FALSE(exists(aniso));
+  r = run_microsim(base + "--theta-i 10,95 -o " + one);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--theta-i"), std::string::npos) << r.err;
+  for (const auto& p : {surf, bsdf, json, one}) std::remove(p.c_str());
 }
