@@ -172,6 +172,35 @@ TEST(RglFile, MirrorWhiteFurnace) {
   std::remove(path.c_str());
 }
 
+TEST(RglFile, AnisotropicTableOverTheFullCircle) {
+  // An azimuth grid from -180 to 180 degrees: absolute phi_m, one table per (phi_i, theta_i).
+  const BsdfTable t = measure(kGold, {20, 50}, 100000, 12, {-180, -90, 0, 90, 180});
+  const RglOptions o;
+  const std::string path = temp("gold_aniso.bsdf");
+  const RglTable table = build_rgl_table(t, surface(), o);
+  EXPECT_FALSE(table.isotropic);
+  EXPECT_EQ(table.ndf_phi, 17);
+  write_rgl_bsdf(path, table);
+  const HemisphereMap map(128);
+  for (int p = 0; p < 5; ++p)
+    for (int q = 0; q < 2; ++q) {
+      RglReader reader(path, p, q);
+      const BsdfResult& r = t.at(p, q);
+      const Agreement a = agreement(r, [&](const Vec3& wo) { return reader.eval(wo) / wo.z(); }, 0.0, 0.05);
+      EXPECT_LT(a.max_abs_z, sidak_z(1e-3, a.n)) << "phi_i " << deg(t.phi_i[p]) << " theta_i " << deg(t.theta_i[q]);
+      double sum = 0.0;
+      for (int j = 0; j < map.resolution(); ++j)
+        for (int i = 0; i < map.resolution(); ++i)
+          sum += reader.eval(map.from_square(-1 + (i + 0.5) * 2.0 / map.resolution(), -1 + (j + 0.5) * 2.0 / map.resolution()));
+      const double albedo = r.albedo(0, r.options.orders).mean;
+      EXPECT_NEAR(sum * map.pixel_solid_angle() / albedo, 1.0, 0.02) << "phi_i " << deg(t.phi_i[p]);
+    }
+  // A partial circle of azimuths is refused.
+  const BsdfTable part = measure(kGold, {20}, 1000, 4, {0, 90});
+  EXPECT_THROW(build_rgl_table(part, surface(), o), UsageError);
+  std::remove(path.c_str());
+}
+
 TEST(RglFile, ImportanceSamplingMatchesItsDensityAndEval) {
   const BsdfTable t = measure(kGold, {30}, 50000, 12);
   RglOptions o;

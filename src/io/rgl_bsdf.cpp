@@ -266,7 +266,10 @@ RglTable build_rgl_table(const BsdfTable& t, const Microsurface& s, const RglOpt
   // --- ndf: kernel estimate from the facet normals (tent in theta, see kernel_width; tent of one
   // vertex spacing in phi when anisotropic): D(v) = sum_f (A_f / A) K_v(m_f) / int K_v d omega.
   const FacetNormals fn = facet_normals(s);
-  const int Nt = o.ndf_resolution, Np = out.isotropic ? 2 : o.ndf_resolution;
+  // Anisotropic: at most 17 azimuth vertices (22.5 degrees apart): finer phi tents hold too few
+  // facets of one tile, and the reader's f cos / D interpolation turns the noise of D into
+  // bias (the mean of 1/D over noisy neighbours exceeds 1/D).
+  const int Nt = o.ndf_resolution, Np = out.isotropic ? 2 : std::min(o.ndf_resolution, 17);
   out.ndf_theta = Nt;
   out.ndf_phi = Np;
   {

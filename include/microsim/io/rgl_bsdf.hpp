@@ -16,7 +16,8 @@
 //   ndf    the facets' D(m) by a kernel estimate at every vertex: sum_f (A_f / A) K(m_f) /
 //          int K d omega, K a tent in theta of half-width max(vertex spacing, 1.5 degrees) (the
 //          u-grid's first steps near the pole are far too small to hold facets) times, when
-//          anisotropic, a tent of one vertex spacing in phi; floored at `ndf_floor` times its
+//          anisotropic, a tent of one vertex spacing in phi (at most 17 phi vertices, 22.5
+//          degrees apart: finer tents hold too few facets of one tile); floored at `ndf_floor` times its
 //          maximum so that every half vector has a finite spectra value. Isotropic: the
 //          azimuthal average.
 //   sigma  sum_f A_f max(0, w.m_f) / A at each vertex direction: exact from the facets
