@@ -26,13 +26,17 @@ for t in "${targets[@]}"; do
   start=$(date +%s)
   # -runs stops after RUNS inputs, -max_total_time after SECONDS, whichever comes first; one
   # worker (the CPU is shared); 2 GB memory cap and 10 s per input count as crashes.
+  # RUNS = 0: no mutation, every corpus file is run once.
+  inputs=("$out" "$src/fuzz/corpus/$t")
+  [ "$runs" -gt 0 ] || inputs=("$src/fuzz/corpus/$t"/*)
   "$build/fuzz/$t" ${MICROSIM_FUZZ_SEED:+-seed=$MICROSIM_FUZZ_SEED} -runs="$runs" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
       -malloc_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$art/" \
-      "$out" "$src/fuzz/corpus/$t" 2> "$build/fuzz-$t.log" || {
+      "${inputs[@]}" 2> "$build/fuzz-$t.log" || {
     tail -n 60 "$build/fuzz-$t.log" >&2
     echo "$t: FAILED (input saved in $art/)" >&2
     exit 1
   }
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$build/fuzz-$t.log")
+  [ -n "$execs" ] || execs=$(grep -c '^Executed ' "$build/fuzz-$t.log" || true)
   echo "$t: $execs executions in $(( $(date +%s) - start )) s, no crash"
 done

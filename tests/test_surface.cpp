@@ -10,6 +10,7 @@
 #include <OpenMesh/Core/System/omstream.hh>
 
 #include "microsim/surface/gaussian.hpp"
+#include "microsim/surface/mesh_check.hpp"
 #include "microsim/surface/surface_io.hpp"
 #include "test_helpers.hpp"
 
@@ -152,10 +153,10 @@ TEST(SurfaceIo, MeshExportHasTheSameFacets) {
 // Loading a mesh captures OpenMesh's messages only while it reads: afterwards omerr reaches its
 // own targets again (std::cerr) and the OpenMesh streams have their buffers back.
 TEST(SurfaceIo, MeshLoadRestoresOpenMeshStreams) {
-  const std::string obj = tmp("repeated-vertex.obj");
+  const std::string obj = tmp("complex-edge.obj");
   {
-    std::ofstream f(obj);
-    f << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 1 2\n";  // OpenMesh complains on omerr
+    std::ofstream f(obj);  // three faces on edge 1-2: OpenMesh reports a complex edge on omerr
+    f << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n";
   }
   omerr().enable();
   std::streambuf* const err = omerr().rdbuf();
@@ -169,6 +170,31 @@ TEST(SurfaceIo, MeshLoadRestoresOpenMeshStreams) {
   std::cerr.rdbuf(cerr);
   EXPECT_NE(seen.str().find("after the load"), std::string::npos);
   std::remove(obj.c_str());
+}
+
+// A PLY header with a property before any element crashed OpenMesh's reader (SEGV); it is a
+// usage error now. The same body with the element declared first loads.
+TEST(SurfaceIo, PlyPropertyBeforeElementIsRefused) {
+  const std::string body =
+      "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  const std::string bad = tmp("property-first.ply");
+  std::ofstream(bad) << "ply\nformat ascii 1.0\ncomment x element\n" << body;
+  try {
+    load_surface(bad);
+    ADD_FAILURE() << "accepted";
+  } catch (const UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("a property before any element"), std::string::npos) << e.what();
+  }
+  const std::string good = tmp("element-first.ply");
+  std::ofstream(good) << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                         "property float z\nelement face 1\n" << body;
+  std::vector<Eigen::Vector3f> v;
+  std::vector<std::array<std::uint32_t, 3>> t;
+  read_mesh_file(good, v, t);
+  EXPECT_EQ(v.size(), 3u);
+  EXPECT_EQ(t.size(), 1u);
+  std::remove(bad.c_str());
+  std::remove(good.c_str());
 }
 
 TEST(SurfaceIo, MissingCorruptAndUnknownFilesAreUsageErrors) {

@@ -14,6 +14,7 @@
 #include <numeric>
 #include <sstream>
 
+#include "microsim/io/output.hpp"
 #include "microsim/surface/generators.hpp"
 
 namespace microsim {
@@ -53,6 +54,33 @@ class OpenMeshStreamCapture {
   std::ostringstream captured_, discarded_;
   std::streambuf *err_, *log_, *out_;
 };
+
+// OpenMesh 9.0's PLY header parser files each "property" under the last declared element and
+// crashes (SEGV) when none was declared yet, and loops forever when the file ends before
+// end_header or an element count is not a number. The header is checked first, token by token
+// as OpenMesh reads it (comments skipped).
+void check_ply_header(const std::string& path) {
+  const auto malformed = [&](const std::string& why) {
+    throw UsageError(path + ": malformed PLY header (" + why + ")");
+  };
+  std::ifstream in(path, std::ios::binary);
+  bool element = false;
+  std::string word, name, count;
+  for (int tokens = 0; tokens < 100000 && in >> word; ++tokens) {
+    if (word == "end_header") return;
+    if (word == "comment" || word == "obj_info") {
+      std::getline(in, word);
+    } else if (word == "element") {
+      if (!(in >> name >> count) || count.empty() || count.size() > 10 ||
+          count.find_first_not_of("0123456789") != std::string::npos)
+        malformed("element " + name + " needs a count");
+      element = true;
+    } else if (word == "property" && !element) {
+      malformed("a property before any element");
+    }
+  }
+  malformed("no end_header");
+}
 
 std::string point_str(const Eigen::Vector3f& p) {
   std::ostringstream os;
@@ -205,6 +233,7 @@ void read_mesh_file(const std::string& path, std::vector<Eigen::Vector3f>& verts
 
   // OpenMesh reports problems on omerr and repairs non-manifold faces by duplicating their
   // vertices; capture its messages and read the repair flags instead.
+  if (extension_of(path) == "ply") check_ply_header(path);
   OMesh om;
   om.request_face_status();
   std::string msg;
