@@ -137,6 +137,7 @@ int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
                      {"rays", r.measured.paths},
                      {"rays_requested", o.rays},
                      {"seed", o.seed},
+                     {"replicates", bo.replicates},
                      {"resolution", o.resolution},
                      {"in_plane_bins", r.plane.size()},
                      {"in_plane_band_half_width_deg", deg(r.plane.half_width())},
@@ -150,8 +151,9 @@ int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
       {"albedo", "fraction of the incident power leaving on each side after exactly n scattering "
                  "events (order_Kplus: K or more; total: all); a conductor's paths carry the "
                  "product of their Fresnel factors, a dielectric chooses reflection with "
-                 "probability F (unpolarized light); *_stderr: standard error over paths "
-                 "(stratified origins: an upper bound)"},
+                 "probability F (unpolarized light); *_stderr: standard error of the mean of "
+                 "`replicates` independent stratified replicates of the rays (the Smith walk's: "
+                 "over its independent walks)"},
       {"in_plane", "f = p / int_B |cos theta_o| d omega (exact), p the fraction of power leaving "
                    "through bin B: a band |beta| <= half width around the plane of incidence, "
                    "theta_o_deg signed, positive on the specular side (azimuth phi_i + 180); "

@@ -1,4 +1,5 @@
 #include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
 
 #include <tbb/blocked_range.h>
@@ -144,6 +145,7 @@ BsdfTally::BsdfTally(int K, int npix, int nplane) : orders(K), pixels(npix), pla
 void BsdfTally::add_exit(int s, int order, double w, int px, int b) {
   const int k = std::min(order, orders) - 1;
   const double w2 = w * w;
+  both2 += w2;  // a path leaves on one side only
   for (int slot : {k, orders}) {
     albedo[a_index(s, slot)] += w;
     albedo2[a_index(s, slot)] += w2;
@@ -170,12 +172,50 @@ BsdfTally& BsdfTally::operator+=(const BsdfTally& o) {
   add(pix2, o.pix2);
   add(plane, o.plane);
   add(plane2, o.plane2);
+  both2 += o.both2;
   paths += o.paths;
   lost += o.lost;
   unterminated += o.unterminated;
   events += o.events;
   counters += o.counters;
   return *this;
+}
+
+void BsdfTally::add_replicate(const BsdfTally& rep) {
+  if (albedo.empty()) *this = BsdfTally(rep.orders, rep.pixels, rep.plane_bins);
+  auto add = [](std::vector<double>& a, std::vector<double>& a2, const std::vector<double>& b) {
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      a[k] += b[k];
+      a2[k] += b[k] * b[k];
+    }
+  };
+  add(albedo, albedo2, rep.albedo);
+  add(pix, pix2, rep.pix);
+  add(plane, plane2, rep.plane);
+  const double rt = rep.albedo[rep.a_index(0, orders)] + rep.albedo[rep.a_index(1, orders)];
+  both2 += rt * rt;
+  paths += rep.paths;
+  lost += rep.lost;
+  unterminated += rep.unterminated;
+  events += rep.events;
+  counters += rep.counters;
+  ++replicates;
+}
+
+Estimate BsdfTally::estimate(double sum, double sum2, double scale) const {
+  if (replicates == 0) return tally_estimate(sum, sum2, paths, scale);
+  // Replicate sums S_r of n = paths / R paths each: x_r = S_r / n, var(x_r) from
+  // sum S_r and sum S_r^2, error sqrt(var / R) (measure/replicates.hpp).
+  Estimate e;
+  e.n = paths;
+  if (paths == 0) return e;
+  const double R = replicates, n = static_cast<double>(paths) / R;
+  e.mean = sum / static_cast<double>(paths) * scale;
+  if (replicates < 2) return e;
+  const double mx = sum / R / n;
+  const double var = std::max(0.0, (sum2 / (n * n) - R * mx * mx) / (R - 1));
+  e.stderr_ = std::sqrt(var / R) * scale;
+  return e;
 }
 
 Estimate tally_estimate(double sum, double sum2, std::uint64_t n, double scale) {
@@ -193,15 +233,15 @@ Estimate tally_estimate(double sum, double sum2, std::uint64_t n, double scale) 
 
 Estimate BsdfResult::albedo(int s, int k) const {
   const auto i = measured.a_index(s, k);
-  return tally_estimate(measured.albedo[i], measured.albedo2[i], measured.paths);
+  return measured.estimate(measured.albedo[i], measured.albedo2[i]);
 }
 Estimate BsdfResult::f_pixel(int s, int k, int px) const {
   const auto i = measured.p_index(s, k, px);
-  return tally_estimate(measured.pix[i], measured.pix2[i], measured.paths, 1.0 / map.pixel_cos_integral(px));
+  return measured.estimate(measured.pix[i], measured.pix2[i], 1.0 / map.pixel_cos_integral(px));
 }
 Estimate BsdfResult::f_plane(int s, int k, int b) const {
   const auto i = measured.b_index(s, k, b);
-  return tally_estimate(measured.plane[i], measured.plane2[i], measured.paths, 1.0 / plane.cos_integral(b));
+  return measured.estimate(measured.plane[i], measured.plane2[i], 1.0 / plane.cos_integral(b));
 }
 Estimate BsdfResult::model_albedo(int s, int k) const {
   if (!smith_walk) return {};
@@ -289,7 +329,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
   const int K = o.orders, npix = r.map.size(), nplane = r.plane.size();
   const Material mat = o.material;
   const Vec3 wi = r.wi;
-  const Strata strata(o.rays);
+  const ReplicatePlan plan(o.rays, o.replicates);
   const Macrosurface& macro = s.macro();
   const Vec3 corner(-0.5 * macro.size_x, -0.5 * macro.size_y, tracer.z_top());
   const std::uint64_t stream = direction_stream(0xB5DF0000ull, o.theta_i, o.phi_i);
@@ -300,11 +340,18 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
     t.add_exit(reflected ? 0 : 1, order, w, r.map.pixel_of(d), r.plane.bin_of(d));
   };
 
-  r.measured = run_paths(strata.total(), K, npix, nplane, o.progress, 0.0, share,
+  // Replicates one after the other, each a stratified pass of its own stream; their sums and
+  // squared sums give the calibrated errors.
+  r.measured = BsdfTally(K, npix, nplane);
+  r.measured.replicates = 0;
+  for (int q = 0; q < plan.replicates; ++q) {
+  const std::uint64_t rep_stream = ReplicatePlan::stream(stream, q);
+  const double span = share / plan.replicates;
+  r.measured.add_replicate(run_paths(plan.per_replicate(), K, npix, nplane, o.progress, q * span, span,
                          [&](std::uint64_t i, BsdfTally& t) {
-    CounterRng rng(o.seed, stream, i);
+    CounterRng rng(o.seed, rep_stream, i);
     ++t.paths;
-    const Vec2 ab = strata.point(i, rng);
+    const Vec2 ab = plan.strata.point(i, rng);
     Vec3 dir = -wi;
     RaySide side = RaySide::Front;
     double weight = 1.0;
@@ -361,7 +408,8 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
       const SourcePlane plane = SourcePlane::of(s.facet(hit.facet));
       hit = tracer.first_hit(hit.point, dir, &plane, t.counters, side);
     }
-  });
+  }));
+  }
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   if (with_model) {
@@ -425,9 +473,8 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
     const Estimate R = r.albedo(0, K), T = r.albedo(1, K);
     // R + T per path is the path's weight when it leaves: its own standard error.
     const auto& m = r.measured;
-    double sum = m.albedo[m.a_index(0, K)] + m.albedo[m.a_index(1, K)];
-    double sum2 = m.albedo2[m.a_index(0, K)] + m.albedo2[m.a_index(1, K)];
-    const Estimate RT = tally_estimate(sum, sum2, m.paths);
+    const double sum = m.albedo[m.a_index(0, K)] + m.albedo[m.a_index(1, K)];
+    const Estimate RT = m.estimate(sum, m.both2);
     j["reflected_plus_transmitted"] = RT.mean;
     j["reflected_plus_transmitted_stderr"] = RT.stderr_;
     (void)R;
@@ -567,6 +614,7 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
   // --- bookkeeping
   const auto& m = r.measured;
   j["paths"] = m.paths;
+  j["replicates"] = m.replicates;
   j["lost_paths"] = m.lost;
   j["unterminated_paths"] = m.unterminated;
   j["scattering_events"] = m.events;
