@@ -183,17 +183,24 @@ BsdfTally& BsdfTally::operator+=(const BsdfTally& o) {
 
 void BsdfTally::add_replicate(const BsdfTally& rep) {
   if (albedo.empty()) *this = BsdfTally(rep.orders, rep.pixels, rep.plane_bins);
-  auto add = [](std::vector<double>& a, std::vector<double>& a2, const std::vector<double>& b) {
-    for (std::size_t k = 0; k < a.size(); ++k) {
-      a[k] += b[k];
-      a2[k] += b[k] * b[k];
-    }
+  // Welford's update of the sum of squared deviations of the replicate means x = S / n (every
+  // replicate has the same n paths): stable where the spread is far below the mean.
+  const double n = static_cast<double>(rep.paths), k = replicates;
+  auto welford = [&](double& sum, double& m2, double S) {
+    const double x = S / n;
+    const double old_mean = k > 0 ? sum / (k * n) : x;
+    sum += S;
+    m2 += (x - old_mean) * (x - sum / ((k + 1) * n));
   };
+  auto add = [&](std::vector<double>& a, std::vector<double>& a2, const std::vector<double>& b) {
+    for (std::size_t i = 0; i < a.size(); ++i) welford(a[i], a2[i], b[i]);
+  };
+  const double rt = rep.albedo[rep.a_index(0, orders)] + rep.albedo[rep.a_index(1, orders)];
+  double rt_sum = albedo[a_index(0, orders)] + albedo[a_index(1, orders)];
+  welford(rt_sum, both2, rt);
   add(albedo, albedo2, rep.albedo);
   add(pix, pix2, rep.pix);
   add(plane, plane2, rep.plane);
-  const double rt = rep.albedo[rep.a_index(0, orders)] + rep.albedo[rep.a_index(1, orders)];
-  both2 += rt * rt;
   paths += rep.paths;
   lost += rep.lost;
   unterminated += rep.unterminated;
@@ -204,17 +211,14 @@ void BsdfTally::add_replicate(const BsdfTally& rep) {
 
 Estimate BsdfTally::estimate(double sum, double sum2, double scale) const {
   if (replicates == 0) return tally_estimate(sum, sum2, paths, scale);
-  // Replicate sums S_r of n = paths / R paths each: x_r = S_r / n, var(x_r) from
-  // sum S_r and sum S_r^2, error sqrt(var / R) (measure/replicates.hpp).
+  // sum2: squared deviations of the R replicate means; error sqrt(var / R)
+  // (measure/replicates.hpp).
   Estimate e;
   e.n = paths;
   if (paths == 0) return e;
-  const double R = replicates, n = static_cast<double>(paths) / R;
   e.mean = sum / static_cast<double>(paths) * scale;
   if (replicates < 2) return e;
-  const double mx = sum / R / n;
-  const double var = std::max(0.0, (sum2 / (n * n) - R * mx * mx) / (R - 1));
-  e.stderr_ = std::sqrt(var / R) * scale;
+  e.stderr_ = std::sqrt(std::max(0.0, sum2) / (replicates - 1.0) / replicates) * scale;
   return e;
 }
 

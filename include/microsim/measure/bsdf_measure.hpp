@@ -103,7 +103,7 @@ struct BsdfOptions {
 // left in the cell. The second moments depend on how the paths were drawn:
 //  * replicates == 0 (i.i.d. paths, the Smith walk): sums over paths of the squared weight;
 //  * replicates = R >= 1 (R stratified replicates of paths / R paths, the explicit surface):
-//    sums over replicates of the squared replicate sums (add_replicate).
+//    the sums of squared deviations of the R replicate means from their mean (add_replicate).
 struct BsdfTally {
   int orders = 4, pixels = 0, plane_bins = 0;
   int replicates = 0;
