@@ -342,12 +342,14 @@ TEST(G2Cli, WritesRowsWithModelsAndBinsAndEnsembles) {
   for (const char* k : {"m", "area_fraction", "g2", "g2_stderr"})
     EXPECT_TRUE(j["rows"][0]["bins"][0].contains(k)) << k;
   EXPECT_EQ(j["rows"][3]["phi_i_deg"].get<double>(), 180.0);
+  EXPECT_EQ(j["rows"][0]["replicates"].get<int>(), 32);  // errors from 32 replicates
   r = run("measure g2 " + s1 + " " + s2 + " --theta-o 60 --theta-i 60 --phi-i 180 --rays 5000 -o " + out2);
   ASSERT_EQ(r.code, 0) << r.err;
   std::ifstream f2(out2);
   Json e = Json::parse(f2);
   EXPECT_EQ(e["rows"][0]["surfaces"].get<int>(), 2);
   EXPECT_TRUE(e["rows"][0].contains("g2_stderr_rays"));
+  EXPECT_EQ(e["rows"][0]["replicates"].get<int>(), 32);
   EXPECT_TRUE(e["rows"][0]["z_height_correlated_nominal"].is_number());
   EXPECT_EQ(e["per_surface"].size(), 2u);
 }
