@@ -239,3 +239,17 @@ TEST(Calibration, VcavityEnsemble) {
     return measure_vcavity_g1(s, views, o)[0].bin_g1_raycast(b);
   }));
 }
+
+TEST(Calibration, G1RaycastAveragedOnAFiniteObject) {
+  // On a finite object (a box) the window's rays can miss: the averaged ray-cast G1 and the
+  // visible area ratio are real estimates there (unlike on a periodic tile).
+  BoxParams p;
+  const Microsurface s = generate_box(p);
+  Tracer tracer(s);
+  G1Options o;
+  o.rays = 4096;
+  expect_calibrated(calibrate("box visible area ratio, 60 deg", [&](std::uint64_t seed) {
+    o.seed = seed;
+    return measure_g1(tracer, dir(60, 20), o).visible_area_ratio();
+  }));
+}
