@@ -359,7 +359,7 @@ TEST(G2Cli, BadInputIsOneLineExitTwoAndNoFile) {
   ASSERT_EQ(run("generate gaussian --resolution 32 -o " + s1).code, 0);
   for (const std::string args :
        {"--theta-o 90 --theta-i 10", "--theta-o 10 --theta-i -5", "--theta-o 10 --theta-i 10 --rays 0",
-        "--theta-o x --theta-i 10"}) {
+        "--theta-o x --theta-i 10", "--theta-o 10 --theta-i 10 --replicates 1"}) {
     std::remove(out.c_str());
     CliRun r = run("measure g2 " + s1 + " " + args + " -o " + out);
     EXPECT_EQ(r.code, 2) << args << r.err;

@@ -25,6 +25,7 @@ struct BsdfCliOptions {
   int orders = 4;
   long long rays = 1000000;
   std::uint64_t seed = 1;
+  int replicates = 32;
   int resolution = 64;
 };
 
@@ -119,6 +120,7 @@ int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
   bo.orders = o.orders;
   bo.rays = static_cast<std::uint64_t>(o.rays);
   bo.seed = o.seed;
+  bo.replicates = o.replicates;
   bo.resolution = o.resolution;
   bo.model_walks = s.nominal ? bo.rays : 0;
   Progress progress("measure bsdf", g.quiet);
@@ -217,6 +219,7 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
       ->capture_default_str();
   cmd->add_option("--rays", o->rays, "Rays (random walks)")->capture_default_str();
   cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str();
+  cmd->add_option("--replicates", o->replicates, "Independent randomized replicates the rays are split into; the standard errors are those of the replicate means (>= 2)")->capture_default_str();
   cmd->add_option("--resolution", o->resolution,
                   "Hemisphere map resolution R (R x R equal-area pixels); also the number of "
                   "in-plane bins over [-90, 90] degrees")

@@ -112,6 +112,7 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   G1Options go;
   go.rays = static_cast<std::uint64_t>(o.rays);
   go.seed = o.seed;
+  go.replicates = o.replicates;
   Json j = run_header("measure g1", g);
   j["file"] = files.size() == 1 ? Json(files[0]) : Json(files);
   j["surface"] = first[0].description;
@@ -273,6 +274,7 @@ void register_measure_g1(CLI::App& measure, const GlobalOptions& g) {
   g1->add_option("--phi", mo->phi, "View azimuths in degrees, same syntax")->capture_default_str();
   g1->add_option("--rays", mo->rays, "Rays per estimator and direction")->capture_default_str();
   g1->add_option("--seed", mo->seed, "Random seed")->capture_default_str();
+  g1->add_option("--replicates", mo->replicates, "Independent randomized replicates the rays are split into; the standard errors are those of the replicate means (>= 2)")->capture_default_str();
   g1->callback([mo, files, &g] {
     mo->surface = files->front();
     mo->extra_surfaces.assign(files->begin() + 1, files->end());

@@ -19,6 +19,7 @@ struct G2CliOptions {
   std::string theta_o, phi_o = "0", theta_i, phi_i = "0";
   long long rays = 1000000;
   std::uint64_t seed = 1;
+  int replicates = 32;
 };
 
 const char* kForms[] = {"separable", "height_correlated", "direction_correlated",
@@ -118,6 +119,7 @@ int run_measure_g2(const G2CliOptions& o, const GlobalOptions& g) {
   G2Options go;
   go.rays = static_cast<std::uint64_t>(o.rays);
   go.seed = o.seed;
+  go.replicates = o.replicates;
   Json j = run_header("measure g2", g);
   j["file"] = o.files.size() == 1 ? Json(o.files[0]) : Json(o.files);
   j["parameters"] = {{"theta_o", o.theta_o}, {"phi_o", o.phi_o},     {"theta_i", o.theta_i},
@@ -231,6 +233,7 @@ void register_measure_g2(CLI::App& measure, const GlobalOptions& g) {
   cmd->add_option("--rays", o->rays, "Area samples per direction pair (two occlusion rays each)")
       ->capture_default_str();
   cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str();
+  cmd->add_option("--replicates", o->replicates, "Independent randomized replicates the rays are split into; the standard errors are those of the replicate means (>= 2)")->capture_default_str();
   cmd->callback([o, &g] { run_measure_g2(*o, g); });
 }
 

@@ -55,9 +55,12 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
   std::vector<std::vector<double>> cdfs(nv, std::vector<double>(2 * K));
   // Ray casting: every groove gets the same stratified rays per replicate; area sampling:
   // per replicate a stratified pass along the ensemble's projected-area CDF.
-  const ReplicatePlan groove_plan((o.rays + K - 1) / K, o.replicates);
+  // (At least one ray per groove and replicate: every replicate covers every groove.)
+  const std::uint64_t groove_rays =
+      std::max<std::uint64_t>((o.rays + K - 1) / K, static_cast<std::uint64_t>(std::max(0, o.replicates)));
+  const ReplicatePlan groove_plan(groove_rays, o.replicates);
   const int R = groove_plan.replicates;
-  const ReplicatePlan sample_plan(o.rays, R);
+  const ReplicatePlan sample_plan(std::max<std::uint64_t>(o.rays, R), R);
   const std::uint64_t per_groove = groove_plan.per_replicate();  // per replicate
   const std::uint64_t n_samples = sample_plan.per_replicate();
   for (std::size_t iv = 0; iv < nv; ++iv) {
