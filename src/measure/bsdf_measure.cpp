@@ -223,6 +223,10 @@ Estimate BsdfTally::estimate(double sum, double sum2, double scale) const {
   e.mean = sum / static_cast<double>(paths) * scale;
   if (replicates < 2) return e;
   e.stderr_ = std::sqrt(std::max(0.0, sum2) / (replicates - 1.0) / replicates) * scale;
+  // Where every replicate agrees to the last bits (a deterministic tally, e.g. one Fresnel
+  // factor per path on a V-groove), the error left is the rounding of the sums, which the
+  // replicates share: its bound paths * eps * |mean|.
+  e.stderr_ = std::max(e.stderr_, static_cast<double>(paths) * 1.1102230246251565e-16 * std::abs(e.mean));
   return e;
 }
 
