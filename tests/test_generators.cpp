@@ -411,7 +411,12 @@ TEST(VCavity, IdenticalForAnyThreadCount) {
   }
   EXPECT_EQ(a[0].raycast_hits, b[0].raycast_hits);
   EXPECT_EQ(a[0].sample_visible, b[0].sample_visible);
-  for (int k = 0; k < a[0].binning.size(); ++k) EXPECT_EQ(a[0].bins[k].visible, b[0].bins[k].visible);
+  for (int k = 0; k < a[0].binning.size(); ++k) {
+    EXPECT_EQ(a[0].bins[k].visible, b[0].bins[k].visible);
+    EXPECT_EQ(a[0].bins[k].visible_r, b[0].bins[k].visible_r);  // every replicate
+    EXPECT_EQ(a[0].bins[k].raycast_hits_r, b[0].bins[k].raycast_hits_r);
+  }
+  EXPECT_EQ(a[0].counters.rays, b[0].counters.rays);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -32,6 +32,7 @@ struct BsdfCliOptions {
   int table_resolution = 64;
   long long rays = 1000000;
   std::uint64_t seed = 1;
+  int replicates = 32;
   int resolution = 64;
 };
 
@@ -164,6 +165,7 @@ int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
   to.base.rays = static_cast<std::uint64_t>(o.rays);
   to.base.seed = o.seed;
   to.base.resolution = o.resolution;
+  to.base.replicates = o.replicates;
   to.base.model_walks = s.nominal ? to.base.rays : 0;
   for (double t : thetas) to.theta_i.push_back(rad(t));
   for (double p : phis) to.phi_i.push_back(rad(p));
@@ -185,6 +187,7 @@ int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
                      {"rays", r.measured.paths},
                      {"rays_requested", o.rays},
                      {"seed", o.seed},
+                     {"replicates", to.base.replicates},
                      {"resolution", o.resolution},
                      {"in_plane_bins", r.plane.size()},
                      {"in_plane_band_half_width_deg", deg(r.plane.half_width())},
@@ -199,8 +202,9 @@ int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
       {"albedo", "fraction of the incident power leaving on each side after exactly n scattering "
                  "events (order_Kplus: K or more; total: all); a conductor's paths carry the "
                  "product of their Fresnel factors, a dielectric chooses reflection with "
-                 "probability F (unpolarized light); *_stderr: standard error over paths "
-                 "(stratified origins: an upper bound)"},
+                 "probability F (unpolarized light); *_stderr: standard error of the mean of "
+                 "`replicates` independent stratified replicates of the rays (the Smith walk's: "
+                 "over its independent walks)"},
       {"in_plane", "f = p / int_B |cos theta_o| d omega (exact), p the fraction of power leaving "
                    "through bin B: a band |beta| <= half width around the plane of incidence, "
                    "theta_o_deg signed, positive on the specular side (azimuth phi_i + 180); "
@@ -328,6 +332,9 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
       ->check(integer_in(1, kMaxRays));
   cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str()
       ->check(seed_value());
+  cmd->add_option("--replicates", o->replicates, "Independent randomized replicates the rays are split into; the standard errors are those of the replicate means (>= 2)")
+      ->capture_default_str()
+      ->check(integer_in(2, 1 << 16));
   cmd->add_option("--resolution", o->resolution,
                   "Hemisphere map resolution R (R x R equal-area pixels); also the number of "
                   "in-plane bins over [-90, 90] degrees")

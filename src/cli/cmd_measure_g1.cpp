@@ -27,6 +27,7 @@ Json g1_ensemble_row(const std::vector<const Json*>& rows) {
                         {{"theta_deg", Field::Copy},
                          {"phi_deg", Field::Copy},
                          {"surfaces", Field::Count},
+                         {"replicates", Field::Copy},
                          {"g1", Field::Measured},
                          {"g1_raycast", Field::Measured},
                          {"visible_area_ratio", Field::Measured},
@@ -112,10 +113,12 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   G1Options go;
   go.rays = static_cast<std::uint64_t>(o.rays);
   go.seed = o.seed;
+  go.replicates = o.replicates;
   Json j = run_header("measure g1", g);
   j["file"] = files.size() == 1 ? Json(files[0]) : Json(files);
   j["surface"] = first[0].description;
   j["parameters"] = {{"theta", o.theta}, {"phi", o.phi}, {"rays", o.rays}, {"seed", o.seed},
+                     {"replicates", go.replicates},
                      {"normal_bins", {{"theta", go.normal_theta_bins}, {"phi", go.normal_phi_bins}}}};
   j["definitions"] = {
       {"g1", "area sampling: fraction of points, drawn by projected area A_f max(0,v.m_f), "
@@ -138,8 +141,9 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
       {"eq_2b", "the visible_area_ratio at theta = 0 is 000 eq. 2b, int (n.m) G1(n,m) D(m) dm; "
                 "1 for a valid periodic microsurface"},
       {"stderr", files.size() == 1
-                     ? "ray-count standard error of this one surface (binomial bound; stratified "
-                       "sampling only lowers it)"
+                     ? "ray-count standard error of this one surface: the rays are split into `replicates` "
+                       "independent randomized replicates (each a stratified pass with its own random "
+                       "stream) and the error is that of the replicate means, sqrt(var / replicates)"
                      : "between-surface standard error (sd over surfaces / sqrt(K)); the ray-count "
                        "one is *_stderr_rays; per_surface holds each surface's own rows"}};
   if (is_vcavity(first[0]))
@@ -273,6 +277,9 @@ void register_measure_g1(CLI::App& measure, const GlobalOptions& g) {
       ->check(integer_in(1, kMaxRays));
   g1->add_option("--seed", mo->seed, "Random seed")->capture_default_str()
       ->check(seed_value());
+  g1->add_option("--replicates", mo->replicates, "Independent randomized replicates the rays are split into; the standard errors are those of the replicate means (>= 2)")
+      ->capture_default_str()
+      ->check(integer_in(2, 1 << 16));
   g1->callback([mo, files, &g] {
     mo->surface = files->front();
     mo->extra_surfaces.assign(files->begin() + 1, files->end());

@@ -20,6 +20,7 @@ struct G2CliOptions {
   std::string theta_o, phi_o = "0", theta_i, phi_i = "0";
   long long rays = 1000000;
   std::uint64_t seed = 1;
+  int replicates = 32;
 };
 
 const char* kForms[] = {"separable", "height_correlated", "direction_correlated",
@@ -32,6 +33,7 @@ Json g2_ensemble_row(const std::vector<const Json*>& rows) {
   FieldSpec spec = {{"theta_o_deg", Field::Copy}, {"phi_o_deg", Field::Copy},
                     {"theta_i_deg", Field::Copy}, {"phi_i_deg", Field::Copy},
                     {"delta_phi_deg", Field::Copy}, {"surfaces", Field::Count},
+                    {"replicates", Field::Copy},
                     {"g2", Field::Measured},        {"g1_o", Field::Measured},
                     {"g1_i", Field::Measured},      {"half_bin_theta_m_range_deg", Field::Copy},
                     {"half_bin_phi_m_range_deg", Field::Copy}, {"g2_half", Field::Measured},
@@ -118,39 +120,44 @@ int run_measure_g2(const G2CliOptions& o, const GlobalOptions& g) {
   G2Options go;
   go.rays = static_cast<std::uint64_t>(o.rays);
   go.seed = o.seed;
+  go.replicates = o.replicates;
   Json j = run_header("measure g2", g);
   j["file"] = o.files.size() == 1 ? Json(o.files[0]) : Json(o.files);
   j["parameters"] = {{"theta_o", o.theta_o}, {"phi_o", o.phi_o},     {"theta_i", o.theta_i},
                      {"phi_i", o.phi_i},     {"rays", o.rays},       {"seed", o.seed},
+                     {"replicates", go.replicates},
                      {"normal_bins", {{"theta", go.normal_theta_bins}, {"phi", go.normal_phi_bins}}}};
   j["definitions"] = {
-      {"g2", "fraction of the area facing both o and i (o.m_f > 0, i.m_f > 0), sampled uniformly "
-             "by area, that is unoccluded toward o and toward i (two occlusion rays per point; "
-             "000 eq. 16a, DESIGN.md)"},
-      {"g1_o", "fraction of the same points unoccluded toward o (g1_i: toward i)"},
+      {"g2", "fraction of the facets facing both o and i (o.m_f > 0, i.m_f > 0) unoccluded "
+             "toward o and toward i, weighted by w_f = A_f (o.m_f + i.m_f) / 2 (points drawn "
+             "with that density, two occlusion rays per point; 000 eq. 16a, DESIGN.md): "
+             "symmetric in o and i, G1's projected-area weight at o = i (g2 = g1 there, 000 eq. "
+             "16) and the BRDF's A_f (i.m) at the half vector"},
+      {"g1_o", "fraction of the same points and weights unoccluded toward o (g1_i: toward i)"},
       {"g2_half", "g2 of the normal bin holding the half vector (o+i)/|o+i| (half_bin_*_range_deg): "
                   "the G2(o, h, i) of a specular microfacet BRDF, to compare with the Smith forms "
                   "as they are (null when the bin holds fewer than 100 samples)"},
-      {"bins", "per normal bin, the same ratios over the bin's area facing both; front_fraction = "
-               "that area / the bin's area (multiply g2 by it for the fraction of the whole bin)"},
+      {"bins", "per normal bin, the same ratios over the bin's facets facing both; front_fraction = "
+               "their area / the bin's area; weight_fraction = the bin's share of sum w_f"},
       {"smith_*", "001 eq. 20 (separable), 21 (height correlated), 22 (direction correlated), 23 "
                   "(height-direction correlated) with the van Ginneken lambda(phi) = 4.41 phi / "
                   "(4.41 phi + 1) and Lambda from the surface's facets, sum_f A_f max(0,-v.m_f) / "
                   "((v.n) A); they do not depend on m, so they equal their own area average"},
       {"smith_*_nominal", "the same with the closed-form Lambda of the surface's nominal NDF"},
       {"*_from_g1", "the four forms built in each normal bin from the bin's measured g1_o and g1_i "
-                    "(Lambda = 1/G1 - 1, 001 eq. 10), averaged over bins with the bins' area facing "
-                    "both; *_from_g1_diff = average of (g2 - form), *_diff_stderr its standard "
-                    "error (delta method on each bin's counts both/o only/i only/neither); they "
+                    "(Lambda = 1/G1 - 1, 001 eq. 10), averaged over bins with the bins' weights "
+                    "sum w_f; *_from_g1_diff = average of (g2 - form), *_diff_stderr its standard "
+                    "error (delete-one-replicate jackknife); they "
                     "test the correlation each form assumes, free of the m-dependence of G1"},
       {"vcavity", "V-cavity G2 (Cook-Torrance) averaged over the surface's facets facing both, "
-                  "weighted by area A_f like the measurement"},
+                  "weighted by w_f like the measurement"},
       {"z_*", "(g2 - model) / stderr; for models from the facets the ray-count error "
               "(g2_stderr, or g2_stderr_rays for ensembles), for nominal models the between-"
               "surface error g2_stderr of an ensemble"},
       {"stderr", o.files.size() == 1
-                     ? "ray-count standard error of this one surface (binomial bound; stratified "
-                       "sampling only lowers it)"
+                     ? "ray-count standard error of this one surface: the rays are split into `replicates` "
+                       "independent randomized replicates (each a stratified pass with its own random "
+                       "stream) and the error is that of the replicate means, sqrt(var / replicates)"
                      : "between-surface standard error (sd over surfaces / sqrt(K)); the ray-count "
                        "one is *_stderr_rays; per_surface holds each surface's own rows"}};
   Progress progress("measure g2", g.quiet);
@@ -229,6 +236,9 @@ void register_measure_g2(CLI::App& measure, const GlobalOptions& g) {
       ->check(integer_in(1, kMaxRays));
   cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str()
       ->check(seed_value());
+  cmd->add_option("--replicates", o->replicates, "Independent randomized replicates the rays are split into; the standard errors are those of the replicate means (>= 2)")
+      ->capture_default_str()
+      ->check(integer_in(2, 1 << 16));
   cmd->callback([o, &g] { run_measure_g2(*o, g); });
 }
 

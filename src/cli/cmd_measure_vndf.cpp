@@ -135,6 +135,7 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
                      {"rays", o.rays},
                      {"sampler_samples", o.sampler_samples},
                      {"seed", o.seed},
+                     {"replicates", nullptr},
                      {"normal_bins", {{"theta", o.theta_bins}, {"phi", o.phi_bins}, {"theta_max_deg", 90}}},
                      {"family_alpha", vo.family_alpha}};
   j["definitions"] = {
@@ -153,6 +154,8 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
                "*_smith_numeric the same against dv_smith_numeric"},
       {"sampler_*", "the same chi-square test for sampler_samples normals drawn by the nominal "
                     "NDF's VNDF sampler (models/ndf.hpp sample_visible_normal)"},
+      {"replicates", "null: the ray origins are i.i.d. uniform (not stratified), so the bin "
+                     "counts are multinomial and the binomial standard error is exact"},
       {"stderr", o.files.size() == 1 ? "ray-count (binomial) standard error of this one surface"
                                      : "between-surface standard error (sd / sqrt(K)); "
                                        "per_surface holds each surface's rows"}};

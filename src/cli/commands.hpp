@@ -25,6 +25,7 @@ struct MeasureOptions {
   std::string theta = "0:85:5", phi = "0";
   long long rays = 1000000;
   std::uint64_t seed = 1;
+  int replicates = 32;  // measure g1: independent replicates (standard errors)
   int theta_bins = 90, phi_bins = 72;
 };
 

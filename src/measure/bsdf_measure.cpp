@@ -1,6 +1,7 @@
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/bsdf_walk.hpp"
 #include "microsim/measure/groove_models.hpp"
+#include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
 #include "microsim/measure/vcavity_measure.hpp"
 #include "microsim/surface/generators.hpp"
@@ -148,6 +149,7 @@ BsdfTally::BsdfTally(int K, int npix, int nplane) : orders(K), pixels(npix), pla
 void BsdfTally::add_exit(int s, int order, double w, int px, int b) {
   const int k = std::min(order, orders) - 1;
   const double w2 = w * w;
+  both2 += w2;  // a path leaves on one side only
   for (int slot : {k, orders}) {
     albedo[a_index(s, slot)] += w;
     albedo2[a_index(s, slot)] += w2;
@@ -174,12 +176,58 @@ BsdfTally& BsdfTally::operator+=(const BsdfTally& o) {
   add(pix2, o.pix2);
   add(plane, o.plane);
   add(plane2, o.plane2);
+  both2 += o.both2;
   paths += o.paths;
   lost += o.lost;
   unterminated += o.unterminated;
   events += o.events;
   counters += o.counters;
   return *this;
+}
+
+void BsdfTally::add_replicate(const BsdfTally& rep) {
+  if (albedo.empty()) *this = BsdfTally(rep.orders, rep.pixels, rep.plane_bins);
+  // Welford's update of the sum of squared deviations of the replicate means x = S / n (every
+  // replicate has the same n paths): stable where the spread is far below the mean.
+  const double n = static_cast<double>(rep.paths), k = replicates;
+  auto welford = [&](double& sum, double& m2, double S) {
+    const double x = S / n;
+    const double old_mean = k > 0 ? sum / (k * n) : x;
+    sum += S;
+    m2 += (x - old_mean) * (x - sum / ((k + 1) * n));
+  };
+  auto add = [&](std::vector<double>& a, std::vector<double>& a2, const std::vector<double>& b) {
+    for (std::size_t i = 0; i < a.size(); ++i) welford(a[i], a2[i], b[i]);
+  };
+  const double rt = rep.albedo[rep.a_index(0, orders)] + rep.albedo[rep.a_index(1, orders)];
+  double rt_sum = albedo[a_index(0, orders)] + albedo[a_index(1, orders)];
+  welford(rt_sum, both2, rt);
+  add(albedo, albedo2, rep.albedo);
+  add(pix, pix2, rep.pix);
+  add(plane, plane2, rep.plane);
+  paths += rep.paths;
+  lost += rep.lost;
+  unterminated += rep.unterminated;
+  events += rep.events;
+  counters += rep.counters;
+  ++replicates;
+}
+
+Estimate BsdfTally::estimate(double sum, double sum2, double scale) const {
+  if (replicates == 0) return tally_estimate(sum, sum2, paths, scale);
+  // sum2: squared deviations of the R replicate means; error sqrt(var / R)
+  // (measure/replicates.hpp).
+  Estimate e;
+  e.n = paths;
+  if (paths == 0) return e;
+  e.mean = sum / static_cast<double>(paths) * scale;
+  if (replicates < 2) return e;
+  e.stderr_ = std::sqrt(std::max(0.0, sum2) / (replicates - 1.0) / replicates) * scale;
+  // Where every replicate agrees to the last bits (a deterministic tally, e.g. one Fresnel
+  // factor per path on a V-groove), the error left is the rounding of the sums, which the
+  // replicates share: its bound paths * eps * |mean|.
+  e.stderr_ = std::max(e.stderr_, static_cast<double>(paths) * 1.1102230246251565e-16 * std::abs(e.mean));
+  return e;
 }
 
 Estimate tally_estimate(double sum, double sum2, std::uint64_t n, double scale) {
@@ -197,15 +245,15 @@ Estimate tally_estimate(double sum, double sum2, std::uint64_t n, double scale) 
 
 Estimate BsdfResult::albedo(int s, int k) const {
   const auto i = measured.a_index(s, k);
-  return tally_estimate(measured.albedo[i], measured.albedo2[i], measured.paths);
+  return measured.estimate(measured.albedo[i], measured.albedo2[i]);
 }
 Estimate BsdfResult::f_pixel(int s, int k, int px) const {
   const auto i = measured.p_index(s, k, px);
-  return tally_estimate(measured.pix[i], measured.pix2[i], measured.paths, 1.0 / map.pixel_cos_integral(px));
+  return measured.estimate(measured.pix[i], measured.pix2[i], 1.0 / map.pixel_cos_integral(px));
 }
 Estimate BsdfResult::f_plane(int s, int k, int b) const {
   const auto i = measured.b_index(s, k, b);
-  return tally_estimate(measured.plane[i], measured.plane2[i], measured.paths, 1.0 / plane.cos_integral(b));
+  return measured.estimate(measured.plane[i], measured.plane2[i], 1.0 / plane.cos_integral(b));
 }
 Estimate BsdfResult::model_albedo(int s, int k) const {
   if (!smith_walk) return {};
@@ -291,7 +339,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
   const int K = o.orders, npix = r.map.size(), nplane = r.plane.size();
   const Material mat = o.material;
   const Vec3 wi = r.wi;
-  const Strata strata(o.rays);
+  const ReplicatePlan plan(o.rays, o.replicates);
   const Macrosurface& macro = s.macro();
   // Periodic tile: the tile at the top of the slab. Finite object: a window perpendicular to l
   // covering its projection; each ray carries W_perp / (A cos theta_i), so that the tallies are
@@ -313,15 +361,22 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
     r.measured = trace_vcavity_bsdf(s, o, wi, r.map, r.plane, stream);
     if (o.progress) o.progress(share);
   } else {
-    r.measured = run_paths(strata.total(), K, npix, nplane, o.progress, 0.0, share,
-                           [&](std::uint64_t i, BsdfTally& t) {
-      CounterRng rng(o.seed, stream, i);
-      ++t.paths;
-      const Vec2 ab = strata.point(i, rng);
-      const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
-                                       -wi, mat, rng, o.max_events, finite, t.counters, t.events);
-      record_walk_end(t, e, ray_weight, r.map, r.plane);
-    });
+    // Replicates one after the other, each a stratified pass of its own stream; their sums
+    // and spread give the calibrated errors (measure/replicates.hpp).
+    r.measured = BsdfTally(K, npix, nplane);
+    const double span = share / plan.replicates;
+    for (int q = 0; q < plan.replicates; ++q) {
+      const std::uint64_t rep_stream = ReplicatePlan::stream(stream, q);
+      r.measured.add_replicate(run_paths(plan.per_replicate(), K, npix, nplane, o.progress, q * span,
+                                         span, [&](std::uint64_t i, BsdfTally& t) {
+        CounterRng rng(o.seed, rep_stream, i);
+        ++t.paths;
+        const Vec2 ab = plan.strata.point(i, rng);
+        const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
+                                         -wi, mat, rng, o.max_events, finite, t.counters, t.events);
+        record_walk_end(t, e, ray_weight, r.map, r.plane);
+      }));
+    }
   }
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -386,9 +441,8 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
     const Estimate R = r.albedo(0, K), T = r.albedo(1, K);
     // R + T per path is the path's weight when it leaves: its own standard error.
     const auto& m = r.measured;
-    double sum = m.albedo[m.a_index(0, K)] + m.albedo[m.a_index(1, K)];
-    double sum2 = m.albedo2[m.a_index(0, K)] + m.albedo2[m.a_index(1, K)];
-    const Estimate RT = tally_estimate(sum, sum2, m.paths);
+    const double sum = m.albedo[m.a_index(0, K)] + m.albedo[m.a_index(1, K)];
+    const Estimate RT = m.estimate(sum, m.both2);
     j["reflected_plus_transmitted"] = RT.mean;
     j["reflected_plus_transmitted_stderr"] = RT.stderr_;
     (void)R;
@@ -530,6 +584,7 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
   // --- bookkeeping
   const auto& m = r.measured;
   j["paths"] = m.paths;
+  j["replicates"] = m.replicates;
   j["lost_paths"] = m.lost;
   j["unterminated_paths"] = m.unterminated;
   j["scattering_events"] = m.events;

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <memory>
 
@@ -24,53 +25,87 @@ struct Tally {
 
 constexpr std::uint64_t kChunk = 1 << 14;
 
-// Runs `body(i, tally)` for i in [0, n) in parallel chunks and merges the chunk tallies in
-// chunk order (integer counts: identical for any thread count).
+// Runs `body(rep, j, tally)` for every replicate and ray in parallel chunks and merges the
+// chunk tallies per replicate in chunk order (integer counts: identical for any thread count).
 template <class Body>
-void run_chunks(std::uint64_t n, int nbins, Tally& total, std::atomic<std::uint64_t>& done,
-                Body&& body) {
-  std::uint64_t nchunks = (n + kChunk - 1) / kChunk;
-  std::vector<Tally> parts(nchunks, Tally(nbins));
-  tbb::parallel_for(std::uint64_t(0), nchunks, [&](std::uint64_t c) {
-    std::uint64_t end = std::min(n, (c + 1) * kChunk);
-    for (std::uint64_t i = c * kChunk; i < end; ++i) body(i, parts[c]);
-    done += end - c * kChunk;
-  });
-  for (const auto& p : parts) {
+std::vector<Tally> run_replicates(int R, std::uint64_t n, int nbins, TraceCounters& counters,
+                                  std::atomic<std::uint64_t>& done, Body&& body) {
+  const std::uint64_t nc = chunks_per_replicate(n, kChunk);
+  std::vector<Tally> parts = run_replicate_chunks<Tally>(
+      R, n, kChunk, [&] { return Tally(nbins); },
+      [&](int rep, std::uint64_t j, Tally& t) {
+        body(rep, j, t);
+        if ((j + 1) % kChunk == 0 || j + 1 == n) done += (j % kChunk) + 1;
+      });
+  std::vector<Tally> reps(R, Tally(nbins));
+  for (std::size_t c = 0; c < parts.size(); ++c) {
+    Tally& total = reps[c / nc];
     for (int b = 0; b < nbins; ++b) {
-      total.hits[b] += p.hits[b];
-      total.samples[b] += p.samples[b];
-      total.visible[b] += p.visible[b];
+      total.hits[b] += parts[c].hits[b];
+      total.samples[b] += parts[c].samples[b];
+      total.visible[b] += parts[c].visible[b];
     }
-    total.counters += p.counters;
+    counters += parts[c].counters;
   }
+  return reps;
 }
+
+double per_replicate(std::uint64_t total, int R) { return static_cast<double>(total) / R; }
 
 }  // namespace
 
-Estimate G1Result::g1_area_sampling() const { return binomial_estimate(sample_visible, sample_rays); }
+Estimate G1Result::g1_area_sampling() const {
+  return replicate_mean(sample_visible_r, 1.0 / per_replicate(sample_rays, replicates));
+}
 
 Estimate G1Result::g1_raycast() const {
-  Estimate p = binomial_estimate(raycast_hits, raycast_rays);
-  double k = front_projected > 0 ? window_area_perp / front_projected : 0;
-  return {p.mean * k, p.stderr_ * k, p.n};
+  const double k = front_projected > 0 ? window_area_perp / front_projected : 0;
+  return replicate_mean(raycast_hits_r, k / per_replicate(raycast_rays, replicates));
 }
 
 Estimate G1Result::visible_area_ratio() const {
-  Estimate p = binomial_estimate(raycast_hits, raycast_rays);
-  double denom = std::abs(v.z()) * total_area_macro();  // |v.n| A (undersurface: v.n < 0)
-  double k = denom > 0 ? window_area_perp / denom : 0;
-  return {p.mean * k, p.stderr_ * k, p.n};
+  const double denom = std::abs(v.z()) * total_area_macro();  // |v.n| A (undersurface: v.n < 0)
+  const double k = denom > 0 ? window_area_perp / denom : 0;
+  return replicate_mean(raycast_hits_r, k / per_replicate(raycast_rays, replicates));
 }
 
 Estimate G1Result::bin_g1_area_sampling(int b) const {
-  return binomial_estimate(bins[b].visible, bins[b].samples);
+  // visible / samples of the bin: a ratio whose denominator varies between replicates.
+  return replicate_ratio(bins[b].visible_r, bins[b].samples_r);
 }
 
 Estimate G1Result::bin_g1_raycast(int b) const {
-  Estimate p = binomial_estimate(bins[b].raycast_hits, raycast_rays);
-  double k = bins[b].front_projected > 0 ? window_area_perp / bins[b].front_projected : 0;
-  return {p.mean * k, p.stderr_ * k, bins[b].raycast_hits};
+  const double k = bins[b].front_projected > 0 ? window_area_perp / bins[b].front_projected : 0;
+  Estimate e = replicate_mean(bins[b].raycast_hits_r, k / per_replicate(raycast_rays, replicates));
+  e.n = bins[b].raycast_hits;
+  return e;
+}
+
+// Per-replicate totals and per-bin counts from the replicates' tallies.
+void set_g1_counts(G1Result& r, const std::vector<Tally>& ray_reps, const std::vector<Tally>& sample_reps) {
+  const int R = r.replicates, nbins = r.binning.size();
+  r.raycast_hits_r.assign(R, 0);
+  r.sample_visible_r.assign(R, 0);
+  r.raycast_hits = r.sample_visible = 0;
+  for (int b = 0; b < nbins; ++b) {
+    G1NormalBin& nb = r.bins[b];
+    nb.raycast_hits_r.assign(R, 0);
+    nb.samples_r.assign(R, 0);
+    nb.visible_r.assign(R, 0);
+    nb.raycast_hits = nb.samples = nb.visible = 0;
+    for (int q = 0; q < R; ++q) {
+      nb.raycast_hits_r[q] = ray_reps[q].hits[b];
+      nb.samples_r[q] = sample_reps[q].samples[b];
+      nb.visible_r[q] = sample_reps[q].visible[b];
+      nb.raycast_hits += nb.raycast_hits_r[q];
+      nb.samples += nb.samples_r[q];
+      nb.visible += nb.visible_r[q];
+      r.raycast_hits_r[q] += nb.raycast_hits_r[q];
+      r.sample_visible_r[q] += nb.visible_r[q];
+    }
+    r.raycast_hits += nb.raycast_hits;
+    r.sample_visible += nb.visible;
+  }
 }
 
 DirectionBinning g1_normal_binning(const G1Options& o) {
@@ -213,68 +248,64 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
 
   const RayWindow w = make_ray_window(tracer, v);
   r.window_area_perp = w.area_perp;
-  const Strata strata(o.rays);
-  r.raycast_rays = strata.total();
-  r.sample_rays = strata.total();
-  const std::uint64_t total_work = 2 * strata.total();
+  const ReplicatePlan plan(o.rays, o.replicates);
+  const int R = plan.replicates;
+  const std::uint64_t n_rep = plan.per_replicate();
+  r.replicates = R;
+  r.raycast_rays = plan.total();
+  r.sample_rays = plan.total();
+  const std::uint64_t total_work = 2 * plan.total();
   std::atomic<std::uint64_t> done{0};
-  Tally tally(nbins);
+  TraceCounters counters;
 
   auto report = [&] {
     if (o.progress) o.progress(static_cast<double>(done.load()) / total_work);
   };
 
-  // (a) ray casting along -v from the stratified window.
+  // (a) ray casting along -v: per replicate a stratified, Morton-ordered pass over the window.
   auto t_raycast = std::chrono::steady_clock::now();
-  run_chunks(strata.total(), nbins, tally, done, [&](std::uint64_t i, Tally& t) {
-    CounterRng rng(o.seed, 0xA000 + static_cast<std::uint64_t>(r.theta * 1e6) * 7919 +
-                               static_cast<std::uint64_t>(r.phi * 1e6), i);
-    Vec2 ab = strata.point(i, rng);
-    Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
-    TraceHit h = tracer.first_hit(org, -v, nullptr, t.counters);
-    if (h.hit && !h.backface) ++t.hits[r.binning.bin_of(h.normal)];
-  });
+  const std::uint64_t key = static_cast<std::uint64_t>(r.theta * 1e6) * 7919 +
+                            static_cast<std::uint64_t>(r.phi * 1e6);
+  const std::vector<Tally> ray_reps =
+      run_replicates(R, n_rep, nbins, counters, done, [&](int rep, std::uint64_t j, Tally& t) {
+        CounterRng rng(o.seed, ReplicatePlan::stream(0xA000 + key, rep), j);
+        Vec2 ab = plan.strata.point(j, rng);
+        Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
+        TraceHit h = tracer.first_hit(org, -v, nullptr, t.counters);
+        // Hits on back faces (counted in counters) are left out of the visible area: a ray
+        // that meets a facet from behind crossed the surface through a rounding gap.
+        if (h.hit && !h.backface) ++t.hits[r.binning.bin_of(h.normal)];
+      });
   report();
-  // Hits on back faces (counted in counters) are left out of the visible area: a ray that
-  // meets a facet from behind crossed the surface through a rounding gap.
-  for (int b = 0; b < nbins; ++b) {
-    r.bins[b].raycast_hits = tally.hits[b];
-    r.raycast_hits += tally.hits[b];
-  }
-
   r.raycast_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_raycast).count();
-  // (b) area sampling, strata along the CDF (facet order is spatially coherent).
+  // (b) area sampling, per replicate strata along the CDF (facet order is spatially coherent).
   auto t_sample = std::chrono::steady_clock::now();
   const double total = r.front_projected;
-  run_chunks(strata.total(), nbins, tally, done, [&](std::uint64_t i, Tally& t) {
-    CounterRng rng(o.seed, 0xB000 + static_cast<std::uint64_t>(r.theta * 1e6) * 7919 +
-                               static_cast<std::uint64_t>(r.phi * 1e6), i);
-    double u = (static_cast<double>(i) + rng.uniform()) / strata.total() * total;
-    std::size_t k = std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin();
-    k = std::min(k, nf - 1);
-    while (k > 0 && cdf[k] == cdf[k - 1]) --k;  // never land on a zero-weight facet
-    if (!ft.buried.empty() && ft.buried[k]) {  // pressed against a twin: never visible
-      ++t.samples[facet_bin[k]];
-      return;
-    }
-    Triangle f = s.facet(k);
-    double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
-    Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
-    SourcePlane plane = SourcePlane::of(f);
-    int b = facet_bin[k];
-    ++t.samples[b];
-    if (!tracer.occluded(p, v, &plane, t.counters)) ++t.visible[b];
-  });
+  const std::vector<Tally> sample_reps =
+      run_replicates(R, n_rep, nbins, counters, done, [&](int rep, std::uint64_t j, Tally& t) {
+        CounterRng rng(o.seed, ReplicatePlan::stream(0xB000 + key, rep), j);
+        double u = (static_cast<double>(j) + rng.uniform()) / n_rep * total;
+        std::size_t k = std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin();
+        k = std::min(k, nf - 1);
+        while (k > 0 && cdf[k] == cdf[k - 1]) --k;  // never land on a zero-weight facet
+        if (!ft.buried.empty() && ft.buried[k]) {  // pressed against a twin: never visible
+          ++t.samples[facet_bin[k]];
+          return;
+        }
+        Triangle f = s.facet(k);
+        double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
+        Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
+        SourcePlane plane = SourcePlane::of(f);
+        int b = facet_bin[k];
+        ++t.samples[b];
+        if (!tracer.occluded(p, v, &plane, t.counters)) ++t.visible[b];
+      });
   report();
-  for (int b = 0; b < nbins; ++b) {
-    r.bins[b].samples = tally.samples[b];
-    r.bins[b].visible = tally.visible[b];
-    r.sample_visible += tally.visible[b];
-  }
+  set_g1_counts(r, ray_reps, sample_reps);
+  r.counters = counters;
   r.sample_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_sample).count();
-  r.counters = tally.counters;
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }
@@ -292,7 +323,7 @@ Json g1_row_json(const G1Result& r, const Microsurface& s) {
   row["visible_area_ratio_stderr"] = var.stderr_;
   // In absolute units (surface units squared), perpendicular to v: hits / rays x window area.
   {
-    Estimate p = binomial_estimate(r.raycast_hits, r.raycast_rays);
+    const Estimate p = replicate_mean(r.raycast_hits_r, 1.0 / per_replicate(r.raycast_rays, r.replicates));
     row["visible_projected_area"] = p.mean * r.window_area_perp;
     row["visible_projected_area_stderr"] = p.stderr_ * r.window_area_perp;
     row["macro_projected_area"] = std::abs(r.v.z()) * r.macro_area;  // |v.n| A
@@ -316,6 +347,7 @@ Json g1_row_json(const G1Result& r, const Microsurface& s) {
   }
   row["rays"] = r.raycast_rays;
   row["area_samples"] = r.sample_rays;
+  row["replicates"] = r.replicates;
   if (s.macro().periodic) {
     row["lost_rays"] = r.counters.lost_below + r.counters.unresolved;
   } else {

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 
+#include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
 
 namespace microsim {
@@ -39,66 +40,106 @@ models::G2Forms from_array(const std::array<double, 4>& a) {
 }
 }  // namespace
 
+Estimate G2Result::g2() const {
+  std::vector<std::uint64_t> x(replicates, 0);
+  for (const G2NormalBin& nb : bins)
+    for (int q = 0; q < replicates; ++q) x[q] += nb.visible_both_r[q];
+  return replicate_mean(x, static_cast<double>(replicates) / samples);
+}
+Estimate G2Result::g1_o() const {
+  std::vector<std::uint64_t> x(replicates, 0);
+  for (const G2NormalBin& nb : bins)
+    for (int q = 0; q < replicates; ++q) x[q] += nb.visible_o_r[q];
+  return replicate_mean(x, static_cast<double>(replicates) / samples);
+}
+Estimate G2Result::g1_i() const {
+  std::vector<std::uint64_t> x(replicates, 0);
+  for (const G2NormalBin& nb : bins)
+    for (int q = 0; q < replicates; ++q) x[q] += nb.visible_i_r[q];
+  return replicate_mean(x, static_cast<double>(replicates) / samples);
+}
+Estimate G2Result::bin_g2(int b) const { return replicate_ratio(bins[b].visible_both_r, bins[b].samples_r); }
+Estimate G2Result::bin_g1_o(int b) const { return replicate_ratio(bins[b].visible_o_r, bins[b].samples_r); }
+Estimate G2Result::bin_g1_i(int b) const { return replicate_ratio(bins[b].visible_i_r, bins[b].samples_r); }
+
+namespace {
+// A bin's counts: samples, visible from o, from i, from both.
+struct BinCounts {
+  double n = 0, o = 0, i = 0, both = 0;
+};
+BinCounts counts_without(const G2NormalBin& nb, int rep) {  // rep < 0: all replicates
+  BinCounts c{static_cast<double>(nb.samples), static_cast<double>(nb.visible_o),
+              static_cast<double>(nb.visible_i), static_cast<double>(nb.visible_both)};
+  if (rep >= 0) {
+    c.n -= nb.samples_r[rep];
+    c.o -= nb.visible_o_r[rep];
+    c.i -= nb.visible_i_r[rep];
+    c.both -= nb.visible_both_r[rep];
+  }
+  return c;
+}
+// The four forms from the bin's g1_o, g1_i, and g2 minus each.
+void forms_and_diff(const BinCounts& c, double phi, std::array<double, 4>& value,
+                    std::array<double, 4>& diff) {
+  value = as_array(models::g2_forms_from_g1(c.o / c.n, c.i / c.n, phi));
+  for (int k = 0; k < 4; ++k) diff[k] = c.both / c.n - value[k];
+}
+}  // namespace
+
 G2Result::FormsFromG1 G2Result::bin_forms_from_g1(int b) const {
   FormsFromG1 out;
   const G2NormalBin& nb = bins[b];
   if (nb.samples == 0) return out;
-  const double n = static_cast<double>(nb.samples);
-  // Multinomial cell probabilities: both, o only, i only.
-  const double p11 = nb.visible_both / n, p10 = (nb.visible_o - nb.visible_both) / n,
-               p01 = (nb.visible_i - nb.visible_both) / n;
   const double phi = models::azimuth_difference(o, i);
-  auto forms = [&](double a11, double a10, double a01) {
-    return as_array(models::g2_forms_from_g1(a11 + a10, a11 + a01, phi));
-  };
-  const std::array<double, 4> f = forms(p11, p10, p01);
-  std::array<double, 4> diff{}, se{};
-  // Gradient of D = p11 - F(p11 + p10, p11 + p01) by central differences (F is smooth apart
-  // from the min/max kinks of eq. 22-23, where a one-sided slope is as good as any).
-  const double h = 1e-6;
-  std::array<std::array<double, 4>, 3> grad{};
-  for (int c = 0; c < 3; ++c) {
-    double d[3] = {0, 0, 0};
-    d[c] = h;
-    const auto fp = forms(p11 + d[0], p10 + d[1], p01 + d[2]);
-    const auto fm = forms(p11 - d[0], p10 - d[1], p01 - d[2]);
-    for (int k = 0; k < 4; ++k) grad[c][k] = (c == 0 ? 1.0 : 0.0) - (fp[k] - fm[k]) / (2 * h);
+  std::array<double, 4> value, diff, v, d;
+  forms_and_diff(counts_without(nb, -1), phi, value, diff);
+  std::array<std::vector<double>, 4> without;
+  for (int q = 0; q < replicates; ++q) {
+    const BinCounts c = counts_without(nb, q);
+    if (!(c.n > 0)) continue;  // the bin's only samples were in replicate q
+    forms_and_diff(c, phi, v, d);
+    for (int k = 0; k < 4; ++k) without[k].push_back(d[k]);
   }
-  const double p[3] = {p11, p10, p01};
-  for (int k = 0; k < 4; ++k) {
-    diff[k] = p11 - f[k];
-    // Var = g^T (diag(p) - p p^T) g / n
-    double gp = 0, gdg = 0;
-    for (int c = 0; c < 3; ++c) {
-      gp += grad[c][k] * p[c];
-      gdg += grad[c][k] * grad[c][k] * p[c];
-    }
-    se[k] = std::sqrt(std::max(0.0, gdg - gp * gp) / n);
-  }
-  out.value = from_array(f);
+  std::array<double, 4> se{};
+  for (int k = 0; k < 4; ++k) se[k] = jackknife(diff[k], without[k]).stderr_;
+  out.value = from_array(value);
   out.diff = from_array(diff);
   out.diff_stderr = from_array(se);
   return out;
 }
 
 G2Result::FormsFromG1 G2Result::forms_from_g1() const {
-  std::array<double, 4> value{}, diff{}, var{};
-  for (int b = 0; b < binning.size(); ++b) {
-    if (bins[b].front_area <= 0 || bins[b].samples == 0) continue;
-    const double w = bins[b].front_area / front_area;
-    const FormsFromG1 f = bin_forms_from_g1(b);
-    const auto v = as_array(f.value), d = as_array(f.diff), s = as_array(f.diff_stderr);
-    for (int k = 0; k < 4; ++k) {
-      value[k] += w * v[k];
-      diff[k] += w * d[k];
-      var[k] += w * w * s[k] * s[k];
+  const double phi = models::azimuth_difference(o, i);
+  // sum_b w_b (value_b, diff_b) over the bins with samples, without replicate `rep` (< 0: none).
+  auto average = [&](int rep, std::array<double, 4>& value, std::array<double, 4>& diff) {
+    value = {};
+    diff = {};
+    std::array<double, 4> v, d;
+    for (int b = 0; b < binning.size(); ++b) {
+      if (bins[b].weight <= 0 || bins[b].samples == 0) continue;
+      const BinCounts c = counts_without(bins[b], rep);
+      if (!(c.n > 0)) continue;
+      forms_and_diff(c, phi, v, d);
+      const double w = bins[b].weight / weight;
+      for (int k = 0; k < 4; ++k) {
+        value[k] += w * v[k];
+        diff[k] += w * d[k];
+      }
     }
+  };
+  std::array<double, 4> value, diff, v, d;
+  average(-1, value, diff);
+  std::array<std::vector<double>, 4> without;
+  for (int q = 0; q < replicates; ++q) {
+    average(q, v, d);
+    for (int k = 0; k < 4; ++k) without[k].push_back(d[k]);
   }
+  std::array<double, 4> se{};
+  for (int k = 0; k < 4; ++k) se[k] = jackknife(diff[k], without[k]).stderr_;
   FormsFromG1 out;
   out.value = from_array(value);
   out.diff = from_array(diff);
-  for (auto& x : var) x = std::sqrt(x);
-  out.diff_stderr = from_array(var);
+  out.diff_stderr = from_array(se);
   return out;
 }
 
@@ -126,100 +167,122 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
   const FacetTable& ft = facet_table_for(s, r.binning, table, own);
   const std::size_t nf = s.num_facets();
 
-  // Exact facet sums. Per bin: area, area facing both, area-weighted normal (3), V-cavity sum;
-  // then the back-facing projected areas toward o and toward i (Smith Lambda from facets).
+  // Exact facet sums. Per bin: area, area facing both, weight w_f, w-weighted normal (3),
+  // V-cavity sum; then the back-facing projected areas toward o and toward i (Smith Lambda
+  // from facets). The CDF of w_f places the samples.
   std::vector<double> cdf(nf);
   using Sums = std::vector<double>;
-  const std::size_t width = 6 * static_cast<std::size_t>(nbins) + 2;
+  constexpr std::size_t kW = 7;
+  const std::size_t width = kW * static_cast<std::size_t>(nbins) + 2;
   Sums sums = sum_over_facets(nf, width, [&](std::size_t k, double* acc) {
     const double a = ft.area[k];
     const Vec3 m = ft.normal[k].cast<double>();
     const double om = o.dot(m), im = i.dot(m);
     const bool front = om > 0 && im > 0;
-    cdf[k] = front ? a : 0.0;
-    double* bin = acc + 6 * static_cast<std::size_t>(ft.bin[k]);
+    const double wf = front ? 0.5 * a * (om + im) : 0.0;  // symmetric; A_f (v.m) at o = i = v
+    cdf[k] = wf;
+    double* bin = acc + kW * static_cast<std::size_t>(ft.bin[k]);
     bin[0] += a;
     if (front) {
       bin[1] += a;
-      bin[2] += a * m.x();
-      bin[3] += a * m.y();
-      bin[4] += a * m.z();
-      bin[5] += a * models::vcavity_G2(o, i, m);
+      bin[2] += wf;
+      bin[3] += wf * m.x();
+      bin[4] += wf * m.y();
+      bin[5] += wf * m.z();
+      bin[6] += wf * models::vcavity_G2(o, i, m);
     }
     acc[width - 2] += a * std::max(0.0, -om);
     acc[width - 1] += a * std::max(0.0, -im);
   });
   double vcav_total = 0;
   for (int b = 0; b < nbins; ++b) {
-    const double* bin = sums.data() + 6 * static_cast<std::size_t>(b);
+    const double* bin = sums.data() + kW * static_cast<std::size_t>(b);
     G2NormalBin& nb = r.bins[b];
     nb.area = bin[0];
     nb.front_area = bin[1];
-    nb.mean_normal = Vec3(bin[2], bin[3], bin[4]);
+    nb.weight = bin[2];
+    nb.mean_normal = Vec3(bin[3], bin[4], bin[5]);
     if (nb.mean_normal.norm() > 0) nb.mean_normal.normalize();
-    nb.vcavity_sum = bin[5];
+    nb.vcavity_sum = bin[6];
     r.total_area += bin[0];
-    vcav_total += bin[5];
+    r.front_area += bin[1];
+    vcav_total += bin[6];
   }
   // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   (DESIGN.md, 001 App. A)
   const Vec3 n = s.macro().normal;
   r.lambda_o = sums[width - 2] / (o.dot(n) * s.macro().area);
   r.lambda_i = sums[width - 1] / (i.dot(n) * s.macro().area);
   for (std::size_t k = 1; k < nf; ++k) cdf[k] += cdf[k - 1];  // sequential: deterministic
-  r.front_area = nf ? cdf[nf - 1] : 0.0;
-  if (!(r.front_area > 0)) throw RuntimeFailure("no facet faces both directions");
-  r.vcavity = vcav_total / r.front_area;
+  r.weight = nf ? cdf[nf - 1] : 0.0;
+  if (!(r.weight > 0)) throw RuntimeFailure("no facet faces both directions");
+  r.vcavity = vcav_total / r.weight;
 
   // Random stream from the unordered pair {o, i}: swapping the directions traces the same points.
   const std::uint64_t ko = direction_stream_key(o), ki = direction_stream_key(i);
   const std::uint64_t stream = 0xC2000000ull ^ mix64(std::min(ko, ki) ^ mix64(std::max(ko, ki)));
-  const Strata strata(opt.rays);
-  const std::uint64_t total = strata.total();
-  r.samples = total;
-  const std::uint64_t nchunks = (total + kChunk - 1) / kChunk;
-  std::vector<Tally> parts(nchunks, Tally(nbins));
+  const ReplicatePlan plan(opt.rays, opt.replicates);
+  const int R = plan.replicates;
+  const std::uint64_t n_rep = plan.per_replicate();
+  r.replicates = R;
+  r.samples = plan.total();
   std::atomic<std::uint64_t> done{0};
-  const double front = r.front_area;
+  const double front = r.weight;
+  // Per replicate a stratified pass along the CDF of w_f (facet order is spatially coherent).
   // The progress callback runs on the calling thread only: between two halves of the work.
-  auto run = [&](std::uint64_t c0, std::uint64_t c1) {
-    tbb::parallel_for(c0, c1, [&](std::uint64_t c) {
-      Tally& t = parts[c];
-      const std::uint64_t end = std::min(total, (c + 1) * kChunk);
-      for (std::uint64_t j = c * kChunk; j < end; ++j) {
-        CounterRng rng(opt.seed, stream, j);
-        // Strata along the area CDF (facet order is spatially coherent).
-        const double u = (static_cast<double>(j) + rng.uniform()) / total * front;
-        std::size_t k = std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin();
-        k = std::min(k, nf - 1);
-        while (k > 0 && cdf[k] == cdf[k - 1]) --k;  // never land on a zero-weight facet
-        const Triangle f = s.facet(k);
-        const double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
-        const Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
-        const SourcePlane plane = SourcePlane::of(f);
-        const int b = ft.bin[k];
-        const bool vo = !tracer.occluded(p, o, &plane, t.counters);
-        const bool vi = !tracer.occluded(p, i, &plane, t.counters);
-        ++t.samples[b];
-        t.vis_o[b] += vo;
-        t.vis_i[b] += vi;
-        t.vis_both[b] += vo && vi;
-      }
-      done += end - c * kChunk;
-    });
-    if (opt.progress) opt.progress(static_cast<double>(done.load()) / total);
+  auto body = [&](int rep, std::uint64_t j, Tally& t) {
+    CounterRng rng(opt.seed, ReplicatePlan::stream(stream, rep), j);
+    const double u = (static_cast<double>(j) + rng.uniform()) / n_rep * front;
+    std::size_t k = std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin();
+    k = std::min(k, nf - 1);
+    while (k > 0 && cdf[k] == cdf[k - 1]) --k;  // never land on a zero-weight facet
+    const Triangle f = s.facet(k);
+    const double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
+    const Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
+    const SourcePlane plane = SourcePlane::of(f);
+    const int b = ft.bin[k];
+    const bool vo = !tracer.occluded(p, o, &plane, t.counters);
+    const bool vi = o == i ? vo : !tracer.occluded(p, i, &plane, t.counters);
+    ++t.samples[b];
+    t.vis_o[b] += vo;
+    t.vis_i[b] += vi;
+    t.vis_both[b] += vo && vi;
+    if ((j + 1) % kChunk == 0 || j + 1 == n_rep) done += (j % kChunk) + 1;
   };
-  run(0, nchunks / 2);
-  run(nchunks / 2, nchunks);
-  for (const Tally& t : parts) {  // merged in chunk order: identical for any thread count
-    for (int b = 0; b < nbins; ++b) {
-      r.bins[b].samples += t.samples[b];
-      r.bins[b].visible_o += t.vis_o[b];
-      r.bins[b].visible_i += t.vis_i[b];
-      r.bins[b].visible_both += t.vis_both[b];
-    }
-    r.counters += t.counters;
+  for (int b = 0; b < nbins; ++b) {
+    G2NormalBin& nb = r.bins[b];
+    for (auto* v : {&nb.samples_r, &nb.visible_o_r, &nb.visible_i_r, &nb.visible_both_r})
+      v->assign(R, 0);
   }
-  for (const G2NormalBin& nb : r.bins) {
+  const std::uint64_t nc = chunks_per_replicate(n_rep, kChunk);
+  // Two halves of the replicates (progress between them); chunk tallies merged per replicate
+  // in chunk order: identical for any thread count.
+  const int halves[3] = {0, R / 2, R};
+  for (int h = 0; h < 2; ++h) {
+    const int r0 = halves[h], r1 = halves[h + 1];
+    if (r1 <= r0) continue;
+    std::vector<Tally> parts = run_replicate_chunks<Tally>(
+        r1 - r0, n_rep, kChunk, [&] { return Tally(nbins); },
+        [&](int rep, std::uint64_t j, Tally& t) { body(r0 + rep, j, t); });
+    for (std::size_t c = 0; c < parts.size(); ++c) {
+      const int rep = r0 + static_cast<int>(c / nc);
+      for (int b = 0; b < nbins; ++b) {
+        G2NormalBin& nb = r.bins[b];
+        nb.samples_r[rep] += parts[c].samples[b];
+        nb.visible_o_r[rep] += parts[c].vis_o[b];
+        nb.visible_i_r[rep] += parts[c].vis_i[b];
+        nb.visible_both_r[rep] += parts[c].vis_both[b];
+      }
+      r.counters += parts[c].counters;
+    }
+    if (opt.progress) opt.progress(static_cast<double>(done.load()) / r.samples);
+  }
+  for (G2NormalBin& nb : r.bins) {
+    for (int q = 0; q < R; ++q) {
+      nb.samples += nb.samples_r[q];
+      nb.visible_o += nb.visible_o_r[q];
+      nb.visible_i += nb.visible_i_r[q];
+      nb.visible_both += nb.visible_both_r[q];
+    }
     r.visible_o += nb.visible_o;
     r.visible_i += nb.visible_i;
     r.visible_both += nb.visible_both;
@@ -300,6 +363,7 @@ Json g2_row_json(const G2Result& r, const Microsurface& s) {
     row[std::string("z_") + names[k] + "_from_g1"] = fs[k] > 0 ? fd[k] / fs[k] : 0.0;
   }
   row["area_samples"] = r.samples;
+  row["replicates"] = r.replicates;
   row["occlusion_rays"] = r.counters.rays;
   row["lost_rays"] = r.counters.lost_below + r.counters.unresolved;
   row["backface_hits"] = r.counters.backface_hits;
@@ -315,7 +379,8 @@ Json g2_row_json(const G2Result& r, const Microsurface& s) {
     jb["phi_m_range_deg"] = {deg(r.binning.phi_lo(ip)), deg(r.binning.phi_hi(ip))};
     jb["area_fraction"] = nb.area / r.total_area;
     jb["front_fraction"] = nb.front_area / nb.area;
-    if (nb.front_area > 0 && nb.samples > 0) {
+    jb["weight_fraction"] = r.weight > 0 ? nb.weight / r.weight : 0.0;
+    if (nb.weight > 0 && nb.samples > 0) {
       const Estimate e2 = r.bin_g2(b), eo = r.bin_g1_o(b), ei = r.bin_g1_i(b);
       jb["g2"] = e2.mean;
       jb["g2_stderr"] = e2.stderr_;
@@ -323,7 +388,7 @@ Json g2_row_json(const G2Result& r, const Microsurface& s) {
       jb["g1_o_stderr"] = eo.stderr_;
       jb["g1_i"] = ei.mean;
       jb["g1_i_stderr"] = ei.stderr_;
-      jb["vcavity"] = nb.vcavity_sum / nb.front_area;
+      jb["vcavity"] = nb.vcavity_sum / nb.weight;
       const G2Result::FormsFromG1 bf = r.bin_forms_from_g1(b);
       jb["separable_from_g1"] = bf.value.separable;
       jb["height_correlated_from_g1"] = bf.value.height_correlated;

@@ -1,11 +1,13 @@
 #include "microsim/measure/vcavity_measure.hpp"
 #include "microsim/measure/bsdf_walk.hpp"
+#include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <atomic>
 #include <chrono>
 
 #include "microsim/models/vgroove_multiple.hpp"
@@ -15,10 +17,10 @@ namespace microsim {
 
 namespace {
 
-// Per groove and view: counts for its facet m (side 1) and m' (side 0).
-struct GrooveTally {
-  std::uint64_t hits[2] = {0, 0}, samples[2] = {0, 0}, visible[2] = {0, 0};
-  TraceCounters counters;
+// Per view, replicate and normal bin: ray-cast hits, area samples and visible samples.
+// Integer sums, added atomically groove by groove: exact, so identical for any thread count.
+struct Counts {
+  std::atomic<std::uint64_t> hits{0}, samples{0}, visible{0};
 };
 
 std::uint64_t stream_of(std::uint64_t base, std::size_t view) { return base + 7919 * view; }
@@ -55,8 +57,16 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
 
   std::vector<G1Result> results(nv);
   std::vector<std::vector<double>> cdfs(nv, std::vector<double>(2 * K));
-  const std::uint64_t per_groove = Strata((o.rays + K - 1) / K).total();
-  const Strata sample_strata(o.rays);
+  // Ray casting: every groove gets the same stratified rays per replicate; area sampling:
+  // per replicate a stratified pass along the ensemble's projected-area CDF.
+  // (At least one ray per groove and replicate: every replicate covers every groove.)
+  const std::uint64_t groove_rays =
+      std::max<std::uint64_t>((o.rays + K - 1) / K, static_cast<std::uint64_t>(std::max(0, o.replicates)));
+  const ReplicatePlan groove_plan(groove_rays, o.replicates);
+  const int R = groove_plan.replicates;
+  const ReplicatePlan sample_plan(std::max<std::uint64_t>(o.rays, R), R);
+  const std::uint64_t per_groove = groove_plan.per_replicate();  // per replicate
+  const std::uint64_t n_samples = sample_plan.per_replicate();
   for (std::size_t iv = 0; iv < nv; ++iv) {
     G1Result& r = results[iv];
     r.v = views[iv].normalized();
@@ -84,29 +94,39 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
     r.front_projected = cdf.back();
     r.lambda_numeric = back / (r.v.z() * r.macro_area);  // DESIGN.md, 001 App. A
     r.window_area_perp = r.v.z() * r.macro_area;          // K unit tiles seen along v
-    r.raycast_rays = per_groove * K;
-    r.sample_rays = sample_strata.total();
+    r.replicates = R;
+    r.raycast_rays = per_groove * K * R;
+    r.sample_rays = n_samples * sample_plan.replicates;
   }
 
-  // Area sampling: facet index of every stratified sample (nondecreasing in the sample index),
-  // so that each groove handles a contiguous range of samples.
+  // Area sampling: facet index of every stratified sample of replicate q (nondecreasing in
+  // the sample index), so that each groove handles a contiguous range of each replicate.
+  auto sample_stream = [&](std::size_t iv, int q) {
+    return ReplicatePlan::stream(stream_of(0xC000, iv), q);
+  };
   std::vector<std::vector<std::uint32_t>> sample_facet(nv);
   for (std::size_t iv = 0; iv < nv; ++iv) {
     const std::vector<double>& cdf = cdfs[iv];
     const double total = cdf.back();
     std::vector<std::uint32_t>& sf = sample_facet[iv];
-    sf.resize(sample_strata.total());
-    tbb::parallel_for(std::uint64_t(0), sample_strata.total(), [&](std::uint64_t i) {
-      CounterRng rng(o.seed, stream_of(0xC000, iv), i);
-      double u = (static_cast<double>(i) + rng.uniform()) / sample_strata.total() * total;
+    sf.resize(n_samples * R);
+    tbb::parallel_for(std::uint64_t(0), n_samples * R, [&](std::uint64_t g) {
+      const int q = static_cast<int>(g / n_samples);
+      const std::uint64_t i = g % n_samples;
+      CounterRng rng(o.seed, sample_stream(iv, q), i);
+      double u = (static_cast<double>(i) + rng.uniform()) / n_samples * total;
       std::size_t j = std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin();
       j = std::min(j, 2 * K - 1);
       while (j > 0 && cdf[j] == cdf[j - 1]) --j;  // never a zero-weight facet
-      sf[i] = static_cast<std::uint32_t>(j);
+      sf[g] = static_cast<std::uint32_t>(j);
     });
   }
 
-  std::vector<GrooveTally> tally(K * nv);
+  std::vector<Counts> counts(nv * R * nbins);
+  auto at = [&](std::size_t iv, int q, int b) -> Counts& {
+    return counts[(iv * R + q) * nbins + b];
+  };
+  std::vector<TraceCounters> groove_counters(K * nv);
   tbb::parallel_for(std::size_t(0), K, [&](std::size_t k) {
     // Groove k in its own frame: x along d (the horizontal direction of m_k), y along the
     // ridge, one period [-1/2, 1/2] per tile; cell i = 1 (x in [0, 1/2]) has normal m_k.
@@ -119,51 +139,72 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
     Tracer tracer(groove);
     const SourcePlane plane[2] = {SourcePlane::of(groove.facet(0)), SourcePlane::of(groove.facet(2))};
     for (std::size_t iv = 0; iv < nv; ++iv) {
-      GrooveTally& g = tally[k * nv + iv];
+      TraceCounters& tc = groove_counters[k * nv + iv];
       const Vec3 v = results[iv].v;
       const Vec3 vl(v.dot(d), v.dot(t), v.z());
-      // (a) stratified rays over the tile along -v.
-      const Strata rays(per_groove);
-      for (std::uint64_t i = 0; i < per_groove; ++i) {
-        CounterRng rng(o.seed, stream_of(0xA000, iv) + (static_cast<std::uint64_t>(k) << 24), i);
-        Vec2 ab = rays.point(i, rng);
-        Vec3 org(ab.x() - 0.5, ab.y() - 0.5, tracer.z_top());
-        TraceHit h = tracer.first_hit(org, -vl, nullptr, g.counters);
-        if (h.hit && !h.backface) ++g.hits[(h.facet / 2) % 2];
-      }
-      // (b) this groove's share of the ensemble's stratified area samples.
-      const std::vector<std::uint32_t>& sf = sample_facet[iv];
-      const auto lo = std::lower_bound(sf.begin(), sf.end(), static_cast<std::uint32_t>(2 * k));
-      const auto hi = std::lower_bound(sf.begin(), sf.end(), static_cast<std::uint32_t>(2 * k + 2));
-      for (auto it = lo; it != hi; ++it) {
-        const std::uint64_t i = static_cast<std::uint64_t>(it - sf.begin());
-        const int side = static_cast<int>(*it - 2 * k);
-        CounterRng rng(o.seed, stream_of(0xC000, iv), i);
-        rng.uniform();  // the draw that placed the sample on its facet
-        const double x = (side == 1 ? 0.5 : -0.5) * rng.uniform(), y = rng.uniform() - 0.5;
-        const Vec3 p(x, y, top * (1 - 2 * std::abs(x)));
-        ++g.samples[side];
-        if (!tracer.occluded(p, vl, &plane[side], g.counters)) ++g.visible[side];
+      for (int q = 0; q < R; ++q) {
+        std::uint64_t hits[2] = {0, 0}, samples[2] = {0, 0}, visible[2] = {0, 0};
+        // (a) stratified rays over the tile along -v.
+        const std::uint64_t stream =
+            ReplicatePlan::stream(stream_of(0xA000, iv) + (static_cast<std::uint64_t>(k) << 24), q);
+        for (std::uint64_t i = 0; i < per_groove; ++i) {
+          CounterRng rng(o.seed, stream, i);
+          Vec2 ab = groove_plan.strata.point(i, rng);
+          Vec3 org(ab.x() - 0.5, ab.y() - 0.5, tracer.z_top());
+          TraceHit h = tracer.first_hit(org, -vl, nullptr, tc);
+          if (h.hit && !h.backface) ++hits[(h.facet / 2) % 2];
+        }
+        // (b) this groove's share of the replicate's stratified area samples.
+        const auto first = sample_facet[iv].begin() + q * n_samples, last = first + n_samples;
+        const auto lo = std::lower_bound(first, last, static_cast<std::uint32_t>(2 * k));
+        const auto hi = std::lower_bound(first, last, static_cast<std::uint32_t>(2 * k + 2));
+        for (auto it = lo; it != hi; ++it) {
+          const std::uint64_t i = static_cast<std::uint64_t>(it - first);
+          const int side = static_cast<int>(*it - 2 * k);
+          CounterRng rng(o.seed, sample_stream(iv, q), i);
+          rng.uniform();  // the draw that placed the sample on its facet
+          const double x = (side == 1 ? 0.5 : -0.5) * rng.uniform(), y = rng.uniform() - 0.5;
+          const Vec3 p(x, y, top * (1 - 2 * std::abs(x)));
+          ++samples[side];
+          if (!tracer.occluded(p, vl, &plane[side], tc)) ++visible[side];
+        }
+        for (int side = 0; side < 2; ++side) {
+          Counts& c = at(iv, q, bin[2 * k + side]);
+          c.hits += hits[side];
+          c.samples += samples[side];
+          c.visible += visible[side];
+        }
       }
     }
   });
 
-  // Merge in groove order (integer counts: identical for any thread count).
+  // Per-replicate counts into the results.
   for (std::size_t iv = 0; iv < nv; ++iv) {
     G1Result& r = results[iv];
-    for (std::size_t k = 0; k < K; ++k) {
-      const GrooveTally& g = tally[k * nv + iv];
-      for (int side = 0; side < 2; ++side) {
-        G1NormalBin& nb = r.bins[bin[2 * k + side]];
-        nb.raycast_hits += g.hits[side];
-        nb.samples += g.samples[side];
-        nb.visible += g.visible[side];
-        r.raycast_hits += g.hits[side];
-        r.sample_visible += g.visible[side];
+    r.raycast_hits_r.assign(R, 0);
+    r.sample_visible_r.assign(R, 0);
+    for (int b = 0; b < nbins; ++b) {
+      G1NormalBin& nb = r.bins[b];
+      nb.raycast_hits_r.assign(R, 0);
+      nb.samples_r.assign(R, 0);
+      nb.visible_r.assign(R, 0);
+      for (int q = 0; q < R; ++q) {
+        const Counts& c = at(iv, q, b);
+        nb.raycast_hits_r[q] = c.hits;
+        nb.samples_r[q] = c.samples;
+        nb.visible_r[q] = c.visible;
+        nb.raycast_hits += c.hits;
+        nb.samples += c.samples;
+        nb.visible += c.visible;
+        r.raycast_hits_r[q] += c.hits;
+        r.sample_visible_r[q] += c.visible;
       }
-      r.counters += g.counters;
+      r.raycast_hits += nb.raycast_hits;
+      r.sample_visible += nb.visible;
     }
   }
+  for (std::size_t iv = 0; iv < nv; ++iv)  // in groove order
+    for (std::size_t k = 0; k < K; ++k) results[iv].counters += groove_counters[k * nv + iv];
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (auto& r : results) r.seconds = seconds / nv;
   if (o.progress) o.progress(1.0);

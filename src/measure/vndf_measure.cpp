@@ -212,6 +212,8 @@ Json vndf_row_json(const VndfResult& r, const Microsurface& s, const VndfOptions
   row["theta_deg"] = deg(theta_of(r.v));
   row["phi_deg"] = deg(phi_of(r.v));
   row["rays"] = r.rays;
+  // i.i.d. origins: multinomial counts, the binomial error is exact (no replicates needed).
+  row["replicates"] = nullptr;
   row["hits"] = r.hits;
   row["hits_below_horizon"] = r.hits_below;
   row["visible_area_ratio"] = r.macro_area > 0 ? static_cast<double>(r.hits) / r.rays *

@@ -91,17 +91,26 @@ struct BsdfOptions {
   int max_events = 10000;  // a walk longer than this is counted unterminated (lost)
   // Smith random-walk model: walks of the nominal NDF (0 = none); same seed, own stream.
   std::uint64_t model_walks = 0;
+  // Independent randomized replicates the explicit surface's rays are split into: standard
+  // errors of the replicate means (measure/replicates.hpp).
+  int replicates = 32;
   // Called from the calling thread with the fraction of work done (progress display).
   std::function<void(double)> progress;
 };
 
 // Mergeable sums. Index conventions: side s (0 reflected, 1 transmitted), slot k (0 .. K-1 for
-// orders 1 .. K+, K for the total).
+// orders 1 .. K+, K for the total). The first moments are sums over paths of the weight that
+// left in the cell. The second moments depend on how the paths were drawn:
+//  * replicates == 0 (i.i.d. paths, the Smith walk): sums over paths of the squared weight;
+//  * replicates = R >= 1 (R stratified replicates of paths / R paths, the explicit surface):
+//    the sums of squared deviations of the R replicate means from their mean (add_replicate).
 struct BsdfTally {
   int orders = 4, pixels = 0, plane_bins = 0;
+  int replicates = 0;
   std::vector<double> albedo, albedo2;  // [s][k]
   std::vector<double> pix, pix2;        // [s][k][pixel]
   std::vector<double> plane, plane2;    // [s][k][bin]
+  double both2 = 0;                     // second moment of reflected + transmitted (total)
   std::uint64_t paths = 0;              // rays (walks) started
   std::uint64_t lost = 0;               // ended without leaving (tracer loss, wrong-side hit)
   std::uint64_t unterminated = 0;       // more than max_events scattering events
@@ -122,6 +131,10 @@ struct BsdfTally {
   // in-plane bin b (or -1).
   void add_exit(int s, int order, double w, int px, int b);
   BsdfTally& operator+=(const BsdfTally& o);
+  // Adds one replicate's per-path tally (replicates == 0) as replicate number `replicates`.
+  void add_replicate(const BsdfTally& rep);
+  // Mean per path of the first moment `sum` (times `scale`) with its standard error.
+  Estimate estimate(double sum, double sum2, double scale = 1.0) const;
 };
 
 // Mean and standard error of the per-path contribution X (0 or the path's weight) times `scale`.

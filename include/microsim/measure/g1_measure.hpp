@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "microsim/measure/binning.hpp"
+#include "microsim/measure/replicates.hpp"
 #include "microsim/trace/tracer.hpp"
 
 namespace microsim {
@@ -23,6 +24,9 @@ struct G1Options {
   std::uint64_t seed = 1;
   int normal_theta_bins = 18;  // normal bins over the whole sphere (10 degree rings)
   int normal_phi_bins = 8;     // 45 degree sectors
+  // Independent randomized replicates the rays are split into (measure/replicates.hpp): the
+  // standard errors are those of the replicate means.
+  int replicates = 32;
   // Called from the calling thread with the fraction of work done (progress display).
   std::function<void(double)> progress;
 };
@@ -35,6 +39,8 @@ struct G1NormalBin {
   std::uint64_t raycast_hits = 0;   // estimator (a)
   std::uint64_t samples = 0;        // estimator (b)
   std::uint64_t visible = 0;
+  // The same counts per replicate (size G1Result::replicates).
+  std::vector<std::uint64_t> raycast_hits_r, samples_r, visible_r;
 };
 
 struct G1Result {
@@ -45,6 +51,10 @@ struct G1Result {
   double theta = 0, phi = 0;
   std::uint64_t raycast_rays = 0, sample_rays = 0;
   std::uint64_t raycast_hits = 0, sample_visible = 0;
+  // Independent replicates (each a full stratified pass of raycast_rays / replicates rays and
+  // as many area samples) and the totals per replicate.
+  int replicates = 1;
+  std::vector<std::uint64_t> raycast_hits_r, sample_visible_r;
   double window_area_perp = 0;     // area of the ray window perpendicular to v
   double front_projected = 0;      // sum_f A_f max(0, v.m_f)
   double total_area = 0;
@@ -59,7 +69,7 @@ struct G1Result {
   double raycast_seconds = 0;  // estimator (a),
   double sample_seconds = 0;   // estimator (b)
 
-  // Derived quantities with standard errors.
+  // Derived quantities with standard errors (of the replicate means, measure/replicates.hpp).
   Estimate g1_area_sampling() const;  // (b), averaged over front-facing projected area
   Estimate g1_raycast() const;        // (a), averaged
   Estimate visible_area_ratio() const;

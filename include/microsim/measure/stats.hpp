@@ -1,6 +1,7 @@
 // Small statistics shared by the estimators and their tests: two-sided z thresholds with a
 // Sidak correction over many bins, and the chi-square upper tail for goodness-of-fit tests.
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -56,6 +57,30 @@ inline double gamma_q(double a, double x) {
 inline double chi2_p_value(double chi2, int dof) {
   if (dof <= 0) return 1.0;
   return gamma_q(0.5 * dof, 0.5 * std::max(0.0, chi2));
+}
+
+// Quantile of the chi-square distribution: the x with P(X <= x) = p for `dof` degrees of
+// freedom (0 < p < 1), by bisection on the regularized incomplete gamma (monotone in x).
+inline double chi2_quantile(double p, int dof) {
+  if (!(p > 0 && p < 1) || dof <= 0) return std::numeric_limits<double>::quiet_NaN();
+  double lo = 0, hi = dof + 10.0 * std::sqrt(2.0 * dof) + 50;
+  while (1 - gamma_q(0.5 * dof, 0.5 * hi) < p) hi *= 2;
+  for (int i = 0; i < 200 && hi - lo > 1e-13 * hi; ++i) {
+    const double x = 0.5 * (lo + hi);
+    if (1 - gamma_q(0.5 * dof, 0.5 * x) < p) lo = x; else hi = x;
+  }
+  return 0.5 * (lo + hi);
+}
+
+// Two-sided interval of a sample-to-reference standard deviation ratio s / sigma from `dof`
+// degrees of freedom at confidence 1 - alpha: (dof s^2 / sigma^2 is chi-square with dof).
+struct RatioInterval {
+  double lo = 0, hi = 0;
+  bool contains(double ratio) const { return ratio >= lo && ratio <= hi; }
+};
+inline RatioInterval sd_ratio_interval(int dof, double alpha) {
+  return {std::sqrt(chi2_quantile(0.5 * alpha, dof) / dof),
+          std::sqrt(chi2_quantile(1 - 0.5 * alpha, dof) / dof)};
 }
 
 }  // namespace microsim
