@@ -116,12 +116,20 @@ TEST_F(Cli, InfoPrintsFittedAlphaAndChecks) {
 TEST_F(Cli, PresetConfigGeneratesTheDocumentedSurface) {
   std::string out = tmp("preset.exr");
   Result r = run("generate gaussian --config " + std::string(MICROSIM_SOURCE_DIR) +
-              "/surfaces/beckmann-0.5.toml --resolution 64 -o " + out);
+              "/surfaces/beckmann-0.5.toml --resolution 64 --correlation-length 0.0625 -o " + out);
   ASSERT_EQ(r.code, 0) << r.err;
   Result info = run("info " + out + " --json " + tmp("info.json"));
   auto j = nlohmann::json::parse(slurp(tmp("info.json")));
   EXPECT_EQ(j["surface"]["alpha_x"], 0.5);
   EXPECT_EQ(j["surface"]["resolution"], 64);
+  EXPECT_EQ(j["surface"]["correlation_length"], 0.0625);
+  // The preset applies: its correlation length (4 cells of 1024) is below one cell of 64.
+  std::remove(out.c_str());
+  r = run("generate gaussian --config " + std::string(MICROSIM_SOURCE_DIR) +
+          "/surfaces/beckmann-0.5.toml --resolution 64 -o " + out);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--correlation-length"), std::string::npos) << r.err;
+  EXPECT_FALSE(exists(out));
 }
 
 TEST_F(Cli, BadInputIsOneLineExitTwoAndNoOutput) {

@@ -9,6 +9,7 @@
 
 #include "microsim/common.hpp"
 #include "microsim/io/output.hpp"
+#include "cli_helpers.hpp"  // removes this program's temporary files at exit
 
 using namespace microsim;
 

@@ -12,6 +12,7 @@
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/surface/mesh_check.hpp"
 #include "microsim/surface/surface_io.hpp"
+#include "cli_helpers.hpp"  // removes this program's temporary files at exit
 #include "test_helpers.hpp"
 
 using namespace microsim;
