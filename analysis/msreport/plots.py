@@ -51,11 +51,16 @@ def _nominal(description):
 
 
 def validation_z(path, validation):
-    """z of every z-tested row, one line per (quantity vs model), colored by verdict."""
+    """z of every z-tested row in units of its own threshold (Sidak; Student t with K - 1 dof for
+    rows whose error is the spread of K surfaces), one line per (quantity vs model), colored by
+    verdict."""
     rows = [r for r in validation.get("rows", []) if num(r.get("z")) == num(r.get("z"))]
     if not rows:
         raise NoData("no z-tested rows in the validation record")
     zt = num(validation.get("z_threshold"), 3.0)
+
+    def scaled(r):  # z / the row's threshold (records without per-row thresholds: the run's)
+        return num(r.get("z")) / num(r.get("z_threshold"), zt)
     cats = []
     for r in rows:
         c = "%s vs %s [%s]" % (r.get("quantity"), r.get("model_name"), r.get("kind"))
@@ -69,15 +74,17 @@ def validation_z(path, validation):
             continue
         y = np.array([cats.index("%s vs %s [%s]" % (r.get("quantity"), r.get("model_name"), r.get("kind")))
                       for r in sel]) + rng.uniform(-0.25, 0.25, len(sel))
-        ax.scatter(column(sel, "z"), y, s=9, color=color, alpha=0.7, label="%s (%d)" % (verdict, len(sel)))
+        ax.scatter([scaled(r) for r in sel], y, s=9, color=color, alpha=0.7,
+                   label="%s (%d)" % (verdict, len(sel)))
     for s in (-1, 1):
-        ax.axvline(s * zt, color="k", ls="--", lw=0.8)
-    ax.set_xscale("symlog", linthresh=max(zt, 1.0))
+        ax.axvline(s, color="k", ls="--", lw=0.8)
+    ax.set_xscale("symlog", linthresh=1.0)
     ax.set_yticks(range(len(cats)))
     ax.set_yticklabels(cats, fontsize=8)
     ax.invert_yaxis()
-    ax.set_xlabel("z = (measured - model) / stderr   (dashed: Sidak threshold |z| = %.2f over %d tests)"
-                  % (zt, int(num(validation.get("comparisons"), 0))))
+    ax.set_xlabel("z / threshold, z = (measured - model) / stderr   (dashed: the threshold; Sidak over %d "
+                  "tests: |z| = %.2f, or Student t with K - 1 dof for ensemble rows)"
+                  % (int(num(validation.get("comparisons"), 0)), zt))
     ax.legend(fontsize=8, loc="lower right")
     ax.set_title("Validation: z-scores by check (identities must pass; models may deviate)")
     ax.grid(True, axis="x", alpha=0.3)
@@ -302,7 +309,7 @@ def g1_per_normal(path, entry):
 
 
 # ----------------------------------------------------------------------------------------------
-# G2 (measure g2; documented fields of issue 4)
+# G2 (measure g2; fields documented in the README)
 
 G2_MODELS = [
     ("smith_separable", "Smith separable (001 eq. 20)", "-"),
@@ -352,7 +359,7 @@ def g2_curves(path, record, title=""):
 
 
 # ----------------------------------------------------------------------------------------------
-# BSDF (measure bsdf; documented fields of issue 5)
+# BSDF (measure bsdf; fields documented in the README)
 
 ORDER_KEYS = ["order_1", "order_2", "order_3", "order_4plus", "total"]
 
@@ -437,7 +444,7 @@ def table4(path, records):
 
 
 # ----------------------------------------------------------------------------------------------
-# Tiled boxes (measure g1 on generate tiled-boxes; fields of issue 3)
+# Tiled boxes (measure g1 on generate tiled-boxes; fields documented in the README)
 
 
 def tiled_boxes(path, points):

@@ -1,9 +1,8 @@
 #!/usr/bin/python3
 """Unit tests of the report's plotting and reading code (CTest: analysis_plots).
 
-The G2, BSDF, Table 4 and tiled-box figures read records of commands that other issues add
-(measure g2, measure bsdf, generate tiled-boxes). Until those land, these tests feed the plot
-functions records with the documented field names and *synthetic* values (smooth made-up curves,
+The G2, BSDF, Table 4 and tiled-box figures read records of measure g2, measure bsdf and
+generate tiled-boxes. These tests feed the plot functions records with the documented field names and *synthetic* values (smooth made-up curves,
 never shown in a report) to check that the figures are drawn, and that a record lacking the
 fields gives NoData instead of a crash.
 """
