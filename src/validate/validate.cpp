@@ -70,7 +70,9 @@ Row albedo_total_row(std::uint64_t paths, std::uint64_t lost, std::uint64_t unte
   const double n = static_cast<double>(paths);
   const double allowed = std::max(1.0, std::ceil(kMaxLostFraction * n));
   e.tolerance = paths > 0 ? (allowed + 0.5) / n : 0.0;
-  e.error = "exact (lost and unterminated paths counted; budget " + num(kMaxLostFraction) +
+  std::ostringstream budget;
+  budget << kMaxLostFraction;
+  e.error = "exact (lost and unterminated paths counted; budget " + budget.str() +
             " of the paths, at least one)";
   e.extra = {{"paths", paths}, {"lost", lost}, {"unterminated", unterminated}};
   return e;
