@@ -364,6 +364,46 @@ def g2_curves(path, record, title=""):
 ORDER_KEYS = ["order_1", "order_2", "order_3", "order_4plus", "total"]
 
 
+def g2_hotspot(path, entry):
+    """G2(v, v) of `validate`'s g2 check (per surface) against G1 of an independent `measure g1`
+    run with the same weights (000 eq. 16: G2(v, m, v) = G1(v, m)) and Smith's direction-correlated
+    form 1/(1 + Lambda) (001 eq. 22), with ray-count errors."""
+    per_surface = entry.get("measurements", {}).get("g2")
+    points = []
+    for k, surface in enumerate(per_surface or []):
+        for h in surface.get("hotspot", []):
+            points.append((k, h))
+    if not points:
+        raise NoData("entry %s has no G2 hotspot measurements" % entry.get("name"))
+    n = len(per_surface)
+    fig, (ax, axd) = plt.subplots(1, 2, figsize=(10, 3.8))
+    for k, h in points:
+        t = num(h.get("theta_deg")) + 0.6 * (k - (n - 1) / 2)
+        ax.errorbar([t - 0.25], [num(h.get("g2"))], yerr=[num(h.get("g2_stderr"))], fmt="o", ms=4, capsize=2,
+                    color="k", label="G2(v, v), measure g2" if k == 0 else None)
+        ax.errorbar([t + 0.25], [num(h.get("g1_independent"))], yerr=[num(h.get("g1_independent_stderr"))],
+                    fmt="s", ms=4, capsize=2, color="tab:blue", mfc="none",
+                    label="G1(v), independent measure g1" if k == 0 else None)
+        ax.plot([t], [num(h.get("direction_correlated_numeric"))], "x", color="tab:orange",
+                label="Smith direction-correlated, 1/(1+Lambda)" if k == 0 else None)
+        se = math.hypot(num(h.get("g2_stderr"), 0.0), num(h.get("g1_independent_stderr"), 0.0))
+        if se > 0:
+            axd.plot([t], [(num(h.get("g2")) - num(h.get("g1_independent"))) / se], "o", color="k")
+    ax.set_xlabel("theta_o = theta_i (deg)")
+    ax.set_ylabel("averaged G2 / G1")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    axd.axhline(0, color="k", lw=0.8)
+    for s_ in (-3, 3):
+        axd.axhline(s_, color="k", ls="--", lw=0.8)
+    axd.set_xlabel("theta (deg)")
+    axd.set_ylabel("z = (G2 - G1) / stderr")
+    axd.grid(True, alpha=0.3)
+    fig.suptitle("%s: the hotspot G2(v, m, v) = G1(v, m) (000 eq. 16), %d surface%s"
+                 % (entry.get("name"), n, "s" if n > 1 else ""), fontsize=10)
+    return _save(fig, path)
+
+
 def bsdf_albedo(path, record, title=""):
     alb = record.get("albedo")
     if not isinstance(alb, dict):

@@ -234,6 +234,13 @@ def section_g2(ctx):
     s.figure(ctx, "g2_%s.png" % e["name"], plots.g2_curves,
              "%s: G2 against theta_i for several theta_o, in the plane of incidence (delta phi = 0: same "
              "side, 180: opposite sides)." % e["name"], load_json(out), e["name"])
+    for entry in ctx.entries():
+        g2 = entry.get("measurements", {}).get("g2")
+        if isinstance(g2, list) and any(surface.get("hotspot") for surface in g2):
+            s.figure(ctx, "g2_hotspot_%s.png" % entry["name"], plots.g2_hotspot,
+                     "%s (validate): at o = i the measured G2 equals G1 measured by an independent run with "
+                     "the same weights, and Smith's direction-correlated form; right: z of G2 - G1 (dashed: "
+                     "+-3)." % entry["name"], entry)
     return s
 
 

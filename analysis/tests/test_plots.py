@@ -121,6 +121,21 @@ class Figures(unittest.TestCase):
         html = report.validation_table_html(v)
         self.assertIn("worst of 2, 1 outside", html)
         self.assertIn("deviates (finding)", html)
+        # An ensemble row with its own Student t threshold is shown with its degrees of freedom.
+        rows.append({"quantity": "g1", "model_name": "smith_nominal", "kind": "model", "z": 5.0,
+                     "verdict": "agrees", "measured": 0.9, "stderr": 0.01, "model": 0.85, "rel_dev": 0.06,
+                     "condition": "d", "group": "", "dof": 3, "z_threshold": 60.3})
+        self.assertTrue(png_ok(plots.validation_z(self.path("z2.png"), v)))
+        self.assertIn("(t, 3 dof)", report.validation_table_html(v))
+
+    def test_g2_hotspot_from_validate_measurements(self):
+        hot = [{"theta_deg": t, "g2": 0.9, "g2_stderr": 0.002, "g1_independent": 0.901,
+                "g1_independent_stderr": 0.002, "direction_correlated_numeric": 0.9005, "bins": []}
+               for t in (30, 60, 80)]  # synthetic
+        entry = {"name": "e", "measurements": {"g2": [{"label": "seed 1", "rows": [], "hotspot": hot}]}}
+        self.assertTrue(png_ok(plots.g2_hotspot(self.path("h.png"), entry)))
+        with self.assertRaises(plots.NoData):
+            plots.g2_hotspot(self.path("h2.png"), {"name": "x", "measurements": {"g2": [{"rows": []}]}})
 
 
 if __name__ == "__main__":
