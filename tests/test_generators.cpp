@@ -440,14 +440,16 @@ TEST(GaussianGgx, TileHasHeavierTailsThanBeckmannWithTheSameCore) {
   GaussianGgxParams p;
   p.resolution = 256;
   p.alpha_x = p.alpha_y = 0.3;
+  // Roughness field E(x) correlated over 16 cells (4 correlation lengths of the heights): 256
+  // roughness patches on the tile.
+  p.roughness_correlation_length = 16.0 / 256;
   Microsurface s = generate_gaussian_ggx(p);
   ASSERT_TRUE(s.nominal.has_value());
   EXPECT_EQ(s.nominal->kind, models::Distribution::GGX);
   // Projected-area fraction with slope beyond 3 alpha: GGX 1/(1+9) = 0.10, Beckmann e^-9.
-  // The roughness field E(x) has a correlation length of 64 cells, so the fraction varies
-  // from patch to patch: its error is the spread of 4 x 4 blocks of 64 x 64 cells (Student t
-  // with 15 degrees of freedom).
-  constexpr int nb = 4;
+  // The fraction varies from roughness patch to patch: its error is the spread of 8 x 8 blocks
+  // of 32 x 32 cells (Student t with 63 degrees of freedom).
+  constexpr int nb = 8;
   std::vector<double> beyond(nb * nb, 0.0), total(nb * nb, 0.0);
   for (std::size_t k = 0; k < s.num_facets(); ++k) {
     Triangle t = s.facet(k);
@@ -466,10 +468,11 @@ TEST(GaussianGgx, TileHasHeavierTailsThanBeckmannWithTheSameCore) {
   const double se = std::sqrt(ss / (nb * nb - 1) / (nb * nb));
   const double tt = sidak_t(0.01, 1, nb * nb - 1);
   EXPECT_LT(std::abs(mean - 0.10) / se, tt) << mean << " +- " << se;
-  // Power: Beckmann's tail (e^-9) and a GGX with alpha 25% smaller (1/(1 + 9 * 1.25^2)) are
-  // rejected.
+  // Power: Beckmann's tail (e^-9) and GGX with alpha 25% smaller or larger (1/(1 + 9 * 1.25^2),
+  // 1/(1 + 9 / 1.25^2)) are rejected.
   EXPECT_GT(std::abs(mean - std::exp(-9.0)) / se, tt) << mean << " +- " << se;
   EXPECT_GT(std::abs(mean - 1 / (1 + 9 * 1.25 * 1.25)) / se, tt) << mean << " +- " << se;
+  EXPECT_GT(std::abs(mean - 1 / (1 + 9 / (1.25 * 1.25))) / se, tt) << mean << " +- " << se;
 }
 
 // ---------------------------------------------------------------------------------------------
