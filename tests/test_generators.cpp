@@ -438,18 +438,18 @@ TEST(GaussianGgx, TheScaleMixtureIdentityHolds) {
 
 TEST(GaussianGgx, TileHasHeavierTailsThanBeckmannWithTheSameCore) {
   GaussianGgxParams p;
-  p.resolution = 256;
+  p.resolution = 512;
   p.alpha_x = p.alpha_y = 0.3;
-  // Roughness field E(x) correlated over 16 cells (4 correlation lengths of the heights): 256
+  // Roughness field E(x) correlated over 16 cells (4 correlation lengths of the heights): 1024
   // roughness patches on the tile.
-  p.roughness_correlation_length = 16.0 / 256;
+  p.roughness_correlation_length = 16.0 / 512;
   Microsurface s = generate_gaussian_ggx(p);
   ASSERT_TRUE(s.nominal.has_value());
   EXPECT_EQ(s.nominal->kind, models::Distribution::GGX);
   // Projected-area fraction with slope beyond 3 alpha: GGX 1/(1+9) = 0.10, Beckmann e^-9.
-  // The fraction varies from roughness patch to patch: its error is the spread of 8 x 8 blocks
-  // of 32 x 32 cells (Student t with 63 degrees of freedom).
-  constexpr int nb = 8;
+  // The fraction varies from roughness patch to patch: its error is the spread of 16 x 16 blocks
+  // of 32 x 32 cells (Student t with 255 degrees of freedom).
+  constexpr int nb = 16;
   std::vector<double> beyond(nb * nb, 0.0), total(nb * nb, 0.0);
   for (std::size_t k = 0; k < s.num_facets(); ++k) {
     Triangle t = s.facet(k);
