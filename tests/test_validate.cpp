@@ -186,7 +186,7 @@ TEST(ValidateRules, RowsWithSurfaceErrorsUseStudentT) {
   EXPECT_EQ(rows[0].verdict, "deviates (finding)");  // z = 5 > 2.93
   EXPECT_EQ(rows[1].verdict, "agrees");              // z = 5 < 9.2 (t, 3 dof)
   Json j = mv::row_to_json(rows[1]);
-  EXPECT_EQ(j["dof"], 3);
+  EXPECT_EQ(j["t_dof"], 3);
   EXPECT_NEAR(j["z_threshold"].get<double>(), sidak_t(0.01, 3, 3), 1e-9);
 }
 

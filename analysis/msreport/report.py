@@ -426,7 +426,7 @@ def validation_table_html(v):
         verdict = r.get("verdict", "")
         vclass = "v-" + verdict.split(" ")[0]
         thr = "-" if r.get("z_threshold") is None else _fmt(r.get("z_threshold"), 3) + (
-            "" if r.get("dof") is None else " (t, %d dof)" % int(num(r.get("dof"))))
+            "" if r.get("t_dof") is None else " (t, %d dof)" % int(num(r.get("t_dof"))))
         parts.append("<tr><td>%s vs %s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td>"
                      '<td class="%s">%s</td><td>%s</td><td>%s</td></tr>'
                      % (html.escape(r.get("quantity", "")), html.escape(r.get("model_name", "")), cond, measured,

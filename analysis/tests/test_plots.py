@@ -124,7 +124,7 @@ class Figures(unittest.TestCase):
         # An ensemble row with its own Student t threshold is shown with its degrees of freedom.
         rows.append({"quantity": "g1", "model_name": "smith_nominal", "kind": "model", "z": 5.0,
                      "verdict": "agrees", "measured": 0.9, "stderr": 0.01, "model": 0.85, "rel_dev": 0.06,
-                     "condition": "d", "group": "", "dof": 3, "z_threshold": 60.3})
+                     "condition": "d", "group": "", "t_dof": 3, "z_threshold": 60.3})
         self.assertTrue(png_ok(plots.validation_z(self.path("z2.png"), v)))
         self.assertIn("(t, 3 dof)", report.validation_table_html(v))
 

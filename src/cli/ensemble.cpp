@@ -38,7 +38,7 @@ void apply(Json& out, const std::vector<const Json*>& rows, const FieldSpec& spe
         break;
       case Field::Count:
         out[key] = rows.size();
-        out["dof"] = rows.size() - 1;
+        out["t_dof"] = rows.size() - 1;
         break;
       case Field::Measured:
       case Field::MeanStderr:

@@ -13,7 +13,7 @@ namespace microsim::cli {
 // How a field of the per-surface rows becomes a field of the ensemble row.
 enum class Field {
   Copy,        // taken from the first surface's row (parameters, nominal models)
-  Count,       // the number of surfaces (the key names the output field), and "dof" = K - 1
+  Count,       // the number of surfaces (the key names the output field), and "t_dof" = K - 1
   Measured,    // mean, KEY_stderr between surfaces, KEY_stderr_rays from the rows' KEY_stderr
   MeanStderr,  // mean and KEY_stderr between surfaces
   Mean,        // mean only

@@ -1089,7 +1089,7 @@ Json row_to_json(const Row& r) {
   j["rel_dev"] = r.rel_dev ? Json(*r.rel_dev) : Json(nullptr);
   j["verdict"] = r.verdict;
   if (r.kind == Kind::Deterministic) j["tolerance"] = r.tolerance;
-  j["dof"] = r.dof ? Json(*r.dof) : Json(nullptr);
+  j["t_dof"] = r.dof ? Json(*r.dof) : Json(nullptr);
   j["z_threshold"] = r.threshold ? Json(*r.threshold) : Json(nullptr);
   j["error"] = r.error;
   j["reference"] = r.reference;
@@ -1112,9 +1112,9 @@ Json verdict_rules_json(double significance, double z_threshold, std::size_t com
       {"rel_dev", "(measured - model) / |model|"},
       {"z_threshold", "Sidak: per-row rate 1 - (1 - significance)^(1/comparisons) over the "
                       "'comparisons' z-tested rows of the run; the two-sided normal quantile at that "
-                      "rate (z_threshold_value), or for rows with an error from K surfaces (dof = "
+                      "rate (z_threshold_value), or for rows with an error from K surfaces (t_dof = "
                       "K - 1) the two-sided Student t quantile with K - 1 degrees of freedom"},
-      {"dof", "degrees of freedom of a row's error: K - 1 for the spread of K surfaces, null for "
+      {"t_dof", "degrees of freedom of a row's error: K - 1 for the spread of K surfaces, null for "
               "ray-count errors (normal)"},
       {"significance", significance},
       {"comparisons", comparisons},
