@@ -377,15 +377,16 @@ def g2_hotspot(path, entry):
         raise NoData("entry %s has no G2 hotspot measurements" % entry.get("name"))
     n = len(per_surface)
     fig, (ax, axd) = plt.subplots(1, 2, figsize=(10, 3.8))
-    for k, h in points:
+    for i, (k, h) in enumerate(points):
+        first = i == 0  # one legend entry per series
         t = num(h.get("theta_deg")) + 0.6 * (k - (n - 1) / 2)
         ax.errorbar([t - 0.25], [num(h.get("g2"))], yerr=[num(h.get("g2_stderr"))], fmt="o", ms=4, capsize=2,
-                    color="k", label="G2(v, v), measure g2" if k == 0 else None)
+                    color="k", label="G2(v, v), measure g2" if first else None)
         ax.errorbar([t + 0.25], [num(h.get("g1_independent"))], yerr=[num(h.get("g1_independent_stderr"))],
                     fmt="s", ms=4, capsize=2, color="tab:blue", mfc="none",
-                    label="G1(v), independent measure g1" if k == 0 else None)
+                    label="G1(v), independent measure g1" if first else None)
         ax.plot([t], [num(h.get("direction_correlated_numeric"))], "x", color="tab:orange",
-                label="Smith direction-correlated, 1/(1+Lambda)" if k == 0 else None)
+                label="Smith direction-correlated, 1/(1+Lambda)" if first else None)
         se = math.hypot(num(h.get("g2_stderr"), 0.0), num(h.get("g1_independent_stderr"), 0.0))
         if se > 0:
             axd.plot([t], [(num(h.get("g2")) - num(h.get("g1_independent"))) / se], "o", color="k")
