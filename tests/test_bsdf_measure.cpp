@@ -11,6 +11,9 @@
 #include <cmath>
 
 #include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/groove_models.hpp"
+#include "microsim/models/vgroove_multiple.hpp"
+#include "microsim/surface/generators.hpp"
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/surface/surface_io.hpp"
 #include "test_helpers.hpp"
@@ -289,4 +292,136 @@ TEST(BsdfMeasure, MeasuredTablesAreReciprocal) {
     EXPECT_GT(std::abs(f1.mean - f2.mean) / std::hypot(f1.stderr_, f2.stderr_), 10.0);
   }
   for (double z : zs) EXPECT_LT(std::abs(z), sidak_z(0.01, 2)) << z;
+}
+
+// --- Finite objects, V-grooves and V-cavity ensembles beside their closed forms ---------------
+
+TEST(BsdfMeasure, MirrorBoxAlbedoIsItsVisibleAreaRatio) {
+  // A convex mirror object reflects every ray that hits it once; per unit of the flux on its
+  // macrosurface (000 eq. 4a with the base area A) the total albedo is its visible area ratio,
+  // 1 + (H/W) tan(theta) seen across a face (000 "Inherent Assumptions", Fig. 5).
+  BoxParams p;
+  p.height = 0.5;
+  Microsurface s = generate_box(p);
+  Tracer tracer(s);
+  const double zc = sidak_z(0.001, 3);
+  for (double th : {0.0, 30.0, 60.0}) {
+    const BsdfResult r = measure_bsdf(tracer, options(mm::Material::mirror(), th, 0.0, 100000));
+    const double ratio = 1.0 + 0.5 * std::tan(rad(th));
+    const Estimate e = r.albedo(0, 4);
+    SCOPED_TRACE("theta " + std::to_string(th));
+    EXPECT_EQ(r.measured.lost, 0u);
+    EXPECT_EQ(r.albedo(0, 0).mean, e.mean);  // convex: one bounce
+    EXPECT_LT(std::abs(e.mean - ratio) / e.stderr_, zc) << e.mean << " vs " << ratio;
+    // Power: the plain macro-area normalization (ratio 1) is rejected where walls are lit.
+    if (th > 0) EXPECT_GT(std::abs(e.mean - 1.0) / e.stderr_, zc);
+    // The top's mirror lobe: the share 1 of the albedo leaves upward in the specular pixel.
+    const int px = r.map.pixel_of(direction_from_angles(rad(th), kPi));
+    EXPECT_NEAR(r.f_pixel(0, 4, px).mean * r.map.pixel_cos_integral(px), 1.0, 6 * r.f_pixel(0, 4, px).stderr_ * r.map.pixel_cos_integral(px));
+  }
+}
+
+TEST(BsdfMeasure, TiledMirrorBoxesTendToTheMacrosurface) {
+  BoxParams p;
+  p.height = 0.5;
+  p.tiles = 4;
+  Microsurface s = generate_tiled_boxes(p);
+  Tracer tracer(s);
+  const BsdfResult r = measure_bsdf(tracer, options(mm::Material::mirror(), 30.0, 0.0, 100000));
+  // Only the outer walls stick out of the macrosurface's swept volume: 1 + (H/(N W)) tan(theta).
+  const double ratio = 1.0 + 0.5 / 4 * std::tan(rad(30));
+  const Estimate e = r.albedo(0, 4);
+  EXPECT_LT(std::abs(e.mean - ratio) / e.stderr_, 3.5) << e.mean << " vs " << ratio;
+}
+
+TEST(BsdfMeasure, VGrooveOrdersEqualTheClosedForm) {
+  // Periodic V-grooves traced in 3D against the 2D-unfolding closed form per order
+  // (models/vgroove_multiple.hpp), several facet angles, incidences and azimuths.
+  const mm::Material mats[2] = {mm::Material::mirror(), mm::Material::conductor(0.2, 3.0)};
+  const double cases[3][2] = {{20, 0}, {50, 30}, {70, 120}};
+  const int K = 4;
+  const double zc = sidak_z(0.001, 3 * 3 * 2 * K);
+  int rejected_wrong = 0;
+  for (double tf : {45.0, 60.0, 70.0})
+    for (const auto& c : cases)
+      for (const auto& mat : mats) {
+        VGrooveParams vp;
+        vp.facet_angle_deg = tf;
+        Microsurface s = generate_vgroove(vp);
+        Tracer tracer(s);
+        BsdfOptions o = options(mat, c[0], c[1], 40000);
+        const BsdfResult r = measure_bsdf(tracer, o);
+        const auto model = mm::vgroove_albedo(rad(tf), direction_from_angles(o.theta_i, o.phi_i), mat, K);
+        const auto wrong = mm::vgroove_albedo(rad(tf + 1.0), direction_from_angles(o.theta_i, o.phi_i), mat, K);
+        EXPECT_EQ(r.measured.lost, 0u);
+        for (int k = 0; k < K; ++k) {
+          const Estimate e = r.albedo(0, k);
+          SCOPED_TRACE("tf " + std::to_string(tf) + " theta " + std::to_string(c[0]) + " order " + std::to_string(k + 1));
+          if (e.stderr_ > 0) EXPECT_LT(std::abs(e.mean - model[k]) / e.stderr_, zc) << e.mean << " vs " << model[k];
+          else EXPECT_NEAR(e.mean, model[k], 1e-9);
+          if (std::abs(e.mean - wrong[k]) > zc * std::max(e.stderr_, 1e-9)) ++rejected_wrong;
+        }
+        // The known case: facet angle 70, theta_i 20: orders 3 and 4 = 0.4679 and 0.5321.
+        if (tf == 70.0 && c[0] == 20.0 && mat.kind == mm::MaterialKind::Mirror) {
+          EXPECT_NEAR(model[2], 0.4679, 1e-4);
+          EXPECT_NEAR(model[3], 0.5321, 1e-4);
+        }
+      }
+  EXPECT_GT(rejected_wrong, 10);  // power: a groove 1 deg steeper is rejected
+}
+
+TEST(BsdfMeasure, VCavityEnsembleEqualsItsGroovesClosedForm) {
+  VCavityParams vp;
+  vp.grooves = 256;
+  Microsurface s = generate_vcavity(vp);
+  Tracer tracer(s);
+  const mm::Material mat = mm::Material::conductor(0.2, 3.0);
+  const BsdfOptions o = options(mat, 50.0, 20.0, 256 * 256);
+  const BsdfResult r = measure_bsdf(tracer, o);
+  const auto model = groove_model_albedo(s, o, "vcavity_multiple_grooves");
+  ASSERT_TRUE(model.has_value());
+  EXPECT_EQ(r.measured.lost, 0u);
+  const double zc = sidak_z(0.001, 5);
+  for (int k = 0; k <= 4; ++k) {
+    const Estimate e = r.albedo(0, k);
+    if (e.stderr_ == 0) {  // no ray in this order (shallow grooves): the closed form agrees
+      EXPECT_EQ(e.mean, 0.0);
+      EXPECT_LT((*model)[k], 1e-3);
+      continue;
+    }
+    EXPECT_LT(std::abs(e.mean - (*model)[k]) / e.stderr_, zc) << k << ": " << e.mean << " vs " << (*model)[k];
+    // Power: a 5% change of a slot holding more than 5% is rejected.
+    if ((*model)[k] > 0.05) EXPECT_GT(std::abs(e.mean - 1.05 * (*model)[k]) / e.stderr_, zc);
+  }
+  // The record carries the models beside the rows.
+  const Json j = bsdf_summary_json(r, s);
+  EXPECT_TRUE(j["albedo_models"]["vcavity_multiple"].is_object());
+  EXPECT_TRUE(j["albedo_models"]["vgroove_multiple"].is_null());
+  EXPECT_TRUE(j["rows"][0].contains("z_vcavity_multiple_grooves"));
+  EXPECT_TRUE(j["in_plane"][0].contains("vcavity_multiple_order_2_stderr"));
+}
+
+TEST(BsdfMeasure, VGrooveInPlaneLobesEqualTheClosedFormBeams) {
+  // Every beam of a V-groove leaves in one direction: binned, the closed form's in-plane lobes
+  // equal the traced ones bin by bin (facet angle 70, theta_i 20, phi_i 0: all in the plane).
+  VGrooveParams vp;
+  vp.facet_angle_deg = 70.0;
+  Microsurface s = generate_vgroove(vp);
+  Tracer tracer(s);
+  const BsdfResult r = measure_bsdf(tracer, options(mm::Material::mirror(), 20.0, 0.0, 40000, 31));  // odd: no bin edge at the normal
+  const Json j = bsdf_summary_json(r, s);
+  double model_sum = 0.0;
+  int b = 0;
+  for (const Json& row : j["in_plane"]) {
+    const double ci = r.plane.cos_integral(b);
+    for (int k = 0; k < 4; ++k) {
+      const double model = row["vgroove_multiple_" + order_key(k, 4)].get<double>() * ci;
+      const Estimate e = r.f_plane(0, k, b);
+      if (e.stderr_ > 0) EXPECT_LT(std::abs(e.mean * ci - model) / (e.stderr_ * ci), 3.5) << b << " " << k;
+      else EXPECT_NEAR(e.mean * ci, model, 1e-9) << b << " " << k;
+    }
+    model_sum += row["vgroove_multiple"].get<double>() * ci;
+    ++b;
+  }
+  EXPECT_NEAR(model_sum, 1.0, 1e-12);
 }

@@ -1,6 +1,7 @@
 // Output layer: atomic writes, CSV mirroring JSON rows, self-describing EXR tables.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <sys/stat.h>
@@ -37,10 +38,14 @@ TEST(Output, FailedWriteLeavesNothingBehind) {
                                 }),
                RuntimeFailure);
   EXPECT_FALSE(exists(path));
-  // ... and no temporary either.
-  std::string dir = ::testing::TempDir();
-  std::string tmpname = dir + ".tmp-" + std::to_string(getpid()) + "-" + path.substr(dir.size());
-  EXPECT_FALSE(exists(tmpname));
+  // ... and no temporary either (.tmp-PID-N-never.json).
+  const std::string prefix = ".tmp-" + std::to_string(getpid()) + "-";
+  for (const auto& e : std::filesystem::directory_iterator(::testing::TempDir())) {
+    const std::string name = e.path().filename().string();
+    EXPECT_FALSE(name.rfind(prefix, 0) == 0 && name.size() > 10 &&
+                 name.compare(name.size() - 10, 10, "never.json") == 0)
+        << name;
+  }
 }
 
 TEST(Output, FailedWriteKeepsThePreviousFile) {
@@ -89,4 +94,36 @@ TEST(Output, ExrTableRoundTripWithAttributes) {
 TEST(Output, ExtensionIsCaseInsensitiveAndIgnoresFolders) {
   EXPECT_EQ(extension_of("a/b.c/file.JSON"), "json");
   EXPECT_EQ(extension_of("a/b.c/file"), "");
+}
+
+// A corrupt EXR header declaring a string attribute larger than the file (here 2 GB in a file
+// of a few hundred bytes) is refused before OpenEXR allocates the declared size; the same file
+// with its true size reads.
+TEST(Output, ExrAttributeLargerThanTheFileIsRefused) {
+  ExrTable t;
+  t.width = 2;
+  t.height = 2;
+  t.channel_names = {"Z"};
+  t.channels = {{0, 1, 2, 3}};
+  t.attributes = {{"note", "abcdefgh"}};
+  const std::string path = tmp("huge-attribute.exr");
+  write_exr(path, t);
+  EXPECT_EQ(read_exr(path).attributes["note"], "abcdefgh");
+  std::string bytes = slurp(path);
+  const std::string key("note\0string\0", 12);
+  const std::size_t at = bytes.find(key);
+  ASSERT_NE(at, std::string::npos);
+  ASSERT_EQ(bytes[at + 12], 8);  // little-endian int32 size of "abcdefgh"
+  bytes[at + 12] = '\xf0';
+  bytes[at + 13] = bytes[at + 14] = '\xff';
+  bytes[at + 15] = '\x7f';
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+  try {
+    read_exr(path);
+    ADD_FAILURE() << "a 2 GB attribute in a short file was accepted";
+  } catch (const UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("attribute 'note' declares 2147483632 bytes"), std::string::npos)
+        << e.what();
+  }
+  std::remove(path.c_str());
 }

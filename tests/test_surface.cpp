@@ -4,6 +4,10 @@
 
 #include <cstdio>
 #include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include <OpenMesh/Core/System/omstream.hh>
 
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/surface/surface_io.hpp"
@@ -143,6 +147,28 @@ TEST(SurfaceIo, MeshExportHasTheSameFacets) {
     std::remove(path.c_str());
     std::remove((path + ".json").c_str());
   }
+}
+
+// Loading a mesh captures OpenMesh's messages only while it reads: afterwards omerr reaches its
+// own targets again (std::cerr) and the OpenMesh streams have their buffers back.
+TEST(SurfaceIo, MeshLoadRestoresOpenMeshStreams) {
+  const std::string obj = tmp("repeated-vertex.obj");
+  {
+    std::ofstream f(obj);
+    f << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 1 2\n";  // OpenMesh complains on omerr
+  }
+  omerr().enable();
+  std::streambuf* const err = omerr().rdbuf();
+  std::streambuf* const log = omlog().rdbuf();
+  EXPECT_THROW(load_surface(obj), UsageError);
+  EXPECT_EQ(omerr().rdbuf(), err);
+  EXPECT_EQ(omlog().rdbuf(), log);
+  std::ostringstream seen;
+  std::streambuf* const cerr = std::cerr.rdbuf(seen.rdbuf());
+  omerr() << "after the load" << std::endl;
+  std::cerr.rdbuf(cerr);
+  EXPECT_NE(seen.str().find("after the load"), std::string::npos);
+  std::remove(obj.c_str());
 }
 
 TEST(SurfaceIo, MissingCorruptAndUnknownFilesAreUsageErrors) {

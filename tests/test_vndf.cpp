@@ -5,6 +5,7 @@
 #include <tbb/global_control.h>
 
 #include <fstream>
+#include <limits>
 #include <sys/wait.h>
 
 #include "microsim/measure/stats.hpp"
@@ -188,4 +189,29 @@ TEST(VndfCli, WritesTestsAndBins) {
   EXPECT_EQ(j["surface"]["kind"], "ellipsoid");
   EXPECT_EQ(run("measure vndf " + e + " --theta 95 -o " + out + ".bad.json"), 2);
   EXPECT_EQ(run("measure vndf " + e + " --theta-bins 0 -o " + out + ".bad.json"), 2);
+}
+
+// Directions from corrupt geometry (NaN or infinite components) have no bin (-1) rather than an
+// out-of-range cast or index; huge finite ones stay in range; bin counts whose product overflows
+// int are refused. Ordinary directions keep their own bins.
+TEST(DirectionBinning, NonFiniteDirectionsHaveNoBin) {
+  const DirectionBinning sphere(18, 36, kPi), hemi(9, 36, kPi / 2);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const DirectionBinning* b : {&sphere, &hemi}) {
+    for (const Vec3& d : {Vec3(nan, nan, nan), Vec3(nan, 0, 1), Vec3(0, nan, 0.5), Vec3(inf, 0, 0),
+                          Vec3(-inf, -inf, 0), Vec3(0, 0, -inf)})
+      EXPECT_EQ(b->bin_of(d), -1) << d.transpose();
+    const int k = b->bin_of(Vec3(1e300, -1e300, 1e-300));
+    EXPECT_TRUE(k >= 0 && k < b->size()) << k;
+  }
+  EXPECT_THROW(DirectionBinning(1 << 16, 1 << 16, kPi), UsageError);
+  EXPECT_THROW(DirectionBinning(0, 36, kPi), UsageError);
+  // 25 degrees from the pole, azimuth 45 degrees: ring 2, sector 4 (10-degree bins).
+  const double t = 25 * kPi / 180, p = 45 * kPi / 180;
+  const Vec3 d(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
+  EXPECT_EQ(sphere.bin_of(d), sphere.index(2, 4));
+  EXPECT_EQ(hemi.bin_of(d), hemi.index(2, 4));
+  EXPECT_EQ(sphere.bin_of(Vec3(0, 0, -1)), sphere.index(17, 0));
+  EXPECT_EQ(hemi.bin_of(Vec3(0, 0, -1)), -1);
 }

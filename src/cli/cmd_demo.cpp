@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "option_checks.hpp"
 #include "commands.hpp"
 
 namespace microsim::cli {
@@ -13,6 +14,13 @@ namespace microsim::cli {
 namespace {
 int run_demo(GenerateOptions gen, MeasureOptions meas, const std::string& dir,
              const GlobalOptions& g) {
+  // Every option is checked before anything is written (the outputs are committed together at
+  // the end by main's OutputTransaction).
+  std::vector<double> thetas = parse_angle_list(meas.theta, "--theta");
+  require_above_horizon(thetas, "--theta");
+  GaussianParams p = gen.gaussian;
+  if (gen.alpha_given) p.alpha_x = p.alpha_y = gen.alpha;
+  validate(p);
   if (mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST)
     throw UsageError("--out-dir " + dir + ": cannot create the folder");
   gen.output = dir + "/surface.exr";
@@ -35,12 +43,14 @@ void register_demo(CLI::App& app, const GlobalOptions& g) {
   auto gen = std::make_shared<GenerateOptions>();
   auto meas = std::make_shared<MeasureOptions>();
   auto dir = std::make_shared<std::string>("microsim-demo");
-  demo->set_config("--config", "", "Surface preset (TOML), e.g. surfaces/beckmann-0.5.toml");
+  add_preset_option(*demo, "Surface preset (TOML), e.g. surfaces/beckmann-0.5.toml; command-line options win");
   add_gaussian_options(*demo, *gen);
   demo->add_option("--theta", meas->theta, "View zenith angles (deg)")->capture_default_str();
-  demo->add_option("--rays", meas->rays, "Rays per estimator and direction")->capture_default_str();
+  demo->add_option("--rays", meas->rays, "Rays per estimator and direction")->capture_default_str()
+      ->check(integer_in(1, kMaxRays));
   demo->add_option("--out-dir", *dir, "Folder for the surface and the tables")->capture_default_str();
-  demo->callback([=, &g] {
+  on_run(demo, [=, &g] {
+    gen->alpha_given = demo->count("--alpha") > 0;
     gen->alpha_x_given = demo->count("--alpha-x") > 0;
     gen->alpha_y_given = demo->count("--alpha-y") > 0;
     run_demo(*gen, *meas, *dir, g);

@@ -19,7 +19,8 @@ int run_convert(const std::string& input, const std::string& output, const Globa
 }
 
 int run_info(const std::string& path, const std::string& json_out, const GlobalOptions& g) {
-  if (!json_out.empty()) require_extension(json_out, {"json"});
+  if (!json_out.empty() && extension_of(json_out) != "json")
+    throw UsageError("--json " + json_out + ": unsupported output format (use .json)");
   Microsurface s = load_surface(path);
   FacetSums f = facet_sums(s);
   Json j = run_header("info", g);

@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "option_checks.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/surface/surface_io.hpp"
@@ -124,8 +125,6 @@ int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
                        " GiB of tallies, more than half of this machine's memory");
   }
   Microsurface s = load_surface(o.surface);
-  if (!s.macro().periodic)
-    throw UsageError(o.surface + ": measure bsdf needs a periodic tile (this surface is a finite object)");
   const auto t0 = std::chrono::steady_clock::now();
 
   BsdfOptions bo;
@@ -224,7 +223,7 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
       "bsdf", "BSDF per scattering order by random walks on the surface (mirror, conductor, "
               "dielectric), beside the single-scattering models and the Smith random walk");
   auto o = std::make_shared<BsdfCliOptions>();
-  cmd->add_option("surface", o->surface, "Surface file (a periodic tile)")->required();
+  cmd->add_option("surface", o->surface, "Surface file (a periodic tile, a finite object or a vcavity ensemble)")->required();
   cmd->add_option("-o,--output", o->output,
                   "Output: .exr (hemisphere tables; the JSON summary goes beside it, same name "
                   ".json) or .json (summary only)")
@@ -232,18 +231,26 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
   cmd->add_option("--material", o->material, "mirror, conductor or dielectric")->required();
   cmd->add_option("--eta", o->eta,
                   "Conductor: real part of the complex index; dielectric: index of the material "
-                  "below relative to the medium above (e.g. 1.5, or 0.6667 for light inside glass)");
-  cmd->add_option("--k", o->k, "Conductor: extinction coefficient (index eta + i k)");
-  cmd->add_option("--theta-i", o->theta_i, "Incidence zenith angle in degrees, [0, 90)")->required();
-  cmd->add_option("--phi-i", o->phi_i, "Incidence azimuth in degrees")->required();
+                  "below relative to the medium above (e.g. 1.5, or 0.6667 for light inside glass)")
+      ->check(number_in(positive()));
+  cmd->add_option("--k", o->k, "Conductor: extinction coefficient (index eta + i k)")
+      ->check(number_in(closed(0, 1000)));
+  cmd->add_option("--theta-i", o->theta_i, "Incidence zenith angle in degrees, [0, 90)")->required()
+      ->check(number_in({0, 90, false, true}));
+  cmd->add_option("--phi-i", o->phi_i, "Incidence azimuth in degrees")->required()
+      ->check(finite_number());
   cmd->add_option("--orders", o->orders, "Scattering orders tallied: 1 .. K-1 separately, K+ together")
-      ->capture_default_str();
-  cmd->add_option("--rays", o->rays, "Rays (random walks)")->capture_default_str();
-  cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str();
+      ->capture_default_str()
+      ->check(integer_in(1, 64));
+  cmd->add_option("--rays", o->rays, "Rays (random walks)")->capture_default_str()
+      ->check(integer_in(1, kMaxRays));
+  cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str()
+      ->check(seed_value());
   cmd->add_option("--resolution", o->resolution,
                   "Hemisphere map resolution R (R x R equal-area pixels); also the number of "
                   "in-plane bins over [-90, 90] degrees")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(integer_in(1, 4096));
   cmd->callback([o, cmd, &g] {
     o->eta_given = cmd->count("--eta") > 0;
     o->k_given = cmd->count("--k") > 0;

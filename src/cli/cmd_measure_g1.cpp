@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "option_checks.hpp"
 #include "commands.hpp"
 #include "ensemble.hpp"
 #include "microsim/io/output.hpp"
@@ -269,8 +270,10 @@ void register_measure_g1(CLI::App& measure, const GlobalOptions& g) {
   g1->add_option("-o,--output", mo->output, "Output (.json or .csv)")->required();
   g1->add_option("--theta", mo->theta, "View zenith angles in degrees: a, a,b,c or start:stop:step")->capture_default_str();
   g1->add_option("--phi", mo->phi, "View azimuths in degrees, same syntax")->capture_default_str();
-  g1->add_option("--rays", mo->rays, "Rays per estimator and direction")->capture_default_str();
-  g1->add_option("--seed", mo->seed, "Random seed")->capture_default_str();
+  g1->add_option("--rays", mo->rays, "Rays per estimator and direction")->capture_default_str()
+      ->check(integer_in(1, kMaxRays));
+  g1->add_option("--seed", mo->seed, "Random seed")->capture_default_str()
+      ->check(seed_value());
   g1->callback([mo, files, &g] {
     mo->surface = files->front();
     mo->extra_surfaces.assign(files->begin() + 1, files->end());

@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "option_checks.hpp"
 #include "ensemble.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/measure/g2_measure.hpp"
@@ -225,8 +226,10 @@ void register_measure_g2(CLI::App& measure, const GlobalOptions& g) {
       ->required();
   cmd->add_option("--phi-i", o->phi_i, "Light azimuths in degrees")->capture_default_str();
   cmd->add_option("--rays", o->rays, "Area samples per direction pair (two occlusion rays each)")
-      ->capture_default_str();
-  cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str();
+      ->capture_default_str()
+      ->check(integer_in(1, kMaxRays));
+  cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str()
+      ->check(seed_value());
   cmd->callback([o, &g] { run_measure_g2(*o, g); });
 }
 

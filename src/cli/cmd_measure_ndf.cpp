@@ -1,8 +1,11 @@
 // microsim measure ndf FILE -o OUT: D over the sphere from the facets.
+#include <tbb/task_arena.h>
+
 #include <iomanip>
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "option_checks.hpp"
 #include "commands.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/measure/ndf_measure.hpp"
@@ -12,6 +15,14 @@ namespace microsim::cli {
 
 int run_measure_ndf(const MeasureOptions& o, const GlobalOptions& g) {
   require_extension(o.output, {"json", "csv", "exr"});
+  {
+    // Area per block and bin in each live accumulator of the deterministic reduction (about two
+    // per thread), refused before loading the surface.
+    NdfOptions defaults;
+    const double bins = static_cast<double>(o.theta_bins) * o.phi_bins;
+    require_memory(bins * defaults.blocks * defaults.blocks * 8.0 * 2 * (tbb::this_task_arena::max_concurrency() + 1),
+                   "--theta-bins " + std::to_string(o.theta_bins) + " x --phi-bins " + std::to_string(o.phi_bins));
+  }
   Microsurface s = load_surface(o.surface);
   NdfOptions no;
   no.n_theta = o.theta_bins;

@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "option_checks.hpp"
 #include "ensemble.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/measure/stats.hpp"
@@ -224,15 +225,20 @@ void register_measure_vndf(CLI::App& measure, const GlobalOptions& g) {
   cmd->add_option("--theta", o->theta, "View zenith angles in degrees, [0, 90): a, a,b,c or start:stop:step")
       ->capture_default_str();
   cmd->add_option("--phi", o->phi, "View azimuths in degrees, same syntax")->capture_default_str();
-  cmd->add_option("--rays", o->rays, "Rays per direction")->capture_default_str();
+  cmd->add_option("--rays", o->rays, "Rays per direction")->capture_default_str()
+      ->check(integer_in(1, kMaxRays));
   cmd->add_option("--sampler-samples", o->sampler_samples,
                   "Samples for the chi-square test of the nominal NDF's VNDF sampler (0: skip)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(integer_in(0, kMaxRays));
   cmd->add_option("--theta-bins", o->theta_bins, "Normal bins in theta_m over [0, 90] degrees")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(integer_in(1, 360));
   cmd->add_option("--phi-bins", o->phi_bins, "Normal bins in phi_m over [0, 360) degrees")
-      ->capture_default_str();
-  cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str();
+      ->capture_default_str()
+      ->check(integer_in(1, 720));
+  cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str()
+      ->check(seed_value());
   cmd->callback([o, &g] { run_measure_vndf(*o, g); });
 }
 

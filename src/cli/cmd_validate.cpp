@@ -5,11 +5,13 @@
 
 #include <filesystem>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <iostream>
 #include <memory>
 
 #include "cli_common.hpp"
+#include "option_checks.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/surface/surface_io.hpp"
 #include "microsim/validate/validate.hpp"
@@ -81,7 +83,9 @@ Microsurface generate_entry(const validation::SuiteEntry& e, const std::string& 
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   try {
+    OutputTransaction written;  // the surface is needed now, not with the command's outputs
     app.parse(static_cast<int>(argv.size()), argv.data());
+    written.commit();
   } catch (const CLI::ParseError& err) {
     std::string cmd;
     for (std::size_t k = 1; k < args.size(); ++k) cmd += (k > 1 ? " " : "") + args[k];
@@ -90,6 +94,21 @@ Microsurface generate_entry(const validation::SuiteEntry& e, const std::string& 
     throw UsageError("--suite " + suite_file + ": entry " + e.name + ": " + err.what());
   }
   return load_surface(path);
+}
+
+// Entry names become file names in the surfaces folder: no path separators, no "..", no leading
+// dot, no control characters, and unique within the suite.
+void require_safe_entry_names(const validation::Suite& suite, const std::string& path) {
+  std::set<std::string> seen;
+  for (const auto& e : suite.entries) {
+    bool ok = !e.name.empty() && e.name.size() <= 100 && e.name[0] != '.' && e.name[0] != '-';
+    for (char c : e.name) ok = ok && c != '/' && c != '\\' && static_cast<unsigned char>(c) >= 0x20;
+    if (!ok)
+      throw UsageError("--suite " + path + ": entry name '" + e.name + "' must be 1-100 characters "
+                       "without '/', '\\', control characters or a leading '.' or '-'");
+    if (!seen.insert(e.name).second)
+      throw UsageError("--suite " + path + ": entry name '" + e.name + "' is used twice");
+  }
 }
 
 int run_validate(ValidateOptions o, const GlobalOptions& g) {
@@ -126,7 +145,7 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
   Json j = run_header("validate", g);
   std::vector<validation::SurfaceSet> sets;
   double significance = o.significance;
-  std::unique_ptr<fs::path> temp_dir;  // removed at the end unless --surfaces-dir
+  std::unique_ptr<TemporaryFolder> temp_dir;  // removed at the end (or on interrupt) unless --surfaces-dir
   if (!o.files.empty()) {
     validation::SurfaceSet set;
     set.name = fs::path(o.files[0]).stem().string();
@@ -140,6 +159,7 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
   } else {
     const std::string path = validation::find_suite(o.suite, suite_dirs());
     validation::Suite suite = validation::load_suite(path);
+    require_safe_entry_names(suite, path);
     if (!o.significance_given) significance = suite.significance;
     j["suite"] = {{"name", suite.name}, {"file", path}, {"description", suite.description}};
     fs::path dir;
@@ -150,13 +170,11 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
       if (ec || !fs::is_directory(dir))
         throw UsageError("--surfaces-dir " + o.surfaces_dir + ": cannot create the folder");
     } else {
-      std::string tmpl = (fs::temp_directory_path() / "microsim-validate-XXXXXX").string();
-      if (!mkdtemp(tmpl.data())) throw RuntimeFailure("cannot create a temporary folder");
-      dir = tmpl;
-      temp_dir = std::make_unique<fs::path>(dir);
+      temp_dir = std::make_unique<TemporaryFolder>("microsim-validate");
+      dir = temp_dir->path();
     }
     Json generated = Json::array();
-    try {
+    {
       for (const auto& e : suite.entries) {
         validation::SurfaceSet set;
         set.name = e.name;
@@ -175,9 +193,6 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
         }
         sets.push_back(std::move(set));
       }
-    } catch (...) {
-      if (temp_dir) fs::remove_all(*temp_dir);
-      throw;
     }
     if (!temp_dir) j["surface_files"] = generated;
   }
@@ -189,18 +204,17 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
                                     {"checks", o.checks_given ? Json(o.checks) : Json(nullptr)}}}};
 
   Progress progress("validate", g.quiet);
-  validation::Result result;
-  try {
-    result = validation::run(sets, significance, [&](double f) { progress.update(f); });
-  } catch (...) {
-    if (temp_dir) fs::remove_all(*temp_dir);
-    throw;
-  }
+  validation::Result result = validation::run(sets, significance, [&](double f) { progress.update(f); });
   progress.finish();
-  if (temp_dir) fs::remove_all(*temp_dir);
+  temp_dir.reset();
   j.update(validation::result_to_json(result));
   j["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!o.output.empty()) write_record(o.output, j);
+  if (!o.output.empty()) {
+    // The record is kept even when an identity FAILED below (exit 1 with the evidence).
+    OutputTransaction record;
+    write_record(o.output, j);
+    record.commit();
+  }
   if (!g.quiet) {
     std::cout << "validate " << (o.suite.empty() ? o.files[0] : "--suite " + o.suite) << ": "
               << result.rows.size() << " rows (groups of per-bin rows shown by their worst row)\n"
@@ -237,11 +251,14 @@ void register_validate(CLI::App& app, const GlobalOptions& g) {
   cmd->add_option("--theta", o->theta, "View zenith angles of the G1 checks (deg): a, a,b,c or start:stop:step")
       ->capture_default_str();
   cmd->add_option("--phi", o->phi, "View azimuths (deg), same syntax")->capture_default_str();
-  cmd->add_option("--rays", o->rays, "Rays per estimator and direction")->capture_default_str();
-  cmd->add_option("--seed", o->seed, "Random seed of the estimators")->capture_default_str();
+  cmd->add_option("--rays", o->rays, "Rays per estimator and direction")->capture_default_str()
+      ->check(integer_in(1, kMaxRays));
+  cmd->add_option("--seed", o->seed, "Random seed of the estimators")->capture_default_str()
+      ->check(seed_value());
   cmd->add_option("--significance", o->significance,
                   "Family-wise false-alarm rate of the z tests (Sidak over all of them)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(number_in({0, 1, true, true}));
   cmd->add_option("--checks", o->checks, "Comma-separated checks to run (default: all applicable: "
                                          "d_identities, d_nominal, g1, g2, vndf (nominal NDF), "
                                          "bsdf_albedo (periodic))");

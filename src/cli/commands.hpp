@@ -14,8 +14,8 @@ namespace microsim::cli {
 struct GenerateOptions {
   std::string output;
   GaussianParams gaussian;
-  double alpha = -1;  // isotropic shorthand; -1 = not given
-  bool alpha_x_given = false, alpha_y_given = false;
+  double alpha = 0.5;  // isotropic shorthand, used when alpha_given
+  bool alpha_given = false, alpha_x_given = false, alpha_y_given = false;
 };
 void add_gaussian_options(CLI::App& cmd, GenerateOptions& go);
 

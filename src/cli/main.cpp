@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "cli_common.hpp"
+#include "microsim/io/output.hpp"
 
 using namespace microsim;
 using namespace microsim::cli;
@@ -68,8 +69,13 @@ int main(int argc, char** argv) {
   register_measure_bsdf(*measure, g);
 
   if (!check_command_words(app, argc, argv)) return 2;
+  // Every output of the command (main file, sidecar, tables) is renamed into place together once
+  // the command has succeeded; an error or an interrupt leaves no file and no temporary behind.
+  install_interrupt_cleanup();
+  OutputTransaction outputs;
   try {
     app.parse(argc, argv);
+    outputs.commit();
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {

@@ -9,14 +9,23 @@
 #include <OpenEXR/ImfStringAttribute.h>
 #include <OpenEXR/ImfDoubleAttribute.h>
 #include <OpenEXR/ImfIntAttribute.h>
+#include <dirent.h>
+#include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cstring>
+#include <filesystem>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iomanip>
 
 #include "microsim/common.hpp"
+#include "microsim/io/checks.hpp"
+#include "microsim/io/exr_header.hpp"
 
 namespace microsim {
 
@@ -29,6 +38,123 @@ std::string extension_of(const std::string& path) {
   return e;
 }
 
+namespace {
+// Registered temporaries in fixed storage the signal handler can read without allocating: a slot
+// is filled, then published by its flag.
+constexpr int kSlots = 256;
+constexpr std::size_t kPathMax = 4096;
+char g_paths[kSlots][kPathMax];
+std::atomic<bool> g_used[kSlots];
+
+// Removes a file, or a folder with its contents (unlink/rmdir; readdir in the handler is the one
+// call that is not listed async-signal-safe, acceptable as the process is ending).
+void remove_path_raw(const char* path, int depth) {
+  if (unlink(path) == 0 || depth > 8) return;
+  if (DIR* d = opendir(path)) {
+    while (dirent* e = readdir(d)) {
+      if (!std::strcmp(e->d_name, ".") || !std::strcmp(e->d_name, "..")) continue;
+      char child[kPathMax];
+      std::size_t n = std::strlen(path), m = std::strlen(e->d_name);
+      if (n + m + 2 > kPathMax) continue;
+      std::memcpy(child, path, n);
+      child[n] = '/';
+      std::memcpy(child + n + 1, e->d_name, m + 1);
+      remove_path_raw(child, depth + 1);
+    }
+    closedir(d);
+  }
+  rmdir(path);
+}
+
+void on_interrupt(int sig) {
+  for (int k = 0; k < kSlots; ++k)
+    if (g_used[k].load()) remove_path_raw(g_paths[k], 0);
+  signal(sig, SIG_DFL);
+  raise(sig);
+}
+
+std::vector<OutputTransaction*>& transactions() {
+  static std::vector<OutputTransaction*> stack;
+  return stack;
+}
+}  // namespace
+
+void register_temporary(const std::string& path) {
+  if (path.size() + 1 > kPathMax) throw RuntimeFailure("path too long: " + path);
+  for (int k = 0; k < kSlots; ++k)
+    if (!g_used[k].load() && g_paths[k][0] == 0) {
+      std::memcpy(g_paths[k], path.c_str(), path.size() + 1);
+      g_used[k].store(true);
+      return;
+    }
+  throw RuntimeFailure("too many temporary files at once");
+}
+
+void unregister_temporary(const std::string& path) {
+  for (int k = 0; k < kSlots; ++k)
+    if (g_used[k].load() && path == g_paths[k]) {
+      g_used[k].store(false);
+      g_paths[k][0] = 0;
+      return;
+    }
+}
+
+void install_interrupt_cleanup() {
+  struct sigaction sa {};
+  sa.sa_handler = on_interrupt;
+  sigemptyset(&sa.sa_mask);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaction(sig, &sa, nullptr);
+}
+
+TemporaryFolder::TemporaryFolder(const std::string& prefix) {
+  std::string tmpl = (std::filesystem::temp_directory_path() / (prefix + "-XXXXXX")).string();
+  if (!mkdtemp(tmpl.data())) throw RuntimeFailure("cannot create a temporary folder in " + tmpl);
+  path_ = tmpl;
+  register_temporary(path_);
+}
+
+TemporaryFolder::~TemporaryFolder() {
+  std::error_code ec;
+  std::filesystem::remove_all(path_, ec);
+  unregister_temporary(path_);
+}
+
+OutputTransaction::OutputTransaction() { transactions().push_back(this); }
+
+OutputTransaction::~OutputTransaction() {
+  for (const auto& [tmp, path] : files_) {
+    std::remove(tmp.c_str());
+    unregister_temporary(tmp);
+  }
+  auto& st = transactions();
+  st.erase(std::remove(st.begin(), st.end(), this), st.end());
+}
+
+void OutputTransaction::commit() {
+  auto files = std::move(files_);
+  files_.clear();
+  std::string failed;
+  // A destination that cannot take a file (a folder of that name) fails the whole set before
+  // anything is renamed.
+  for (const auto& [tmp, path] : files) {
+    struct stat st;
+    if (stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) failed = path;
+  }
+  for (const auto& [tmp, path] : files) {
+    if (failed.empty() && std::rename(tmp.c_str(), path.c_str()) != 0) failed = path;
+    if (!failed.empty()) std::remove(tmp.c_str());
+    unregister_temporary(tmp);
+  }
+  if (!failed.empty()) throw RuntimeFailure("cannot write " + failed);
+}
+
+std::string OutputTransaction::pending(const std::string& path) {
+  for (auto it = transactions().rbegin(); it != transactions().rend(); ++it)
+    for (const auto& [tmp, final_path] : (*it)->files_)
+      if (final_path == path) return tmp;
+  return "";
+}
+
 void write_atomically(const std::string& path,
                       const std::function<void(const std::string&)>& write) {
   // Same folder, so the rename is atomic; the temporary keeps the extension (EXR/PLY writers
@@ -36,17 +162,24 @@ void write_atomically(const std::string& path,
   auto slash = path.find_last_of('/');
   std::string dir = slash == std::string::npos ? "" : path.substr(0, slash + 1);
   std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
-  std::string tmp = dir + ".tmp-" + std::to_string(getpid()) + "-" + base;
+  static int counter = 0;
+  std::string tmp = dir + ".tmp-" + std::to_string(getpid()) + "-" + std::to_string(counter++) + "-" + base;
+  register_temporary(tmp);
   try {
     write(tmp);
   } catch (...) {
     std::remove(tmp.c_str());
+    unregister_temporary(tmp);
     throw;
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw RuntimeFailure("cannot write " + path);
+  if (!transactions().empty()) {
+    transactions().back()->files_.emplace_back(tmp, path);
+    return;
   }
+  const bool ok = std::rename(tmp.c_str(), path.c_str()) == 0;
+  if (!ok) std::remove(tmp.c_str());
+  unregister_temporary(tmp);
+  if (!ok) throw RuntimeFailure("cannot write " + path);
 }
 
 void write_json(const std::string& path, const Json& j) {
@@ -109,14 +242,21 @@ void write_exr(const std::string& path, const ExrTable& t) {
   });
 }
 
-ExrTable read_exr(const std::string& path) {
+ExrTable read_exr(const std::string& path, const std::function<void(const ExrTable&)>& check_header) {
   ExrTable t;
+  check_exr_header_sizes(path);  // before OpenEXR allocates what a corrupt header declares
   try {
     Imf::InputFile file(path.c_str());
     const Imf::Header& h = file.header();
     auto dw = h.dataWindow();
-    t.width = dw.max.x - dw.min.x + 1;
-    t.height = dw.max.y - dw.min.y + 1;
+    // 64-bit sizes: a corrupt data window must not overflow before it is refused.
+    const long long w = static_cast<long long>(dw.max.x) - dw.min.x + 1;
+    const long long hgt = static_cast<long long>(dw.max.y) - dw.min.y + 1;
+    if (w < 1 || hgt < 1 || w > (1 << 30) || hgt > (1 << 30))
+      throw UsageError(path + ": EXR data window " + std::to_string(w) + " x " + std::to_string(hgt) +
+                       " is empty or absurd");
+    t.width = static_cast<int>(w);
+    t.height = static_cast<int>(hgt);
     for (auto it = h.begin(); it != h.end(); ++it) {
       if (auto* d = dynamic_cast<const Imf::DoubleAttribute*>(&it.attribute()))
         t.attributes[it.name()] = d->value();
@@ -125,11 +265,13 @@ ExrTable read_exr(const std::string& path) {
       else if (auto* i = dynamic_cast<const Imf::IntAttribute*>(&it.attribute()))
         t.attributes[it.name()] = i->value();
     }
+    for (auto c = h.channels().begin(); c != h.channels().end(); ++c) t.channel_names.push_back(c.name());
+    if (check_header) check_header(t);
+    require_memory(static_cast<double>(w) * hgt * 4.0 * std::max<std::size_t>(1, t.channel_names.size()),
+                   path + " (" + std::to_string(w) + " x " + std::to_string(hgt) + " pixels)");
     Imf::FrameBuffer fb;
-    for (auto c = h.channels().begin(); c != h.channels().end(); ++c) {
-      t.channel_names.push_back(c.name());
+    for (std::size_t c = 0; c < t.channel_names.size(); ++c)
       t.channels.emplace_back(static_cast<std::size_t>(t.width) * t.height);
-    }
     for (std::size_t c = 0; c < t.channels.size(); ++c) {
       char* base = (char*)t.channels[c].data() -
                    (static_cast<long>(dw.min.x) + static_cast<long>(dw.min.y) * t.width) *
@@ -139,6 +281,8 @@ ExrTable read_exr(const std::string& path) {
     }
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
+  } catch (const UsageError&) {
+    throw;
   } catch (const std::exception& e) {
     throw UsageError(path + " is not a readable EXR file (" + std::string(e.what()) + ")");
   }

@@ -1,5 +1,9 @@
 #include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/bsdf_walk.hpp"
+#include "microsim/measure/groove_models.hpp"
 #include "microsim/measure/sampling.hpp"
+#include "microsim/measure/vcavity_measure.hpp"
+#include "microsim/surface/generators.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
@@ -269,8 +273,6 @@ BsdfTally run_paths(std::uint64_t n, int K, int npix, int nplane,
 BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
   using namespace microsim::models;
   const Microsurface& s = tracer.surface();
-  if (!s.macro().periodic)
-    throw UsageError("measure bsdf needs a periodic tile (the surface is a finite object)");
   if (!(o.theta_i >= 0.0 && o.theta_i < 0.5 * kPi))
     throw UsageError("--theta-i must be in [0, 90) degrees");
   if (!std::isfinite(o.phi_i)) throw UsageError("--phi-i must be finite");
@@ -291,7 +293,13 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
   const Vec3 wi = r.wi;
   const Strata strata(o.rays);
   const Macrosurface& macro = s.macro();
-  const Vec3 corner(-0.5 * macro.size_x, -0.5 * macro.size_y, tracer.z_top());
+  // Periodic tile: the tile at the top of the slab. Finite object: a window perpendicular to l
+  // covering its projection; each ray carries W_perp / (A cos theta_i), so that the tallies are
+  // per unit of the flux falling on the macrosurface (000 eq. 4a with the declared area A) and
+  // rays that miss the object add nothing.
+  const bool finite = !macro.periodic;
+  const RayWindow window = make_ray_window(tracer, wi);
+  const double ray_weight = finite ? window.area_perp / (macro.area * wi.z()) : 1.0;
   const std::uint64_t stream = direction_stream(0xB5DF0000ull, o.theta_i, o.phi_i);
   const bool with_model = s.nominal && o.model_walks > 0;
   const double share = with_model ? 0.8 : 1.0;
@@ -300,68 +308,21 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
     t.add_exit(reflected ? 0 : 1, order, w, r.map.pixel_of(d), r.plane.bin_of(d));
   };
 
-  r.measured = run_paths(strata.total(), K, npix, nplane, o.progress, 0.0, share,
-                         [&](std::uint64_t i, BsdfTally& t) {
-    CounterRng rng(o.seed, stream, i);
-    ++t.paths;
-    const Vec2 ab = strata.point(i, rng);
-    Vec3 dir = -wi;
-    RaySide side = RaySide::Front;
-    double weight = 1.0;
-    TraceHit hit = tracer.first_hit(corner + Vec3(ab.x() * macro.size_x, ab.y() * macro.size_y, 0.0), dir,
-                                    nullptr, t.counters);
-    for (int order = 0;; ++order) {
-      if (!hit.hit) {
-        if (side == RaySide::Front && dir.z() > 0.0 && order > 0) leave(t, true, order, weight, dir);
-        else if (side == RaySide::Back && hit.exit_below) leave(t, false, order, weight, dir);
-        else ++t.lost;  // lost below / unresolved (tracer counters), or left the solid upward
-        return;
-      }
-      // A hit on the unexpected side crossed the surface through a rounding gap.
-      if (hit.backface != (side == RaySide::Back)) {
-        ++t.lost;
-        return;
-      }
-      if (order + 1 > o.max_events) {
-        ++t.unterminated;
-        return;
-      }
-      ++t.events;
-      // Normal on the side of the current medium; v toward where the ray came from.
-      const Vec3 m = side == RaySide::Front ? hit.normal : Vec3(-hit.normal);
-      const Vec3 v = -dir;
-      const double vm = std::max(0.0, v.dot(m));
-      const bool front = side == RaySide::Front;
-      switch (mat.kind) {
-        case MaterialKind::Mirror:
-          dir = reflect(v, m);  // 000 eq. 13a
-          break;
-        case MaterialKind::Conductor:
-          weight *= mat.reflectance(vm, true);  // 000 eq. 8, complex index
-          dir = reflect(v, m);
-          break;
-        case MaterialKind::Dielectric: {
-          const double F = mat.reflectance(vm, front);
-          if (rng.uniform() < F) {
-            dir = reflect(v, m);
-          } else {
-            const double n = front ? mat.eta : 1.0 / mat.eta;  // far side over near side
-            Vec3 t_dir;
-            if (refract(v, m, 1.0 / n, &t_dir)) {  // 000 eq. 15a
-              dir = t_dir;
-              side = front ? RaySide::Back : RaySide::Front;
-            } else {
-              dir = reflect(v, m);
-            }
-          }
-          break;
-        }
-      }
-      dir.normalize();
-      const SourcePlane plane = SourcePlane::of(s.facet(hit.facet));
-      hit = tracer.first_hit(hit.point, dir, &plane, t.counters, side);
-    }
-  });
+  if (is_vcavity(s)) {
+    // The V-cavity ensemble: every groove traced on its own as an infinite periodic groove.
+    r.measured = trace_vcavity_bsdf(s, o, wi, r.map, r.plane, stream);
+    if (o.progress) o.progress(share);
+  } else {
+    r.measured = run_paths(strata.total(), K, npix, nplane, o.progress, 0.0, share,
+                           [&](std::uint64_t i, BsdfTally& t) {
+      CounterRng rng(o.seed, stream, i);
+      ++t.paths;
+      const Vec2 ab = strata.point(i, rng);
+      const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
+                                       -wi, mat, rng, o.max_events, finite, t.counters, t.events);
+      record_walk_end(t, e, ray_weight, r.map, r.plane);
+    });
+  }
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   if (with_model) {
@@ -563,6 +524,8 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
     }
   }
   j["in_plane"] = in_plane;
+  add_groove_models(j, r, s);  // closed-form V-groove / V-cavity models beside rows and lobes
+  add_macro_normalization(j, r, s);
 
   // --- bookkeeping
   const auto& m = r.measured;

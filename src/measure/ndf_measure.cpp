@@ -44,7 +44,9 @@ NdfResult measure_ndf(const Microsurface& s, const NdfOptions& o) {
           Vec3 centroid = (t.p0 + t.p1 + t.p2) / 3.0;
           int bx = std::clamp(static_cast<int>((centroid.x() - x0) / wx * o.blocks), 0, o.blocks - 1);
           int by = std::clamp(static_cast<int>((centroid.y() - y0) / wy * o.blocks), 0, o.blocks - 1);
-          acc.area[static_cast<std::size_t>(by * o.blocks + bx) * nbins + r.bins.bin_of(c / (2 * a))] += a;
+          const int bin = r.bins.bin_of(c / (2 * a));
+          if (bin < 0) continue;  // non-finite normal: no direction to bin
+          acc.area[static_cast<std::size_t>(by * o.blocks + bx) * nbins + bin] += a;
         }
         return acc;
       },

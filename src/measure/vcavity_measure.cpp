@@ -1,10 +1,14 @@
 #include "microsim/measure/vcavity_measure.hpp"
+#include "microsim/measure/bsdf_walk.hpp"
 #include "microsim/measure/sampling.hpp"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <chrono>
 
+#include "microsim/models/vgroove_multiple.hpp"
 #include "microsim/surface/generators.hpp"
 
 namespace microsim {
@@ -164,6 +168,43 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
   for (auto& r : results) r.seconds = seconds / nv;
   if (o.progress) o.progress(1.0);
   return results;
+}
+
+BsdfTally trace_vcavity_bsdf(const Microsurface& s, const BsdfOptions& o, const Vec3& wi,
+                             const HemisphereMap& map, const InPlaneBins& plane, std::uint64_t stream) {
+  if (!is_vcavity(s) || s.num_facets() % 4 != 0)
+    throw UsageError("trace_vcavity_bsdf: not a vcavity surface (generate vcavity)");
+  const std::size_t K = s.num_facets() / 4;
+  const Strata strata((o.rays + K - 1) / K);
+  const int orders = o.orders, npix = map.size(), nplane = plane.size();
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<std::size_t>(0, K, 16), BsdfTally(),
+      [&](const tbb::blocked_range<std::size_t>& range, BsdfTally acc) {
+        if (acc.albedo.empty()) acc = BsdfTally(orders, npix, nplane);
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+          // Groove k in its own frame (as measure_vcavity_g1): x along the horizontal part of
+          // m_k, y along the ridge, one unit period per tile.
+          const models::GrooveFrame frame(vcavity_groove_normal(s, k));
+          const float top = static_cast<float>(0.5 * std::tan(frame.facet_angle));
+          Microsurface groove = Microsurface::heightfield(2, 2, 1.0, 1.0, {0.0f, top, 0.0f, top});
+          Tracer tracer(groove);
+          const Vec3 wl = frame.to_local(wi);
+          for (std::uint64_t i = 0; i < strata.total(); ++i) {
+            CounterRng rng(o.seed, stream + (static_cast<std::uint64_t>(k) << 32), i);
+            ++acc.paths;
+            const Vec2 ab = strata.point(i, rng);
+            WalkEnd e = walk_bsdf_path(tracer, Vec3(ab.x() - 0.5, ab.y() - 0.5, tracer.z_top()), -wl,
+                                       o.material, rng, o.max_events, false, acc.counters, acc.events);
+            e.direction = frame.to_world(e.direction);
+            record_walk_end(acc, e, 1.0, map, plane);
+          }
+        }
+        return acc;
+      },
+      [](BsdfTally a, const BsdfTally& b) {
+        a += b;
+        return a;
+      });
 }
 
 }  // namespace microsim

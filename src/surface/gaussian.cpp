@@ -1,5 +1,7 @@
 #include "microsim/surface/gaussian.hpp"
 
+#include "microsim/io/checks.hpp"
+
 #include <unsupported/Eigen/FFT>
 
 #include <tbb/parallel_for.h>
@@ -27,14 +29,7 @@ void validate(const GaussianParams& p) {
   if (p.resolution > 32760)
     throw UsageError("--resolution must be at most 32760 (Embree grid limit); got " +
                      std::to_string(p.resolution));
-  double need = gaussian_memory_estimate(p.resolution);
-  double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
-  if (need > 0.8 * have) {
-    std::ostringstream os;
-    os << "--resolution " << p.resolution << " needs about " << need / (1 << 30)
-       << " GiB, more than 80% of this machine's " << have / (1 << 30) << " GiB";
-    throw UsageError(os.str());
-  }
+  require_memory(gaussian_memory_estimate(p.resolution), "--resolution " + std::to_string(p.resolution));
   if (!(p.size > 0) || !std::isfinite(p.size)) throw UsageError("--size must be > 0");
   double dx = p.size / p.resolution;
   if (p.correlation_length != 0.0 &&

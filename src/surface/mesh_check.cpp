@@ -1,4 +1,5 @@
 #include "microsim/surface/mesh_check.hpp"
+#include "microsim/surface/mesh_header.hpp"
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
@@ -9,6 +10,7 @@
 #include <algorithm>
 #include <fstream>
 #include <iostream>
+#include <mutex>
 #include <numeric>
 #include <sstream>
 
@@ -17,6 +19,40 @@
 namespace microsim {
 
 namespace {
+
+// While alive, OpenMesh's omerr writes into a string and omlog/omout are silenced; the streams'
+// buffers are restored on destruction (also when read_mesh throws). The buffers are swapped
+// rather than multiplex targets connected: OpenMesh's disconnect() never deletes the target it
+// allocated in connect(), so one connect per load leaked. The mutex makes concurrent loads safe.
+class OpenMeshStreamCapture {
+ public:
+  OpenMeshStreamCapture()
+      : lock_(mutex()),
+        err_(omerr().rdbuf(captured_.rdbuf())),
+        log_(omlog().rdbuf(discarded_.rdbuf())),
+        out_(omout().rdbuf(discarded_.rdbuf())) {}
+  ~OpenMeshStreamCapture() {
+    omerr().flush();
+    omerr().rdbuf(err_);
+    omlog().rdbuf(log_);
+    omout().rdbuf(out_);
+  }
+  OpenMeshStreamCapture(const OpenMeshStreamCapture&) = delete;
+  OpenMeshStreamCapture& operator=(const OpenMeshStreamCapture&) = delete;
+  std::string text() {
+    omerr().flush();
+    return captured_.str();
+  }
+
+ private:
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> lock_;
+  std::ostringstream captured_, discarded_;
+  std::streambuf *err_, *log_, *out_;
+};
 
 std::string point_str(const Eigen::Vector3f& p) {
   std::ostringstream os;
@@ -165,24 +201,22 @@ void read_mesh_file(const std::string& path, std::vector<Eigen::Vector3f>& verts
                     std::vector<std::array<std::uint32_t, 3>>& tris) {
   using OMesh = OpenMesh::TriMesh_ArrayKernelT<>;
   if (!std::ifstream(path).good()) throw UsageError("mesh file " + path + " does not exist or cannot be read");
+  check_mesh_header(path);  // declared counts against the file's length and memory, before reading
+
   // OpenMesh reports problems on omerr and repairs non-manifold faces by duplicating their
   // vertices; capture its messages and read the repair flags instead.
-  std::ostringstream captured;
-  omlog().disable();
-  omout().disable();
-  omerr().disconnect(std::cerr);
-  omerr().connect(captured);
-  omerr().enable();
   OMesh om;
   om.request_face_status();
-  OpenMesh::IO::Options opt;
-  const bool ok = OpenMesh::IO::read_mesh(om, path, opt);
-  omerr().flush();
-  omerr().disconnect(captured);
-  omerr().disable();
+  std::string msg;
+  bool ok = false;
+  {
+    OpenMeshStreamCapture capture;
+    OpenMesh::IO::Options opt;
+    ok = OpenMesh::IO::read_mesh(om, path, opt);
+    msg = capture.text();
+  }
   if (!ok || om.n_faces() == 0)
     throw UsageError(path + " is not a readable mesh (PLY/OBJ/OFF with at least one face)");
-  const std::string msg = captured.str();
   if (msg.find("equal vertices") != std::string::npos)
     throw UsageError(path + ": degenerate face (a face repeats a vertex)");
   if (msg.find("invalid vertex index") != std::string::npos)

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sys/stat.h>
 
+#include "microsim/io/checks.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/surface/mesh_check.hpp"
 
@@ -35,21 +36,46 @@ Json macro_to_json(const Macrosurface& m) {
           {"size_y", m.size_y}};
 }
 
-Macrosurface macro_from_json(const Json& j) {
+// Every field checked (io/checks.hpp): a file naming `file` and the field on a bad value.
+Macrosurface macro_from_json(const Json& j, const std::string& file) {
+  const auto number = [&](const Json& x, const std::string& key, const Range& r) {
+    if (!x.is_number()) throw UsageError(file + ": macrosurface field '" + key + "' must be a number");
+    const double v = x.get<double>();
+    require_in_range(v, r, file + ": macrosurface field '" + key + "'");
+    return v;
+  };
+  if (!j.is_object()) throw UsageError(file + ": the macrosurface must be a JSON object");
+  for (const char* key : {"normal", "area", "periodic", "size_x", "size_y"})
+    if (!j.contains(key)) throw UsageError(file + ": macrosurface field '" + key + "' is missing");
   Macrosurface m;
-  auto n = j.at("normal");
-  m.normal = Vec3(n.at(0).get<double>(), n.at(1).get<double>(), n.at(2).get<double>());
-  m.area = j.at("area").get<double>();
+  const Json& n = j.at("normal");
+  if (!n.is_array() || n.size() != 3) throw UsageError(file + ": macrosurface field 'normal' must be [x, y, z]");
+  m.normal = Vec3(number(n[0], "normal", closed(-1e6, 1e6)), number(n[1], "normal", closed(-1e6, 1e6)),
+                  number(n[2], "normal", closed(-1e6, 1e6)));
+  if (!(m.normal.norm() > 0)) throw UsageError(file + ": macrosurface field 'normal' must be nonzero");
+  m.area = number(j.at("area"), "area", open_closed(0, 1e12));
+  if (!j.at("periodic").is_boolean()) throw UsageError(file + ": macrosurface field 'periodic' must be true or false");
   m.periodic = j.at("periodic").get<bool>();
-  m.size_x = j.at("size_x").get<double>();
-  m.size_y = j.at("size_y").get<double>();
+  m.size_x = number(j.at("size_x"), "size_x", closed(0, 1e6));
+  m.size_y = number(j.at("size_y"), "size_y", closed(0, 1e6));
   return m;
 }
 
-// The nominal NDF travels in the description ("nominal_ndf", "alpha_x", "alpha_y").
-void restore_nominal(Microsurface& s) {
+// The nominal NDF travels in the description ("nominal_ndf", "alpha_x", "alpha_y"); each field is
+// checked, naming the file and the key.
+void restore_nominal(Microsurface& s, const std::string& file) {
   const auto& d = s.description;
+  if (!d.is_object()) return;
+  for (const char* key : {"alpha_x", "alpha_y"}) {
+    if (!d.contains(key)) continue;
+    if (!d[key].is_number())
+      throw UsageError(file + ": description field '" + key + "' must be a number in (0, 1000]");
+    require_in_range(d[key].get<double>(), open_closed(0, 1000), file + ": description field '" + key + "'");
+  }
   if (!d.contains("nominal_ndf") || !d.contains("alpha_x") || !d.contains("alpha_y")) return;
+  if (!d["nominal_ndf"].is_string() ||
+      (d["nominal_ndf"].get<std::string>() != "beckmann" && d["nominal_ndf"].get<std::string>() != "ggx"))
+    throw UsageError(file + ": description field 'nominal_ndf' must be \"beckmann\" or \"ggx\"");
   std::string kind = d["nominal_ndf"].get<std::string>();
   double ax = d["alpha_x"].get<double>(), ay = d["alpha_y"].get<double>();
   if (kind == "beckmann") s.nominal = models::Ndf::beckmann(ax, ay);
@@ -73,21 +99,45 @@ void save_heightfield_exr(const Microsurface& s, const std::string& path) {
   write_exr(path, t);
 }
 
+// Largest heightfield side: Embree's grid limit, as for generate.
+constexpr int kMaxGrid = 32760;
+// Bytes per grid cell once loaded and traced (the same costs as a generated tile).
+double heightfield_bytes(double w, double h) { return (w + 3) * (h + 3) * 72.0; }
+
 Microsurface load_heightfield_exr(const std::string& path) {
-  ExrTable t = read_exr(path);
-  if (!t.attributes.contains("microsim_surface") || !t.attributes.contains("microsim_macrosurface"))
-    throw UsageError(path + " is an EXR file but not a microsim heightfield (no microsim header)");
+  Macrosurface m;
+  // The header is checked before any pixel is allocated: size, macrosurface, description.
+  ExrTable t = read_exr(path, [&](const ExrTable& h) {
+    if (!h.attributes.contains("microsim_surface") || !h.attributes.contains("microsim_macrosurface") ||
+        !h.attributes["microsim_macrosurface"].is_string())
+      throw UsageError(path + " is an EXR file but not a microsim heightfield (no microsim header)");
+    if (std::find(h.channel_names.begin(), h.channel_names.end(), "Z") == h.channel_names.end())
+      throw UsageError(path + " has no Z channel");
+    if (h.width < 1 || h.width > kMaxGrid || h.height < 1 || h.height > kMaxGrid)
+      throw UsageError(path + ": heightfield size " + std::to_string(h.width) + " x " +
+                       std::to_string(h.height) + " is outside [1, " + std::to_string(kMaxGrid) + "] per side");
+    require_memory(heightfield_bytes(h.width, h.height),
+                   path + " (" + std::to_string(h.width) + " x " + std::to_string(h.height) + " heightfield)");
+    Json mj;
+    try {
+      mj = Json::parse(h.attributes["microsim_macrosurface"].get<std::string>());
+    } catch (const Json::exception& e) {
+      throw UsageError(path + " has a corrupt microsim header (" + std::string(e.what()) + ")");
+    }
+    m = macro_from_json(mj, path);
+    require_in_range(m.size_x, closed(1e-6, 1e6), path + ": macrosurface field 'size_x'");
+    require_in_range(m.size_y, closed(1e-6, 1e6), path + ": macrosurface field 'size_y'");
+    if (!m.periodic) throw UsageError(path + ": macrosurface field 'periodic' must be true for a heightfield");
+  });
   auto it = std::find(t.channel_names.begin(), t.channel_names.end(), "Z");
-  if (it == t.channel_names.end()) throw UsageError(path + " has no Z channel");
+  for (float h : t.channels[it - t.channel_names.begin()])
+    if (!std::isfinite(h) || std::abs(h) > 1e12) throw UsageError(path + " contains non-finite or absurd heights");
   try {
-    Macrosurface m = macro_from_json(Json::parse(
-        t.attributes["microsim_macrosurface"].get<std::string>()));
     Microsurface s = Microsurface::heightfield(t.width, t.height, m.size_x, m.size_y,
                                                t.channels[it - t.channel_names.begin()]);
-    s.description = Json::parse(t.attributes["microsim_description"].get<std::string>());
-    restore_nominal(s);
-    for (float h : s.heights())
-      if (!std::isfinite(h)) throw UsageError(path + " contains non-finite heights");
+    if (t.attributes.contains("microsim_description") && t.attributes["microsim_description"].is_string())
+      s.description = Json::parse(t.attributes["microsim_description"].get<std::string>());
+    restore_nominal(s, path);
     return s;
   } catch (const Json::exception& e) {
     throw UsageError(path + " has a corrupt microsim header (" + std::string(e.what()) + ")");
@@ -129,7 +179,9 @@ Microsurface load_mesh(const std::string& path) {
     try {
       std::ifstream f(side);
       auto j = Json::parse(f);
-      macro = macro_from_json(j.at("macrosurface"));
+      if (!j.is_object() || !j.contains("macrosurface"))
+        throw UsageError(side + ": not a microsim sidecar (no 'macrosurface' field)");
+      macro = macro_from_json(j.at("macrosurface"), side);
       if (j.contains("description")) description = j["description"];
     } catch (const Json::exception& e) {
       throw UsageError(side + " is not a valid microsim sidecar (" + std::string(e.what()) + ")");
@@ -161,7 +213,7 @@ Microsurface load_mesh(const std::string& path) {
     throw UsageError(std::string(e.what()) + " (no sidecar " + side +
                      ": declare the macrosurface with microsim generate mesh --input)");
   }
-  restore_nominal(s);
+  restore_nominal(s, side);
   return s;
 }
 }  // namespace
@@ -203,10 +255,14 @@ void save_surface(const Microsurface& s, const std::string& path) {
 }
 
 Microsurface load_surface(const std::string& path) {
-  if (!file_exists(path)) throw UsageError("surface file " + path + " does not exist");
+  // A surface written earlier by this command (demo) and not committed yet is read from its
+  // temporary.
+  const std::string pending = OutputTransaction::pending(path);
+  const std::string file = pending.empty() ? path : pending;
+  if (!file_exists(file)) throw UsageError("surface file " + path + " does not exist");
   std::string ext = extension_of(path);
-  if (ext == "exr") return load_heightfield_exr(path);
-  if (ext == "ply" || ext == "obj" || ext == "off") return load_mesh(path);
+  if (ext == "exr") return load_heightfield_exr(file);
+  if (ext == "ply" || ext == "obj" || ext == "off") return load_mesh(file);
   throw UsageError("surface file " + path + ": unknown format (expected .exr, .ply, .obj or .off)");
 }
 

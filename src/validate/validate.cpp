@@ -18,6 +18,7 @@
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/measure/g2_measure.hpp"
 #include "microsim/measure/vndf_measure.hpp"
+#include "microsim/validate/bsdf_object_rows.hpp"
 #include "microsim/measure/ndf_measure.hpp"
 #include "microsim/models/ndf.hpp"
 #include "microsim/trace/tracer.hpp"
@@ -910,6 +911,11 @@ void check_bsdf_albedo(const SurfaceSet& set, Progress& progress, CheckOutput& o
       progress.update();
       const std::string where = (label.empty() ? "" : label + ", ") + "mirror, theta_i " + angle(t);
       const Json ang = {{"theta_i_deg", t}};
+      // Finite objects against their visible area ratio; V-grooves and V-cavity ensembles
+      // against the closed forms (validate/bsdf_object_rows.hpp).
+      append_bsdf_object_rows(r, s, make_row(set, "", "", "", Kind::Identity, ""), where,
+                              set.name, ang, out.rows);
+      // Energy conservation: every path of a mirror carries weight 1 and leaves (or is lost).
       const Estimate up = r.albedo(0, K), down = r.albedo(1, K);
       Row e = albedo_total_row(r.measured.paths, r.measured.lost, r.measured.unterminated, up.mean,
                                down.mean);
@@ -917,7 +923,7 @@ void check_bsdf_albedo(const SurfaceSet& set, Progress& progress, CheckOutput& o
       e.condition = set.name + " " + where;
       e.group = set.name + "/albedo_total";
       e.extra["theta_i_deg"] = t;
-      out.rows.push_back(e);
+      if (mirror_total_is_one(s)) out.rows.push_back(e);
       Json row = {{"theta_i_deg", t}, {"paths", r.measured.paths}, {"lost", r.measured.lost},
                   {"unterminated", r.measured.unterminated}, {"albedo", Json::array()},
                   {"albedo_stderr", Json::array()}};
@@ -1000,9 +1006,10 @@ const std::vector<Check>& checks() {
       {"vndf", "VNDF histogram against the nominal D_v (chi-square), and the nominal NDF's VNDF "
                "sampler against its own D_v (identity)",
        [](const SurfaceSet& s) { return s.surfaces[0].nominal.has_value(); }, vndf_work, check_vndf},
-      {"bsdf_albedo", "mirror BSDF albedos: total = 1 (energy conservation), order 1 against the "
-                      "single-scattering model, per order against the Smith random walk",
-       [](const SurfaceSet& s) { return s.surfaces[0].macro().periodic; }, bsdf_work, check_bsdf_albedo},
+      {"bsdf_albedo", "mirror BSDF albedos: total = 1 (energy conservation; finite objects: the "
+                      "visible area ratio), order 1 against the single-scattering model, per order "
+                      "against the Smith random walk and the V-groove / V-cavity closed forms",
+       [](const SurfaceSet&) { return true; }, bsdf_work, check_bsdf_albedo},
   };
   return registry;
 }

@@ -14,8 +14,48 @@ namespace microsim {
 // Extension of a path, lower case, without the dot ("json", "csv", "exr"...).
 std::string extension_of(const std::string& path);
 
-// Calls write(tmp_path) and renames tmp_path to path; removes tmp_path if write throws.
+// Calls write(tmp_path), tmp_path in the folder of path, and renames tmp_path to path; removes
+// tmp_path if write throws. Inside an OutputTransaction the rename waits for its commit().
 void write_atomically(const std::string& path, const std::function<void(const std::string&)>& write);
+
+// All outputs of one command committed together: while a transaction is alive, every
+// write_atomically goes to its temporary and is renamed into place only by commit(), after every
+// output is written; destroying an uncommitted transaction removes its temporaries. Transactions
+// nest (the innermost receives the writes). Single-threaded use (the command's main thread).
+class OutputTransaction {
+ public:
+  OutputTransaction();
+  ~OutputTransaction();
+  OutputTransaction(const OutputTransaction&) = delete;
+  OutputTransaction& operator=(const OutputTransaction&) = delete;
+  // Renames every temporary to its final path, in the order written.
+  void commit();
+  // Temporary holding `path` if a live transaction wrote it and has not committed yet.
+  static std::string pending(const std::string& path);
+
+ private:
+  friend void write_atomically(const std::string&, const std::function<void(const std::string&)>&);
+  std::vector<std::pair<std::string, std::string>> files_;  // (temporary, final)
+};
+
+// Temporary files and folders removed if the process is interrupted: install_interrupt_cleanup()
+// makes SIGINT, SIGTERM and SIGHUP remove every registered path (a folder with its contents),
+// then end the process by the same signal.
+void register_temporary(const std::string& path);
+void unregister_temporary(const std::string& path);
+void install_interrupt_cleanup();
+// A temporary folder (mkdtemp under TMPDIR, registered), removed with its contents when destroyed.
+class TemporaryFolder {
+ public:
+  explicit TemporaryFolder(const std::string& prefix);
+  ~TemporaryFolder();
+  TemporaryFolder(const TemporaryFolder&) = delete;
+  TemporaryFolder& operator=(const TemporaryFolder&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
 
 void write_json(const std::string& path, const Json& j);
 // One CSV line per element of j["rows"]; nested objects and arrays are skipped (CSV is flat).
@@ -30,6 +70,10 @@ struct ExrTable {
   Json attributes = Json::object();
 };
 void write_exr(const std::string& path, const ExrTable& t);
-ExrTable read_exr(const std::string& path);
+// Reads a table; `check_header` (if given) sees the size, channel names and attributes (no pixels
+// yet) and may refuse the file before its pixels are allocated. Width and height must be >= 1
+// and the pixels must fit in memory (io/checks.hpp).
+ExrTable read_exr(const std::string& path,
+                  const std::function<void(const ExrTable&)>& check_header = {});
 
 }  // namespace microsim

@@ -12,8 +12,8 @@ class DirectionBinning {
   DirectionBinning(int n_theta, int n_phi, double theta_max);
   int n_theta() const { return n_theta_; }
   int n_phi() const { return n_phi_; }
-  int size() const { return n_theta_ * n_phi_; }
-  // Bin index, or -1 when theta > theta_max.
+  int size() const { return n_theta_ * n_phi_; }  // the constructor keeps this below 2^31
+  // Bin index, or -1 when theta > theta_max or the direction is not finite.
   int bin_of(const Vec3& unit_dir) const;
   int index(int it, int ip) const { return it * n_phi_ + ip; }
   double theta_lo(int it) const { return it * d_theta_; }

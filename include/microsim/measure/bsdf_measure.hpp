@@ -144,7 +144,10 @@ struct BsdfResult {
   Estimate model_f_plane(int side, int k, int b) const;
 };
 
-// Throws UsageError for a non-periodic surface, theta_i outside [0, 90), bad counts.
+// Periodic tiles; finite objects (rays over a window covering the projection, tallies per unit
+// of the flux on the macrosurface: a convex mirror object's total albedo is its visible area
+// ratio); V-cavity ensembles (each groove traced on its own, measure/vcavity_measure.hpp).
+// Throws UsageError for theta_i outside [0, 90) and bad counts.
 BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& options);
 
 // Key of slot k: "order_1", ..., "order_<K>plus", "total".

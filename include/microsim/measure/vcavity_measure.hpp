@@ -4,6 +4,7 @@
 #pragma once
 #include <vector>
 
+#include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/g1_measure.hpp"
 
 namespace microsim {
@@ -18,5 +19,14 @@ namespace microsim {
 // Each groove's Embree scene is built once for all views.
 std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vector<Vec3>& views,
                                          const G1Options& options);
+
+// The BSDF random walk on a vcavity ensemble: each groove traced on its own as an infinite
+// periodic V-groove (its tile one period, in the groove's frame) with the same number of
+// stratified rays along -wi, every interreflection kept; exit directions are turned back to the
+// world frame before binning. Every groove covers the same macro area, so the tallies are per
+// unit macro area (the V-cavity multiple-scattering model's normalization). Deterministic for
+// any thread count.
+BsdfTally trace_vcavity_bsdf(const Microsurface& s, const BsdfOptions& o, const Vec3& wi,
+                             const HemisphereMap& map, const InPlaneBins& plane, std::uint64_t stream);
 
 }  // namespace microsim

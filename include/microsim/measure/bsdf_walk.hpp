@@ -1,0 +1,38 @@
+// One random walk of the BSDF estimator on an explicit microsurface (DESIGN.md "BSDF"): the ray
+// starts at `origin` along `dir`; at each hit a mirror reflects, a conductor reflects with weight
+// F (complex index, 000 eq. 8), a dielectric reflects with probability F and otherwise refracts
+// (000 eq. 15a; total internal reflection; both sides of the interface). Shared by the periodic
+// tile, finite objects and the V-cavity ensemble (each groove traced on its own).
+#pragma once
+#include <cstdint>
+
+#include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/models/microfacet_bsdf.hpp"
+#include "microsim/trace/tracer.hpp"
+
+namespace microsim {
+
+struct WalkEnd {
+  enum Kind { Reflected, Transmitted, Missed, Lost, Unterminated };
+  Kind kind = Lost;
+  int order = 0;       // scattering events before leaving
+  double weight = 1.0;  // product of the conductor reflectances (1 for mirror and dielectric)
+  Vec3 direction = Vec3::UnitZ();
+};
+
+// `finite`: the surface is a finite object. Its rays that miss it at once are Missed, and a ray
+// that leaves it outside after at least one event is reflected whatever its direction (walls send
+// light below the base plane: 000 "Inherent Assumptions", the visible area exceeds the
+// macrosurface's). On a periodic tile a reflected ray leaves upward, a transmitted one downward
+// from inside the slab; anything else is Lost. `events` counts the scattering events.
+WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir,
+                       const models::Material& mat, CounterRng& rng, int max_events, bool finite,
+                       TraceCounters& counters, std::uint64_t& events);
+
+// Adds a walk's end to the tallies with the path's starting weight w0: exits with their order
+// and direction (binned when they point into their side's hemisphere: a finite object's
+// reflected ray below the base plane counts in the albedo only), losses and unterminated walks.
+void record_walk_end(BsdfTally& t, const WalkEnd& e, double w0, const HemisphereMap& map,
+                     const InPlaneBins& plane);
+
+}  // namespace microsim

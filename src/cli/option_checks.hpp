@@ -1,0 +1,36 @@
+// Option rules of the command line, all built on microsim/io/checks.hpp: CLI11 validators that
+// refuse non-finite, out-of-range or wrapped-around values before the command runs, and TOML
+// presets (--config FILE) applied to any command, keys checked against its options.
+#pragma once
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <string>
+
+#include "microsim/io/checks.hpp"
+
+namespace microsim::cli {
+
+// A finite number inside r ("--alpha: must be a finite number in (0, 10] (got -1)").
+CLI::Validator number_in(const Range& r);
+// Any finite number (the range is checked where the parameters are validated).
+CLI::Validator finite_number();
+// A decimal integer in [lo, hi].
+CLI::Validator integer_in(long long lo, long long hi);
+// A seed: a decimal integer in [0, 2^64 - 1] (no negative values wrapping around).
+CLI::Validator seed_value();
+
+// Largest accepted --rays: about a day of tracing at 10 Mrays/s on one direction.
+constexpr long long kMaxRays = 1000000000000LL;
+
+// Adds --config FILE (a TOML preset of this command's options) to cmd.
+void add_preset_option(CLI::App& cmd, const std::string& help);
+// Applies cmd's --config preset, if given: every key must be one of cmd's long options, values
+// go through the option's own validators, and options given on the command line win. A missing,
+// binary or malformed file, an unknown or repeated key or a bad value: UsageError naming the file
+// and the key.
+void apply_preset(CLI::App& cmd);
+// cmd's callback, after its preset is applied.
+void on_run(CLI::App* cmd, std::function<void()> run);
+
+}  // namespace microsim::cli

@@ -1,0 +1,87 @@
+#include "microsim/measure/bsdf_walk.hpp"
+
+namespace microsim {
+
+WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir0,
+                       const models::Material& mat, CounterRng& rng, int max_events, bool finite,
+                       TraceCounters& counters, std::uint64_t& events) {
+  using models::MaterialKind;
+  const Microsurface& s = tracer.surface();
+  WalkEnd e;
+  Vec3 dir = dir0;
+  RaySide side = RaySide::Front;
+  TraceHit hit = tracer.first_hit(origin, dir, nullptr, counters);
+  for (int order = 0;; ++order) {
+    e.order = order;
+    e.direction = dir;
+    if (!hit.hit) {
+      if (side == RaySide::Front && order == 0 && finite) e.kind = WalkEnd::Missed;
+      else if (side == RaySide::Front && order > 0 && (finite || dir.z() > 0.0)) e.kind = WalkEnd::Reflected;
+      else if (side == RaySide::Back && hit.exit_below) e.kind = WalkEnd::Transmitted;
+      else e.kind = WalkEnd::Lost;  // lost below / unresolved (tracer counters), or left the solid upward
+      return e;
+    }
+    // A hit on the unexpected side crossed the surface through a rounding gap.
+    if (hit.backface != (side == RaySide::Back)) {
+      e.kind = WalkEnd::Lost;
+      return e;
+    }
+    if (order + 1 > max_events) {
+      e.kind = WalkEnd::Unterminated;
+      return e;
+    }
+    ++events;
+    // Normal on the side of the current medium; v toward where the ray came from.
+    const Vec3 m = side == RaySide::Front ? hit.normal : Vec3(-hit.normal);
+    const Vec3 v = -dir;
+    const double vm = std::max(0.0, v.dot(m));
+    const bool front = side == RaySide::Front;
+    switch (mat.kind) {
+      case MaterialKind::Mirror:
+        dir = models::reflect(v, m);  // 000 eq. 13a
+        break;
+      case MaterialKind::Conductor:
+        e.weight *= mat.reflectance(vm, true);  // 000 eq. 8, complex index
+        dir = models::reflect(v, m);
+        break;
+      case MaterialKind::Dielectric: {
+        const double F = mat.reflectance(vm, front);
+        if (rng.uniform() < F) {
+          dir = models::reflect(v, m);
+        } else {
+          const double n = front ? mat.eta : 1.0 / mat.eta;  // far side over near side
+          Vec3 t_dir;
+          if (models::refract(v, m, 1.0 / n, &t_dir)) {  // 000 eq. 15a
+            dir = t_dir;
+            side = front ? RaySide::Back : RaySide::Front;
+          } else {
+            dir = models::reflect(v, m);
+          }
+        }
+        break;
+      }
+    }
+    dir.normalize();
+    const SourcePlane plane = SourcePlane::of(s.facet(hit.facet));
+    hit = tracer.first_hit(hit.point, dir, &plane, counters, side);
+  }
+}
+
+void record_walk_end(BsdfTally& t, const WalkEnd& e, double w0, const HemisphereMap& map,
+                     const InPlaneBins& plane) {
+  switch (e.kind) {
+    case WalkEnd::Reflected:
+    case WalkEnd::Transmitted: {
+      const bool reflected = e.kind == WalkEnd::Reflected;
+      const bool binned = reflected ? e.direction.z() > 0.0 : e.direction.z() < 0.0;
+      t.add_exit(reflected ? 0 : 1, e.order, w0 * e.weight, binned ? map.pixel_of(e.direction) : -1,
+                 binned ? plane.bin_of(e.direction) : -1);
+      break;
+    }
+    case WalkEnd::Missed: break;
+    case WalkEnd::Lost: ++t.lost; break;
+    case WalkEnd::Unterminated: ++t.unterminated; break;
+  }
+}
+
+}  // namespace microsim

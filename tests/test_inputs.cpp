@@ -1,0 +1,613 @@
+// Every input honoured or refused: presets apply (non-default values, command line wins), and a
+// table of malformed options and files, each answered with exit 2, one line on stderr naming the
+// option or file, and no output file; valid edge values give exit 0. Interrupts at random moments
+// leave no output, temporary file or temporary folder behind.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <fstream>
+#include <random>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "cli_helpers.hpp"
+#include "microsim/io/output.hpp"
+
+extern char** environ;
+
+namespace {
+using namespace microsim::testing;
+namespace fs = std::filesystem;
+// Every file of this program in one private folder (removed at exit by cli_helpers.hpp), so that
+// temporaries left behind are this program's own.
+std::string folder() {
+  static const std::string dir = [] {
+    std::string d = temp_path("inputs", "files");
+    std::filesystem::create_directories(d);
+    return d;
+  }();
+  return dir;
+}
+std::string tmp(const std::string& name) { return folder() + "/" + name; }
+const std::string kSrc = MICROSIM_SOURCE_DIR;
+
+// Runs microsim under an 8 GiB address-space limit and a 60 s timeout, so that an input that is
+// wrongly accepted fails this test instead of exhausting the machine.
+Result run_limited(const std::string& args) {
+  return run_microsim(args, "ulimit -v 8388608; timeout 60");
+}
+
+void write_file(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+// Files with one thing wrong each, made once for the whole program.
+class Inputs : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    surface_ = tmp("s.exr");
+    Result r = run_microsim("generate gaussian --resolution 16 --seed 2 -o " + surface_);
+    ASSERT_EQ(r.code, 0) << r.err;
+    mesh_ = tmp("el.ply");
+    r = run_microsim("generate ellipsoid --alpha 0.5 --rings 4 --segments 16 -o " + mesh_);
+    ASSERT_EQ(r.code, 0) << r.err;
+    // Heightfield headers: macrosurface size 0, -1, 1e300; description alpha <= 0 or not a number;
+    // a data window of 40000^2 in a small file.
+    const microsim::ExrTable good = microsim::read_exr(surface_);
+    auto with_macro = [&](const std::string& name, const std::string& key, const nlohmann::json& v) {
+      microsim::ExrTable t = good;
+      auto m = nlohmann::json::parse(t.attributes["microsim_macrosurface"].get<std::string>());
+      m[key] = v;
+      t.attributes["microsim_macrosurface"] = m.dump();
+      microsim::write_exr(tmp(name), t);
+    };
+    with_macro("size0.exr", "size_x", 0.0);
+    with_macro("sizeneg.exr", "size_y", -1.0);
+    with_macro("sizehuge.exr", "size_x", 1e300);
+    with_macro("area0.exr", "area", 0.0);
+    auto with_description = [&](const std::string& name, const std::string& key, const nlohmann::json& v) {
+      microsim::ExrTable t = good;
+      auto d = nlohmann::json::parse(t.attributes["microsim_description"].get<std::string>());
+      d[key] = v;
+      t.attributes["microsim_description"] = d.dump();
+      microsim::write_exr(tmp(name), t);
+    };
+    with_description("alphaneg.exr", "alpha_x", -0.5);
+    with_description("alpha0.exr", "alpha_y", 0.0);
+    with_description("alphastr.exr", "alpha_x", "abc");
+    {
+      microsim::ExrTable t = good;
+      t.attributes = nlohmann::json::object();
+      microsim::write_exr(tmp("plain.exr"), t);
+    }
+    {  // The data window (xmin, ymin, xmax, ymax as int32) patched to 40000 x 40000.
+      std::ifstream f(surface_, std::ios::binary);
+      std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+      const std::string key = std::string("dataWindow") + '\0' + "box2i" + '\0';
+      auto at = bytes.find(key);
+      ASSERT_NE(at, std::string::npos);
+      const std::size_t values = at + key.size() + 4;
+      const std::int32_t box[4] = {0, 0, 39999, 39999};
+      bytes.replace(values, 16, reinterpret_cast<const char*>(box), 16);
+      write_file(tmp("window.exr"), bytes);
+    }
+    // Mesh headers declaring absurd counts, and sidecars with bad fields.
+    const std::string ply_tail =
+        "property float x\nproperty float y\nproperty float z\nelement face 1\n"
+        "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    write_file(tmp("huge.ply"), "ply\nformat ascii 1.0\nelement vertex 2000000000\n" + ply_tail);
+    write_file(tmp("neg.ply"), "ply\nformat ascii 1.0\nelement vertex -3\n" + ply_tail);
+    write_file(tmp("huge.off"), "OFF\n2000000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    write_file(tmp("neg.off"), "OFF\n3 -1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    auto with_sidecar = [&](const std::string& name, const std::function<void(nlohmann::json&)>& edit) {
+      fs::copy_file(mesh_, tmp(name), fs::copy_options::overwrite_existing);
+      auto j = nlohmann::json::parse(slurp(mesh_ + ".json"));
+      edit(j);
+      write_file(tmp(name) + ".json", j.dump());
+    };
+    with_sidecar("alphastr.ply", [](nlohmann::json& j) { j["description"]["alpha_x"] = "abc"; });
+    with_sidecar("area0.ply", [](nlohmann::json& j) { j["macrosurface"]["area"] = 0; });
+    with_sidecar("normalnan.ply", [](nlohmann::json& j) { j["macrosurface"]["normal"] = {0, 0, "x"}; });
+    with_sidecar("nomacro.ply", [](nlohmann::json& j) { j.erase("macrosurface"); });
+    write_file(tmp("notjson.ply"), slurp(mesh_));
+    write_file(tmp("notjson.ply") + ".json", "{\"macrosurface\": ");
+    // Presets.
+    write_file(tmp("p_unknown.toml"), "resolutionn = 32\n");
+    write_file(tmp("p_type.toml"), "resolution = \"abc\"\n");
+    write_file(tmp("p_float.toml"), "resolution = 32.5\n");
+    write_file(tmp("p_bool.toml"), "alpha = true\n");
+    write_file(tmp("p_alpha.toml"), "alpha = -1\n");
+    write_file(tmp("p_nan.toml"), "size = nan\n");
+    write_file(tmp("p_malformed.toml"), "resolution 32\n");
+    write_file(tmp("p_empty_value.toml"), "resolution =\n");
+    write_file(tmp("p_binary.toml"), std::string("\x7f" "ELF\x02\x01\x01\0\0\0", 10));
+    write_file(tmp("p_section.toml"), "[gaussian]\nresolution = 32\n");
+    write_file(tmp("p_twice.toml"), "alpha = 0.3\nalpha = 0.4\n");
+    write_file(tmp("p_array.toml"), "alpha = [0.3, 0.4]\n");
+    write_file(tmp("p_seed.toml"), "seed = -1\n");
+    write_file(tmp("p_config.toml"), "config = \"other.toml\"\n");
+    write_file(tmp("p_flag.toml"), "two-d = 3\n");
+    // Suites whose entry names would escape or collide, and one with a bad argument.
+    const std::string flat = "{\"generate\": \"flat\", \"preset\": \"" + kSrc + "/surfaces/flat.toml\"";
+    write_file(tmp("suite_dotdot.json"), "{\"entries\": [" + flat + ", \"name\": \"../x\"}]}");
+    write_file(tmp("suite_slash.json"), "{\"entries\": [" + flat + ", \"name\": \"a/b\"}]}");
+    write_file(tmp("suite_twice.json"),
+               "{\"entries\": [" + flat + ", \"name\": \"a\"}, " + flat + ", \"name\": \"a\"}]}");
+    write_file(tmp("suite_alpha.json"),
+               "{\"entries\": [{\"name\": \"g\", \"generate\": \"gaussian\", \"args\": "
+               "{\"resolution\": 16, \"alpha\": -1}}]}");
+  }
+  static std::string surface_, mesh_;
+};
+std::string Inputs::surface_, Inputs::mesh_;
+
+// One row: arguments ({o} = a fresh output path with extension `ext`, {S} the heightfield, {M}
+// the mesh, {T} the test folder prefix, {src} the source tree), the expected exit code and, for
+// exit 2, a word the one-line message must contain (the option or file).
+struct Case {
+  std::string args;
+  int code;
+  std::string needle;
+  std::string ext = "json";
+};
+
+std::string expand(std::string s, const std::string& out, const std::string& S, const std::string& M) {
+  auto put = [&](const std::string& key, const std::string& value) {
+    for (std::size_t at; (at = s.find(key)) != std::string::npos;) s.replace(at, key.size(), value);
+  };
+  put("{o}", out);
+  put("{S}", S);
+  put("{M}", M);
+  put("{T}", tmp(""));
+  put("{src}", kSrc);
+  return s;
+}
+
+// Temporaries this process's children left in a folder (.tmp-PID-*).
+int leftover_temporaries(const std::string& dir) {
+  int n = 0;
+  for (const auto& e : fs::directory_iterator(dir))
+    n += e.path().filename().string().rfind(".tmp-", 0) == 0;
+  return n;
+}
+
+const std::vector<Case>& cases() {
+  static const std::vector<Case> c = {
+      // Global options.
+      {"--threads -1 info {S}", 2, "--threads"},
+      {"--threads 5000 info {S}", 2, "--threads"},
+      // generate gaussian: every option, including the silent-default cases.
+      {"generate gaussian --resolution 16 --alpha -1 -o {o}", 2, "--alpha", "exr"},
+      {"generate gaussian --resolution 16 --alpha 0 -o {o}", 2, "--alpha", "exr"},
+      {"generate gaussian --resolution 16 --alpha nan -o {o}", 2, "--alpha", "exr"},
+      {"generate gaussian --resolution 16 --alpha inf -o {o}", 2, "--alpha", "exr"},
+      {"generate gaussian --resolution 16 --alpha 11 -o {o}", 2, "--alpha", "exr"},
+      {"generate gaussian --resolution 16 --alpha abc -o {o}", 2, "--alpha", "exr"},
+      {"generate gaussian --resolution 16 --alpha -1 --alpha-x 0.3 -o {o}", 2, "--alpha", "exr"},
+      {"generate gaussian --resolution 16 --alpha 0.5 --alpha-x 0.3 -o {o}", 2, "--alpha", "exr"},
+      {"generate gaussian --resolution 16 --alpha-x -1 -o {o}", 2, "--alpha-x", "exr"},
+      {"generate gaussian --resolution 16 --alpha-y nan -o {o}", 2, "--alpha-y", "exr"},
+      {"generate gaussian --resolution 0 -o {o}", 2, "--resolution", "exr"},
+      {"generate gaussian --resolution 3 -o {o}", 2, "--resolution", "exr"},
+      {"generate gaussian --resolution 40000 -o {o}", 2, "--resolution", "exr"},
+      {"generate gaussian --resolution 30000 -o {o}", 2, "--resolution", "exr"},
+      {"generate gaussian --resolution 16.5 -o {o}", 2, "--resolution", "exr"},
+      {"generate gaussian --resolution 16 --size 0 -o {o}", 2, "--size", "exr"},
+      {"generate gaussian --resolution 16 --size -1 -o {o}", 2, "--size", "exr"},
+      {"generate gaussian --resolution 16 --size 1e300 -o {o}", 2, "--size", "exr"},
+      {"generate gaussian --resolution 16 --size inf -o {o}", 2, "--size", "exr"},
+      {"generate gaussian --resolution 16 --size nan -o {o}", 2, "--size", "exr"},
+      {"generate gaussian --resolution 16 --correlation-length 0 -o {o}", 2, "--correlation-length", "exr"},
+      {"generate gaussian --resolution 16 --correlation-length -1 -o {o}", 2, "--correlation-length", "exr"},
+      {"generate gaussian --resolution 16 --correlation-length nan -o {o}", 2, "--correlation-length", "exr"},
+      {"generate gaussian --resolution 16 --correlation-length 0.5 -o {o}", 2, "--correlation-length", "exr"},
+      {"generate gaussian --resolution 16 --seed -1 -o {o}", 2, "--seed", "exr"},
+      {"generate gaussian --resolution 16 --seed 18446744073709551616 -o {o}", 2, "--seed", "exr"},
+      {"generate gaussian --resolution 16 --seed 1.5 -o {o}", 2, "--seed", "exr"},
+      {"generate gaussian --resolution 16 --seed 18446744073709551615 -o {o}", 0, "", "exr"},
+      {"generate gaussian --resolution 16 --size 1e6 --alpha 10 -o {o}", 0, "", "exr"},
+      {"generate gaussian --resolution 16 -o {o}.xyz", 2, "-o", "exr"},
+      // generate flat.
+      {"generate flat --resolution 0 -o {o}", 2, "--resolution", "exr"},
+      {"generate flat --resolution 5000 -o {o}", 2, "--resolution", "exr"},
+      {"generate flat --size inf -o {o}", 2, "--size", "exr"},
+      {"generate flat --size 0 -o {o}", 2, "--size", "exr"},
+      {"generate flat --resolution 1 -o {o}", 0, "", "exr"},
+      // Structured kinds.
+      {"generate box --width 0 -o {o}", 2, "--width", "ply"},
+      {"generate box --width nan -o {o}", 2, "--width", "ply"},
+      {"generate box --depth -1 -o {o}", 2, "--depth", "ply"},
+      {"generate box --height inf -o {o}", 2, "--height", "ply"},
+      {"generate box --height 0.5 -o {o}", 2, "-o", "exr"},
+      {"generate tiled-boxes --tiles 0 -o {o}", 2, "--tiles", "ply"},
+      {"generate tiled-boxes --tiles 257 -o {o}", 2, "--tiles", "ply"},
+      {"generate tiled-boxes --tiles -1 -o {o}", 2, "--tiles", "ply"},
+      {"generate square-wave --duty 0 -o {o}", 2, "--duty", "ply"},
+      {"generate square-wave --duty 1 -o {o}", 2, "--duty", "ply"},
+      {"generate square-wave --duty nan -o {o}", 2, "--duty", "ply"},
+      {"generate square-wave --period 0 -o {o}", 2, "--period", "ply"},
+      {"generate square-wave --height -0.5 -o {o}", 2, "--height", "ply"},
+      {"generate vgroove --facet-angle 0 -o {o}", 2, "--facet-angle", "exr"},
+      {"generate vgroove --facet-angle 90 -o {o}", 2, "--facet-angle", "exr"},
+      {"generate vgroove --facet-angle nan -o {o}", 2, "--facet-angle", "exr"},
+      {"generate vgroove --period -1 -o {o}", 2, "--period", "exr"},
+      {"generate vgroove --facet-angle 89.9 -o {o}", 0, "", "exr"},
+      {"generate vcavity --alpha -1 --grooves 8 -o {o}", 2, "--alpha", "ply"},
+      {"generate vcavity --alpha -1 --alpha-x 0.3 --grooves 8 -o {o}", 2, "--alpha", "ply"},
+      {"generate vcavity --alpha-x 0 --grooves 8 -o {o}", 2, "--alpha-x", "ply"},
+      {"generate vcavity --grooves 0 -o {o}", 2, "--grooves", "ply"},
+      {"generate vcavity --ndf phong --grooves 8 -o {o}", 2, "--ndf", "ply"},
+      {"generate vcavity --seed -1 --grooves 8 -o {o}", 2, "--seed", "ply"},
+      {"generate parallelepiped --shear-x nan -o {o}", 2, "--shear-x", "ply"},
+      {"generate parallelepiped --shear-y inf -o {o}", 2, "--shear-y", "ply"},
+      {"generate parallelepiped --tiles 0 -o {o}", 2, "--tiles", "ply"},
+      {"generate parallelepiped --matrix 1,0,0,0,1,0,0,0,0 -o {o}", 2, "--matrix", "ply"},
+      {"generate parallelepiped --matrix abc -o {o}", 2, "--matrix", "ply"},
+      {"generate ellipsoid --alpha -1 --rings 4 --segments 16 -o {o}", 2, "--alpha", "ply"},
+      {"generate ellipsoid --alpha 0 --rings 4 --segments 16 -o {o}", 2, "--alpha", "ply"},
+      {"generate ellipsoid --alpha -1 --alpha-x 0.5 --rings 4 --segments 16 -o {o}", 2, "--alpha", "ply"},
+      {"generate ellipsoid --rings 1 -o {o}", 2, "--rings", "ply"},
+      {"generate ellipsoid --segments 7 -o {o}", 2, "--segments", "ply"},
+      {"generate gaussian-ggx --resolution 32 --alpha -1 -o {o}", 2, "--alpha", "exr"},
+      {"generate gaussian-ggx --resolution 32 --alpha -1 --alpha-x 0.3 -o {o}", 2, "--alpha", "exr"},
+      {"generate gaussian-ggx --resolution 32 --roughness-correlation-length -1 -o {o}", 2,
+       "--roughness-correlation-length", "exr"},
+      {"generate gaussian-ggx --resolution 32 --roughness-correlation-length nan -o {o}", 2,
+       "--roughness-correlation-length", "exr"},
+      {"generate gaussian-ggx --resolution 32 --roughness-correlation-length 0 -o {o}", 2,
+       "--roughness-correlation-length", "exr"},
+      {"generate gaussian-ggx --resolution 32 --correlation-length 0 -o {o}", 2, "--correlation-length", "exr"},
+      {"generate gaussian-ggx --resolution 32 --tail-fraction 0 -o {o}", 2, "--tail-fraction", "exr"},
+      {"generate gaussian-ggx --resolution 32 --tail-fraction 0.5 -o {o}", 2, "--tail-fraction", "exr"},
+      {"generate gaussian-ggx --resolution 32 --size inf -o {o}", 2, "--size", "exr"},
+      {"generate gaussian-ggx --resolution 32 --seed -1 -o {o}", 2, "--seed", "exr"},
+      // generate mesh and mesh files.
+      {"generate mesh --input {T}missing.ply -o {o}", 2, "missing.ply", "ply"},
+      {"generate mesh --input {M} --area 0 -o {o}", 2, "--area", "ply"},
+      {"generate mesh --input {M} --area -1 -o {o}", 2, "--area", "ply"},
+      {"generate mesh --input {M} --area nan -o {o}", 2, "--area", "ply"},
+      {"generate mesh --input {M} --normal 0,0,0 -o {o}", 2, "--normal", "ply"},
+      {"generate mesh --input {M} --normal 0,0,nan -o {o}", 2, "--normal", "ply"},
+      {"generate mesh --input {M} --periodic --tile-x 0 --tile-y 1 -o {o}", 2, "--tile-x", "ply"},
+      {"generate mesh --input {M} --tile-x 1 -o {o}", 2, "--tile-x", "ply"},
+      {"generate mesh --input {T}huge.ply -o {o}", 2, "huge.ply", "ply"},
+      {"generate mesh --input {T}neg.ply -o {o}", 2, "neg.ply", "ply"},
+      {"generate mesh --input {T}huge.off -o {o}", 2, "huge.off", "ply"},
+      {"generate mesh --input {T}neg.off -o {o}", 2, "neg.off", "ply"},
+      {"info {T}huge.ply --json {o}", 2, "huge.ply"},
+      {"info {T}neg.off --json {o}", 2, "neg.off"},
+      {"info {T}alphastr.ply --json {o}", 2, "alpha_x"},
+      {"info {T}area0.ply --json {o}", 2, "area"},
+      {"info {T}normalnan.ply --json {o}", 2, "normal"},
+      {"info {T}nomacro.ply --json {o}", 2, "macrosurface"},
+      {"info {T}notjson.ply --json {o}", 2, "notjson.ply.json"},
+      // Heightfield headers.
+      {"info {T}size0.exr --json {o}", 2, "size_x"},
+      {"info {T}sizeneg.exr --json {o}", 2, "size_y"},
+      {"info {T}sizehuge.exr --json {o}", 2, "size_x"},
+      {"info {T}area0.exr --json {o}", 2, "area"},
+      {"info {T}alphaneg.exr --json {o}", 2, "alpha_x"},
+      {"info {T}alpha0.exr --json {o}", 2, "alpha_y"},
+      {"info {T}alphastr.exr --json {o}", 2, "alpha_x"},
+      {"info {T}plain.exr --json {o}", 2, "plain.exr"},
+      {"info {T}window.exr --json {o}", 2, "window.exr"},
+      {"measure ndf {T}sizehuge.exr -o {o}", 2, "sizehuge.exr"},
+      {"measure ndf {T}size0.exr -o {o}", 2, "size0.exr"},
+      {"measure g1 {T}alphaneg.exr --rays 1000 -o {o}", 2, "alphaneg.exr"},
+      {"convert {T}window.exr -o {o}", 2, "window.exr", "ply"},
+      {"convert {S} -o {o}.xyz", 2, "-o"},
+      {"info {S} --json {o}.txt", 2, "--json"},
+      {"info {T}missing.exr", 2, "missing.exr"},
+      // measure ndf.
+      {"measure ndf {S} --theta-bins 0 -o {o}", 2, "--theta-bins"},
+      {"measure ndf {S} --theta-bins 3601 -o {o}", 2, "--theta-bins"},
+      {"measure ndf {S} --phi-bins 0 -o {o}", 2, "--phi-bins"},
+      {"measure ndf {S} --theta-bins 3600 --phi-bins 7200 -o {o}", 2, "--theta-bins"},
+      {"measure ndf {S} --theta-bins 1 --phi-bins 1 -o {o}", 0, ""},
+      // measure g1.
+      {"measure g1 {S} --rays 0 -o {o}", 2, "--rays"},
+      {"measure g1 {S} --rays -1 -o {o}", 2, "--rays"},
+      {"measure g1 {S} --rays 1e20 -o {o}", 2, "--rays"},
+      {"measure g1 {S} --rays 99999999999999999999 -o {o}", 2, "--rays"},
+      {"measure g1 {S} --rays 10000000000000 -o {o}", 2, "--rays"},
+      {"measure g1 {S} --seed -1 --rays 100 -o {o}", 2, "--seed"},
+      {"measure g1 {S} --seed 18446744073709551616 --rays 100 -o {o}", 2, "--seed"},
+      {"measure g1 {S} --theta 90 --rays 100 -o {o}", 2, "--theta"},
+      {"measure g1 {S} --theta nan --rays 100 -o {o}", 2, "--theta"},
+      {"measure g1 {S} --theta 0:95:5 --rays 100 -o {o}", 2, "--theta"},
+      {"measure g1 {S} --phi inf --rays 100 -o {o}", 2, "--phi"},
+      {"measure g1 {S} --phi abc --rays 100 -o {o}", 2, "--phi"},
+      {"measure g1 {S} --rays 1 --theta 0 -o {o}", 0, ""},
+      // measure g2.
+      {"measure g2 {S} --theta-o 90 --theta-i 0 --rays 100 -o {o}", 2, "--theta-o"},
+      {"measure g2 {S} --theta-o 0 --theta-i nan --rays 100 -o {o}", 2, "--theta-i"},
+      {"measure g2 {S} --theta-o 0 --theta-i 0 --phi-i inf --rays 100 -o {o}", 2, "--phi-i"},
+      {"measure g2 {S} --theta-o 0 --theta-i 0 --rays 0 -o {o}", 2, "--rays"},
+      {"measure g2 {S} --theta-o 0 --theta-i 0 --seed -1 -o {o}", 2, "--seed"},
+      // measure vndf.
+      {"measure vndf {S} --rays 10000000000000 -o {o}", 2, "--rays"},
+      {"measure vndf {S} --rays 0 -o {o}", 2, "--rays"},
+      {"measure vndf {S} --theta-bins 0 -o {o}", 2, "--theta-bins"},
+      {"measure vndf {S} --theta-bins 361 -o {o}", 2, "--theta-bins"},
+      {"measure vndf {S} --phi-bins 721 -o {o}", 2, "--phi-bins"},
+      {"measure vndf {S} --sampler-samples -1 -o {o}", 2, "--sampler-samples"},
+      {"measure vndf {S} --seed -1 -o {o}", 2, "--seed"},
+      {"measure vndf {S} --theta 90 -o {o}", 2, "--theta"},
+      // measure bsdf.
+      {"measure bsdf {S} --material gold --theta-i 0 --phi-i 0 --rays 100 -o {o}", 2, "--material"},
+      {"measure bsdf {S} --material dielectric --eta 0 --theta-i 0 --phi-i 0 --rays 100 -o {o}", 2, "--eta"},
+      {"measure bsdf {S} --material dielectric --eta nan --theta-i 0 --phi-i 0 --rays 100 -o {o}", 2, "--eta"},
+      {"measure bsdf {S} --material conductor --eta 1 --k -1 --theta-i 0 --phi-i 0 --rays 100 -o {o}", 2, "--k"},
+      {"measure bsdf {S} --material mirror --theta-i 90 --phi-i 0 --rays 100 -o {o}", 2, "--theta-i"},
+      {"measure bsdf {S} --material mirror --theta-i nan --phi-i 0 --rays 100 -o {o}", 2, "--theta-i"},
+      {"measure bsdf {S} --material mirror --theta-i 0 --phi-i inf --rays 100 -o {o}", 2, "--phi-i"},
+      {"measure bsdf {S} --material mirror --theta-i 0 --phi-i 0 --orders 0 --rays 100 -o {o}", 2, "--orders"},
+      {"measure bsdf {S} --material mirror --theta-i 0 --phi-i 0 --orders 65 --rays 100 -o {o}", 2, "--orders"},
+      {"measure bsdf {S} --material mirror --theta-i 0 --phi-i 0 --rays 0 -o {o}", 2, "--rays"},
+      {"measure bsdf {S} --material mirror --theta-i 0 --phi-i 0 --resolution 0 -o {o}", 2, "--resolution", "exr"},
+      {"measure bsdf {S} --material mirror --theta-i 0 --phi-i 0 --seed -1 -o {o}", 2, "--seed"},
+      {"measure bsdf {M} --material mirror --theta-i 0 --phi-i 0 --rays 100 -o {o}", 2, "periodic"},
+      // demo: every option checked before anything is written.
+      {"demo --resolution 16 --alpha -1 --out-dir {o}", 2, "--alpha", "d"},
+      {"demo --resolution 16 --theta 95 --out-dir {o}", 2, "--theta", "d"},
+      {"demo --resolution 16 --theta nan --out-dir {o}", 2, "--theta", "d"},
+      {"demo --resolution 16 --rays 0 --out-dir {o}", 2, "--rays", "d"},
+      {"demo --resolution 2 --out-dir {o}", 2, "--resolution", "d"},
+      {"demo --resolution 16 --seed -1 --out-dir {o}", 2, "--seed", "d"},
+      {"demo --resolution 16 --size inf --out-dir {o}", 2, "--size", "d"},
+      {"demo --config {T}missing.toml --out-dir {o}", 2, "missing.toml", "d"},
+      {"demo --config {T}p_alpha.toml --out-dir {o}", 2, "p_alpha.toml", "d"},
+      // Presets: every failure names the file and the key.
+      {"generate gaussian --config {T}missing.toml -o {o}", 2, "missing.toml", "exr"},
+      {"generate gaussian --config {T}p_unknown.toml -o {o}", 2, "resolutionn", "exr"},
+      {"generate gaussian --config {T}p_type.toml -o {o}", 2, "'resolution'", "exr"},
+      {"generate gaussian --config {T}p_float.toml -o {o}", 2, "'resolution'", "exr"},
+      {"generate gaussian --config {T}p_bool.toml -o {o}", 2, "'alpha'", "exr"},
+      {"generate gaussian --config {T}p_alpha.toml --resolution 16 -o {o}", 2, "'alpha'", "exr"},
+      {"generate gaussian --config {T}p_nan.toml --resolution 16 -o {o}", 2, "'size'", "exr"},
+      {"generate gaussian --config {T}p_malformed.toml -o {o}", 2, "p_malformed.toml", "exr"},
+      {"generate gaussian --config {T}p_empty_value.toml -o {o}", 2, "p_empty_value.toml", "exr"},
+      {"generate gaussian --config {T}p_binary.toml -o {o}", 2, "p_binary.toml", "exr"},
+      {"generate gaussian --config {T}p_section.toml -o {o}", 2, "p_section.toml", "exr"},
+      {"generate gaussian --config {T}p_twice.toml -o {o}", 2, "'alpha'", "exr"},
+      {"generate gaussian --config {T}p_array.toml -o {o}", 2, "'alpha'", "exr"},
+      {"generate gaussian --config {T}p_seed.toml -o {o}", 2, "'seed'", "exr"},
+      {"generate gaussian --config {T}p_config.toml -o {o}", 2, "'config'", "exr"},
+      {"generate vgroove --config {T}p_flag.toml -o {o}", 2, "'two-d'", "ply"},
+      {"generate box --config {T}p_alpha.toml -o {o}", 2, "'alpha'", "ply"},
+      {"generate gaussian --config {T}p_alpha.toml --alpha 0.3 --resolution 16 -o {o}", 0, "", "exr"},
+      // validate.
+      {"validate {S} --rays 0 -o {o}", 2, "--rays"},
+      {"validate {S} --seed -1 -o {o}", 2, "--seed"},
+      {"validate {S} --significance 0 -o {o}", 2, "--significance"},
+      {"validate {S} --significance 1 -o {o}", 2, "--significance"},
+      {"validate {S} --significance nan -o {o}", 2, "--significance"},
+      {"validate {S} --theta 90 -o {o}", 2, "--theta"},
+      {"validate --suite {T}suite_dotdot.json -o {o}", 2, "../x"},
+      {"validate --suite {T}suite_slash.json -o {o}", 2, "a/b"},
+      {"validate --suite {T}suite_twice.json -o {o}", 2, "twice"},
+      {"validate --suite {T}suite_alpha.json -o {o}", 2, "--alpha"},
+      {"validate --suite {T}missing.json -o {o}", 2, "missing"},
+  };
+  return c;
+}
+}  // namespace
+
+TEST_F(Inputs, EveryBadOptionOrFileIsRefusedWithOneLineAndNoOutput) {
+  int failed = 0, n = 0;
+  const std::string dir = folder();
+  for (const Case& c : cases()) {
+    const std::string out = tmp("case" + std::to_string(n++) + "." + c.ext);
+    const std::string args = expand(c.args, out, surface_, mesh_);
+    SCOPED_TRACE(args);
+    Result r = run_limited(args);
+    bool ok = r.code == c.code;
+    EXPECT_EQ(r.code, c.code) << r.err;
+    if (c.code == 2) {
+      ok = ok && lines(r.err) == 1 && r.err.find(c.needle) != std::string::npos;
+      EXPECT_EQ(lines(r.err), 1) << r.err;
+      EXPECT_NE(r.err.find(c.needle), std::string::npos) << r.err;
+      for (const std::string& p : {out, out + ".json", out + ".xyz", out + "/surface.exr", out + "/ndf.json"}) {
+        EXPECT_FALSE(exists(p)) << p;
+        ok = ok && !exists(p);
+      }
+    }
+    EXPECT_EQ(leftover_temporaries(dir), 0);
+    fs::remove_all(out);
+    fs::remove(out + ".json");
+    failed += !ok;
+  }
+  std::cout << "[ table    ] " << cases().size() << " cases, " << failed << " not as expected\n";
+}
+
+TEST_F(Inputs, PresetsApplyWithNonDefaultValuesAndTheCommandLineWins) {
+  const std::string preset = tmp("p_good.toml"), out = tmp("preset.exr"), info = tmp("preset_info.json");
+  write_file(preset, "# a preset\nresolution = 32\nalpha = 0.7\nseed = 5\nsize = 2.0\n"
+                     "correlation-length = 0.125  # four cells\n");
+  ASSERT_EQ(run_microsim("generate gaussian --config " + preset + " -o " + out).code, 0);
+  ASSERT_EQ(run_microsim("info " + out + " --json " + info).code, 0);
+  auto j = nlohmann::json::parse(slurp(info));
+  EXPECT_EQ(j["surface"]["resolution"], 32);
+  EXPECT_EQ(j["surface"]["alpha_x"], 0.7);
+  EXPECT_EQ(j["surface"]["alpha_y"], 0.7);
+  EXPECT_EQ(j["surface"]["seed"], 5);
+  EXPECT_EQ(j["macrosurface"]["size_x"], 2.0);
+  // The command line overrides the file, option by option.
+  ASSERT_EQ(run_microsim("generate gaussian --config " + preset + " --alpha 0.3 --resolution 16 -o " + out).code, 0);
+  ASSERT_EQ(run_microsim("info " + out + " --json " + info).code, 0);
+  j = nlohmann::json::parse(slurp(info));
+  EXPECT_EQ(j["surface"]["resolution"], 16);
+  EXPECT_EQ(j["surface"]["alpha_x"], 0.3);
+  EXPECT_EQ(j["surface"]["seed"], 5);
+  // --alpha-x on the command line with --alpha in the preset: the two conflict, as on the
+  // command line alone.
+  EXPECT_EQ(run_microsim("generate gaussian --config " + preset + " --alpha-x 0.3 -o " + out).code, 2);
+  // The box preset's height (0.5, not the default 1): the visible box reaches z = 0.5.
+  const std::string box = tmp("box.ply"), boxinfo = tmp("box_info.json");
+  ASSERT_EQ(run_microsim("generate box --config " + kSrc + "/surfaces/box.toml -o " + box).code, 0);
+  ASSERT_EQ(run_microsim("info " + box + " --json " + boxinfo).code, 0);
+  j = nlohmann::json::parse(slurp(boxinfo));
+  EXPECT_EQ(j["surface"]["height"], 0.5);
+  // demo takes the same presets.
+  const std::string demo = tmp("demo");
+  Result r = run_microsim("demo --config " + preset + " --resolution 16 --theta 30 --rays 2000 --out-dir " + demo);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("alpha (0.7, 0.7)"), std::string::npos) << r.out;
+}
+
+// Every shipped preset loads with its generator and gives its declared values.
+TEST_F(Inputs, EveryShippedPresetLoadsAndGivesItsValues) {
+  const std::vector<std::pair<std::string, std::string>> presets = {
+      {"beckmann-0.5", "gaussian"}, {"box", "box"}, {"ellipsoid", "ellipsoid"}, {"flat", "flat"},
+      {"gaussian-ggx", "gaussian-ggx"}, {"parallelepiped", "parallelepiped"},
+      {"square-wave", "square-wave"}, {"tiled-boxes", "tiled-boxes"}, {"vcavity", "vcavity"},
+      {"vgroove", "vgroove"}};
+  for (const auto& [name, kind] : presets) {
+    SCOPED_TRACE(name);
+    const bool heightfield = kind == "gaussian" || kind == "gaussian-ggx" || kind == "flat" || kind == "vgroove";
+    // Big presets are made small from the command line (which wins); the rest is the file's.
+    std::string small = kind == "gaussian" ? " --resolution 32 --correlation-length 0.125"
+                        : kind == "gaussian-ggx" ? " --resolution 64 --correlation-length 0.0625"
+                        : kind == "ellipsoid" ? " --rings 8 --segments 32"
+                        : kind == "vcavity" ? " --grooves 16" : "";
+    const std::string out = tmp("preset_" + name + (heightfield ? ".exr" : ".ply"));
+    const std::string info = tmp("preset_" + name + "_info.json");
+    Result r = run_microsim("generate " + kind + " --config " + kSrc + "/surfaces/" + name + ".toml" + small +
+                            " -o " + out);
+    ASSERT_EQ(r.code, 0) << r.err;
+    ASSERT_EQ(run_microsim("info " + out + " --json " + info).code, 0);
+    auto d = nlohmann::json::parse(slurp(info))["surface"];
+    // Every key of the preset that the description records has the preset's value.
+    std::ifstream f(kSrc + "/surfaces/" + name + ".toml");
+    int compared = 0;
+    for (std::string line; std::getline(f, line);) {
+      if (line.empty() || line[0] == '#' || line.find('=') == std::string::npos) continue;
+      std::string key = line.substr(0, line.find('=')), value = line.substr(line.find('=') + 1);
+      key.erase(key.find_last_not_of(' ') + 1);
+      value = value.substr(value.find_first_not_of(' '));
+      if (small.find("--" + key + " ") != std::string::npos) continue;
+      std::string field = key;
+      for (char& ch : field) ch = ch == '-' ? '_' : ch;
+      if (field == "two_d") field = "two_d";
+      if (!d.contains(field)) continue;
+      ++compared;
+      if (d[field].is_number()) EXPECT_DOUBLE_EQ(d[field].get<double>(), std::stod(value)) << key;
+      else if (d[field].is_string()) EXPECT_EQ("\"" + d[field].get<std::string>() + "\"", value) << key;
+    }
+    EXPECT_GT(compared, 0) << "no preset value recorded in the description of " << name;
+  }
+}
+
+// Suites' presets apply: a suite entry's preset gives its values to the generated surface.
+TEST_F(Inputs, SuitePresetsApply) {
+  const std::string preset = tmp("p_suite.toml"), suite = tmp("suite_preset.json"), dir = tmp("suite_dir");
+  write_file(preset, "resolution = 16\nalpha = 0.7\nseed = 9\n");
+  write_file(suite, "{\"defaults\": {\"rays\": 1000, \"theta_deg\": [0], \"checks\": [\"d_identities\"]}, "
+                    "\"entries\": [{\"name\": \"g\", \"generate\": \"gaussian\", \"preset\": \"" + preset + "\"}]}");
+  Result r = run_microsim("validate --suite " + suite + " --surfaces-dir " + dir + " -o " + tmp("suite_out.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string info = tmp("suite_info.json");
+  ASSERT_EQ(run_microsim("info " + dir + "/g.exr --json " + info).code, 0);
+  auto j = nlohmann::json::parse(slurp(info));
+  EXPECT_EQ(j["surface"]["resolution"], 16);
+  EXPECT_EQ(j["surface"]["alpha_x"], 0.7);
+  EXPECT_EQ(j["surface"]["seed"], 9);
+}
+
+// All outputs of a command or none: bsdf's table and summary, a mesh and its sidecar, when one of
+// them cannot be written (its name is taken by a folder).
+TEST_F(Inputs, AllOutputsOrNone) {
+  const std::string mesh = tmp("pair.ply");
+  fs::create_directories(mesh + ".json");  // the sidecar cannot be written
+  Result r = run_microsim("generate box -o " + mesh);
+  EXPECT_NE(r.code, 0);
+  EXPECT_FALSE(exists(mesh));
+  fs::remove_all(mesh + ".json");
+  const std::string exr = tmp("pair.exr");
+  const std::string summary = exr.substr(0, exr.size() - 4) + ".json";
+  fs::create_directories(summary);
+  r = run_microsim("measure bsdf " + surface_ + " --material mirror --theta-i 30 --phi-i 0 --rays 2000 -o " + exr);
+  EXPECT_NE(r.code, 0);
+  EXPECT_FALSE(exists(exr));
+  fs::remove_all(summary);
+  EXPECT_EQ(leftover_temporaries(folder()), 0);
+}
+
+namespace {
+// Starts microsim with `args` (no shell), TMPDIR set to `tmpdir`; returns the child's pid.
+pid_t spawn(const std::vector<std::string>& args, const std::string& tmpdir) {
+  std::vector<std::string> env = {"TMPDIR=" + tmpdir};
+  for (char** e = environ; *e; ++e)
+    if (std::string(*e).rfind("TMPDIR=", 0) != 0) env.push_back(*e);
+  std::vector<char*> argv, envp;
+  static std::string bin;
+  bin = binary();
+  argv.push_back(bin.data());
+  std::vector<std::string> a = args;
+  for (auto& s : a) argv.push_back(s.data());
+  argv.push_back(nullptr);
+  for (auto& s : env) envp.push_back(s.data());
+  envp.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
+  pid_t pid = -1;
+  posix_spawn(&pid, bin.c_str(), &fa, nullptr, argv.data(), envp.data());
+  posix_spawn_file_actions_destroy(&fa);
+  return pid;
+}
+}  // namespace
+
+// SIGINT at random moments of measure and validate runs: the process ends by the signal and
+// leaves neither its output nor a temporary file or folder.
+TEST_F(Inputs, InterruptsLeaveNothingBehind) {
+  std::mt19937 rng(12345);
+  std::uniform_int_distribution<int> delay_ms(20, 900);
+  const std::string suite = tmp("suite_interrupt.json");
+  write_file(suite, "{\"defaults\": {\"rays\": 400000, \"theta_deg\": [0, 60], \"checks\": [\"g1\"]}, "
+                    "\"entries\": [{\"name\": \"g\", \"generate\": \"gaussian\", \"args\": "
+                    "{\"resolution\": 32}, \"seeds\": [1, 2, 3, 4]}]}");
+  int interrupted = 0;
+  for (int k = 0; k < 6; ++k) {
+    const std::string dir = tmp("interrupt" + std::to_string(k));
+    fs::create_directories(dir);
+    const std::string out = dir + "/out.json";
+    std::vector<std::string> args;
+    if (k % 2 == 0)
+      args = {"measure", "g1", surface_, "--theta", "0:80:10", "--rays", "3000000", "-o", out};
+    else
+      args = {"validate", "--suite", suite, "-o", out};
+    const int ms = delay_ms(rng);
+    SCOPED_TRACE(args[0] + " interrupted after " + std::to_string(ms) + " ms");
+    pid_t pid = spawn(args, dir);
+    ASSERT_GT(pid, 0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(ms));
+    kill(pid, SIGINT);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    if (WIFSIGNALED(status)) {
+      ++interrupted;
+      EXPECT_EQ(WTERMSIG(status), SIGINT);
+      int left = 0;
+      for (const auto& e : fs::directory_iterator(dir)) {
+        ADD_FAILURE() << "left behind: " << e.path();
+        ++left;
+      }
+      EXPECT_EQ(left, 0);
+    } else {  // finished before the signal: then its output is complete
+      EXPECT_EQ(WEXITSTATUS(status), 0);
+      EXPECT_NO_THROW(nlohmann::json::parse(slurp(out)));
+    }
+    fs::remove_all(dir);
+  }
+  EXPECT_GE(interrupted, 4);
+}
