@@ -343,6 +343,9 @@ void register_structured_kinds(CLI::App& gen, const GlobalOptions& g) {
 
 }  // namespace
 
+// Measured heightmaps (cmd_generate_heightmap.cpp).
+void register_generate_heightmap(CLI::App& gen, const GlobalOptions& g);
+
 void register_generate(CLI::App& app, const GlobalOptions& g) {
   auto* gen = app.add_subcommand("generate", "Generate a microsurface and save it (.exr, .ply, .obj, .off)");
   gen->require_subcommand(1);
@@ -375,6 +378,7 @@ void register_generate(CLI::App& app, const GlobalOptions& g) {
     if (!g.quiet) std::cout << "wrote " << *flat_out << ": flat plane\n";
   });
   register_structured_kinds(*gen, g);
+  register_generate_heightmap(*gen, g);
 }
 
 void add_gaussian_options(CLI::App& cmd, GenerateOptions& go) {

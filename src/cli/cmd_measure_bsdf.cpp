@@ -1,16 +1,21 @@
-// microsim measure bsdf FILE --material ... -o OUT.exr|OUT.json: the BSDF per scattering order by
-// random walks on the explicit surface, beside the single-scattering models and the Smith
-// random-walk multiple-scattering model.
+// microsim measure bsdf FILE --material ... -o OUT.exr|OUT.json|OUT.bsdf|OUT.binary: the BSDF per
+// scattering order by random walks on the explicit surface, beside the single-scattering models
+// and the Smith random-walk multiple-scattering model, at every incidence of --theta-i x --phi-i;
+// .bsdf (RGL tensor file) and .binary (MERL) are tables renderers load.
 #include <tbb/task_arena.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <iomanip>
 #include <iostream>
 
 #include "cli_common.hpp"
 #include "option_checks.hpp"
 #include "microsim/io/output.hpp"
+#include "microsim/io/merl.hpp"
+#include "microsim/io/rgl_bsdf.hpp"
 #include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/bsdf_table.hpp"
 #include "microsim/surface/surface_io.hpp"
 #include "microsim/trace/tracer.hpp"
 
@@ -22,8 +27,9 @@ struct BsdfCliOptions {
   std::string surface, output, material;
   double eta = 0.0, k = 0.0;
   bool eta_given = false, k_given = false;
-  double theta_i = 0.0, phi_i = 0.0;
+  std::string theta_i, phi_i = "0";
   int orders = 4;
+  int table_resolution = 64;
   long long rays = 1000000;
   std::uint64_t seed = 1;
   int resolution = 64;
@@ -100,54 +106,97 @@ void print_summary(const Json& j, const std::string& out) {
             << fmt(j["rays_per_second"].get<double>() / 1e6, 2) << " Mrays/s; wrote " << out << "\n";
 }
 
+// Sorted, without repeats (a table's axes must increase).
+std::vector<double> sorted_unique(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end(), [](double a, double b) { return std::abs(a - b) < 1e-9; }), v.end());
+  return v;
+}
+
+std::string table_description(const BsdfCliOptions& o, const Microsurface& s, const BsdfTable& t) {
+  std::string d = "microsim measured BSDF of an explicit microsurface (" + s.description.dump() +
+                  "), material " + o.material;
+  if (o.eta_given) d += " eta " + fmt(o.eta, 4);
+  if (o.k_given) d += " k " + fmt(o.k, 4);
+  d += "; reflection, all scattering orders; " + std::to_string(t.results[0].measured.paths) +
+       " random walks per incidence, seed " + std::to_string(o.seed);
+  if (o.material == "dielectric") d += "; the reflected part only (transmission is not in this table)";
+  return d;
+}
+
 int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
-  require_extension(o.output, {"exr", "json"});
+  require_extension(o.output, {"exr", "json", "bsdf", "binary"});
+  const std::string ext = extension_of(o.output);
   const models::Material material = parse_material(o);
-  if (!(o.theta_i >= 0 && o.theta_i < 90))
-    throw UsageError("--theta-i must be in [0, 90) degrees (got " + fmt(o.theta_i, 2) + ")");
-  if (!std::isfinite(o.phi_i) || std::abs(o.phi_i) > 3600)
-    throw UsageError("--phi-i must be a finite angle in degrees, |phi| <= 3600");
+  const std::vector<double> thetas = sorted_unique(parse_angle_list(o.theta_i, "--theta-i"));
+  require_above_horizon(thetas, "--theta-i");
+  const std::vector<double> phis = sorted_unique(parse_angle_list(o.phi_i, "--phi-i"));
+  for (double p : phis)
+    if (!std::isfinite(p) || std::abs(p) > 3600)
+      throw UsageError("--phi-i must be finite angles in degrees, |phi| <= 3600");
   if (o.orders < 1 || o.orders > 16)
     throw UsageError("--orders must be in [1, 16] (got " + std::to_string(o.orders) + ")");
   if (o.rays <= 0 || o.rays > 1000000000000LL)
     throw UsageError("--rays must be in [1, 1e12] (got " + std::to_string(o.rays) + ")");
   if (o.resolution < 1 || o.resolution > 1024)
     throw UsageError("--resolution must be in [1, 1024] (got " + std::to_string(o.resolution) + ")");
+  if (o.table_resolution < 2 || o.table_resolution > 512)
+    throw UsageError("--table-resolution must be in [2, 512] (got " + std::to_string(o.table_resolution) + ")");
+  const std::size_t n_inc = thetas.size() * phis.size();
+  if (n_inc > 100000) throw UsageError("--theta-i x --phi-i: more than 100000 incidences");
+  if (ext == "binary" && phis.size() > 1)
+    throw UsageError("-o .binary: MERL tables are isotropic; give one --phi-i (got " +
+                     std::to_string(phis.size()) + " azimuths)");
+  if (ext == "bsdf" && phis.size() > 1 && (std::abs(phis.front() + 180) > 1e-9 || std::abs(phis.back() - 180) > 1e-9))
+    throw UsageError("--phi-i: an anisotropic .bsdf needs azimuths over the full circle from -180 to 180 "
+                     "(e.g. --phi-i -180:180:30), or one azimuth for an isotropic table");
   {
-    // Tallies: f and f^2 per side, slot and pixel, one per worker plus the merge tree.
+    // Tallies: f and f^2 per side, slot and pixel, one per worker plus the merge tree, and the
+    // finished results of every incidence.
     const double tally = 2.0 * (o.orders + 1) * (static_cast<double>(o.resolution) * o.resolution + o.resolution) * 2 * 8;
     const int threads = g.threads > 0 ? g.threads : tbb::this_task_arena::max_concurrency();
-    const double need = tally * (3.0 * threads + 4.0);
+    const double need = tally * (3.0 * threads + 4.0 + 2.0 * n_inc);
     const double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
     if (need > 0.5 * have)
       throw UsageError("--resolution " + std::to_string(o.resolution) + " with --orders " +
-                       std::to_string(o.orders) + " needs about " + fmt(need / (1 << 30), 1) +
-                       " GiB of tallies, more than half of this machine's memory");
+                       std::to_string(o.orders) + " and " + std::to_string(n_inc) + " incidences needs about " +
+                       fmt(need / (1 << 30), 1) + " GiB of tallies, more than half of this machine's memory");
   }
   Microsurface s = load_surface(o.surface);
+  if (!s.macro().periodic && (ext == "bsdf" || ext == "binary"))
+    throw UsageError(o.surface + ": -o ." + ext + " tables need a periodic tile (this surface is a finite object)");
+  const bool anisotropic_surface = s.nominal && std::abs(s.nominal->alpha_x - s.nominal->alpha_y) > 1e-12;
+  if (ext == "binary" && anisotropic_surface)
+    throw UsageError(o.surface + ": -o .binary needs an isotropic surface (MERL tables are isotropic; nominal "
+                     "alpha_x != alpha_y); write a .bsdf with --phi-i -180:180:STEP instead");
+  if (ext == "bsdf" && anisotropic_surface && phis.size() == 1)
+    throw UsageError(o.surface + ": an anisotropic surface (alpha_x != alpha_y) needs --phi-i over the full "
+                     "circle for a .bsdf (e.g. --phi-i -180:180:30)");
   const auto t0 = std::chrono::steady_clock::now();
 
-  BsdfOptions bo;
-  bo.material = material;
-  bo.theta_i = rad(o.theta_i);
-  bo.phi_i = rad(o.phi_i);
-  bo.orders = o.orders;
-  bo.rays = static_cast<std::uint64_t>(o.rays);
-  bo.seed = o.seed;
-  bo.resolution = o.resolution;
-  bo.model_walks = s.nominal ? bo.rays : 0;
-  Progress progress("measure bsdf", g.quiet);
-  bo.progress = [&](double f) { progress.update(f); };
+  BsdfTableOptions to;
+  to.base.material = material;
+  to.base.orders = o.orders;
+  to.base.rays = static_cast<std::uint64_t>(o.rays);
+  to.base.seed = o.seed;
+  to.base.resolution = o.resolution;
+  to.base.model_walks = s.nominal ? to.base.rays : 0;
+  for (double t : thetas) to.theta_i.push_back(rad(t));
+  for (double p : phis) to.phi_i.push_back(rad(p));
+  Progress progress(n_inc > 1 ? "measure bsdf (" + std::to_string(n_inc) + " incidences)" : "measure bsdf", g.quiet);
+  to.progress = [&](double f) { progress.update(f); };
 
   Tracer tracer(s);
-  const BsdfResult r = measure_bsdf(tracer, bo);
+  const BsdfTable table = measure_bsdf_table(tracer, to);
   progress.finish();
+  const BsdfResult& r = table.results[0];
+  const bool single = n_inc == 1;
 
   Json parameters = {{"material", o.material},
                      {"eta", o.eta_given ? Json(o.eta) : Json(nullptr)},
                      {"k", o.k_given ? Json(o.k) : Json(nullptr)},
-                     {"theta_i_deg", o.theta_i},
-                     {"phi_i_deg", o.phi_i},
+                     {"theta_i_deg", single ? Json(thetas[0]) : Json(thetas)},
+                     {"phi_i_deg", single ? Json(phis[0]) : Json(phis)},
                      {"orders", o.orders},
                      {"rays", r.measured.paths},
                      {"rays_requested", o.rays},
@@ -155,8 +204,9 @@ int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
                      {"resolution", o.resolution},
                      {"in_plane_bins", r.plane.size()},
                      {"in_plane_band_half_width_deg", deg(r.plane.half_width())},
-                     {"max_events", bo.max_events},
-                     {"smith_multiple_walks", bo.model_walks}};
+                     {"max_events", to.base.max_events},
+                     {"smith_multiple_walks", to.base.model_walks}};
+  if (ext == "bsdf") parameters["table_resolution"] = o.table_resolution;
   Json j = run_header("measure bsdf", g);
   j["file"] = o.surface;
   j["surface"] = s.description;
@@ -185,33 +235,83 @@ int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
                          "The same holds for z_smith_multiple and z_vcavity_single"},
       {"z_smith_single_rays", "(albedo - model) / stderr with this surface's ray-count error "
                               "(and the walks' error for z_smith_multiple_rays): the distance in "
-                              "units of this run's noise, not a test of the model"}};
-  Json summary = bsdf_summary_json(r, s);
-  for (auto it = summary.begin(); it != summary.end(); ++it) j[it.key()] = it.value();
-  nominal_z_are_ray_count_only(j);
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  j["wall_seconds"] = wall;
+                              "units of this run's noise, not a test of the model"},
+      {"incidences", "one object per incidence (theta_i_deg, phi_i_deg and the single-incidence "
+                     "fields), phi_i outer, theta_i inner; with one incidence the same fields "
+                     "also stand at the top level"}};
+  Json incidences = bsdf_incidences_json(table, s);
+  for (Json& incidence : incidences) nominal_z_are_ray_count_only(incidence);
+  if (single) {
+    for (auto it = incidences[0].begin(); it != incidences[0].end(); ++it)
+      if (it.key() != "theta_i_deg" && it.key() != "phi_i_deg") j[it.key()] = it.value();
+  }
+  j["incidences"] = incidences;
 
   std::string json_path = o.output;
-  if (extension_of(o.output) == "exr") {
+  std::string written = o.output;
+  if (ext != "json") {
     json_path = replace_extension(o.output, "json");
+    written = o.output + " and " + json_path;
+  }
+  if (ext == "exr") {
     Json attrs = {{"microsim_command", "measure bsdf"},
                   {"microsim_version", "0.1.0"},
                   {"file", o.surface},
                   {"surface", s.description.dump()},
                   {"parameters", parameters.dump()},
-                  {"albedo", j["albedo"].dump()},
-                  {"reflected_stderr", j["reflected_stderr"].dump()},
-                  {"transmitted_stderr", j["transmitted_stderr"].dump()},
                   {"summary_json", json_path}};
-    write_exr(o.output, bsdf_exr_table(r, attrs));
+    if (single) {
+      attrs["albedo"] = j["albedo"].dump();
+      attrs["reflected_stderr"] = j["reflected_stderr"].dump();
+      attrs["transmitted_stderr"] = j["transmitted_stderr"].dump();
+    }
+    write_exr(o.output, bsdf_table_exr(table, attrs));
+  } else if (ext == "bsdf") {
+    const auto tb = std::chrono::steady_clock::now();
+    RglOptions ro;
+    ro.resolution = o.table_resolution;
+    ro.description = table_description(o, s, table);
+    const RglTable rgl = build_rgl_table(table, s, ro);
+    write_rgl_bsdf(o.output, rgl);
+    j["table"] = {{"format", "RGL tensor file (Dupuy and Jakob 2018)"},
+                  {"isotropic", rgl.isotropic},
+                  {"resolution", rgl.resolution},
+                  {"ndf_shape", {rgl.ndf_phi, rgl.ndf_theta}},
+                  {"sigma_shape", {rgl.sigma_phi, rgl.sigma_theta}},
+                  {"description", rgl.description},
+                  {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count()}};
+  } else if (ext == "binary") {
+    const auto tb = std::chrono::steady_clock::now();
+    write_merl(o.output, table);
+    j["table"] = {{"format", "MERL isotropic BRDF (90 x 90 x 180 doubles per channel)"},
+                  {"filling", "measured f (reflected, all orders) at cell centres, bilinear on the "
+                              "hemisphere maps, linear in theta_i between measured incidences, held "
+                              "constant outside them; 0 below the horizon"},
+                  {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count()}};
   }
+  j["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_json(json_path, j);
   if (!g.quiet) {
-    std::cout << "BSDF of " << o.surface << ", " << o.material << ", theta_i " << o.theta_i
-              << " deg, phi_i " << o.phi_i << " deg, " << r.measured.paths << " rays"
-              << (s.nominal ? "" : " (no nominal NDF: no microfacet models)") << "\n";
-    print_summary(j, extension_of(o.output) == "exr" ? o.output + " and " + json_path : json_path);
+    if (single) {
+      std::cout << "BSDF of " << o.surface << ", " << o.material << ", theta_i " << thetas[0]
+                << " deg, phi_i " << phis[0] << " deg, " << r.measured.paths << " rays"
+                << (s.nominal ? "" : " (no nominal NDF: no microfacet models)") << "\n";
+      print_summary(j, written);
+    } else {
+      std::cout << "BSDF of " << o.surface << ", " << o.material << ", " << n_inc << " incidences, "
+                << r.measured.paths << " rays each, " << fmt(table.seconds, 1) << " s\n";
+      std::cout << std::setw(10) << "theta_i" << std::setw(10) << "phi_i" << std::setw(12) << "R total"
+                << std::setw(10) << "stderr" << std::setw(12) << "smith_mult" << "\n";
+      for (const auto& inc : incidences) {
+        const Json& m = inc["albedo_models"]["smith_multiple"];
+        std::cout << std::setw(10) << fmt(inc["theta_i_deg"].get<double>(), 1) << std::setw(10)
+                  << fmt(inc["phi_i_deg"].get<double>(), 1) << std::setw(12)
+                  << fmt(inc["albedo"]["reflected"]["total"].get<double>(), 5) << std::setw(10)
+                  << fmt(inc["reflected_stderr"]["total"].get<double>(), 5) << std::setw(12)
+                  << (m.is_null() ? std::string("-") : fmt(m["reflected"]["total"].get<double>(), 5)) << "\n";
+      }
+      std::cout << "wrote " << written << "\n";
+    }
   }
   return 0;
 }
@@ -225,8 +325,9 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
   auto o = std::make_shared<BsdfCliOptions>();
   cmd->add_option("surface", o->surface, "Surface file (a periodic tile, a finite object or a vcavity ensemble)")->required();
   cmd->add_option("-o,--output", o->output,
-                  "Output: .exr (hemisphere tables; the JSON summary goes beside it, same name "
-                  ".json) or .json (summary only)")
+                  "Output: .exr (hemisphere tables of every incidence), .bsdf (RGL tensor file for "
+                  "Mitsuba 3 / pbrt-v4), .binary (MERL, isotropic) -- the JSON record goes beside "
+                  "them, same name .json -- or .json (record only)")
       ->required();
   cmd->add_option("--material", o->material, "mirror, conductor or dielectric")->required();
   cmd->add_option("--eta", o->eta,
@@ -235,10 +336,16 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
       ->check(number_in(positive()));
   cmd->add_option("--k", o->k, "Conductor: extinction coefficient (index eta + i k)")
       ->check(number_in(closed(0, 1000)));
-  cmd->add_option("--theta-i", o->theta_i, "Incidence zenith angle in degrees, [0, 90)")->required()
-      ->check(number_in({0, 90, false, true}));
-  cmd->add_option("--phi-i", o->phi_i, "Incidence azimuth in degrees")->required()
-      ->check(finite_number());
+  cmd->add_option("--theta-i", o->theta_i,
+                  "Incidence zenith angles in degrees, [0, 90): a, a,b,c or start:stop:step")
+      ->required();
+  cmd->add_option("--phi-i", o->phi_i,
+                  "Incidence azimuths in degrees (same syntax); every theta_i x phi_i is measured")
+      ->capture_default_str();
+  cmd->add_option("--table-resolution", o->table_resolution,
+                  "-o .bsdf: vertices per side of the per-incidence sample grid (vndf, spectra)")
+      ->capture_default_str()
+      ->check(integer_in(2, 512));
   cmd->add_option("--orders", o->orders, "Scattering orders tallied: 1 .. K-1 separately, K+ together")
       ->capture_default_str()
       ->check(integer_in(1, 64));

@@ -9,6 +9,7 @@
 
 #include "microsim/io/checks.hpp"
 #include "microsim/io/output.hpp"
+#include "microsim/surface/heightmap_import.hpp"
 #include "microsim/surface/mesh_check.hpp"
 
 namespace microsim {
@@ -91,11 +92,17 @@ void save_heightfield_exr(const Microsurface& s, const std::string& path) {
   t.attributes = s.description;
   t.attributes["microsim_surface"] = "heightfield";
   t.attributes["microsim_description"] = s.description.dump();
-  t.attributes["microsim_macrosurface"] = macro_to_json(s.macro()).dump();
+  // A measured patch imported as a non-periodic window keeps that in its header: the
+  // estimators refuse it on loading (load_surface), metrology reads it.
+  const bool window = s.description.is_object() && s.description.value("boundary", std::string()) == "window";
+  Json macro = macro_to_json(s.macro());
+  if (window) macro["periodic"] = false;
+  t.attributes["microsim_macrosurface"] = macro.dump();
   t.attributes["parameterization"] =
       "Z(i,j) = height of grid vertex x = -size_x/2 + i size_x/width, y = -size_y/2 + j "
-      "size_y/height (row j = y index); periodic tile; cell split along its (i+1,j)-(i,j+1) "
-      "diagonal";
+      "size_y/height (row j = y index); " +
+      std::string(window ? "non-periodic measured window" : "periodic tile") +
+      "; cell split along its (i+1,j)-(i,j+1) diagonal";
   write_exr(path, t);
 }
 
@@ -104,7 +111,7 @@ constexpr int kMaxGrid = 32760;
 // Bytes per grid cell once loaded and traced (the same costs as a generated tile).
 double heightfield_bytes(double w, double h) { return (w + 3) * (h + 3) * 72.0; }
 
-Microsurface load_heightfield_exr(const std::string& path) {
+Microsurface load_heightfield_exr(const std::string& path, bool allow_window) {
   Macrosurface m;
   // The header is checked before any pixel is allocated: size, macrosurface, description.
   ExrTable t = read_exr(path, [&](const ExrTable& h) {
@@ -127,7 +134,11 @@ Microsurface load_heightfield_exr(const std::string& path) {
     m = macro_from_json(mj, path);
     require_in_range(m.size_x, closed(1e-6, 1e6), path + ": macrosurface field 'size_x'");
     require_in_range(m.size_y, closed(1e-6, 1e6), path + ": macrosurface field 'size_y'");
-    if (!m.periodic) throw UsageError(path + ": macrosurface field 'periodic' must be true for a heightfield");
+    if (!m.periodic && !allow_window)
+      throw UsageError(path + " is a non-periodic measured window: the estimators need a periodic "
+                       "tile (a guard-band window is not supported); microsim info reports its "
+                       "metrology; import periodic data with generate heightmap --periodic");
+    // In memory a window is a grid like a tile; its description's "boundary" says "window".
   });
   auto it = std::find(t.channel_names.begin(), t.channel_names.end(), "Z");
   for (float h : t.channels[it - t.channel_names.begin()])
@@ -254,14 +265,16 @@ void save_surface(const Microsurface& s, const std::string& path) {
   }
 }
 
-Microsurface load_surface(const std::string& path) {
+Microsurface load_surface(const std::string& path) { return load_surface_or_window(path); }
+
+Microsurface load_surface_or_window(const std::string& path, bool allow_window) {
   // A surface written earlier by this command (demo) and not committed yet is read from its
   // temporary.
   const std::string pending = OutputTransaction::pending(path);
   const std::string file = pending.empty() ? path : pending;
   if (!file_exists(file)) throw UsageError("surface file " + path + " does not exist");
   std::string ext = extension_of(path);
-  if (ext == "exr") return load_heightfield_exr(file);
+  if (ext == "exr") return load_heightfield_exr(file, allow_window);
   if (ext == "ply" || ext == "obj" || ext == "off") return load_mesh(file);
   throw UsageError("surface file " + path + ": unknown format (expected .exr, .ply, .obj or .off)");
 }

@@ -1,0 +1,79 @@
+#include "microsim/io/merl.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <utility>
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+
+#include "microsim/io/output.hpp"
+
+namespace microsim {
+
+double table_f(const BsdfTable& t, const Vec3& wi0, const Vec3& wo0) {
+  if (t.phi_i.size() != 1) throw UsageError("MERL tables are isotropic: give one --phi-i");
+  if (wi0.z() <= 0 || wo0.z() <= 0) return 0.0;
+  // Turn the pair about the normal so that wi has the measured azimuth.
+  const double turn = t.phi_i[0] - std::atan2(wi0.y(), wi0.x());
+  const double c = std::cos(turn), s = std::sin(turn);
+  const Vec3 wo(c * wo0.x() - s * wo0.y(), s * wo0.x() + c * wo0.y(), wo0.z());
+  const double theta = std::acos(std::clamp(wi0.z() / wi0.norm(), -1.0, 1.0));
+  const auto& th = t.theta_i;
+  const int K = t.results[0].options.orders;
+  const int n = static_cast<int>(th.size());
+  if (n == 1 || theta <= th.front()) return interpolate_f(t.at(0, 0), 0, K, wo);
+  if (theta >= th.back()) return interpolate_f(t.at(0, n - 1), 0, K, wo);
+  const int k = static_cast<int>(std::upper_bound(th.begin(), th.end(), theta) - th.begin()) - 1;
+  const double w = (theta - th[k]) / (th[k + 1] - th[k]);
+  return (1 - w) * interpolate_f(t.at(0, k), 0, K, wo) + w * interpolate_f(t.at(0, k + 1), 0, K, wo);
+}
+
+std::vector<double> merl_cells(const BsdfTable& t) {
+  if (t.phi_i.size() != 1)
+    throw UsageError("-o .binary: MERL tables are isotropic; this table has " +
+                     std::to_string(t.phi_i.size()) + " incidence azimuths (give one --phi-i)");
+  for (std::size_t k = 1; k < t.theta_i.size(); ++k)
+    if (!(t.theta_i[k] > t.theta_i[k - 1])) throw UsageError("--theta-i must be increasing for a .binary");
+  std::vector<double> cells(static_cast<std::size_t>(kMerlThetaH) * kMerlThetaD * kMerlPhiD, 0.0);
+  tbb::parallel_for(0, kMerlThetaH, [&](int ih) {
+    const double u = (ih + 0.5) / kMerlThetaH, th = u * u * 0.5 * kPi;
+    const double ch = std::cos(th), sh = std::sin(th);
+    const Vec3 h(sh, 0.0, ch);
+    for (int id = 0; id < kMerlThetaD; ++id) {
+      const double td = (id + 0.5) / kMerlThetaD * 0.5 * kPi;
+      for (int ip = 0; ip < kMerlPhiD; ++ip) {
+        const double pd = (ip + 0.5) / kMerlPhiD * kPi;
+        const Vec3 d = direction_from_angles(td, pd);
+        // wi = R_y(theta_h) d: the difference vector seen from the half vector's frame.
+        Vec3 wi(d.x() * ch + d.z() * sh, d.y(), -d.x() * sh + d.z() * ch);
+        Vec3 wo = 2.0 * wi.dot(h) * h - wi;
+        // Reciprocity (000 eq. 4c): read the pair with the light at the smaller zenith angle,
+        // which the measured incidences cover best.
+        if (wo.z() > wi.z()) std::swap(wi, wo);
+        cells[static_cast<std::size_t>(ip) + kMerlPhiD * (id + static_cast<std::size_t>(kMerlThetaD) * ih)] =
+            table_f(t, wi, wo);
+      }
+    }
+  });
+  return cells;
+}
+
+void write_merl(const std::string& path, const BsdfTable& t) {
+  const std::vector<double> f = merl_cells(t);
+  write_atomically(path, [&](const std::string& tmp) {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throw std::runtime_error("cannot write " + path);
+    const std::int32_t dims[3] = {kMerlThetaH, kMerlThetaD, kMerlPhiD};
+    out.write(reinterpret_cast<const char*>(dims), sizeof(dims));
+    std::vector<double> block(f.size());
+    for (int c = 0; c < 3; ++c) {
+      for (std::size_t k = 0; k < f.size(); ++k) block[k] = f[k] / kMerlScale[c];
+      out.write(reinterpret_cast<const char*>(block.data()), static_cast<std::streamsize>(block.size() * sizeof(double)));
+    }
+    if (!out) throw std::runtime_error("cannot write " + path);
+  });
+}
+
+}  // namespace microsim

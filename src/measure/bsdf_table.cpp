@@ -1,0 +1,91 @@
+#include "microsim/measure/bsdf_table.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace microsim {
+
+BsdfTable measure_bsdf_table(const Tracer& tracer, const BsdfTableOptions& o) {
+  if (o.theta_i.empty()) throw UsageError("--theta-i: no incidence angle given");
+  if (o.phi_i.empty()) throw UsageError("--phi-i: no azimuth given");
+  for (double t : o.theta_i)
+    if (!(t >= 0.0 && t < 0.5 * kPi))
+      throw UsageError("--theta-i must be in [0, 90) degrees (got " + std::to_string(deg(t)) + ")");
+  for (double p : o.phi_i)
+    if (!std::isfinite(p)) throw UsageError("--phi-i must be finite");
+  const auto t0 = std::chrono::steady_clock::now();
+  BsdfTable table;
+  table.theta_i = o.theta_i;
+  table.phi_i = o.phi_i;
+  const int n = static_cast<int>(o.theta_i.size() * o.phi_i.size());
+  table.results.reserve(static_cast<std::size_t>(n));
+  int k = 0;
+  for (double phi : o.phi_i)
+    for (double theta : o.theta_i) {
+      BsdfOptions b = o.base;
+      b.theta_i = theta;
+      b.phi_i = phi;
+      if (o.progress) b.progress = [&, k](double f) { o.progress((k + f) / n); };
+      else b.progress = nullptr;
+      table.results.push_back(measure_bsdf(tracer, b));
+      ++k;
+    }
+  table.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return table;
+}
+
+double interpolate_f(const BsdfResult& r, int side, int slot, const Vec3& wo) {
+  const int R = r.map.resolution();
+  auto pixel = [&](int i, int j) { return r.f_pixel(side, slot, j * R + i).mean; };
+  if (R == 1) return pixel(0, 0);
+  const Vec2 sq = r.map.to_square(wo);
+  // Pixel centres sit at a = -1 + (i + 1/2) 2/R: continuous index x = (a + 1) R/2 - 1/2.
+  const double x = std::clamp((sq.x() + 1.0) * 0.5 * R - 0.5, 0.0, R - 1.0);
+  const double y = std::clamp((sq.y() + 1.0) * 0.5 * R - 0.5, 0.0, R - 1.0);
+  const int i = std::min(static_cast<int>(x), R - 2), j = std::min(static_cast<int>(y), R - 2);
+  const double fx = x - i, fy = y - j;
+  return (1 - fy) * ((1 - fx) * pixel(i, j) + fx * pixel(i + 1, j)) +
+         fy * ((1 - fx) * pixel(i, j + 1) + fx * pixel(i + 1, j + 1));
+}
+
+Json bsdf_incidences_json(const BsdfTable& t, const Microsurface& s) {
+  Json out = Json::array();
+  for (std::size_t p = 0; p < t.phi_i.size(); ++p)
+    for (std::size_t q = 0; q < t.theta_i.size(); ++q) {
+      Json j = {{"theta_i_deg", deg(t.theta_i[q])}, {"phi_i_deg", deg(t.phi_i[p])}};
+      const Json summary = bsdf_summary_json(t.at(static_cast<int>(p), static_cast<int>(q)), s);
+      for (auto it = summary.begin(); it != summary.end(); ++it) j[it.key()] = it.value();
+      out.push_back(j);
+    }
+  return out;
+}
+
+ExrTable bsdf_table_exr(const BsdfTable& t, const Json& attributes) {
+  if (t.results.size() == 1) return bsdf_exr_table(t.results[0], attributes);
+  ExrTable out;
+  Json incidences = Json::array();
+  for (std::size_t k = 0; k < t.results.size(); ++k) {
+    const BsdfResult& r = t.results[k];
+    ExrTable one = bsdf_exr_table(r, Json::object());
+    if (k == 0) {
+      out = one;
+      out.channel_names.clear();
+      out.channels.clear();
+    }
+    for (std::size_t c = 0; c < one.channels.size(); ++c) {
+      out.channel_names.push_back("incidence_" + std::to_string(k) + "." + one.channel_names[c]);
+      out.channels.push_back(std::move(one.channels[c]));
+    }
+    incidences.push_back({deg(r.options.theta_i), deg(r.options.phi_i)});
+  }
+  for (auto it = attributes.begin(); it != attributes.end(); ++it) out.attributes[it.key()] = it.value();
+  out.attributes["incidences"] = incidences.dump();
+  out.attributes["incidence_layout"] =
+      "channel incidence_<k>.<side>.f_<order>[_stderr] holds incidence k = p * n_theta + t for "
+      "theta_i_deg[t], phi_i_deg[p] of the parameters; `incidences` lists [theta_i_deg, "
+      "phi_i_deg] per k; each incidence's table follows `parameterization` and `value`";
+  return out;
+}
+
+}  // namespace microsim

@@ -1,0 +1,338 @@
+// BSDF tables for renderers: the multi-incidence measurement (measure/bsdf_table.hpp), the RGL
+// tensor file (io/rgl_bsdf.hpp) and the MERL file (io/merl.hpp), checked through readers written
+// from the format descriptions (table_readers.hpp): the files give back the measured f within
+// its standard errors, a mirror's table conserves energy (white furnace), and the RGL importance
+// sampling draws directions with the density it reports (chi-square) and weights eval / pdf.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+
+#include "microsim/io/merl.hpp"
+#include "microsim/io/rgl_bsdf.hpp"
+#include "microsim/measure/bsdf_table.hpp"
+#include "microsim/measure/stats.hpp"
+#include "microsim/surface/gaussian.hpp"
+#include "microsim/surface/surface_io.hpp"
+#include "cli_helpers.hpp"
+#include "table_readers.hpp"
+#include "test_helpers.hpp"
+
+using namespace microsim;
+using namespace microsim::testing;
+namespace mm = microsim::models;
+
+namespace {
+
+const Microsurface& surface() {
+  static const Microsurface s = [] {
+    GaussianParams g;
+    g.resolution = 128;
+    g.alpha_x = g.alpha_y = 0.5;
+    g.seed = 7;
+    return generate_gaussian(g);
+  }();
+  return s;
+}
+
+BsdfTable measure(const mm::Material& m, const std::vector<double>& thetas_deg, std::uint64_t rays, int res,
+                  std::vector<double> phis_deg = {0.0}) {
+  static const Tracer tracer(surface());
+  BsdfTableOptions o;
+  o.base.material = m;
+  o.base.orders = 3;
+  o.base.rays = rays;
+  o.base.resolution = res;
+  o.base.seed = 11;
+  for (double t : thetas_deg) o.theta_i.push_back(rad(t));
+  for (double p : phis_deg) o.phi_i.push_back(rad(p));
+  return measure_bsdf_table(tracer, o);
+}
+
+std::string temp(const std::string& name) { return ::testing::TempDir() + "microsim_tables_" + name; }
+
+const mm::Material kGold = mm::Material::conductor(0.47, 2.4);
+
+// z-scores of a reader's f against the measured pixel f at the pixel centres: pixels that
+// received paths, at theta_o >= min_theta_o, whose f is at least `min_share` of the largest
+// pixel f (the RGL format interpolates f cos / D between grid points; in the faint multiply
+// scattered backscatter, a few percent of the peak, it holds f only to tens of percent).
+struct Agreement {
+  double max_abs_z = 0, chi2 = 0;
+  int n = 0;
+};
+template <class F>
+Agreement agreement(const BsdfResult& r, F&& reader_f, double min_theta_o = 0.0, double min_share = 0.0) {
+  Agreement a;
+  const int R = r.map.resolution(), K = r.options.orders;
+  double peak = 0.0;
+  for (int px = 0; px < r.map.size(); ++px) peak = std::max(peak, r.f_pixel(0, K, px).mean);
+  for (int px = 0; px < r.map.size(); ++px) {
+    const Estimate e = r.f_pixel(0, K, px);
+    if (!(e.stderr_ > 0) || e.mean < min_share * peak) continue;
+    const int i = px % R, j = px / R;
+    const Vec3 wo = r.map.from_square(-1 + (i + 0.5) * 2.0 / R, -1 + (j + 0.5) * 2.0 / R);
+    if (theta_of(wo) < min_theta_o) continue;
+    const double z = (reader_f(wo) - e.mean) / (std::sqrt(2.0) * e.stderr_);
+    a.max_abs_z = std::max(a.max_abs_z, std::abs(z));
+    a.chi2 += z * z;
+    ++a.n;
+  }
+  return a;
+}
+
+}  // namespace
+
+TEST(BsdfTable, EveryIncidenceEqualsItsSingleRun) {
+  const BsdfTable t = measure(kGold, {10, 50}, 4000, 8, {0, 90});
+  ASSERT_EQ(t.incidences(), 4);
+  const Tracer tracer(surface());
+  for (int p = 0; p < 2; ++p)
+    for (int q = 0; q < 2; ++q) {
+      BsdfOptions o = t.at(p, q).options;
+      EXPECT_DOUBLE_EQ(o.theta_i, t.theta_i[q]);
+      EXPECT_DOUBLE_EQ(o.phi_i, t.phi_i[p]);
+      const BsdfResult one = measure_bsdf(tracer, o);
+      EXPECT_EQ(one.measured.albedo, t.at(p, q).measured.albedo);
+      EXPECT_EQ(one.measured.pix, t.at(p, q).measured.pix);
+    }
+  const ExrTable exr = bsdf_table_exr(t, Json::object());
+  EXPECT_EQ(exr.channel_names.front(), "incidence_0.reflected.f_order_1");
+  EXPECT_EQ(exr.channels.size(), 4u * 4u * 2u);
+  // The JSON record's incidences (the single-incidence summary is slow: one small table).
+  const BsdfTable small = measure(kGold, {50}, 1000, 4, {90});
+  const Json j = bsdf_incidences_json(small, surface());
+  ASSERT_EQ(j.size(), 1u);
+  EXPECT_DOUBLE_EQ(j[0]["theta_i_deg"].get<double>(), 50.0);
+  EXPECT_DOUBLE_EQ(j[0]["phi_i_deg"].get<double>(), 90.0);
+  EXPECT_TRUE(j[0].contains("albedo") && j[0].contains("in_plane") && j[0].contains("albedo_models"));
+}
+
+TEST(BilinearWarp, MapsUniformSamplesToItsDensity) {
+  // The writer's warp against the test reader's bisection inverse, and its density.
+  std::vector<double> v = {0.1, 2, 3, 0.5, 1, 4, 0, 1, 2, 0.3, 5, 1};
+  std::vector<float> vf(v.begin(), v.end());
+  const BilinearWarp w(v, 4, 3);
+  const Warp2 ref(Bilinear2{vf.data(), 4, 3});
+  for (double sx : {0.05, 0.3, 0.77})
+    for (double sy : {0.1, 0.5, 0.93}) {
+      const Vec2 p = w.sample(Vec2(sx, sy));
+      const Vec2 back = ref.invert(p);
+      EXPECT_NEAR(back.x(), sx, 1e-6);
+      EXPECT_NEAR(back.y(), sy, 1e-6);
+      EXPECT_NEAR(w.pdf(p), ref.pdf(p), 1e-5 * ref.pdf(p));
+    }
+}
+
+TEST(RglFile, ReaderGivesBackTheMeasuredF) {
+  const BsdfTable t = measure(kGold, {0, 40}, 200000, 12);
+  RglOptions o;
+  o.description = "test";
+  const std::string path = temp("gold.bsdf");
+  write_rgl_bsdf(path, build_rgl_table(t, surface(), o));
+  for (int q = 0; q < 2; ++q) {
+    RglReader reader(path, 0, q);
+    const BsdfResult& r = t.at(0, q);
+    const auto f = [&](const Vec3& wo) { return reader.eval(wo) / wo.z(); };
+    const Agreement a = agreement(r, f, 0.0, 0.05);
+    ASSERT_GT(a.n, 80);
+    const double zc = sidak_z(1e-3, a.n);
+    EXPECT_LT(a.max_abs_z, zc) << "theta_i " << deg(t.theta_i[q]);
+    EXPECT_GT(chi2_p_value(a.chi2, a.n), 1e-3) << "chi2 " << a.chi2 << " over " << a.n << " pixels";
+    // Power: the same file with spectra scaled by 1.05 is rejected.
+    reader.scale_spectra(1.05);
+    const Agreement b = agreement(r, f, 0.0, 0.05);
+    EXPECT_LT(chi2_p_value(b.chi2, b.n), 1e-3) << "chi2 " << b.chi2 << " over " << b.n << " pixels";
+  }
+  std::remove(path.c_str());
+}
+
+TEST(RglFile, MirrorWhiteFurnace) {
+  const BsdfTable t = measure(mm::Material::mirror(), {0, 30, 60}, 100000, 16);
+  RglOptions o;
+  const std::string path = temp("mirror.bsdf");
+  write_rgl_bsdf(path, build_rgl_table(t, surface(), o));
+  const HemisphereMap map(256);
+  for (int q = 0; q < 3; ++q) {
+    RglReader reader(path, 0, q);
+    auto furnace = [&] {
+      double sum = 0.0;  // int f cos d omega over the equal-area map's pixel centres
+      for (int j = 0; j < map.resolution(); ++j)
+        for (int i = 0; i < map.resolution(); ++i)
+          sum += reader.eval(map.from_square(-1 + (i + 0.5) * 2.0 / map.resolution(), -1 + (j + 0.5) * 2.0 / map.resolution()));
+      return sum * map.pixel_solid_angle();
+    };
+    const double measured = t.at(0, q).albedo(0, t.at(0, q).options.orders).mean;
+    EXPECT_NEAR(measured, 1.0, 1e-3);  // a mirror loses no power (few lost paths)
+    const double a = furnace();
+    EXPECT_NEAR(a, 1.0, 0.02) << "theta_i " << deg(t.theta_i[q]);
+    reader.scale_spectra(1.05);
+    EXPECT_GT(std::abs(furnace() - 1.0), 0.02) << "power check";
+  }
+  std::remove(path.c_str());
+}
+
+TEST(RglFile, AnisotropicTableOverTheFullCircle) {
+  // An azimuth grid from -180 to 180 degrees: absolute phi_m, one table per (phi_i, theta_i).
+  const BsdfTable t = measure(kGold, {20, 50}, 100000, 12, {-180, -90, 0, 90, 180});
+  const RglOptions o;
+  const std::string path = temp("gold_aniso.bsdf");
+  const RglTable table = build_rgl_table(t, surface(), o);
+  EXPECT_FALSE(table.isotropic);
+  EXPECT_EQ(table.ndf_phi, 17);
+  write_rgl_bsdf(path, table);
+  const HemisphereMap map(128);
+  for (int p = 0; p < 5; ++p)
+    for (int q = 0; q < 2; ++q) {
+      RglReader reader(path, p, q);
+      const BsdfResult& r = t.at(p, q);
+      const Agreement a = agreement(r, [&](const Vec3& wo) { return reader.eval(wo) / wo.z(); }, 0.0, 0.05);
+      EXPECT_LT(a.max_abs_z, sidak_z(1e-3, a.n)) << "phi_i " << deg(t.phi_i[p]) << " theta_i " << deg(t.theta_i[q]);
+      double sum = 0.0;
+      for (int j = 0; j < map.resolution(); ++j)
+        for (int i = 0; i < map.resolution(); ++i)
+          sum += reader.eval(map.from_square(-1 + (i + 0.5) * 2.0 / map.resolution(), -1 + (j + 0.5) * 2.0 / map.resolution()));
+      const double albedo = r.albedo(0, r.options.orders).mean;
+      EXPECT_NEAR(sum * map.pixel_solid_angle() / albedo, 1.0, 0.02) << "phi_i " << deg(t.phi_i[p]);
+    }
+  // A partial circle of azimuths is refused.
+  const BsdfTable part = measure(kGold, {20}, 1000, 4, {0, 90});
+  EXPECT_THROW(build_rgl_table(part, surface(), o), UsageError);
+  std::remove(path.c_str());
+}
+
+TEST(RglFile, ImportanceSamplingMatchesItsDensityAndEval) {
+  const BsdfTable t = measure(kGold, {30}, 50000, 12);
+  RglOptions o;
+  const std::string path = temp("gold_sampling.bsdf");
+  write_rgl_bsdf(path, build_rgl_table(t, surface(), o));
+  const RglReader reader(path, 0, 0);
+  // Histogram of sampled directions on an 8 x 8 equal-area map plus a "below the horizon" cell,
+  // against N int_bin pdf d omega (6 x 6 midpoint quadrature per bin).
+  const int R = 8, N = 40000;
+  const HemisphereMap map(R);
+  std::vector<double> observed(R * R + 1, 0.0), expected(R * R + 1, 0.0);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  double max_rel = 0.0;
+  for (int n = 0; n < N; ++n) {
+    Vec3 wo;
+    double pdf;
+    if (!reader.sample(Vec2(U(rng), U(rng)), &wo, &pdf)) {
+      observed[R * R] += 1;
+      continue;
+    }
+    observed[map.pixel_of(wo)] += 1;
+    if (n % 100 == 0) {  // the sampled density is the one pdf() reports
+      const double p2 = reader.pdf(wo);
+      max_rel = std::max(max_rel, std::abs(p2 - pdf) / pdf);
+    }
+  }
+  EXPECT_LT(max_rel, 1e-3);
+  double inside = 0.0;
+  const int q = 6;
+  for (int px = 0; px < R * R; ++px) {
+    const int i = px % R, j = px / R;
+    double s = 0.0;
+    for (int a = 0; a < q; ++a)
+      for (int b = 0; b < q; ++b)
+        s += reader.pdf(map.from_square(-1 + (i + (a + 0.5) / q) * 2.0 / R, -1 + (j + (b + 0.5) / q) * 2.0 / R));
+    expected[px] = N * s / (q * q) * map.pixel_solid_angle();
+    inside += expected[px];
+  }
+  expected[R * R] = std::max(0.0, N - inside);
+  auto chi2_of = [&](const std::vector<double>& e) {
+    double chi2 = 0.0;
+    int dof = -1;
+    for (std::size_t k = 0; k < e.size(); ++k)
+      if (e[k] >= 5) {
+        chi2 += (observed[k] - e[k]) * (observed[k] - e[k]) / e[k];
+        ++dof;
+      }
+    return chi2_p_value(chi2, dof);
+  };
+  EXPECT_GT(chi2_of(expected), 1e-3);
+  // Power: a density 10% too high on half of the sphere (and renormalized) is rejected.
+  std::vector<double> wrong = expected;
+  for (int px = 0; px < R * R / 2; ++px) wrong[px] *= 1.10;
+  double sw = 0.0;
+  for (double x : wrong) sw += x;
+  for (double& x : wrong) x *= N / sw;
+  EXPECT_LT(chi2_of(wrong), 1e-3);
+  std::remove(path.c_str());
+}
+
+TEST(MerlFile, ReaderGivesBackTheMeasuredF) {
+  const BsdfTable t = measure(kGold, {0, 30, 60}, 200000, 12);
+  const std::string path = temp("gold.binary");
+  write_merl(path, t);
+  const MerlReader merl(path);
+  // The cells read the light at the smaller zenith angle (reciprocity), so the measured
+  // incidence theta_i itself is what they hold for theta_o > theta_i (3 degrees clear of the
+  // switch); normal incidence is left out: an isotropic table cannot hold the azimuthal
+  // variation of one finite tile seen from straight above.
+  for (int q = 1; q < 3; ++q) {
+    const BsdfResult& r = t.at(0, q);
+    const double min_theta_o = t.theta_i[q] + rad(3.0);
+    const Vec3 wi = direction_from_angles(t.theta_i[q], 0.0);
+    for (int c = 1; c < 3; ++c) {  // wavelength independent: equal decoded channels
+      const Vec3 wo = direction_from_angles(0.3, 2.0);
+      EXPECT_NEAR(merl.f(wi, wo, c), merl.f(wi, wo, 0), 1e-12 * merl.f(wi, wo, 0));
+    }
+    const auto f = [&](const Vec3& wo) { return merl.f(wi, wo, 0); };
+    const Agreement a = agreement(r, f, min_theta_o, 0.05);
+    ASSERT_GT(a.n, 15);
+    EXPECT_LT(a.max_abs_z, sidak_z(1e-3, a.n)) << "theta_i " << deg(t.theta_i[q]);
+    EXPECT_GT(chi2_p_value(a.chi2, a.n), 1e-3) << "chi2 " << a.chi2 << " over " << a.n;
+    const Agreement b = agreement(r, [&](const Vec3& wo) { return 1.05 * f(wo); }, min_theta_o, 0.05);
+    EXPECT_LT(chi2_p_value(b.chi2, b.n), 1e-3) << "power check: chi2 " << b.chi2;
+  }
+  // An azimuth grid (anisotropic table) is refused.
+  const BsdfTable aniso = measure(kGold, {30}, 1000, 4, {-180, 0, 180});
+  EXPECT_THROW(merl_cells(aniso), UsageError);
+  std::remove(path.c_str());
+}
+
+TEST(MeasureBsdfCli, AngleListsAndTables) {
+  // A surface without a nominal NDF keeps the record's model columns out (fast).
+  const std::string surf = temp_path("tables", "bumpy.exr");
+  save_surface(bumpy_heightfield(32, 0.03), surf);
+  const std::string base = "measure bsdf " + surf + " --material conductor --eta 0.47 --k 2.4 --rays 2000 --resolution 8 -q ";
+  const std::string bsdf = temp_path("tables", "t.bsdf"), json = temp_path("tables", "t.json");
+  Result r = run_microsim(base + "--theta-i 0,40 --table-resolution 8 -o " + bsdf);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Json j = Json::parse(slurp(json));
+  ASSERT_EQ(j["incidences"].size(), 2u);
+  EXPECT_DOUBLE_EQ(j["incidences"][1]["theta_i_deg"].get<double>(), 40.0);
+  EXPECT_DOUBLE_EQ(j["incidences"][1]["phi_i_deg"].get<double>(), 0.0);
+  EXPECT_TRUE(j["incidences"][1].contains("albedo") && j["incidences"][1].contains("in_plane"));
+  EXPECT_FALSE(j.contains("albedo"));  // several incidences: no top-level summary
+  EXPECT_TRUE(j["table"]["isotropic"].get<bool>());
+  const auto f = read_tensor_file(bsdf);
+  EXPECT_EQ(f.at("spectra").shape, (std::vector<std::uint64_t>{1, 2, 2, 8, 8}));
+  EXPECT_EQ(f.at("rgb").shape, (std::vector<std::uint64_t>{1, 2, 3, 8, 8}));
+  EXPECT_EQ(f.at("jacobian").u8, (std::vector<std::uint8_t>{1}));
+  // One incidence: the top-level fields stay, and the incidences array has one entry.
+  const std::string one = temp_path("tables", "one.json");
+  r = run_microsim(base + "--theta-i 30 -o " + one);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Json k = Json::parse(slurp(one));
+  EXPECT_TRUE(k.contains("albedo") && k.contains("in_plane") && k.contains("rows"));
+  EXPECT_EQ(k["incidences"].size(), 1u);
+  EXPECT_DOUBLE_EQ(k["parameters"]["theta_i_deg"].get<double>(), 30.0);
+  // MERL is isotropic; an anisotropic .bsdf needs the full circle of azimuths.
+  const std::string bin = temp_path("tables", "t.binary");
+  r = run_microsim(base + "--theta-i 30 --phi-i 0,90 -o " + bin);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--phi-i"), std::string::npos) << r.err;
+  EXPECT_FALSE(exists(bin));
+  const std::string aniso = temp_path("tables", "aniso.bsdf");
+  r = run_microsim(base + "--theta-i 30 --phi-i 0,90 -o " + aniso);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("-180"), std::string::npos) << r.err;
+  EXPECT_FALSE(exists(aniso));
+  r = run_microsim(base + "--theta-i 10,95 -o " + one);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--theta-i"), std::string::npos) << r.err;
+  for (const auto& p : {surf, bsdf, json, one}) std::remove(p.c_str());
+}
