@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Reproduces the core-pipeline figures (issue 2 "Must show") on the default preset:
+# Reproduces the core-pipeline figures on the default preset:
 # fitted alpha, averaged G1 vs smith_numeric (z, stderr <= 1e-3) and vs smith_nominal (1%),
 # per-bin agreement of the two G1 estimators, and a 5-seed ensemble against the nominal model.
 #   analysis/core_pipeline_check.sh [BUILD_DIR] [OUT_DIR]      (about 2-4 minutes on 2 cores)

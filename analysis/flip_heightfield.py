@@ -2,7 +2,7 @@
 """Writes the surface seen from below: a microsim heightfield EXR with its heights negated.
 
 Light arriving from below a surface is light arriving from above the flipped surface (z -> -z),
-with the inverse relative index: this is how issue5_tables.sh measures the reciprocity of
+with the inverse relative index: this is how tables_bsdf_orders.sh measures the reciprocity of
 transmission with a command that takes incidence from above only.
 
 usage: flip_heightfield.py IN.exr OUT.exr

@@ -122,9 +122,10 @@ TEST(BsdfMeasure, FlatDielectricIsFresnel) {
   Microsurface s = flat_heightfield(16);
   Tracer tracer(s);
   std::vector<double> zs;
+  double sum_rf = 0, sum_ff = 0;  // weighted least squares of R = s F, weights 1 / stderr^2
   for (double eta : {1.5, 1.0 / 1.5})
     for (double theta : {0.0, 30.0, 60.0, 80.0}) {
-      const BsdfResult r = measure_bsdf(tracer, options(mm::Material::dielectric(eta), theta, 10.0, 100000));
+      const BsdfResult r = measure_bsdf(tracer, options(mm::Material::dielectric(eta), theta, 10.0, 400000));
       const double F = mm::fresnel_dielectric_unpolarized(std::cos(rad(theta)), eta);
       EXPECT_EQ(r.measured.lost, 0u);
       const Estimate R = r.albedo(0, 4), T = r.albedo(1, 4);
@@ -136,6 +137,8 @@ TEST(BsdfMeasure, FlatDielectricIsFresnel) {
         continue;
       }
       zs.push_back((R.mean - F) / R.stderr_);
+      sum_rf += R.mean * F / (R.stderr_ * R.stderr_);
+      sum_ff += F * F / (R.stderr_ * R.stderr_);
       // The transmitted rays leave in the refracted direction (000 eq. 15a), reflected specularly.
       Vec3 t;
       ASSERT_TRUE(mm::refract(r.wi, Vec3::UnitZ(), 1.0 / eta, &t));
@@ -143,10 +146,15 @@ TEST(BsdfMeasure, FlatDielectricIsFresnel) {
       EXPECT_NEAR(r.f_plane(1, 4, bt).mean * r.plane.cos_integral(bt), T.mean, 1e-12);
       EXPECT_NEAR(r.f_plane(0, 4, br).mean * r.plane.cos_integral(br), R.mean, 1e-12);
     }
-  const double zmax = sidak_z(0.01, static_cast<int>(zs.size()));
+  const double zmax = sidak_z(0.01, static_cast<int>(zs.size()) + 1);
   for (double z : zs) EXPECT_LT(std::abs(z), zmax);
-  // Power: a 1% wrong reflectance is far outside these errors.
   EXPECT_GT(zs.size(), 5u);
+  // The scale s of R = s F over all cases (its error 1/sqrt(sum F^2/se^2)) is 1; power: a
+  // Fresnel factor 1% wrong (s = 1.01) is rejected at the same threshold.
+  const double s_hat = sum_rf / sum_ff, s_se = 1 / std::sqrt(sum_ff);
+  EXPECT_LT(std::abs(s_hat - 1) / s_se, zmax) << s_hat << " +- " << s_se;
+  EXPECT_GT(std::abs(s_hat - 1.01) / s_se, zmax) << "no power against a 1% wrong Fresnel: +- " << s_se;
+  EXPECT_GT(std::abs(s_hat - 0.99) / s_se, zmax) << s_se;
 }
 
 TEST(BsdfMeasure, FlatConductorAndMirrorAreExact) {

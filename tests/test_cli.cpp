@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -13,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_helpers.hpp"
+#include "microsim/measure/stats.hpp"
 
 namespace {
 using namespace microsim::testing;
@@ -154,7 +156,7 @@ TEST_F(Cli, BadInputIsOneLineExitTwoAndNoOutput) {
   expect_usage_error("frobnicate", o, "frobnicate");
 }
 
-// Issue 3: structured and non-heightfield surfaces through the command line.
+// Structured and non-heightfield surfaces through the command line.
 TEST_F(Cli, EveryStructuredKindGeneratesAndMeasures) {
   const std::vector<std::pair<std::string, std::string>> kinds = {
       {"box --width 1 --depth 1 --height 0.5", "box.ply"},
@@ -177,14 +179,22 @@ TEST_F(Cli, EveryStructuredKindGeneratesAndMeasures) {
   }
   // Views below the horizon on a mesh: the undersurface beside both approximations.
   const std::string g1 = tmp("box_g1.json");
-  Result r = run("measure g1 " + tmp("box.ply") + " --theta 30,120 --rays 20000 -o " + g1);
+  Result r = run("measure g1 " + tmp("box.ply") + " --theta 30,120 --rays 200000 -o " + g1);
   ASSERT_EQ(r.code, 0) << r.err;
   auto j = nlohmann::json::parse(slurp(g1));
   EXPECT_FALSE(j["rows"][0].contains("undersurface"));
   for (const char* k : {"undersurface", "g1_reverse_v", "g1_reverse_v_stderr", "g1_reflect_v",
                         "g1_reflect_v_stderr", "z_reverse_v", "z_reflect_v"})
     EXPECT_TRUE(j["rows"][1].contains(k)) << k;
-  EXPECT_GT(j["rows"][0]["visible_area_ratio"].get<double>(), 1.2);  // 1 + tan(30)/2
+  {
+    // A convex box seen across a face: visible area ratio 1 + (H/B) tan(theta) = 1 + tan(30)/2
+    // exactly (000 Fig. 5), within its own standard error; a 2% wrong value is outside it.
+    const double ratio = j["rows"][0]["visible_area_ratio"].get<double>();
+    const double se = j["rows"][0]["visible_area_ratio_stderr"].get<double>();
+    const double exact = 1 + 0.5 * std::tan(std::acos(-1.0) / 6), zt = microsim::sidak_z(0.01, 1);
+    EXPECT_LT(std::abs(ratio - exact), zt * se) << ratio << " +- " << se << " vs " << exact;
+    EXPECT_GT(std::abs(ratio - 1.02 * exact), zt * se) << "no power against a 2% error: +- " << se;
+  }
   // The V-cavity ensemble: per-bin V-cavity and Smith models beside the measurement.
   const std::string vc = tmp("vc_g1.json");
   r = run("measure g1 " + tmp("vc.ply") + " --theta 80 --rays 20000 -o " + vc);

@@ -1,5 +1,5 @@
-// microsim measure bsdf as users and scripts see it: the output files and the fields the issue
-// names, and bad input answered with one line on stderr, exit code 2 and no output file.
+// microsim measure bsdf as users and scripts see it: the output files and the documented
+// fields, and bad input answered with one line on stderr, exit code 2 and no output file.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -41,7 +41,7 @@ std::string CliBsdf::surface_;
 
 }  // namespace
 
-TEST_F(CliBsdf, ExrTableAndJsonSummaryWithTheIssuesFields) {
+TEST_F(CliBsdf, ExrTableAndJsonSummaryWithTheDocumentedFields) {
   const std::string out = tmp("d.exr"), js = tmp("d.json");
   std::remove(out.c_str());
   std::remove(js.c_str());

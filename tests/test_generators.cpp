@@ -1,4 +1,4 @@
-// Structured and non-heightfield microsurfaces (issue 3): exact geometric cases measured by the
+// Structured and non-heightfield microsurfaces: exact geometric cases measured by the
 // estimators (box, tiled boxes, V-groove, square wave, ellipsoid, undersurface, parallelepiped),
 // the explicit V-cavity ensemble against its model, mesh validation, and the generators'
 // identities (000 eq. 1b/1c). Every statistical test has a check that it can fail.
@@ -23,7 +23,8 @@ using namespace microsim;
 
 namespace {
 
-using microsim::sidak_z;  // microsim/measure/stats.hpp
+using microsim::sidak_t;  // microsim/measure/stats.hpp
+using microsim::sidak_z;
 
 // Upper quantile of chi^2 with k degrees of freedom (Wilson-Hilferty), z = normal quantile.
 double chi2_quantile(int k, double z) {
@@ -442,22 +443,41 @@ TEST(GaussianGgx, TheScaleMixtureIdentityHolds) {
 
 TEST(GaussianGgx, TileHasHeavierTailsThanBeckmannWithTheSameCore) {
   GaussianGgxParams p;
-  p.resolution = 256;
+  p.resolution = 512;
   p.alpha_x = p.alpha_y = 0.3;
+  // Roughness field E(x) correlated over 16 cells (4 correlation lengths of the heights): 1024
+  // roughness patches on the tile.
+  p.roughness_correlation_length = 16.0 / 512;
   Microsurface s = generate_gaussian_ggx(p);
   ASSERT_TRUE(s.nominal.has_value());
   EXPECT_EQ(s.nominal->kind, models::Distribution::GGX);
   // Projected-area fraction with slope beyond 3 alpha: GGX 1/(1+9) = 0.10, Beckmann e^-9.
-  double beyond = 0, total = 0;
+  // The fraction varies from roughness patch to patch: its error is the spread of 16 x 16 blocks
+  // of 32 x 32 cells (Student t with 255 degrees of freedom).
+  constexpr int nb = 16;
+  std::vector<double> beyond(nb * nb, 0.0), total(nb * nb, 0.0);
   for (std::size_t k = 0; k < s.num_facets(); ++k) {
     Triangle t = s.facet(k);
     const Vec3 m = t.normal();
+    const Vec3 c = (t.p0 + t.p1 + t.p2) / 3.0;
+    const int bx = std::clamp(static_cast<int>((c.x() / p.size + 0.5) * nb), 0, nb - 1);
+    const int by = std::clamp(static_cast<int>((c.y() / p.size + 0.5) * nb), 0, nb - 1);
     const double w = t.area() * m.z();
-    total += w;
-    if (std::hypot(m.x(), m.y()) / m.z() > 0.9) beyond += w;
+    total[bx + nb * by] += w;
+    if (std::hypot(m.x(), m.y()) / m.z() > 0.9) beyond[bx + nb * by] += w;
   }
-  EXPECT_GT(beyond / total, 0.05);
-  EXPECT_LT(beyond / total, 0.15);
+  double mean = 0, ss = 0;
+  std::vector<double> f(nb * nb);
+  for (int b = 0; b < nb * nb; ++b) mean += (f[b] = beyond[b] / total[b]) / (nb * nb);
+  for (double x : f) ss += (x - mean) * (x - mean);
+  const double se = std::sqrt(ss / (nb * nb - 1) / (nb * nb));
+  const double tt = sidak_t(0.01, 1, nb * nb - 1);
+  EXPECT_LT(std::abs(mean - 0.10) / se, tt) << mean << " +- " << se;
+  // Power: Beckmann's tail (e^-9) and GGX with alpha 25% smaller or larger (1/(1 + 9 * 1.25^2),
+  // 1/(1 + 9 / 1.25^2)) are rejected.
+  EXPECT_GT(std::abs(mean - std::exp(-9.0)) / se, tt) << mean << " +- " << se;
+  EXPECT_GT(std::abs(mean - 1 / (1 + 9 * 1.25 * 1.25)) / se, tt) << mean << " +- " << se;
+  EXPECT_GT(std::abs(mean - 1 / (1 + 9 / (1.25 * 1.25))) / se, tt) << mean << " +- " << se;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -51,11 +51,16 @@ def _nominal(description):
 
 
 def validation_z(path, validation):
-    """z of every z-tested row, one line per (quantity vs model), colored by verdict."""
+    """z of every z-tested row in units of its own threshold (Sidak; Student t with K - 1 dof for
+    rows whose error is the spread of K surfaces), one line per (quantity vs model), colored by
+    verdict."""
     rows = [r for r in validation.get("rows", []) if num(r.get("z")) == num(r.get("z"))]
     if not rows:
         raise NoData("no z-tested rows in the validation record")
     zt = num(validation.get("z_threshold"), 3.0)
+
+    def scaled(r):  # z / the row's threshold (records without per-row thresholds: the run's)
+        return num(r.get("z")) / num(r.get("z_threshold"), zt)
     cats = []
     for r in rows:
         c = "%s vs %s [%s]" % (r.get("quantity"), r.get("model_name"), r.get("kind"))
@@ -69,15 +74,17 @@ def validation_z(path, validation):
             continue
         y = np.array([cats.index("%s vs %s [%s]" % (r.get("quantity"), r.get("model_name"), r.get("kind")))
                       for r in sel]) + rng.uniform(-0.25, 0.25, len(sel))
-        ax.scatter(column(sel, "z"), y, s=9, color=color, alpha=0.7, label="%s (%d)" % (verdict, len(sel)))
+        ax.scatter([scaled(r) for r in sel], y, s=9, color=color, alpha=0.7,
+                   label="%s (%d)" % (verdict, len(sel)))
     for s in (-1, 1):
-        ax.axvline(s * zt, color="k", ls="--", lw=0.8)
-    ax.set_xscale("symlog", linthresh=max(zt, 1.0))
+        ax.axvline(s, color="k", ls="--", lw=0.8)
+    ax.set_xscale("symlog", linthresh=1.0)
     ax.set_yticks(range(len(cats)))
     ax.set_yticklabels(cats, fontsize=8)
     ax.invert_yaxis()
-    ax.set_xlabel("z = (measured - model) / stderr   (dashed: Sidak threshold |z| = %.2f over %d tests)"
-                  % (zt, int(num(validation.get("comparisons"), 0))))
+    ax.set_xlabel("z / threshold, z = (measured - model) / stderr   (dashed: the threshold; Sidak over %d "
+                  "tests: |z| = %.2f, or Student t with K - 1 dof for ensemble rows)"
+                  % (int(num(validation.get("comparisons"), 0)), zt))
     ax.legend(fontsize=8, loc="lower right")
     ax.set_title("Validation: z-scores by check (identities must pass; models may deviate)")
     ax.grid(True, axis="x", alpha=0.3)
@@ -302,7 +309,7 @@ def g1_per_normal(path, entry):
 
 
 # ----------------------------------------------------------------------------------------------
-# G2 (measure g2; documented fields of issue 4)
+# G2 (measure g2; fields documented in the README)
 
 G2_MODELS = [
     ("smith_separable", "Smith separable (001 eq. 20)", "-"),
@@ -352,9 +359,50 @@ def g2_curves(path, record, title=""):
 
 
 # ----------------------------------------------------------------------------------------------
-# BSDF (measure bsdf; documented fields of issue 5)
+# BSDF (measure bsdf; fields documented in the README)
 
 ORDER_KEYS = ["order_1", "order_2", "order_3", "order_4plus", "total"]
+
+
+def g2_hotspot(path, entry):
+    """G2(v, v) of `validate`'s g2 check (per surface) against G1 of an independent `measure g1`
+    run with the same weights (000 eq. 16: G2(v, m, v) = G1(v, m)) and Smith's direction-correlated
+    form 1/(1 + Lambda) (001 eq. 22), with ray-count errors."""
+    per_surface = entry.get("measurements", {}).get("g2")
+    points = []
+    for k, surface in enumerate(per_surface or []):
+        for h in surface.get("hotspot", []):
+            points.append((k, h))
+    if not points:
+        raise NoData("entry %s has no G2 hotspot measurements" % entry.get("name"))
+    n = len(per_surface)
+    fig, (ax, axd) = plt.subplots(1, 2, figsize=(10, 3.8))
+    for i, (k, h) in enumerate(points):
+        first = i == 0  # one legend entry per series
+        t = num(h.get("theta_deg")) + 0.6 * (k - (n - 1) / 2)
+        ax.errorbar([t - 0.25], [num(h.get("g2"))], yerr=[num(h.get("g2_stderr"))], fmt="o", ms=4, capsize=2,
+                    color="k", label="G2(v, v), measure g2" if first else None)
+        ax.errorbar([t + 0.25], [num(h.get("g1_independent"))], yerr=[num(h.get("g1_independent_stderr"))],
+                    fmt="s", ms=4, capsize=2, color="tab:blue", mfc="none",
+                    label="G1(v), independent measure g1" if first else None)
+        ax.plot([t], [num(h.get("direction_correlated_numeric"))], "x", color="tab:orange",
+                label="Smith direction-correlated, 1/(1+Lambda)" if first else None)
+        se = math.hypot(num(h.get("g2_stderr"), 0.0), num(h.get("g1_independent_stderr"), 0.0))
+        if se > 0:
+            axd.plot([t], [(num(h.get("g2")) - num(h.get("g1_independent"))) / se], "o", color="k")
+    ax.set_xlabel("theta_o = theta_i (deg)")
+    ax.set_ylabel("averaged G2 / G1")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    axd.axhline(0, color="k", lw=0.8)
+    for s_ in (-3, 3):
+        axd.axhline(s_, color="k", ls="--", lw=0.8)
+    axd.set_xlabel("theta (deg)")
+    axd.set_ylabel("z = (G2 - G1) / stderr")
+    axd.grid(True, alpha=0.3)
+    fig.suptitle("%s: the hotspot G2(v, m, v) = G1(v, m) (000 eq. 16), %d surface%s"
+                 % (entry.get("name"), n, "s" if n > 1 else ""), fontsize=10)
+    return _save(fig, path)
 
 
 def bsdf_albedo(path, record, title=""):
@@ -437,7 +485,7 @@ def table4(path, records):
 
 
 # ----------------------------------------------------------------------------------------------
-# Tiled boxes (measure g1 on generate tiled-boxes; fields of issue 3)
+# Tiled boxes (measure g1 on generate tiled-boxes; fields documented in the README)
 
 
 def tiled_boxes(path, points):

@@ -2,8 +2,8 @@
 
 A section is one function `section_NAME(ctx)` in SECTIONS: it runs what it needs through
 ctx.run(...), draws its figures with msreport.plots and returns a Section. A section whose
-command does not exist in this microsim build (G2, BSDF, tiled boxes before their issues are
-merged) returns a Section with `skipped` set; the page lists it with the reason. Adding a
+command does not exist in this microsim build (an older build without G2, BSDF or tiled boxes)
+returns a Section with `skipped` set; the page lists it with the reason. Adding a
 quantity to the report is adding one such function.
 """
 import html
@@ -139,7 +139,10 @@ def section_validation(ctx):
                 "`microsim validate --suite %s`: every applicable check of every surface of the suite. "
                 "Identities (two estimators of one quantity, geometric consequences, 000 eq. 1b/1c) must "
                 "pass; approximate models (Smith per normal bin, V-cavity, the nominal NDF the generator "
-                "aimed at) are findings: their deviations are results, not errors." % ctx.profile["suite"])
+                "aimed at) are findings: their deviations are results, not errors. Nominal models are judged "
+                "only over ensembles of surfaces, with the between-surface error and Student t (K - 1 "
+                "degrees of freedom); for one surface they are measured beside the model (info)."
+                % ctx.profile["suite"])
     out = ctx.data("validation.json")
     p = ctx.run(["validate", "--suite", ctx.profile["suite"], "-o", out, "--surfaces-dir", ctx.surf_dir],
                 check=False, quiet=False)
@@ -150,8 +153,9 @@ def section_validation(ctx):
     ctx.validation = load_json(out)
     ctx.validation_failed = p.returncode == 1
     s.figure(ctx, "validation_z.png", plots.validation_z,
-             "z-scores of all z-tested rows, by check. Identities (green pass / red FAIL) must stay inside "
-             "the dashed Sidak threshold; approximate models (blue agrees / orange deviates) may not.",
+             "z-scores of all z-tested rows, by check, in units of each row's threshold (Sidak over all "
+             "rows; Student t with K - 1 dof for ensemble rows). Identities (green pass / red FAIL) must stay "
+             "inside the dashed lines; approximate models (blue agrees / orange deviates) may not.",
              ctx.validation)
     s.html = validation_table_html(ctx.validation)
     return s
@@ -215,10 +219,11 @@ def section_g1(ctx):
 
 def section_g2(ctx):
     s = Section("g2", "Masking-shadowing G2",
-                "G2 averaged over the area front-facing to both directions, against the four Smith forms of "
-                "001 sec. 5 (eq. 20-23) and the V-cavity model.")
+                "G2 averaged over the facets facing both directions with the weight A_f (max(0, o.m_f) + "
+                "max(0, i.m_f)) / 2 (G1's projected area at o = i, so that G2(v, v) = G1(v)), against the four "
+                "Smith forms of 001 sec. 5 (eq. 20-23) and the V-cavity model.")
     if not ctx.has_command("measure", "g2"):
-        return s.skip("`microsim measure g2` is not in this build (issue 4)")
+        return s.skip("`microsim measure g2` is not in this build")
     entries = [e for e in _nominal_entries(ctx) if ctx.surface_files(e["name"])]
     if not entries:
         return s.skip("no surface with a nominal NDF")
@@ -229,6 +234,13 @@ def section_g2(ctx):
     s.figure(ctx, "g2_%s.png" % e["name"], plots.g2_curves,
              "%s: G2 against theta_i for several theta_o, in the plane of incidence (delta phi = 0: same "
              "side, 180: opposite sides)." % e["name"], load_json(out), e["name"])
+    for entry in ctx.entries():
+        g2 = entry.get("measurements", {}).get("g2")
+        if isinstance(g2, list) and any(surface.get("hotspot") for surface in g2):
+            s.figure(ctx, "g2_hotspot_%s.png" % entry["name"], plots.g2_hotspot,
+                     "%s (validate): at o = i the measured G2 equals G1 measured by an independent run with "
+                     "the same weights, and Smith's direction-correlated form; right: z of G2 - G1 (dashed: "
+                     "+-3)." % entry["name"], entry)
     return s
 
 
@@ -237,7 +249,7 @@ def section_bsdf(ctx):
                 "Random walks on the explicit surface (mirror facets): albedo and in-plane lobe per scattering "
                 "order, against the single-scattering models and the Smith random-walk model (001 sec. 4.3, 7).")
     if not ctx.has_command("measure", "bsdf"):
-        return s.skip("`microsim measure bsdf` is not in this build (issue 5)")
+        return s.skip("`microsim measure bsdf` is not in this build")
     entries = [e for e in _nominal_entries(ctx) if ctx.surface_files(e["name"])]
     if not entries:
         return s.skip("no surface with a nominal NDF")
@@ -261,7 +273,7 @@ def section_table4(ctx):
                 "(001 Table 4: Smith shifts the lobe toward the view direction as alpha grows, V-cavity does "
                 "not; the explicit surface decides).")
     if not ctx.has_command("measure", "bsdf"):
-        return s.skip("`microsim measure bsdf` is not in this build (issue 5)")
+        return s.skip("`microsim measure bsdf` is not in this build")
     records = []
     for a in TABLE4_ALPHAS:
         surf = os.path.join(ctx.surf_dir, "table4-alpha%g.exr" % a)
@@ -283,7 +295,7 @@ def section_tiled_boxes(ctx):
                 "000 Fig. 5-6: a box is visibly larger than its macrosurface at grazing angles; tiling it N x N "
                 "times (scaled by 1/N) makes the visible projected area converge to (v.n) A.")
     if not ctx.has_command("generate", "tiled-boxes"):
-        return s.skip("`microsim generate tiled-boxes` is not in this build (issue 3)")
+        return s.skip("`microsim generate tiled-boxes` is not in this build")
     preset = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "..", "surfaces",
                           "tiled-boxes.toml")
     points = []
@@ -334,7 +346,7 @@ def collapse_rows(rows):
         def badness(r):  # as the CLI: a FAIL first, then |z| (deterministic: |d| / tolerance)
             z = num(r.get("z"))
             if z == z:
-                b = abs(z)
+                b = abs(z) / num(r.get("z_threshold"), 1.0)
             elif r.get("z_infinite"):
                 b = float("inf")
             elif r.get("kind") == "deterministic":
@@ -390,14 +402,17 @@ def validation_table_html(v):
     summ = v.get("summary", {})
     parts = ['<p class="summary">%d rows: <b class="v-pass">%d pass</b>, <b class="v-FAIL">%d FAIL</b>, '
              '<b class="v-agrees">%d agree</b>, <b class="v-deviates">%d deviate (finding)</b>, %d measured only. '
-             '|z| threshold %.2f (Sidak over %d z-tests, family-wise significance %g).</p>'
+             '|z| threshold %.2f (Sidak over %d z-tests, family-wise significance %g; rows whose error '
+             'is the spread of K surfaces use the Student t quantile with K - 1 degrees of freedom at the '
+             'same rate, column |z| max).</p>'
              % (summ.get("rows", 0), summ.get("pass", 0), summ.get("fail", 0), summ.get("agrees", 0),
                 summ.get("deviates", 0), summ.get("measured", 0), num(v.get("z_threshold")),
                 int(num(v.get("comparisons"), 0)), num(v.get("significance")))]
     parts.append(summary_table_html(v.get("rows", [])))
     parts.append("<p>All rows (groups of per-bin rows shown by their worst row):</p>")
     parts.append('<table class="validation"><thead><tr><th>quantity</th><th>condition</th><th>measured &plusmn; stderr'
-                 '</th><th>model</th><th>z</th><th>rel. dev.</th><th>verdict</th><th>kind</th><th>source</th>'
+                 '</th><th>model</th><th>z</th><th>|z| max</th><th>rel. dev.</th><th>verdict</th><th>kind</th>'
+                 '<th>source</th>'
                  '</tr></thead><tbody>')
     for r, n, outside in collapse_rows(v.get("rows", [])):
         cond = html.escape(r.get("condition", ""))
@@ -410,10 +425,12 @@ def validation_table_html(v):
         measured = _fmt(r.get("measured")) + ("" if r.get("stderr") is None else " &plusmn; " + _fmt(r.get("stderr"), 2))
         verdict = r.get("verdict", "")
         vclass = "v-" + verdict.split(" ")[0]
-        parts.append("<tr><td>%s vs %s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td>"
+        thr = "-" if r.get("z_threshold") is None else _fmt(r.get("z_threshold"), 3) + (
+            "" if r.get("t_dof") is None else " (t, %d dof)" % int(num(r.get("t_dof"))))
+        parts.append("<tr><td>%s vs %s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td>"
                      '<td class="%s">%s</td><td>%s</td><td>%s</td></tr>'
                      % (html.escape(r.get("quantity", "")), html.escape(r.get("model_name", "")), cond, measured,
-                        _fmt(r.get("model")), z, "-" if rel != rel else "%.3f%%" % (100 * rel), vclass,
+                        _fmt(r.get("model")), z, thr, "-" if rel != rel else "%.3f%%" % (100 * rel), vclass,
                         html.escape(verdict), html.escape(r.get("kind", "")), html.escape(r.get("reference", ""))))
     parts.append("</tbody></table>")
     return "\n".join(parts)

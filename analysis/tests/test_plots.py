@@ -1,9 +1,8 @@
 #!/usr/bin/python3
 """Unit tests of the report's plotting and reading code (CTest: analysis_plots).
 
-The G2, BSDF, Table 4 and tiled-box figures read records of commands that other issues add
-(measure g2, measure bsdf, generate tiled-boxes). Until those land, these tests feed the plot
-functions records with the documented field names and *synthetic* values (smooth made-up curves,
+The G2, BSDF, Table 4 and tiled-box figures read records of measure g2, measure bsdf and
+generate tiled-boxes. These tests feed the plot functions records with the documented field names and *synthetic* values (smooth made-up curves,
 never shown in a report) to check that the figures are drawn, and that a record lacking the
 fields gives NoData instead of a crash.
 """
@@ -122,6 +121,21 @@ class Figures(unittest.TestCase):
         html = report.validation_table_html(v)
         self.assertIn("worst of 2, 1 outside", html)
         self.assertIn("deviates (finding)", html)
+        # An ensemble row with its own Student t threshold is shown with its degrees of freedom.
+        rows.append({"quantity": "g1", "model_name": "smith_nominal", "kind": "model", "z": 5.0,
+                     "verdict": "agrees", "measured": 0.9, "stderr": 0.01, "model": 0.85, "rel_dev": 0.06,
+                     "condition": "d", "group": "", "t_dof": 3, "z_threshold": 60.3})
+        self.assertTrue(png_ok(plots.validation_z(self.path("z2.png"), v)))
+        self.assertIn("(t, 3 dof)", report.validation_table_html(v))
+
+    def test_g2_hotspot_from_validate_measurements(self):
+        hot = [{"theta_deg": t, "g2": 0.9, "g2_stderr": 0.002, "g1_independent": 0.901,
+                "g1_independent_stderr": 0.002, "direction_correlated_numeric": 0.9005, "bins": []}
+               for t in (30, 60, 80)]  # synthetic
+        entry = {"name": "e", "measurements": {"g2": [{"label": "seed 1", "rows": [], "hotspot": hot}]}}
+        self.assertTrue(png_ok(plots.g2_hotspot(self.path("h.png"), entry)))
+        with self.assertRaises(plots.NoData):
+            plots.g2_hotspot(self.path("h2.png"), {"name": "x", "measurements": {"g2": [{"rows": []}]}})
 
 
 if __name__ == "__main__":

@@ -41,6 +41,7 @@ Json g1_ensemble_row(const std::vector<const Json*>& rows) {
     e["z_nominal"] = nullptr;
     e["rel_dev_nominal"] = nullptr;
   }
+  e["p_nominal"] = ensemble_p_value(e["z_nominal"], rows.size());
   double se_num = e["g1_stderr"].get<double>();
   e["z_numeric"] = se_num > 0 ? (e["g1"].get<double>() - e["smith_numeric"].get<double>()) / se_num : 0.0;
   Json bins = ensemble_row(rows, {}, {{"theta_m_range_deg", Field::Key},

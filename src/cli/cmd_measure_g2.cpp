@@ -69,6 +69,7 @@ Json g2_ensemble_row(const std::vector<const Json*>& rows) {
     const Json& model = e[std::string("smith_") + f + "_nominal"];
     e[std::string("z_") + f + "_nominal"] =
         model.is_number() && se > 0 ? Json((g2 - model.get<double>()) / se) : Json(nullptr);
+    e[std::string("p_") + f + "_nominal"] = ensemble_p_value(e[std::string("z_") + f + "_nominal"], rows.size());
   }
   for (const char* f : kForms) {
     const double d = e[std::string(f) + "_from_g1_diff"].get<double>();

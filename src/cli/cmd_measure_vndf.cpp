@@ -28,7 +28,8 @@ struct VndfCliOptions {
 
 // Ensemble row: per-bin D_v averaged over surfaces with the between-surface standard error,
 // and the per-bin z against the nominal model with that error (Sidak threshold over the bins
-// holding at least 0.2% of the visible normals).
+// holding at least 0.2% of the visible normals; Student t with K - 1 degrees of freedom, since
+// the error is the spread of K surfaces).
 Json vndf_ensemble_row(const std::vector<const Json*>& rows, double family_alpha) {
   Json e = ensemble_row(rows,
                         {{"theta_deg", Field::Copy},
@@ -75,7 +76,7 @@ Json vndf_ensemble_row(const std::vector<const Json*>& rows, double family_alpha
   if (!bins.empty() && bins[0]["dv_model"].is_number()) {
     e["bins_tested"] = tested;
     e["max_abs_z"] = max_abs_z;
-    e["sidak_z"] = sidak_z(family_alpha, std::max(1, tested));
+    e["sidak_z"] = sidak_t(family_alpha, std::max(1, tested), static_cast<double>(rows.size() - 1));
     e["pass"] = max_abs_z < e["sidak_z"].get<double>();
   }
   e["bins"] = bins;
@@ -148,7 +149,8 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
       {"z", "per bin (dv - dv_model) / stderr, the binomial stderr under the model (ensembles: "
             "the between-surface stderr); max_abs_z over bins holding >= 5 expected hits "
             "(ensembles: >= 0.2% of the visible normals) against sidak_z, the two-sided threshold "
-            "for family_alpha Sidak-corrected over bins_tested"},
+            "for family_alpha Sidak-corrected over bins_tested (ensembles of K surfaces: the "
+            "Student t quantile with K - 1 degrees of freedom)"},
       {"chi2", "Pearson chi-square of the hit histogram against the nominal bin probabilities "
                "(bins with >= 5 expected hits, the rest pooled), p_value its upper tail; "
                "*_smith_numeric the same against dv_smith_numeric"},

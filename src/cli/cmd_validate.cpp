@@ -223,7 +223,8 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
               << result.count("deviates (finding)") << " deviate (finding), "
               << result.count("measured") << " measured only; |z| threshold "
               << fmt(result.z_threshold, 2) << " (Sidak over " << j["comparisons"].get<std::size_t>()
-              << " z-tests, family-wise significance " << significance << ")\n";
+              << " z-tests, family-wise significance " << significance
+              << "; rows with the spread of K surfaces: Student t, K - 1 dof, column |z|max)\n";
     if (!o.output.empty()) std::cout << "wrote " << o.output << "\n";
   }
   if (result.any_failure())

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "microsim/measure/stats.hpp"
+
 namespace microsim::cli {
 
 std::pair<double, double> ensemble_stat(const std::vector<const Json*>& rows, const std::string& key) {
@@ -21,6 +23,11 @@ std::pair<double, double> ensemble_stat(const std::vector<const Json*>& rows, co
   return {mean, std::sqrt(var / k)};
 }
 
+Json ensemble_p_value(const Json& z, std::size_t surfaces) {
+  if (!z.is_number() || surfaces < 2) return nullptr;
+  return student_t_two_sided_p(z.get<double>(), static_cast<double>(surfaces - 1));
+}
+
 namespace {
 void apply(Json& out, const std::vector<const Json*>& rows, const FieldSpec& spec) {
   for (const auto& [key, how] : spec) {
@@ -31,6 +38,7 @@ void apply(Json& out, const std::vector<const Json*>& rows, const FieldSpec& spe
         break;
       case Field::Count:
         out[key] = rows.size();
+        out["t_dof"] = rows.size() - 1;
         break;
       case Field::Measured:
       case Field::MeanStderr:

@@ -13,7 +13,7 @@ namespace microsim::cli {
 // How a field of the per-surface rows becomes a field of the ensemble row.
 enum class Field {
   Copy,        // taken from the first surface's row (parameters, nominal models)
-  Count,       // the number of surfaces (the key names the output field)
+  Count,       // the number of surfaces (the key names the output field), and "t_dof" = K - 1
   Measured,    // mean, KEY_stderr between surfaces, KEY_stderr_rays from the rows' KEY_stderr
   MeanStderr,  // mean and KEY_stderr between surfaces
   Mean,        // mean only
@@ -21,6 +21,11 @@ enum class Field {
   Key,         // bins only: identifies the bin across surfaces (copied)
 };
 using FieldSpec = std::vector<std::pair<std::string, Field>>;
+
+// Two-sided p-value of z = (mean - model) / stderr when stderr is the between-surface error of
+// K surfaces: Student t with K - 1 degrees of freedom (measure/stats.hpp), not the normal law.
+// Null when z is not a number or K < 2.
+Json ensemble_p_value(const Json& z, std::size_t surfaces);
 
 // Mean over rows of a numeric field, with the between-surface standard error sd / sqrt(K).
 std::pair<double, double> ensemble_stat(const std::vector<const Json*>& rows, const std::string& key);

@@ -166,7 +166,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& options);
 // Key of slot k: "order_1", ..., "order_<K>plus", "total".
 std::string order_key(int k, int orders);
 
-// The JSON summary fields of the issue (albedo, reflected_stderr, transmitted_stderr, in_plane,
+// The JSON summary fields (albedo, reflected_stderr, transmitted_stderr, in_plane,
 // models beside them), without the run header.
 Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s);
 // The EXR table: per side and slot f and its standard error on the hemisphere map, every

@@ -1,5 +1,6 @@
 // Small statistics shared by the estimators and their tests: two-sided z thresholds with a
-// Sidak correction over many bins, and the chi-square upper tail for goodness-of-fit tests.
+// Sidak correction over many bins, the chi-square upper tail for goodness-of-fit tests, and
+// Student's t (CDF, quantile, Sidak threshold) for means over K surfaces (K - 1 dof).
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -19,6 +20,83 @@ inline double sidak_z(double alpha, int k) {
     if (std::erfc(z / std::sqrt(2.0)) > per) lo = z; else hi = z;
   }
   return 0.5 * (lo + hi);
+}
+
+// Regularized incomplete beta I_x(a, b) = B(x; a, b) / B(a, b), a, b > 0, x in [0, 1]:
+// the continued fraction of I_x (modified Lentz), with I_x(a, b) = 1 - I_{1-x}(b, a) used
+// where x > (a + 1) / (a + b + 2) so that the fraction converges fast.
+inline double incomplete_beta(double a, double b, double x) {
+  if (!(a > 0) || !(b > 0) || !(x >= 0 && x <= 1)) return std::numeric_limits<double>::quiet_NaN();
+  if (x == 0 || x == 1) return x;
+  if (x > (a + 1) / (a + b + 2)) return 1.0 - incomplete_beta(b, a, 1.0 - x);
+  const double log_prefix = a * std::log(x) + b * std::log1p(-x) - std::log(a) + std::lgamma(a + b) -
+                            std::lgamma(a) - std::lgamma(b);
+  // I_x = prefix / (1 + d1 / (1 + d2 / (1 + ...))), d_{2m+1} = -(a+m)(a+b+m) x / ((a+2m)(a+2m+1)),
+  // d_{2m} = m (b-m) x / ((a+2m-1)(a+2m)).
+  const double tiny = 1e-300;
+  double c = 1, d = 1 - (a + b) * x / (a + 1);
+  if (std::abs(d) < tiny) d = tiny;
+  d = 1 / d;
+  double h = d;
+  for (int m = 1; m < 100000; ++m) {
+    const double even = m * (b - m) * x / ((a + 2 * m - 1) * (a + 2 * m));
+    d = 1 + even * d;
+    if (std::abs(d) < tiny) d = tiny;
+    c = 1 + even / c;
+    if (std::abs(c) < tiny) c = tiny;
+    d = 1 / d;
+    h *= d * c;
+    const double odd = -(a + m) * (a + b + m) * x / ((a + 2 * m) * (a + 2 * m + 1));
+    d = 1 + odd * d;
+    if (std::abs(d) < tiny) d = tiny;
+    c = 1 + odd / c;
+    if (std::abs(c) < tiny) c = tiny;
+    d = 1 / d;
+    const double delta = d * c;
+    h *= delta;
+    if (std::abs(delta - 1) < 1e-16) break;
+  }
+  return std::exp(log_prefix) * h;
+}
+
+// Two-sided tail P(|T| >= |t|) of Student's t with `dof` degrees of freedom:
+// I_{dof / (dof + t^2)}(dof / 2, 1 / 2).
+inline double student_t_two_sided_p(double t, double dof) {
+  if (!(dof > 0)) return std::numeric_limits<double>::quiet_NaN();
+  if (std::isinf(t)) return 0.0;
+  return incomplete_beta(0.5 * dof, 0.5, dof / (dof + t * t));
+}
+
+// CDF P(T <= t) of Student's t with `dof` degrees of freedom.
+inline double student_t_cdf(double t, double dof) {
+  const double half_tail = 0.5 * student_t_two_sided_p(t, dof);
+  return t >= 0 ? 1.0 - half_tail : half_tail;
+}
+
+// Quantile: the t with P(T <= t) = p, p in (0, 1). Bisection on x = dof / (dof + t^2), where the
+// two-sided tail I_x(dof/2, 1/2) is monotone, so that far tails (t ~ 1e8 for dof 1) are exact too.
+inline double student_t_quantile(double p, double dof) {
+  if (!(p > 0 && p < 1) || !(dof > 0)) return std::numeric_limits<double>::quiet_NaN();
+  if (p == 0.5) return 0.0;
+  const double tail = 2 * std::min(p, 1 - p);  // two-sided tail of |t|
+  double lo = 0, hi = 1;                       // I_x is 0 at x = 0 and 1 at x = 1
+  for (int i = 0; i < 1100 && hi > lo; ++i) {
+    const double x = 0.5 * (lo + hi);
+    if (x == lo || x == hi) break;
+    if (incomplete_beta(0.5 * dof, 0.5, x) < tail) lo = x; else hi = x;
+  }
+  const double x = 0.5 * (lo + hi);
+  const double t = std::sqrt(dof * (1 - x) / x);
+  return p > 0.5 ? t : -t;
+}
+
+// Two-sided Student t threshold with a Sidak correction: |t| above it has probability `alpha`
+// that any of `k` independent null comparisons, each with `dof` degrees of freedom, crosses it.
+// Tends to sidak_z as dof grows.
+inline double sidak_t(double alpha, int k, double dof) {
+  if (k < 1) k = 1;
+  const double per = -std::expm1(std::log1p(-alpha) / k);
+  return student_t_quantile(1 - 0.5 * per, dof);
 }
 
 // Regularized upper incomplete gamma Q(a, x) = Gamma(a, x) / Gamma(a): power series of P for

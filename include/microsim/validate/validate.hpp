@@ -10,13 +10,20 @@
 //                  or a consequence of geometry such as "a periodic tile is hit by every ray").
 //                  z = (measured - model) / stderr; verdict "pass" when |z| <= z_threshold,
 //                  "FAIL" otherwise. z_threshold is Sidak-corrected over every z-tested row of
-//                  the run: a family-wise false-alarm rate `significance` (default 1%).
+//                  the run: a family-wise false-alarm rate `significance` (default 1%). Rows
+//                  whose error is the spread of K surfaces (`dof` = K - 1) use the Student t
+//                  quantile with K - 1 degrees of freedom at the same per-row rate, the others
+//                  the normal quantile.
 //   deterministic  an exact identity computed without sampling (000 eq. 1b, 1c from the facets):
 //                  "pass" when |measured - model| <= tolerance (a bound on double rounding of the
 //                  facet sums), "FAIL" otherwise; z is null.
 //   model          an approximate model (Smith, V-cavity, the nominal NDF the generator aimed
 //                  at): "agrees" when |z| <= z_threshold, "deviates (finding)" otherwise. A
-//                  deviation is a result about the model, never an error.
+//                  deviation is a result about the model, never an error. A nominal model (the
+//                  statistics the generator aimed at) is a model row only over an ensemble of
+//                  surfaces with the between-surface error; for one surface it is an info row.
+//                  Each z-tested row is counted once: on a periodic tile `g1 vs g1_raycast`
+//                  repeats `g1 vs smith_numeric` (every ray hits once) and is an info row.
 //   info           a measurement without a model or without an error bar: verdict "measured".
 // `microsim validate` exits 1 only when a row says "FAIL".
 #pragma once
@@ -47,8 +54,10 @@ struct Row {
   std::optional<double> stderr_;  // none: no error bar
   std::optional<double> model;    // none: nothing to compare with
   double tolerance = 0;           // deterministic rows: accepted |measured - model|
+  std::optional<int> dof;         // error from K surfaces: K - 1 (Student t); none: normal
   // Filled by assign_verdicts.
   std::optional<double> z, rel_dev;
+  std::optional<double> threshold;  // |z| threshold of this row (z-tested rows)
   std::string verdict;
   Json extra = Json::object();  // fields for plots (theta_deg, theta_m_range_deg, ...)
 };
@@ -57,13 +66,23 @@ struct Row {
 // that any of `k` independent null comparisons crosses it.
 double sidak_z(double alpha, std::size_t k);
 
-// Computes z, rel_dev and verdicts for all rows; returns the z threshold used.
+// Computes z, rel_dev, thresholds and verdicts for all rows; returns the normal z threshold
+// (rows with `dof` use the Student t threshold at the same per-row rate).
 double assign_verdicts(std::vector<Row>& rows, double significance);
 
 // Binomial proportion k/n with the standard error of p~ = (k + 1/2)/(n + 1): never zero, so
 // a bin where all n samples were visible still carries an error of order 1/n (the plain
 // binomial error is 0 there and would turn any model difference into an infinite z).
 Estimate proportion(std::uint64_t k, std::uint64_t n);
+
+// The energy-conservation row of a mirror BSDF run: every path leaves up or down, so the
+// fraction that left, (paths - lost - unterminated) / paths, is exactly 1; a lost path is a
+// tracer leak (rays slipping through at rounding level, measured at most 1 in 10^6).
+// Deterministic: pass when at most max(1, kMaxLostFraction paths) paths did not leave (no error
+// bar made from the lost count itself, whose z ~ sqrt(lost) passes almost any loss).
+constexpr double kMaxLostFraction = 1e-5;
+Row albedo_total_row(std::uint64_t paths, std::uint64_t lost, std::uint64_t unterminated,
+                     double albedo_up, double albedo_down);
 
 // A chi-square goodness of fit as a z-tested row: measured chi2/dof, model 1, stderr
 // sqrt(2/dof) (normal approximation of chi2/dof under the null; large dof).

@@ -1,18 +1,18 @@
 #!/usr/bin/env bash
-# Issue 5 "Must show": multiple-scattering BSDF tables on explicit surfaces beside the analytic
-# models. Runs the commands, then prints the tables (analysis/issue5_tables.py).
+# Multiple-scattering BSDF tables on explicit surfaces beside the analytic
+# models. Runs the commands, then prints the tables (analysis/tables_bsdf_orders.py).
 #
-#   analysis/issue5_tables.sh [BUILD_DIR] [OUT_DIR]
+#   analysis/tables_bsdf_orders.sh [BUILD_DIR] [OUT_DIR]
 #
 # BUILD_DIR holds the microsim binary (default: build/ next to this folder); results go to
-# OUT_DIR (default: BUILD_DIR/issue5). Runs are skipped when their JSON exists (delete OUT_DIR to
+# OUT_DIR (default: BUILD_DIR/tables_bsdf_orders). Runs are skipped when their JSON exists (delete OUT_DIR to
 # redo). About 40 minutes on 2 cores. SEEDS (default "1 2 3 4") sets the ensemble of tiles
 # for the mirror table; RAYS_SCALE (default 1) multiplies every ray count.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(dirname "$here")"
 build="${1:-$root/build}"
-out="${2:-$build/issue5}"
+out="${2:-$build/tables_bsdf_orders}"
 M="$build/microsim"
 seeds="${SEEDS:-1 2 3 4}"
 scale="${RAYS_SCALE:-1}"
@@ -91,7 +91,7 @@ d e1.5_t53_p180 "$S" 1.5 53.4375 180      # reverse of the reflection path 14 ->
 d flip_e${inv}_t31_p180 "$F" "$inv" 30.9375 180   # reverse of the transmission path (from below)
 d flip_e1.5_t53_p180 "$F" 1.5 53.4375 180 # reverse of that transmission path (from below)
 
-/usr/bin/python3 "$here/issue5_tables.py" "$out"
+/usr/bin/python3 "$here/tables_bsdf_orders.py" "$out"
 
 # 5. Performance: random-walk rays/s against a bare Embree loop.
 if [ -x "$build/microsim_bench_bsdf" ]; then

@@ -1,5 +1,5 @@
-// Issue 3 "Must show" tables: structured and non-heightfield microsurfaces measured by the
-// library (the same code as the CLI). Run through analysis/issue3_tables.sh; takes a few
+// Tables of structured and non-heightfield microsurfaces measured by the
+// library (the same code as the CLI). Run through analysis/tables_structured_surfaces.sh; takes a few
 // minutes on 2 cores. Every number is printed with its standard error; "z" is
 // (measured - exact) / stderr.
 #include <cstdio>
@@ -398,7 +398,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--quick")) scale = 0.1;
     else if (!std::strcmp(argv[i], "--section") && i + 1 < argc) only = argv[++i];
   }
-  std::printf("# microsim issue 3: structured and non-heightfield microsurfaces%s\n",
+  std::printf("# microsim: structured and non-heightfield microsurfaces%s\n",
               scale < 1 ? " (--quick: 10x fewer rays)" : "");
   if (only.empty() || only == "1") exact_cases();
   if (only.empty() || only == "2") tiled_boxes();

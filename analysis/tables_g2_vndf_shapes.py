@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the exact structured surfaces of issue 4 as OBJ meshes with microsim sidecars
+"""Writes the exact structured surfaces of the G2/VNDF tables as OBJ meshes with microsim sidecars
 (FILE.obj.json), the same constructions as tests/shapes.hpp:
 
   square_wave OUT.obj [period top height periods]   periodic square wave, ridges along y

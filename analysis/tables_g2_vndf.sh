@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
-# Issue 4 "Must show" tables: square-wave G2, Beckmann G2 against the four Smith forms, VNDF on
+# Tables of G2 and the VNDF: square-wave G2, Beckmann G2 against the four Smith forms, VNDF on
 # the ellipsoid (exact GGX) and on Beckmann tiles, stretching/shearing invariance.
-# Usage: analysis/issue4_tables.sh [BUILD_DIR] [WORK_DIR]   (about 10 minutes on 2 cores)
+# Usage: analysis/tables_g2_vndf.sh [BUILD_DIR] [WORK_DIR]   (about 10 minutes on 2 cores)
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 BUILD="$(cd "${1:-$ROOT/build}" && pwd)"
-WORK="${2:-${TMPDIR:-/tmp}/microsim_issue4}"
+WORK="${2:-${TMPDIR:-/tmp}/microsim_tables_g2_vndf}"
 BIN="$BUILD/microsim"
 mkdir -p "$WORK"
 cd "$WORK"
@@ -13,7 +13,7 @@ PY=/usr/bin/python3
 RAYS="${RAYS:-1000000}"
 
 echo "== 1. Square wave (period 1, top 0.5, trench 0.5, height 0.25): G2 of the normal-n area (tops + trench bottoms) =="
-$PY "$ROOT/analysis/issue4_shapes.py" square_wave square.obj 1 0.5 0.25 4
+$PY "$ROOT/analysis/tables_g2_vndf_shapes.py" square_wave square.obj 1 0.5 0.25 4
 "$BIN" -q measure g2 square.obj --theta-o 30,60,80,85 --theta-i 20,40,80,85 --phi-i 0,180 --rays "$RAYS" -o square_g2.json
 $PY - <<'PY'
 import json, math
@@ -70,8 +70,8 @@ PY
 
 echo
 echo "== 3. VNDF =="
-$PY "$ROOT/analysis/issue4_shapes.py" ellipsoid ell_iso.obj 0.5 0.5 90 144
-$PY "$ROOT/analysis/issue4_shapes.py" ellipsoid ell_aniso.obj 0.4 0.8 360 576
+$PY "$ROOT/analysis/tables_g2_vndf_shapes.py" ellipsoid ell_iso.obj 0.5 0.5 90 144
+$PY "$ROOT/analysis/tables_g2_vndf_shapes.py" ellipsoid ell_aniso.obj 0.4 0.8 360 576
 for e in ell_iso ell_aniso; do
   echo "-- $e (GGX, exact): histogram vs analytic D_v, Sidak 3 sigma per bin; sampler chi-square"
   "$BIN" measure vndf $e.obj --theta 0,30,60,80 --phi 0,45 --rays $((2 * RAYS)) --sampler-samples $((2 * RAYS)) -o ${e}_vndf.json | sed 1d

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
-"""Prints the issue-5 tables from the JSON summaries written by issue5_tables.sh.
+"""Prints the BSDF-per-order tables from the JSON summaries written by tables_bsdf_orders.sh.
 
-usage: issue5_tables.py OUT_DIR
+usage: tables_bsdf_orders.py OUT_DIR
 """
 import glob
 import json
@@ -9,7 +9,7 @@ import math
 import os
 import sys
 
-out = sys.argv[1] if len(sys.argv) > 1 else "build/issue5"
+out = sys.argv[1] if len(sys.argv) > 1 else "build/tables_bsdf_orders"
 
 
 def load(name):

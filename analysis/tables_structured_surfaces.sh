@@ -1,8 +1,8 @@
 #!/bin/sh
-# Issue 3 "Must show": structured and non-heightfield microsurfaces.
-# Builds microsim and analysis/issue3_tables.cpp, shows bad mesh input refused by the CLI, then
+# Tables of structured and non-heightfield microsurfaces.
+# Builds microsim and analysis/tables_structured_surfaces.cpp, shows bad mesh input refused by the CLI, then
 # prints every table (markdown) with standard errors. About 5-10 minutes on 2 cores.
-# Usage: analysis/issue3_tables.sh [BUILD_DIR] [--quick]
+# Usage: analysis/tables_structured_surfaces.sh [BUILD_DIR] [--quick]
 set -e
 SRC=$(cd "$(dirname "$0")/.." && pwd)
 BUILD=${1:-$SRC/build}
@@ -10,7 +10,7 @@ BUILD=${1:-$SRC/build}
 QUICK=""
 for a in "$@"; do [ "$a" = "--quick" ] && QUICK="--quick"; done
 cmake -S "$SRC" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$BUILD" -j2 --target microsim issue3_tables >/dev/null
+cmake --build "$BUILD" -j2 --target microsim tables_structured_surfaces >/dev/null
 M="$BUILD/microsim"
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
@@ -36,4 +36,4 @@ for f in nonmanifold flipped degenerate open closed; do
   echo "| $f.off | $code | $(cat "$T/err.txt" | tr '|' '/') ($(wc -l < "$T/err.txt") line) | $written |"
 done
 echo
-"$BUILD/issue3_tables" $QUICK
+"$BUILD/tables_structured_surfaces" $QUICK
