@@ -4,6 +4,7 @@
 // independence, and reciprocity of measured tables (000 eq. 4c, with eta^2 for transmission).
 #include <gtest/gtest.h>
 
+#include "microsim/validate/validate.hpp"
 #include "microsim/measure/stats.hpp"
 
 #include <tbb/global_control.h>
@@ -353,7 +354,10 @@ TEST(BsdfMeasure, VGrooveOrdersEqualTheClosedForm) {
         const BsdfResult r = measure_bsdf(tracer, o);
         const auto model = mm::vgroove_albedo(rad(tf), direction_from_angles(o.theta_i, o.phi_i), mat, K);
         const auto wrong = mm::vgroove_albedo(rad(tf + 1.0), direction_from_angles(o.theta_i, o.phi_i), mat, K);
-        EXPECT_EQ(r.measured.lost, 0u);
+        // The tracer's leak budget (validate's albedo_total row): rays slipping through at
+        // rounding level, at most max(1, kMaxLostFraction paths).
+        EXPECT_LE(static_cast<double>(r.measured.lost),
+                  std::max(1.0, std::ceil(kMaxLostFraction * r.measured.paths)));
         for (int k = 0; k < K; ++k) {
           const Estimate e = r.albedo(0, k);
           SCOPED_TRACE("tf " + std::to_string(tf) + " theta " + std::to_string(c[0]) + " order " + std::to_string(k + 1));

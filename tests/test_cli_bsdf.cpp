@@ -113,3 +113,25 @@ TEST_F(CliBsdf, BadInput) {
                      out, "missing");
   expect_usage_error("measure bsdf " + surface_ + " --material mirror --phi-i 0 -o " + out, out, "--theta-i");
 }
+
+TEST_F(CliBsdf, NoModelsMeasuresTheSameAndLeavesTheModelsOut) {
+  // --no-models drops the analytic columns (their cost) and must not change a measured bit.
+  const std::string with = tmp("m.json"), without = tmp("nm.json");
+  const std::string args = "measure bsdf " + surface_ +
+                           " --material mirror --theta-i 60 --phi-i 0 --rays 20000 --resolution 16 -q -o ";
+  Result a = run(args + with);
+  ASSERT_EQ(a.code, 0) << a.err;
+  Result b = run(args + without + " --no-models");
+  ASSERT_EQ(b.code, 0) << b.err;
+  const auto ja = nlohmann::json::parse(slurp(with)), jb = nlohmann::json::parse(slurp(without));
+  EXPECT_EQ(ja["albedo"], jb["albedo"]);
+  EXPECT_EQ(ja["reflected_stderr"], jb["reflected_stderr"]);
+  EXPECT_TRUE(ja["albedo_models"]["smith_multiple"].is_object());
+  EXPECT_TRUE(ja["albedo_models"]["smith_single"].is_object());
+  EXPECT_TRUE(jb["albedo_models"]["smith_multiple"].is_null());
+  EXPECT_TRUE(jb["albedo_models"]["smith_single"].is_null());
+  EXPECT_EQ(jb["parameters"]["smith_multiple_walks"], 0);
+  EXPECT_EQ(jb["parameters"]["models"], false);
+  std::remove(with.c_str());
+  std::remove(without.c_str());
+}

@@ -354,7 +354,7 @@ const std::vector<Case>& cases() {
       {"measure bsdf {S} --material mirror --theta-i 0 --phi-i 0 --rays 0 -o {o}", 2, "--rays"},
       {"measure bsdf {S} --material mirror --theta-i 0 --phi-i 0 --resolution 0 -o {o}", 2, "--resolution", "exr"},
       {"measure bsdf {S} --material mirror --theta-i 0 --phi-i 0 --seed -1 -o {o}", 2, "--seed"},
-      {"measure bsdf {M} --material mirror --theta-i 0 --phi-i 0 --rays 100 -o {o}", 2, "periodic"},
+      {"measure bsdf {M} --material mirror --theta-i 0 --phi-i 0 --rays 100 -o {o}", 2, "periodic", "bsdf"},
       // demo: every option checked before anything is written.
       {"demo --resolution 16 --alpha -1 --out-dir {o}", 2, "--alpha", "d"},
       {"demo --resolution 16 --theta 95 --out-dir {o}", 2, "--theta", "d"},

@@ -33,6 +33,7 @@ struct BsdfCliOptions {
   long long rays = 1000000;
   std::uint64_t seed = 1;
   int replicates = 32;
+  bool no_models = false;
   int resolution = 64;
 };
 
@@ -182,7 +183,8 @@ int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
   to.base.seed = o.seed;
   to.base.resolution = o.resolution;
   to.base.replicates = o.replicates;
-  to.base.model_walks = s.nominal ? to.base.rays : 0;
+  to.base.models = !o.no_models;
+  to.base.model_walks = s.nominal && !o.no_models ? to.base.rays : 0;
   for (double t : thetas) to.theta_i.push_back(rad(t));
   for (double p : phis) to.phi_i.push_back(rad(p));
   Progress progress(n_inc > 1 ? "measure bsdf (" + std::to_string(n_inc) + " incidences)" : "measure bsdf", g.quiet);
@@ -208,7 +210,8 @@ int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
                      {"in_plane_bins", r.plane.size()},
                      {"in_plane_band_half_width_deg", deg(r.plane.half_width())},
                      {"max_events", to.base.max_events},
-                     {"smith_multiple_walks", to.base.model_walks}};
+                     {"smith_multiple_walks", to.base.model_walks},
+                     {"models", !o.no_models}};
   if (ext == "bsdf") parameters["table_resolution"] = o.table_resolution;
   Json j = run_header("measure bsdf", g);
   j["file"] = o.surface;
@@ -360,6 +363,9 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
   cmd->add_option("--replicates", o->replicates, "Independent randomized replicates the rays are split into; the standard errors are those of the replicate means (>= 2)")
       ->capture_default_str()
       ->check(integer_in(2, 1 << 16));
+  cmd->add_flag("--no-models", o->no_models,
+                "Measure only: no analytic model beside the measurement (single-scattering "
+                "integrals, Smith random walk, V-groove closed forms), which cost time on tables");
   cmd->add_option("--resolution", o->resolution,
                   "Hemisphere map resolution R (R x R equal-area pixels); also the number of "
                   "in-plane bins over [-90, 90] degrees")

@@ -335,7 +335,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
   r.wi = direction_from_angles(o.theta_i, o.phi_i);
   r.map = HemisphereMap(o.resolution);
   r.plane = InPlaneBins(o.phi_i, o.resolution);
-  r.nominal = s.nominal;
+  if (o.models) r.nominal = s.nominal;  // no nominal NDF: no microfacet model beside
   const int K = o.orders, npix = r.map.size(), nplane = r.plane.size();
   const Material mat = o.material;
   const Vec3 wi = r.wi;
@@ -349,7 +349,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
   const RayWindow window = make_ray_window(tracer, wi);
   const double ray_weight = finite ? window.area_perp / (macro.area * wi.z()) : 1.0;
   const std::uint64_t stream = direction_stream(0xB5DF0000ull, o.theta_i, o.phi_i);
-  const bool with_model = s.nominal && o.model_walks > 0;
+  const bool with_model = o.models && s.nominal && o.model_walks > 0;
   const double share = with_model ? 0.8 : 1.0;
 
   auto leave = [&](BsdfTally& t, bool reflected, int order, double w, const Vec3& d) {
@@ -578,7 +578,7 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
     }
   }
   j["in_plane"] = in_plane;
-  add_groove_models(j, r, s);  // closed-form V-groove / V-cavity models beside rows and lobes
+  if (r.options.models) add_groove_models(j, r, s);  // closed-form V-groove / V-cavity models beside rows and lobes
   add_macro_normalization(j, r, s);
 
   // --- bookkeeping

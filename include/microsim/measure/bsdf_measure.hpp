@@ -91,6 +91,9 @@ struct BsdfOptions {
   int max_events = 10000;  // a walk longer than this is counted unterminated (lost)
   // Smith random-walk model: walks of the nominal NDF (0 = none); same seed, own stream.
   std::uint64_t model_walks = 0;
+  // false: measure only (no analytic model beside the measurement: no single-scattering
+  // integrals, no Smith walk, no V-groove closed forms), for tables where models cost time.
+  bool models = true;
   // Independent randomized replicates the explicit surface's rays are split into: standard
   // errors of the replicate means (measure/replicates.hpp).
   int replicates = 32;
