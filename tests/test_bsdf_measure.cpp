@@ -357,7 +357,7 @@ TEST(BsdfMeasure, VGrooveOrdersEqualTheClosedForm) {
         // The tracer's leak budget (validate's albedo_total row): rays slipping through at
         // rounding level, at most max(1, kMaxLostFraction paths).
         EXPECT_LE(static_cast<double>(r.measured.lost),
-                  std::max(1.0, std::ceil(kMaxLostFraction * r.measured.paths)));
+                  std::max(1.0, std::ceil(validation::kMaxLostFraction * r.measured.paths)));
         for (int k = 0; k < K; ++k) {
           const Estimate e = r.albedo(0, k);
           SCOPED_TRACE("tf " + std::to_string(tf) + " theta " + std::to_string(c[0]) + " order " + std::to_string(k + 1));
