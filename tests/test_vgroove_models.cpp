@@ -273,8 +273,10 @@ TEST(BsdfObjectRows, VGrooveOrdersAgainstTheClosedForm) {
     if (row.quantity == "albedo_order_3") EXPECT_NEAR(*row.model, 0.4679, 1e-4);
     if (*row.stderr_ > 0) {
       EXPECT_LT(std::abs(row.measured - *row.model) / *row.stderr_, 3.5) << row.quantity;
-      ++tested;
+      if (row.quantity == "albedo_order_3" || row.quantity == "albedo_order_4plus") ++tested;
     }
   }
-  EXPECT_EQ(tested, 2);  // orders 3 and 4+ (the total and empty orders carry no error)
+  // Orders 3 and 4+ carry a replicate error; an empty order carries one only when a
+  // rounding-level path (a ray grazing a ridge) lands in it, and is then z-tested like the rest.
+  EXPECT_EQ(tested, 2);
 }
