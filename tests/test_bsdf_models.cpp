@@ -165,7 +165,8 @@ std::vector<std::pair<Vec3, Vec3>> view_normal_pairs() {
 }
 
 TEST(MicrofacetVectors, ReflectionAndItsInverse) {
-  for (const auto& [v, m] : view_normal_pairs()) {
+  for (const auto& [vb, m] : view_normal_pairs()) {
+    const Vec3 v = vb;  // a lambda cannot capture a structured binding in C++17
     const Vec3 r = mm::reflect(v, m);  // 000 eq. 13a
     EXPECT_NEAR(r.norm(), 1.0, 1e-14);
     EXPECT_NEAR(r.dot(m), v.dot(m), 1e-14);
@@ -175,7 +176,8 @@ TEST(MicrofacetVectors, ReflectionAndItsInverse) {
 
 TEST(MicrofacetVectors, RefractionAndItsInverse) {
   for (double e : {1.0 / 1.5, 1.5, 1.0 / 2.4})
-    for (const auto& [v, m] : view_normal_pairs()) {
+    for (const auto& [vb, m] : view_normal_pairs()) {
+      const Vec3 v = vb;  // a lambda cannot capture a structured binding in C++17
       Vec3 t;
       if (!mm::refract(v, m, e, &t)) {  // total internal reflection only when e |v x m| > 1
         EXPECT_GT(e * v.cross(m).norm(), 1.0 - 1e-12);
@@ -202,7 +204,8 @@ double numeric_jacobian(const Map& map, const Vec3& d, double h = 1e-5) {
 }
 
 TEST(Jacobians, ReflectionMatchesFiniteDifferences) {
-  for (const auto& [v, m] : view_normal_pairs()) {
+  for (const auto& [vb, m] : view_normal_pairs()) {
+    const Vec3 v = vb;  // a lambda cannot capture a structured binding in C++17
     const Vec3 r = mm::reflect(v, m);
     const double numeric = numeric_jacobian([&](const Vec3& d) { return mm::half_vector_reflection(v, d); }, r);
     const double exact = mm::jacobian_reflection(r, m);  // 000 eq. 19b
@@ -213,7 +216,8 @@ TEST(Jacobians, ReflectionMatchesFiniteDifferences) {
 
 TEST(Jacobians, RefractionMatchesFiniteDifferences) {
   for (double e : {1.0 / 1.5, 1.5})
-    for (const auto& [v, m] : view_normal_pairs()) {
+    for (const auto& [vb, m] : view_normal_pairs()) {
+      const Vec3 v = vb;  // a lambda cannot capture a structured binding in C++17
       Vec3 t;
       if (!mm::refract(v, m, e, &t)) continue;
       if (e * v.cross(m).norm() > 0.98) continue;  // too close to the critical angle for differences
