@@ -281,7 +281,10 @@ namespace {
 constexpr std::uint64_t kChunk = 1 << 13;
 
 std::uint64_t direction_stream(std::uint64_t base, double theta, double phi) {
-  return base + static_cast<std::uint64_t>(theta * 1e6) * 7919 + static_cast<std::uint64_t>(phi * 1e6);
+  // phi may be negative (tables over -180..180 deg): through a signed integer, which wraps
+  // modulo 2^64 as a stream key should (a negative double cast to unsigned is undefined).
+  return base + static_cast<std::uint64_t>(static_cast<std::int64_t>(theta * 1e6)) * 7919 +
+         static_cast<std::uint64_t>(static_cast<std::int64_t>(phi * 1e6));
 }
 
 // Runs body(i, tally) for i in [0, n) in chunks, `batches` sequential parallel passes (progress
