@@ -360,9 +360,7 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
       ->check(integer_in(1, kMaxRays));
   cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str()
       ->check(seed_value());
-  cmd->add_option("--replicates", o->replicates, "Independent randomized replicates the rays are split into; the standard errors are those of the replicate means (>= 2)")
-      ->capture_default_str()
-      ->check(integer_in(2, 1 << 16));
+  add_replicates_option(*cmd, o->replicates);
   cmd->add_flag("--no-models", o->no_models,
                 "Measure only: no analytic model beside the measurement (single-scattering "
                 "integrals, Smith random walk, V-groove closed forms), which cost time on tables");

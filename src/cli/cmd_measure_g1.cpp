@@ -278,9 +278,7 @@ void register_measure_g1(CLI::App& measure, const GlobalOptions& g) {
       ->check(integer_in(1, kMaxRays));
   g1->add_option("--seed", mo->seed, "Random seed")->capture_default_str()
       ->check(seed_value());
-  g1->add_option("--replicates", mo->replicates, "Independent randomized replicates the rays are split into; the standard errors are those of the replicate means (>= 2)")
-      ->capture_default_str()
-      ->check(integer_in(2, 1 << 16));
+  add_replicates_option(*g1, mo->replicates);
   g1->callback([mo, files, &g] {
     mo->surface = files->front();
     mo->extra_surfaces.assign(files->begin() + 1, files->end());

@@ -134,4 +134,12 @@ void on_run(CLI::App* cmd, std::function<void()> run) {
   });
 }
 
+void add_replicates_option(CLI::App& cmd, int& replicates) {
+  cmd.add_option("--replicates", replicates,
+                 "Independent randomized replicates the rays are split into; the standard errors "
+                 "are those of the replicate means (>= 2)")
+      ->capture_default_str()
+      ->check(integer_in(2, 1 << 16));
+}
+
 }  // namespace microsim::cli

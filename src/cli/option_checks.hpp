@@ -17,6 +17,8 @@ CLI::Validator number_in(const Range& r);
 CLI::Validator finite_number();
 // A decimal integer in [lo, hi].
 CLI::Validator integer_in(long long lo, long long hi);
+// --replicates of the Monte Carlo estimators (measure/replicates.hpp): at least 2.
+void add_replicates_option(CLI::App& cmd, int& replicates);
 // A seed: a decimal integer in [0, 2^64 - 1] (no negative values wrapping around).
 CLI::Validator seed_value();
 
