@@ -12,6 +12,7 @@
 #include <functional>
 #include <string>
 
+#include "test_helpers.hpp"
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/measure/g2_measure.hpp"
@@ -22,18 +23,12 @@
 #include "microsim/surface/generators.hpp"
 
 using namespace microsim;
+using namespace microsim::testing;
 
 namespace {
 
 constexpr int kSeeds = 100;
 
-Microsurface beckmann_tile(int resolution, std::uint64_t seed, double alpha = 0.5) {
-  GaussianParams p;
-  p.resolution = resolution;
-  p.alpha_x = p.alpha_y = alpha;
-  p.seed = seed;
-  return generate_gaussian(p);
-}
 
 Vec3 dir(double theta_deg, double phi_deg) { return direction_from_angles(rad(theta_deg), rad(phi_deg)); }
 

@@ -32,13 +32,6 @@ G2Options opts(std::uint64_t rays, std::uint64_t seed = 1) {
 
 Vec3 dir(double theta_deg, double phi_deg) { return direction_from_angles(rad(theta_deg), rad(phi_deg)); }
 
-Microsurface beckmann_tile(int resolution, std::uint64_t seed, double alpha = 0.5) {
-  GaussianParams p;
-  p.resolution = resolution;
-  p.alpha_x = p.alpha_y = alpha;
-  p.seed = seed;
-  return generate_gaussian(p);
-}
 
 // Bins of a run whose facets face both directions and were sampled.
 std::vector<int> sampled_bins(const G2Result& r, std::uint64_t min_samples = 1) {

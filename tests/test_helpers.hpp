@@ -3,9 +3,19 @@
 #include <cmath>
 #include <vector>
 
+#include "microsim/surface/gaussian.hpp"
 #include "microsim/surface/microsurface.hpp"
 
 namespace microsim::testing {
+
+// A periodic Gaussian tile with Beckmann slopes (the estimators' statistical cases).
+inline Microsurface beckmann_tile(int resolution, std::uint64_t seed, double alpha = 0.5) {
+  GaussianParams p;
+  p.resolution = resolution;
+  p.alpha_x = p.alpha_y = alpha;
+  p.seed = seed;
+  return generate_gaussian(p);
+}
 
 // Flat periodic plane z = 0.
 inline Microsurface flat_heightfield(int n = 16, double size = 1.0) {
