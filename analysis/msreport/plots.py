@@ -511,3 +511,192 @@ def tiled_boxes(path, points):
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     return _save(fig, path)
+
+
+# ----------------------------------------------------------------------------------------------
+# Multiple scattering of finite objects, V-grooves and V-cavity ensembles (measure bsdf records;
+# the closed forms are the records' albedo_models / in_plane fields, models/vgroove_multiple.hpp)
+
+OBJECT_ORDERS = ["order_1", "order_2", "order_3", "order_4plus"]
+
+
+def incidences(record):
+    """The per-incidence objects of a measure bsdf record (one incidence: the record itself)."""
+    inc = record.get("incidences")
+    return inc if isinstance(inc, list) and inc else [record]
+
+
+def _total_albedo(inc):
+    a = (inc.get("albedo") or {}).get("reflected") or {}
+    e = inc.get("reflected_stderr") or {}
+    return num(a.get("total")), num(e.get("total"), 0.0)
+
+
+def box_albedo(path, record, h_over_w):
+    """Total albedo of a mirror box per unit macro area against its visible area ratio."""
+    pts = sorted((num(i.get("theta_i_deg")),) + _total_albedo(i) +
+                 (num((i.get("normalization") or {}).get("reflected_below_base_plane"), 0.0),)
+                 for i in incidences(record))
+    pts = [p for p in pts if p[1] == p[1]]
+    if not pts:
+        raise NoData("no total albedo in the box record")
+    th, a, e, below = (np.array(c) for c in zip(*pts))
+    ratio = 1 + h_over_w * np.tan(np.radians(th))
+    fig, (ax, axz) = plt.subplots(2, 1, figsize=(6.5, 5.2), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
+    fine = np.linspace(0, max(th), 200)
+    ax.plot(fine, 1 + h_over_w * np.tan(np.radians(fine)), "k-", lw=1, label="1 + (H/W) tan theta_i")
+    ax.errorbar(th, a, yerr=e, fmt="o", ms=4, capsize=2, color="C0", label="traced total albedo")
+    ax.plot(th, below, "s", ms=3, mfc="none", color="C1", label="of which leaves below the base plane")
+    ax.set_ylabel("albedo per unit macro area")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    z = np.where(e > 0, (a - ratio) / np.where(e > 0, e, 1), 0.0)
+    axz.axhspan(-3, 3, color="0.9")
+    axz.plot(th, z, "o", ms=4, color="C0")
+    axz.axhline(0, color="k", lw=0.8)
+    axz.set_ylabel("z")
+    axz.set_xlabel("theta_i (deg), across a face")
+    axz.grid(True, alpha=0.3)
+    ax.set_title("Mirror box H/W = %g: total albedo = visible area ratio (000 Fig. 5)" % h_over_w, fontsize=10)
+    return _save(fig, path)
+
+
+def tiled_boxes_albedo(path, points, h_over_w):
+    """points: (N, measure bsdf record of N x N tiled mirror boxes). Total albedo against N."""
+    series = {}
+    for n, rec in points:
+        for i in incidences(rec):
+            a, e = _total_albedo(i)
+            if a == a:
+                series.setdefault(num(i.get("theta_i_deg")), []).append((n, a, e))
+    if not series:
+        raise NoData("no total albedo in the tiled-box records")
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    nn = np.logspace(0, np.log2(max(n for n, _ in points)), 50, base=2)
+    for k, theta in enumerate(sorted(series)):
+        pts = sorted(series[theta])
+        ax.plot(nn, 1 + h_over_w / nn * math.tan(math.radians(theta)), "-", color="C%d" % k, lw=0.9)
+        ax.errorbar([p[0] for p in pts], [p[1] for p in pts], yerr=[p[2] for p in pts], fmt="o", ms=4,
+                    capsize=2, color="C%d" % k, label="theta_i = %g deg (line: 1 + (H/(N W)) tan theta_i)" % theta)
+    ax.axhline(1, color="k", lw=0.8)
+    ax.set_xscale("log", base=2)
+    ax.set_xlabel("tiles per side N")
+    ax.set_ylabel("total albedo per unit macro area")
+    ax.set_title("Tiled mirror boxes (000 Fig. 6): the albedo returns to 1 as N grows", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    return _save(fig, path)
+
+
+def vgroove_orders(path, records):
+    """records: (facet angle deg, measure bsdf record over theta_i x phi_i). Per-order albedo
+    against theta_i (markers: traced; lines: the closed form vgroove_multiple)."""
+    usable = [(tf, r) for tf, r in records if any(isinstance(i.get("rows"), list) for i in incidences(r))]
+    if not usable:
+        raise NoData("no V-groove records with rows")
+    fig, axes = plt.subplots(1, len(usable), figsize=(4.2 * len(usable), 3.9), squeeze=False, sharey=True)
+    zmax, nz = 0.0, 0
+    for ax, (tf, rec) in zip(axes[0], usable):
+        phis = sorted({num(i.get("phi_i_deg")) for i in incidences(rec)})
+        for pk, phi in enumerate(phis):
+            incs = sorted((i for i in incidences(rec) if num(i.get("phi_i_deg")) == phi),
+                          key=lambda i: num(i.get("theta_i_deg")))
+            th = np.array([num(i.get("theta_i_deg")) for i in incs])
+            for k, order in enumerate(OBJECT_ORDERS):
+                meas, err, model = [], [], []
+                for i in incs:
+                    row = next((r for r in i.get("rows", []) if r.get("side") == "reflected" and r.get("order") == order), {})
+                    meas.append(num(row.get("albedo")))
+                    err.append(num(row.get("albedo_stderr"), 0.0))
+                    model.append(num(row.get("vgroove_multiple")))
+                    z = num(row.get("z_vgroove_multiple"))
+                    if z == z and num(row.get("albedo_stderr"), 0.0) > 1e-6:
+                        zmax, nz = max(zmax, abs(z)), nz + 1
+                ls = "-" if pk == 0 else "--"
+                ax.plot(th, model, ls, color="C%d" % k, lw=1,
+                        label=("closed form, order %s" % order[6:]) if pk == 0 else None)
+                ax.errorbar(th, meas, yerr=err, fmt="o" if pk == 0 else "^", ms=3.5, mfc="none" if pk else None,
+                            capsize=1.5, color="C%d" % k, label=("traced, phi_i = %g" % phi) if k == 0 else None)
+        ax.set_title("facet angle %g deg" % tf, fontsize=10)
+        ax.set_xlabel("theta_i (deg)")
+        ax.grid(True, alpha=0.3)
+    axes[0][0].set_ylabel("albedo per order (mirror)")
+    axes[0][0].legend(fontsize=6)
+    fig.suptitle("Periodic mirror V-grooves: traced per-order albedo against the closed form (2D unfolding); "
+                 "max |z| = %.2f over %d rows with an error" % (zmax, nz), fontsize=10)
+    return _save(fig, path)
+
+
+def vcavity_albedo_orders(path, record):
+    """V-cavity ensemble: per-order albedo against theta_i, traced vs the V-cavity
+    multiple-scattering model, the closed form over the ensemble's own grooves and the Smith walk."""
+    incs = sorted((i for i in incidences(record) if isinstance(i.get("rows"), list)), key=lambda i: num(i.get("theta_i_deg")))
+    if not incs:
+        raise NoData("no rows in the V-cavity record")
+    th = np.array([num(i.get("theta_i_deg")) for i in incs])
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3.8))
+    for ax, order in zip(axes, OBJECT_ORDERS[:3]):
+        def col(key):
+            out = []
+            for i in incs:
+                row = next((r for r in i["rows"] if r.get("side") == "reflected" and r.get("order") == order), {})
+                out.append(num(row.get(key)))
+            return np.array(out)
+        own = np.array([num(((i.get("albedo_models") or {}).get("vcavity_multiple_grooves") or {})
+                            .get("reflected", {}).get(order)) for i in incs])
+        ax.errorbar(th, col("albedo"), yerr=col("albedo_stderr"), fmt="o", ms=4, capsize=2, color="C0",
+                    label="traced ensemble")
+        ax.plot(th, own, "x", ms=7, color="C2", label="closed form, own grooves")
+        ax.plot(th, col("vcavity_multiple"), "-", color="k", lw=1, label="V-cavity multiple (nominal D)")
+        sm = col("smith_multiple")
+        if np.any(sm == sm):
+            ax.errorbar(th, sm, yerr=col("smith_multiple_stderr"), fmt="s--", ms=3, mfc="none", capsize=2,
+                        color="C3", lw=0.8, label="Smith random walk")
+        ax.set_title(order.replace("_", " "), fontsize=10)
+        ax.set_xlabel("theta_i (deg)")
+        ax.grid(True, alpha=0.3)
+        if order == "order_3":
+            ax.set_yscale("log")
+    axes[0].set_ylabel("albedo (mirror)")
+    axes[0].legend(fontsize=7)
+    fig.suptitle("V-cavity ensemble (Beckmann alpha = 0.5): albedo per order", fontsize=10)
+    return _save(fig, path)
+
+
+def vcavity_lobes(path, record, thetas):
+    """In-plane lobes per order at a few theta_i: traced, the closed form over the ensemble's own
+    grooves, the V-cavity multiple-scattering model of the nominal D and the Smith walk."""
+    incs = [i for i in incidences(record) if isinstance(i.get("in_plane"), list)
+            and any(abs(num(i.get("theta_i_deg")) - t) < 1e-6 for t in thetas)]
+    if not incs:
+        raise NoData("no in_plane rows at the requested incidences")
+    incs.sort(key=lambda i: num(i.get("theta_i_deg")))
+    orders = [("order_1", "_order_1"), ("order_2", "_order_2"), ("total", "")]
+    fig, axes = plt.subplots(len(incs), 3, figsize=(12, 3.1 * len(incs)), squeeze=False)
+    for r_, inc in enumerate(incs):
+        rows = sorted((r for r in inc["in_plane"] if r.get("side") == "reflected"), key=lambda r: num(r.get("theta_o_deg")))
+        th = column(rows, "theta_o_deg")
+        for c, (order, suffix) in enumerate(orders):
+            ax = axes[r_][c]
+            ax.errorbar(th, column(rows, "f_" + order), yerr=column(rows, "f_%s_stderr" % order), fmt="o", ms=3,
+                        capsize=2, color="C0", label="traced ensemble")
+            ax.step(th, column(rows, "vcavity_multiple_grooves" + suffix), where="mid", color="C2", lw=0.9,
+                    label="closed form, own grooves")
+            m, me = column(rows, "vcavity_multiple" + suffix), column(rows, "vcavity_multiple%s_stderr" % suffix)
+            ax.plot(th, m, "-", color="k", lw=1.1, label="V-cavity multiple (nominal D)")
+            ax.fill_between(th, m - 2 * me, m + 2 * me, color="k", alpha=0.12, lw=0)
+            sk = "smith_multiple" + suffix
+            if has_field(rows, sk):
+                ax.plot(th, column(rows, sk), ":", color="C3", lw=1.3, label="Smith random walk")
+            if order == "order_1" and has_field(rows, "vcavity_single"):
+                ax.plot(th, column(rows, "vcavity_single"), "--", color="0.5", lw=0.9, label="V-cavity single scattering")
+            ax.set_title("theta_i = %g deg, %s" % (num(inc.get("theta_i_deg")), order.replace("_", " ")), fontsize=9)
+            ax.grid(True, alpha=0.3)
+            if r_ == len(incs) - 1:
+                ax.set_xlabel("theta_o (deg, signed: + on the specular side)")
+            if c == 0:
+                ax.set_ylabel("f (1/sr)")
+    axes[0][0].legend(fontsize=6)
+    fig.suptitle("V-cavity ensemble: in-plane lobes per order (a finite ensemble's lobe is a sum of the "
+                 "beams of the grooves whose exits fall in the band)", fontsize=10)
+    return _save(fig, path)

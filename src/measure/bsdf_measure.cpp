@@ -572,6 +572,11 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
         row["smith_multiple_stderr"] = m.stderr_;
         row["smith_multiple_order_1"] = m1.mean;
         row["smith_multiple_order_1_stderr"] = m1.stderr_;
+        for (int k = 1; k < K; ++k) {  // the walk's lobe of every further order, beside the closed forms'
+          const Estimate mk = r.model_f_plane(sd, k, b);
+          row["smith_multiple_" + order_key(k, K)] = mk.mean;
+          row["smith_multiple_" + order_key(k, K) + "_stderr"] = mk.stderr_;
+        }
         const Estimate e = r.f_plane(sd, K, b);
         row["z_smith_multiple"] = z_or_null(e.mean, m.mean, std::hypot(e.stderr_, m.stderr_));
       } else {

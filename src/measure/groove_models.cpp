@@ -62,6 +62,18 @@ std::optional<PlaneLobes> groove_model_lobes(const Microsurface& s, const BsdfRe
               nullptr, r.plane, K);
     return p;
   }
+  if (which == "vcavity_multiple_grooves") {
+    // The ensemble's own grooves, one sample each: the exact expectation of the traced lobe (every
+    // groove gets the same rays); the spread between grooves is the error of this average as an
+    // estimate of the nominal model's lobe, like the albedo's reflected_stderr.
+    if (!is_vcavity(s)) return std::nullopt;
+    const std::size_t G = s.num_facets() / 4;
+    for (std::size_t g = 0; g < G; ++g) {
+      const models::GrooveFrame f(vcavity_groove_normal(s, g));
+      add_beams(p, models::vgroove_beams(f.facet_angle, f.to_local(r.wi), r.options.material), &f, r.plane, K);
+    }
+    return p;
+  }
   if (which != "vcavity_multiple" || !is_vcavity(s) || !s.nominal) return std::nullopt;
   const models::Ndf& ndf = *s.nominal;
   const std::uint64_t n = 1 << 18;
@@ -159,8 +171,9 @@ void add_groove_models(Json& j, const BsdfResult& r, const Microsurface& s) {
     }
   }
   // In-plane reflected lobes: f of the model per bin (total and per order), its Monte Carlo
-  // error for the V-cavity average over D (the V-groove beams are exact deltas, binned).
-  for (const std::string name : {"vgroove_multiple", "vcavity_multiple"}) {
+  // error for the V-cavity average over D and the between-groove spread for the ensemble's own
+  // grooves (the V-groove beams are exact deltas, binned).
+  for (const std::string name : {"vgroove_multiple", "vcavity_multiple", "vcavity_multiple_grooves"}) {
     const auto lobes = groove_model_lobes(s, r, name);
     if (!lobes || !j.contains("in_plane")) continue;
     const int nb = r.plane.size();
@@ -174,7 +187,7 @@ void add_groove_models(Json& j, const BsdfResult& r, const Microsurface& s) {
         const Estimate e = tally_estimate(lobes->sum[k * nb + b], lobes->sum2[k * nb + b], lobes->samples, 1.0 / ci);
         const std::string key = k == K ? name : name + "_" + order_key(k, K);
         row[key] = e.mean;
-        if (name == "vcavity_multiple") row[key + "_stderr"] = e.stderr_;
+        if (name != "vgroove_multiple") row[key + "_stderr"] = e.stderr_;
       }
     }
   }
