@@ -571,16 +571,24 @@ def tiled_boxes_albedo(path, points, h_over_w):
                 series.setdefault(num(i.get("theta_i_deg")), []).append((n, a, e))
     if not series:
         raise NoData("no total albedo in the tiled-box records")
-    fig, ax = plt.subplots(figsize=(6.5, 4))
+    fig, (ax, axz) = plt.subplots(2, 1, figsize=(6.5, 5.2), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
     nn = np.logspace(0, np.log2(max(n for n, _ in points)), 50, base=2)
     for k, theta in enumerate(sorted(series)):
         pts = sorted(series[theta])
+        n, a, e = (np.array(c, float) for c in zip(*pts))
         ax.plot(nn, 1 + h_over_w / nn * math.tan(math.radians(theta)), "-", color="C%d" % k, lw=0.9)
-        ax.errorbar([p[0] for p in pts], [p[1] for p in pts], yerr=[p[2] for p in pts], fmt="o", ms=4,
-                    capsize=2, color="C%d" % k, label="theta_i = %g deg (line: 1 + (H/(N W)) tan theta_i)" % theta)
+        ax.errorbar(n, a, yerr=e, fmt="o", ms=4, capsize=2, color="C%d" % k,
+                    label="theta_i = %g deg (line: 1 + (H/(N W)) tan theta_i)" % theta)
+        model = 1 + h_over_w / n * math.tan(math.radians(theta))
+        axz.plot(n * (1 + 0.04 * k), np.where(e > 0, (a - model) / np.where(e > 0, e, 1), 0.0), "o", ms=4,
+                 color="C%d" % k)
     ax.axhline(1, color="k", lw=0.8)
-    ax.set_xscale("log", base=2)
-    ax.set_xlabel("tiles per side N")
+    axz.axhspan(-3, 3, color="0.9")
+    axz.axhline(0, color="k", lw=0.8)
+    axz.set_ylabel("z")
+    axz.grid(True, alpha=0.3)
+    axz.set_xscale("log", base=2)
+    axz.set_xlabel("tiles per side N")
     ax.set_ylabel("total albedo per unit macro area")
     ax.set_title("Tiled mirror boxes (000 Fig. 6): the albedo returns to 1 as N grows", fontsize=10)
     ax.grid(True, alpha=0.3)

@@ -13,7 +13,9 @@ README ("File formats"):
   measure bsdf   albedo {reflected, transmitted: {order_1, order_2, order_3, order_4plus, total}},
                  reflected_stderr, transmitted_stderr; in_plane rows: theta_o_deg (signed),
                  f_order_1(_stderr), f_total(_stderr), smith_single, vcavity_single,
-                 smith_multiple
+                 smith_multiple(_order_k), vgroove_multiple(_order_k),
+                 vcavity_multiple(_order_k)(_stderr), vcavity_multiple_grooves(_order_k)(_stderr);
+                 several incidences: the same fields per object of `incidences`
   validate       rows: quantity, model_name, condition, entry, kind, measured, stderr, model, z,
                  rel_dev, verdict, group, ...; entries[].measurements per check
 """

@@ -33,7 +33,7 @@ PROFILES = {
         "objects_rays": 200000,
         "vgroove_rays": 20000,
         "vcavity_grooves": 4096,
-        "vcavity_rays": 400000,
+        "vcavity_rays": 200000,
     },
     "smoke": {
         "suite": "smoke",

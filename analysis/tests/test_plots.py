@@ -99,6 +99,43 @@ class Figures(unittest.TestCase):
         with self.assertRaises(plots.NoData):
             plots.tiled_boxes(self.path("t2.png"), [(1, {"rows": []})])
 
+    def test_object_and_groove_figures_from_documented_fields(self):
+        orders = ["order_1", "order_2", "order_3", "order_4plus", "total"]
+
+        def incidence(theta):  # synthetic values with the documented fields of measure bsdf
+            a = {o: 0.25 for o in orders}
+            a["total"] = 1 + 0.5 * math.tan(math.radians(theta))
+            rows = [{"side": "reflected", "order": o, "albedo": 0.25, "albedo_stderr": 1e-3,
+                     "vgroove_multiple": 0.25, "z_vgroove_multiple": 0.0, "vcavity_multiple": 0.24,
+                     "smith_multiple": 0.2, "smith_multiple_stderr": 1e-3} for o in orders]
+            plane = []
+            for k in range(16):
+                r = {"side": "reflected", "theta_o_deg": -84.375 + 11.25 * k}
+                for sfx in ("", "_order_1", "_order_2"):
+                    for name in ("vcavity_multiple", "vcavity_multiple_grooves", "smith_multiple"):
+                        r[name + sfx] = 0.3
+                        r[name + sfx + "_stderr"] = 0.01
+                for o in ("order_1", "order_2", "total"):
+                    r["f_" + o], r["f_%s_stderr" % o] = 0.3, 0.01
+                r["vcavity_single"] = 0.3
+                plane.append(r)
+            return {"theta_i_deg": theta, "phi_i_deg": 0, "albedo": {"reflected": a},
+                    "reflected_stderr": {o: 1e-3 for o in orders}, "rows": rows, "in_plane": plane,
+                    "normalization": {"reflected_below_base_plane": 0.1},
+                    "albedo_models": {"vcavity_multiple_grooves": {"reflected": a}}}
+        rec = {"incidences": [incidence(t) for t in (0, 30, 60)]}
+        self.assertTrue(png_ok(plots.box_albedo(self.path("box.png"), rec, 0.5)))
+        self.assertTrue(png_ok(plots.tiled_boxes_albedo(self.path("tb.png"), [(1, rec), (2, rec)], 0.5)))
+        self.assertTrue(png_ok(plots.vgroove_orders(self.path("vg.png"), [(45, rec), (70, rec)])))
+        self.assertTrue(png_ok(plots.vcavity_albedo_orders(self.path("vca.png"), rec)))
+        self.assertTrue(png_ok(plots.vcavity_lobes(self.path("vcl.png"), rec, [0, 30])))
+        single = incidence(30)  # a one-incidence record is its own incidence
+        self.assertTrue(png_ok(plots.box_albedo(self.path("box1.png"), single, 0.5)))
+        with self.assertRaises(plots.NoData):
+            plots.vcavity_lobes(self.path("x.png"), rec, [45])
+        with self.assertRaises(plots.NoData):
+            plots.box_albedo(self.path("y.png"), {"incidences": [{"theta_i_deg": 0}]}, 0.5)
+
     def test_validation_z_and_table(self):
         rows = [
             {"quantity": "g1", "model_name": "g1_raycast", "kind": "identity", "z": 0.5, "verdict": "pass",

@@ -292,6 +292,15 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
         }
         out->facet = facet_of_hit(rh.hit.primID, rh.hit.u, rh.hit.v, ng, &out->normal);
         out->backface = out->normal.dot(dir) > 0;
+        if (out->backface != back && !ctx.context.filter) {
+          // A ray from outside whose first hit is a back face grazed a convex edge (a V-groove's
+          // ridge) closer than float spacing: it passes over it. Trace this segment again with
+          // wrong-side hits rejected, as rays leaving a facet are.
+          ctx.context.filter = reject_source_plane;
+          *out = TraceHit();
+          --segment;
+          continue;
+        }
         if (out->backface != back) ++c.backface_hits;
         return true;
       }
