@@ -34,6 +34,7 @@ PROFILES = {
         "vgroove_rays": 20000,
         "vcavity_grooves": 4096,
         "vcavity_rays": 200000,
+        "vcavity_theta": "0,30,60,80",
     },
     "smoke": {
         "suite": "smoke",
@@ -50,6 +51,7 @@ PROFILES = {
         "vgroove_rays": 2000,
         "vcavity_grooves": 256,
         "vcavity_rays": 20000,
+        "vcavity_theta": "0,60",
     },
 }
 
@@ -379,7 +381,7 @@ def section_objects_grooves(ctx):
     surf = os.path.join(ctx.surf_dir, "vcavity-beckmann-0.5.ply")
     ctx.run(["generate", "vcavity", "--alpha", "0.5", "--grooves", str(p["vcavity_grooves"]), "-o", surf])
     out = ctx.data("objects_vcavity.json")
-    ctx.run(["measure", "bsdf", surf, "--material", "mirror", "--theta-i", "0,30,60,80", "--phi-i", "0",
+    ctx.run(["measure", "bsdf", surf, "--material", "mirror", "--theta-i", p["vcavity_theta"], "--phi-i", "0",
              "--rays", str(p["vcavity_rays"]), "--resolution", "16", "-o", out])
     rec = load_json(out)
     s.figure(ctx, "objects_vcavity_albedo.png", plots.vcavity_albedo_orders,
@@ -390,7 +392,7 @@ def section_objects_grooves(ctx):
              rec)
     s.figure(ctx, "objects_vcavity_lobes.png", plots.vcavity_lobes,
              "The same ensemble: in-plane lobes (band of +-5.6 deg around the plane of incidence) per order at "
-             "theta_i = %s deg. Every groove reflects into a few discrete directions, so the lobe of a finite "
+             "theta_i = %s deg (those measured). Every groove reflects into a few discrete directions, so the lobe of a finite "
              "ensemble is the sum of the beams of the few grooves whose exits fall in the band: the traced lobe "
              "equals the closed form over the ensemble's own grooves bin by bin, while the nominal V-cavity model "
              "(grey band: 2 Monte Carlo errors) is its expectation over D; its order 1 is the V-cavity single "

@@ -292,10 +292,13 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
         }
         out->facet = facet_of_hit(rh.hit.primID, rh.hit.u, rh.hit.v, ng, &out->normal);
         out->backface = out->normal.dot(dir) > 0;
-        if (out->backface != back && !ctx.context.filter) {
-          // A ray from outside whose first hit is a back face grazed a convex edge (a V-groove's
-          // ridge) closer than float spacing: it passes over it. Trace this segment again with
-          // wrong-side hits rejected, as rays leaving a facet are.
+        if (out->backface && !ctx.context.filter && !back && dir.z() < 0 &&
+            surface_.kind() == Microsurface::Kind::Heightfield) {
+          // A downward ray from above a heightfield meets the graph from above first, so a
+          // back face first means it grazed a convex edge (a V-groove's ridge) closer than float
+          // spacing: it passes over it. Trace this segment again with wrong-side hits rejected,
+          // as rays leaving a facet are. (Finite objects seen from below legitimately see back
+          // faces first: the undersurface.)
           ctx.context.filter = reject_source_plane;
           *out = TraceHit();
           --segment;
