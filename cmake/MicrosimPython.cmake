@@ -15,7 +15,5 @@ if(NOT Python3_EXECUTABLE AND CMAKE_VERSION VERSION_GREATER_EQUAL 3.25)
   endif()
 endif()
 find_package(Python3 REQUIRED COMPONENTS Interpreter OPTIONAL_COMPONENTS Development.Module NumPy)
-# Where the module is built (PYTHONPATH for the report and the tests); empty target names when
-# the module is not built.
+# Where the module is built (python/CMakeLists.txt): PYTHONPATH for the report and the tests.
 set(MICROSIM_PYTHON_DIR ${CMAKE_BINARY_DIR}/python)
-set(MICROSIM_PYTHON_TARGET "")
