@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "microsim/io/output.hpp"
+#include "microsim/surface/surface_io.hpp"
 
 namespace microsim::cli {
 
@@ -45,6 +46,20 @@ void require_extension(const std::string& path, std::initializer_list<const char
 void write_record(const std::string& path, const Json& j) {
   if (extension_of(path) == "csv") write_csv_rows(path, j);
   else write_json(path, j);
+}
+
+void write_record(const GlobalOptions& g, const std::string& path, const Json& j) {
+  if (g.keep_record) g.keep_record(path, j);
+  else write_record(path, j);
+}
+
+Microsurface input_surface(const GlobalOptions& g, const std::string& path) {
+  return g.surface_by_name ? g.surface_by_name(path) : load_surface(path);
+}
+
+void output_surface(const GlobalOptions& g, const Microsurface& s, const std::string& path) {
+  if (g.keep_surface) g.keep_surface(path, s);
+  else save_surface(s, path);
 }
 
 std::string fmt(double x, int precision) {

@@ -4,18 +4,31 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <functional>
 #include <initializer_list>
 #include <string>
 #include <vector>
 
 #include "microsim/common.hpp"
+#include "microsim/surface/microsurface.hpp"
 
 namespace microsim::cli {
 
 struct GlobalOptions {
   int threads = 0;  // 0 = all cores
   bool quiet = false;
+  // Set only when the commands run embedded (the Python module): surface arguments name surfaces
+  // held in memory, records and generated surfaces are handed over (with the -o path) instead of
+  // written to files.
+  std::function<Microsurface(const std::string&)> surface_by_name;
+  std::function<void(const std::string&, const Json&)> keep_record;
+  std::function<void(const std::string&, const Microsurface&)> keep_surface;
 };
+
+// A command's input surface: the file `path`, or the surface of that name when embedded.
+Microsurface input_surface(const GlobalOptions& g, const std::string& path);
+// A command's output surface: saved to `path`, or handed over when embedded.
+void output_surface(const GlobalOptions& g, const Microsurface& s, const std::string& path);
 
 // A progress bar with ETA on a terminal; silent in pipes, CI and with --quiet.
 class Progress {
@@ -38,6 +51,8 @@ void require_extension(const std::string& path, std::initializer_list<const char
 void require_surface_extension(const std::string& path);
 // JSON or CSV (rows only) by extension, atomically.
 void write_record(const std::string& path, const Json& j);
+// The same, or the record handed over when embedded.
+void write_record(const GlobalOptions& g, const std::string& path, const Json& j);
 std::string fmt(double x, int precision = 4);
 // Fields every JSON record starts with: command, version, threads.
 Json run_header(const std::string& command, const GlobalOptions& g);

@@ -32,7 +32,7 @@ int run_generate_gaussian(GenerateOptions o, const GlobalOptions& g) {
   validate(o.gaussian);
   require_surface_extension(o.output);
   Microsurface s = generate_gaussian(o.gaussian);
-  save_surface(s, o.output);
+  output_surface(g, s, o.output);
   if (!g.quiet) {
     FacetSums f = facet_sums(s);
     std::cout << "wrote " << o.output << ": gaussian " << o.gaussian.resolution << "^2, alpha ("
@@ -127,7 +127,7 @@ void register_structured_kinds(CLI::App& gen, const GlobalOptions& g) {
     on_run(k, [=, &g] {
       require_mesh_extension(out->path);
       Microsurface s = generate_box(*p);
-      save_surface(s, out->path);
+      output_surface(g, s, out->path);
       summary(s, out->path, g);
     });
   }
@@ -148,7 +148,7 @@ void register_structured_kinds(CLI::App& gen, const GlobalOptions& g) {
     on_run(k, [=, &g] {
       require_mesh_extension(out->path);
       Microsurface s = generate_tiled_boxes(*p);
-      save_surface(s, out->path);
+      output_surface(g, s, out->path);
       summary(s, out->path, g);
     });
   }
@@ -167,7 +167,7 @@ void register_structured_kinds(CLI::App& gen, const GlobalOptions& g) {
     on_run(k, [=, &g] {
       require_mesh_extension(out->path);
       Microsurface s = generate_square_wave(*p);
-      save_surface(s, out->path);
+      output_surface(g, s, out->path);
       summary(s, out->path, g);
     });
   }
@@ -185,7 +185,7 @@ void register_structured_kinds(CLI::App& gen, const GlobalOptions& g) {
       require_surface_extension(out->path);
       if (p->two_d) require_mesh_extension(out->path);
       Microsurface s = generate_vgroove(*p);
-      save_surface(s, out->path);
+      output_surface(g, s, out->path);
       summary(s, out->path, g);
     });
   }
@@ -211,7 +211,7 @@ void register_structured_kinds(CLI::App& gen, const GlobalOptions& g) {
       require_mesh_extension(out->path);
       resolve_alpha(*k, *alpha, p->alpha_x, p->alpha_y);
       Microsurface s = generate_vcavity(*p);
-      save_surface(s, out->path);
+      output_surface(g, s, out->path);
       summary(s, out->path, g);
     });
   }
@@ -248,7 +248,7 @@ void register_structured_kinds(CLI::App& gen, const GlobalOptions& g) {
         std::copy(L, L + 9, p->matrix);
       }
       Microsurface s = generate_parallelepiped(*p);
-      save_surface(s, out->path);
+      output_surface(g, s, out->path);
       summary(s, out->path, g);
     });
   }
@@ -272,7 +272,7 @@ void register_structured_kinds(CLI::App& gen, const GlobalOptions& g) {
       require_mesh_extension(out->path);
       resolve_alpha(*k, *alpha, p->alpha_x, p->alpha_y);
       Microsurface s = generate_ellipsoid(*p);
-      save_surface(s, out->path);
+      output_surface(g, s, out->path);
       summary(s, out->path, g);
     });
   }
@@ -307,7 +307,7 @@ void register_structured_kinds(CLI::App& gen, const GlobalOptions& g) {
       require_surface_extension(out->path);
       resolve_alpha(*k, *alpha, p->alpha_x, p->alpha_y);
       Microsurface s = generate_gaussian_ggx(*p);
-      save_surface(s, out->path);
+      output_surface(g, s, out->path);
       summary(s, out->path, g);
     });
   }
@@ -335,7 +335,7 @@ void register_structured_kinds(CLI::App& gen, const GlobalOptions& g) {
       if (!p->periodic && (k->count("--tile-x") || k->count("--tile-y")))
         throw UsageError("--tile-x/--tile-y need --periodic");
       Microsurface s = import_mesh(*p);
-      save_surface(s, out->path);
+      output_surface(g, s, out->path);
       summary(s, out->path, g);
     });
   }
@@ -374,7 +374,7 @@ void register_generate(CLI::App& app, const GlobalOptions& g) {
   on_run(fl, [=, &g] {
     require_surface_extension(*flat_out);
     Microsurface s = generate_flat(*flat);
-    save_surface(s, *flat_out);
+    output_surface(g, s, *flat_out);
     if (!g.quiet) std::cout << "wrote " << *flat_out << ": flat plane\n";
   });
   register_structured_kinds(*gen, g);

@@ -94,7 +94,7 @@ void register_generate_heightmap(CLI::App& gen, const GlobalOptions& g) {
       p->crop_h = c[3];
     }
     Microsurface s = import_heightmap(*p);
-    save_surface(s, *out);
+    output_surface(g, s, *out);
     const Json& d = s.description;
     if (p->periodic) {
       // The seam's cliff raises the RMS slope of non-periodic data (a 128-cell crop of a

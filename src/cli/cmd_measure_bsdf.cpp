@@ -164,7 +164,7 @@ int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
                        std::to_string(o.orders) + " and " + std::to_string(n_inc) + " incidences needs about " +
                        fmt(need / (1 << 30), 1) + " GiB of tallies, more than half of this machine's memory");
   }
-  Microsurface s = load_surface(o.surface);
+  Microsurface s = input_surface(g, o.surface);
   if (!s.macro().periodic && (ext == "bsdf" || ext == "binary"))
     throw UsageError(o.surface + ": -o ." + ext + " tables need a periodic tile (this surface is a finite object)");
   const bool anisotropic_surface = s.nominal && std::abs(s.nominal->alpha_x - s.nominal->alpha_y) > 1e-12;
@@ -297,7 +297,7 @@ int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
                   {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count()}};
   }
   j["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  write_json(json_path, j);
+  write_record(g, json_path, j);
   if (!g.quiet) {
     if (single) {
       std::cout << "BSDF of " << o.surface << ", " << o.material << ", theta_i " << thetas[0]

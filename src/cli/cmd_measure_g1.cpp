@@ -101,9 +101,9 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   files.insert(files.end(), o.extra_surfaces.begin(), o.extra_surfaces.end());
   // Check every file before the long run starts.
   std::vector<Microsurface> first;
-  first.push_back(load_surface(files[0]));
+  first.push_back(input_surface(g, files[0]));
   const bool periodic = first[0].macro().periodic;
-  for (std::size_t k = 1; k < files.size(); ++k) load_surface(files[k]);
+  for (std::size_t k = 1; k < files.size(); ++k) input_surface(g, files[k]);
   if (below && first[0].kind() == Microsurface::Kind::Heightfield)
     throw UsageError("--theta must be in [0, 90) degrees for a heightfield (theta in (90, 180], the "
                      "undersurface, is measured on meshes only)");
@@ -162,7 +162,7 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   TraceCounters counters;
   double build_seconds = 0;
   for (std::size_t k = 0; k < files.size(); ++k) {
-    Microsurface s = k == 0 ? std::move(first[0]) : load_surface(files[k]);
+    Microsurface s = k == 0 ? std::move(first[0]) : input_surface(g, files[k]);
     Json rows = Json::array();
     if (is_vcavity(s)) {
       // 001 Sec. 6.1 made explicit: every groove traced on its own (measure/vcavity_measure.hpp).
@@ -248,7 +248,7 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   j["lost_rays"] = periodic ? counters.lost_below + counters.unresolved : counters.unresolved;
   if (!periodic) j["missed_rays"] = counters.lost_below;
   j["backface_hits"] = counters.backface_hits;
-  write_record(o.output, j);
+  write_record(g, o.output, j);
   if (!g.quiet) {
     std::cout << "G1 of " << (files.size() == 1 ? files[0] : std::to_string(files.size()) + " surfaces")
               << "  (" << go.rays << " rays per estimator and direction"

@@ -167,7 +167,7 @@ int run_measure_g2(const G2CliOptions& o, const GlobalOptions& g) {
   go.progress = [&](double f) { progress.update((done + f) / total); };
   TraceCounters counters;
   double build_seconds = 0;
-  std::vector<Json> per_surface = measure_over_surfaces(o.files, [&](const Microsurface& s, std::size_t k) {
+  std::vector<Json> per_surface = measure_over_surfaces(g, o.files, [&](const Microsurface& s, std::size_t k) {
     if (k == 0) j["surface"] = s.description;
     Tracer tracer(s);
     build_seconds += tracer.build_seconds();
@@ -199,7 +199,7 @@ int run_measure_g2(const G2CliOptions& o, const GlobalOptions& g) {
   j["rays_per_second"] = counters.rays / wall;
   j["lost_rays"] = counters.lost_below + counters.unresolved;
   j["backface_hits"] = counters.backface_hits;
-  write_record(o.output, j);
+  write_record(g, o.output, j);
   if (!g.quiet) {
     std::cout << "G2 of "
               << (o.files.size() == 1 ? o.files[0] : std::to_string(o.files.size()) + " surfaces")

@@ -23,7 +23,7 @@ int run_measure_ndf(const MeasureOptions& o, const GlobalOptions& g) {
     require_memory(bins * defaults.blocks * defaults.blocks * 8.0 * 2 * (tbb::this_task_arena::max_concurrency() + 1),
                    "--theta-bins " + std::to_string(o.theta_bins) + " x --phi-bins " + std::to_string(o.phi_bins));
   }
-  Microsurface s = load_surface(o.surface);
+  Microsurface s = input_surface(g, o.surface);
   NdfOptions no;
   no.n_theta = o.theta_bins;
   no.n_phi = o.phi_bins;
@@ -36,7 +36,7 @@ int run_measure_ndf(const MeasureOptions& o, const GlobalOptions& g) {
     j.update(run_header("measure ndf", g));
     j["file"] = o.surface;
     j["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    write_record(o.output, j);
+    write_record(g, o.output, j);
   }
   if (!g.quiet) {
     Json c = surface_checks_json(r.sums, s);

@@ -167,7 +167,7 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
   vo.progress = [&](double f) { progress.update((done + f) / total); };
   TraceCounters counters;
   std::uint64_t lost = 0;
-  std::vector<Json> per_surface = measure_over_surfaces(o.files, [&](const Microsurface& s, std::size_t k) {
+  std::vector<Json> per_surface = measure_over_surfaces(g, o.files, [&](const Microsurface& s, std::size_t k) {
     if (k == 0) j["surface"] = s.description;
     Tracer tracer(s);
     const DirectionBinning bins = vndf_binning(vo);
@@ -201,7 +201,7 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
   j["total_rays"] = counters.rays;
   j["lost_rays"] = lost;
   j["backface_hits"] = counters.backface_hits;
-  write_record(o.output, j);
+  write_record(g, o.output, j);
   if (!g.quiet) {
     std::cout << "VNDF of "
               << (o.files.size() == 1 ? o.files[0] : std::to_string(o.files.size()) + " surfaces")

@@ -63,7 +63,9 @@ Microsurface generate_entry(const validation::SuiteEntry& e, const std::string& 
                             std::optional<std::uint64_t> seed, const std::string& path, int threads) {
   CLI::App app;
   app.require_subcommand(1);
-  GlobalOptions quiet{threads, true};
+  GlobalOptions quiet;
+  quiet.threads = threads;
+  quiet.quiet = true;
   register_generate(app, quiet);
   CLI::App* gen = app.get_subcommand("generate");
   bool known = false;
@@ -150,7 +152,7 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
     validation::SurfaceSet set;
     set.name = fs::path(o.files[0]).stem().string();
     for (const auto& f : o.files) {
-      set.surfaces.push_back(load_surface(f));
+      set.surfaces.push_back(input_surface(g, f));
       set.labels.push_back(o.files.size() > 1 ? fs::path(f).filename().string() : "");
     }
     set.options = cli_options;
@@ -212,7 +214,7 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
   if (!o.output.empty()) {
     // The record is kept even when an identity FAILED below (exit 1 with the evidence).
     OutputTransaction record;
-    write_record(o.output, j);
+    write_record(g, o.output, j);
     record.commit();
   }
   if (!g.quiet) {

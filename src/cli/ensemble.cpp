@@ -105,19 +105,19 @@ Json ensemble_row(const std::vector<const Json*>& rows, const FieldSpec& row_fie
 
 }  // namespace microsim::cli
 
-#include "microsim/surface/surface_io.hpp"
+#include "cli_common.hpp"
 
 namespace microsim::cli {
 
 std::vector<Json> measure_over_surfaces(
-    const std::vector<std::string>& files,
+    const GlobalOptions& g, const std::vector<std::string>& files,
     const std::function<Json(const Microsurface&, std::size_t)>& measure) {
   std::vector<Microsurface> first;
-  first.push_back(load_surface(files.at(0)));
-  for (std::size_t k = 1; k < files.size(); ++k) load_surface(files[k]);
+  first.push_back(input_surface(g, files.at(0)));
+  for (std::size_t k = 1; k < files.size(); ++k) input_surface(g, files[k]);
   std::vector<Json> rows;
   for (std::size_t k = 0; k < files.size(); ++k) {
-    Microsurface s = k == 0 ? std::move(first[0]) : load_surface(files[k]);
+    Microsurface s = k == 0 ? std::move(first[0]) : input_surface(g, files[k]);
     rows.push_back(measure(s, k));
   }
   return rows;

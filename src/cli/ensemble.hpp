@@ -39,15 +39,16 @@ Json ensemble_row(const std::vector<const Json*>& rows, const FieldSpec& row_fie
 
 #include <functional>
 
+#include "cli_common.hpp"
 #include "microsim/surface/microsurface.hpp"
 
 namespace microsim::cli {
 
-// Loads every file first (a bad file is reported before the long run starts), then calls
+// Loads every file (input_surface) first (a bad file is reported before the long run starts), then calls
 // measure(surface, k) for each surface k in turn (one surface in memory at a time) and collects
 // the rows it returns (a JSON array per surface).
 std::vector<Json> measure_over_surfaces(
-    const std::vector<std::string>& files,
+    const GlobalOptions& g, const std::vector<std::string>& files,
     const std::function<Json(const Microsurface&, std::size_t)>& measure);
 
 // Fills j["rows"] (and for several surfaces j["per_surface"]): one surface's rows as they are;

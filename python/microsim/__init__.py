@@ -1,0 +1,141 @@
+"""microsim: explicit microsurface Monte Carlo simulator.
+
+Surfaces are generated or loaded as :class:`Surface` objects (heights as a numpy view), measured
+with the same code, options and records as the command line (``microsim measure g1 ...``), and
+compared with the analytic models of :mod:`microsim.models`.
+
+Keyword arguments are the command line's long options with ``_`` for ``-``
+(``correlation_length=0.02`` is ``--correlation-length 0.02``); lists become comma-separated
+values (``theta=[30, 80]`` is ``--theta 30,80``), ``True`` a flag. ``help("measure g1")``
+lists them. Records are the command's JSON as dicts and lists, numeric arrays as numpy arrays,
+bit for bit what ``-o record.json`` writes at the same seed. Errors raise :class:`UsageError`
+(a ``ValueError``) with the command line's message. Measurements release the GIL.
+"""
+from ._core import RuntimeFailure, Surface, UsageError, _help, _run, load, models
+
+__all__ = ["Surface", "UsageError", "RuntimeFailure", "ValidationFailed", "generate", "load",
+           "measure_ndf", "measure_g1", "measure_g2", "measure_vndf", "measure_bsdf", "validate",
+           "help", "models"]
+
+
+class ValidationFailed(RuntimeFailure):
+    """An exact identity FAILED in ``validate``; ``record`` holds the evidence."""
+
+    def __init__(self, message, record):
+        super().__init__(message)
+        self.record = record
+
+
+def _value(name, v):
+    if isinstance(v, bool):
+        raise UsageError(f"--{name}: a flag takes True or False only")
+    if isinstance(v, float):
+        return repr(v)  # shortest text that reads back as the same double
+    if isinstance(v, (int, str)):
+        return str(v)
+    if hasattr(v, "item") and getattr(v, "ndim", 1) == 0:  # numpy scalar
+        return _value(name, v.item())
+    raise UsageError(f"--{name}: unsupported value {v!r}")
+
+
+def _options(options):
+    args = []
+    for key, v in options.items():
+        name = key.replace("_", "-")
+        if v is None or v is False:
+            continue
+        if v is True:
+            args.append("--" + name)
+        elif isinstance(v, (list, tuple)) or (hasattr(v, "tolist") and getattr(v, "ndim", 0) > 0):
+            items = v.tolist() if hasattr(v, "tolist") else v
+            args += ["--" + name, ",".join(_value(name, x) for x in items)]
+        else:
+            args += ["--" + name, _value(name, v)]
+    return args
+
+
+def _surfaces(surfaces):
+    """Names on the command line for the surfaces (their files when loaded) and the name map."""
+    if isinstance(surfaces, Surface):
+        surfaces = [surfaces]
+    surfaces = list(surfaces)
+    if not surfaces:
+        raise UsageError("no surface given")
+    names, by_name = [], {}
+    for k, s in enumerate(surfaces):
+        if not isinstance(s, Surface):
+            raise UsageError(f"surface {k}: expected a microsim.Surface (from generate or load), got {type(s).__name__}")
+        name = s.path if s.path is not None else f"<surface {k}: {s.description.get('kind', 'surface')}>"
+        if by_name.get(name, s) is not s:
+            name = f"<surface {k}>"
+        by_name[name] = s
+        names.append(name)
+    return names, by_name
+
+
+def _command(words, positional, by_name, options, default_output):
+    output = options.pop("output", None)
+    args = list(words) + list(positional) + ["-o", output or default_output] + _options(options)
+    record, generated, failure = _run(args, by_name, output is not None)
+    if failure is not None:
+        raise ValidationFailed(failure, record)
+    return record, generated
+
+
+def generate(kind, **options):
+    """A new surface: ``generate("gaussian", alpha=0.5, resolution=128, seed=9)``.
+
+    ``kind`` and the options are those of ``microsim generate KIND`` (``help("generate gaussian")``);
+    ``output="file.exr"`` also saves it."""
+    # Nothing is written unless output is given; the default name only passes the extension
+    # checks (a heightmap is saved as .exr, every other kind accepts a mesh file).
+    default = "surface.exr" if kind == "heightmap" else "surface.ply"
+    _, generated = _command(["generate", kind], [], {}, options, default)
+    return generated[0]
+
+
+def _measure(quantity, surfaces, options):
+    names, by_name = _surfaces(surfaces)
+    record, _ = _command(["measure", quantity], names, by_name, options, "record.json")
+    return record
+
+
+def measure_ndf(surface, **options):
+    """D over the sphere from the facets (``microsim measure ndf``); one surface."""
+    return _measure("ndf", surface, options)
+
+
+def measure_g1(surfaces, **options):
+    """Masking G1 (``microsim measure g1``): ``measure_g1(s, theta=[30, 80], phi=0, rays=100000, seed=4)``.
+
+    A list of surfaces is an ensemble (rows with the between-surface standard error)."""
+    return _measure("g1", surfaces, options)
+
+
+def measure_g2(surfaces, **options):
+    """Masking-shadowing G2 (``microsim measure g2``)."""
+    return _measure("g2", surfaces, options)
+
+
+def measure_vndf(surfaces, **options):
+    """Distribution of visible normals (``microsim measure vndf``)."""
+    return _measure("vndf", surfaces, options)
+
+
+def measure_bsdf(surface, **options):
+    """BSDF per scattering order (``microsim measure bsdf``); ``output="t.exr"`` (or .bsdf, .binary)
+    also writes the table."""
+    return _measure("bsdf", surface, options)
+
+
+def validate(surfaces=None, **options):
+    """Every applicable check (``microsim validate``) of a surface, an ensemble, or
+    ``suite="smoke"``; raises :class:`ValidationFailed` (with ``.record``) when an exact identity fails."""
+    names, by_name = ([], {}) if surfaces is None else _surfaces(surfaces)
+    record, _ = _command(["validate"], names, by_name, options, "record.json")
+    return record
+
+
+def help(command=""):
+    """The command line's help of a command, e.g. ``help("measure g1")``: its options."""
+    return _help(command.split())

@@ -1,0 +1,195 @@
+// The compiled part of the Python module `microsim` (microsim._core): surfaces as numpy views,
+// the command tree of the command line run in memory (the same options, checks and records as
+// the program), and the analytic models (models.cpp). python/microsim/__init__.py turns keyword
+// arguments into the command's options.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <map>
+#include <memory>
+#include <optional>
+
+#include "../../src/cli/app.hpp"
+#include "json_to_python.hpp"
+#include "microsim/surface/surface_io.hpp"
+
+namespace py = pybind11;
+using namespace microsim;
+
+namespace microsim::python {
+void bind_models(py::module_& m);
+}
+
+namespace {
+
+// A surface held by Python: the geometry is shared (never copied) between Python objects.
+struct Surface {
+  std::shared_ptr<const Microsurface> s;
+  std::optional<std::string> path;  // the file it was loaded from
+};
+
+// A read-only numpy view of `data` kept alive by `owner`.
+template <class T>
+py::array view(const T* data, std::vector<py::ssize_t> shape, py::handle owner) {
+  py::array a(py::dtype::of<T>(), shape, data, owner);
+  a.attr("setflags")(py::arg("write") = false);
+  return a;
+}
+
+py::object nominal(const Microsurface& s) {
+  if (!s.nominal) return py::none();
+  py::dict d;
+  d["distribution"] = models::to_string(s.nominal->kind);
+  d["alpha_x"] = s.nominal->alpha_x;
+  d["alpha_y"] = s.nominal->alpha_y;
+  return std::move(d);
+}
+
+struct RunResult {
+  std::optional<Json> record;
+  std::vector<Surface> surfaces;
+  std::string failure;  // a runtime failure after the record was kept (validate: FAILED identities)
+};
+
+// Runs `args` (a command line without the program name) with surface arguments resolved in
+// `inputs` and outputs handed back; files are written too when `write_files` (an -o the caller
+// chose). Called without the GIL.
+RunResult run(const std::vector<std::string>& args,
+              const std::map<std::string, std::shared_ptr<const Microsurface>>& inputs,
+              bool write_files) {
+  RunResult out;
+  cli::GlobalOptions g;
+  g.quiet = true;
+  g.surface_by_name = [&](const std::string& name) {
+    auto it = inputs.find(name);
+    if (it == inputs.end()) throw UsageError(name + ": no such surface");
+    return *it->second;
+  };
+  g.keep_record = [&](const std::string& path, const Json& j) {
+    out.record = j;
+    if (write_files) cli::write_record(path, j);
+  };
+  g.keep_surface = [&](const std::string& path, const Microsurface& s) {
+    out.surfaces.push_back({std::make_shared<const Microsurface>(s), std::nullopt});
+    if (write_files) save_surface(s, path);
+  };
+  std::unique_ptr<CLI::App> app = cli::build_app(g);
+  const std::string unknown = cli::unknown_command(*app, args);
+  if (!unknown.empty()) throw UsageError(unknown);
+  try {
+    cli::run_app(*app, args);
+  } catch (const CLI::ParseError& e) {
+    throw UsageError(e.what());  // the command line's message, e.g. "--rays: ..."
+  } catch (const RuntimeFailure& e) {
+    if (!out.record) throw;
+    out.failure = e.what();
+  }
+  return out;
+}
+
+std::string help(const std::vector<std::string>& command) {
+  cli::GlobalOptions g;
+  std::unique_ptr<CLI::App> app = cli::build_app(g);
+  const std::string unknown = cli::unknown_command(*app, command);
+  if (!unknown.empty()) throw UsageError(unknown);
+  const CLI::App* level = app.get();
+  for (const auto& word : command) level = level->get_subcommand(word);
+  return level->help();
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "microsim: explicit microsurface Monte Carlo simulator (compiled core)";
+  static py::exception<UsageError> usage_error(m, "UsageError", PyExc_ValueError);
+  static py::exception<RuntimeFailure> runtime_failure(m, "RuntimeFailure", PyExc_RuntimeError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const UsageError& e) {
+      usage_error(e.what());
+    } catch (const RuntimeFailure& e) {
+      runtime_failure(e.what());
+    }
+  });
+
+  py::class_<Surface>(m, "Surface", "A microsurface (heightfield or mesh) with its macrosurface")
+      .def_property_readonly("kind", [](const Surface& s) {
+        return s.s->kind() == Microsurface::Kind::Heightfield ? "heightfield" : "mesh";
+      })
+      .def_property_readonly("heights", [](py::object self) -> py::object {
+        const Surface& s = self.cast<const Surface&>();
+        if (s.s->kind() != Microsurface::Kind::Heightfield) return py::none();
+        // heights()[i + nx j]: row j, column i (a view, not a copy; read-only).
+        return view(s.s->heights().data(), {s.s->ny(), s.s->nx()}, self);
+      }, "Heights as a read-only (ny, nx) float32 numpy view (row j, column i; None for a mesh)")
+      .def_property_readonly("vertices", [](py::object self) -> py::object {
+        const Surface& s = self.cast<const Surface&>();
+        const auto& v = s.s->vertices();
+        if (v.empty()) return py::none();
+        return view(v[0].data(), {static_cast<py::ssize_t>(v.size()), 3}, self);
+      }, "Mesh vertices, (n, 3) float32 view (None for a heightfield)")
+      .def_property_readonly("triangles", [](py::object self) -> py::object {
+        const Surface& s = self.cast<const Surface&>();
+        const auto& t = s.s->triangles();
+        if (t.empty()) return py::none();
+        return view(t[0].data(), {static_cast<py::ssize_t>(t.size()), 3}, self);
+      }, "Mesh triangles, (n, 3) uint32 view (None for a heightfield)")
+      .def_property_readonly("description", [](const Surface& s) { return python::to_python(s.s->description); },
+                             "The generator's name and parameters (the record's `surface`)")
+      .def_property_readonly("nominal", [](const Surface& s) { return nominal(*s.s); },
+                             "The generator's nominal NDF, or None")
+      .def_property_readonly("size", [](const Surface& s) {
+        return py::make_tuple(s.s->macro().size_x, s.s->macro().size_y);
+      }, "Tile (or window) extent along x and y")
+      .def_property_readonly("area", [](const Surface& s) { return s.s->macro().area; }, "Macrosurface area A")
+      .def_property_readonly("periodic", [](const Surface& s) { return s.s->macro().periodic; })
+      .def_property_readonly("num_facets", [](const Surface& s) { return s.s->num_facets(); })
+      .def_property_readonly("path", [](const Surface& s) { return s.path; },
+                             "The file it was loaded from, or None")
+      .def("save", [](const Surface& s, const std::string& path) {
+        py::gil_scoped_release nogil;
+        save_surface(*s.s, path);
+      }, py::arg("path"), "Save as .exr (heightfields), .ply, .obj or .off")
+      .def("__repr__", [](const Surface& s) {
+        std::string r = "<microsim.Surface " + s.s->description.value("kind", std::string("surface"));
+        if (s.s->kind() == Microsurface::Kind::Heightfield)
+          r += " " + std::to_string(s.s->nx()) + "x" + std::to_string(s.s->ny());
+        r += ", " + std::to_string(s.s->num_facets()) + " facets";
+        if (s.path) r += ", " + *s.path;
+        return r + ">";
+      });
+
+  m.def("load", [](const std::string& path) {
+    Surface s;
+    {
+      py::gil_scoped_release nogil;
+      s.s = std::make_shared<const Microsurface>(load_surface(path));
+    }
+    s.path = path;
+    return s;
+  }, py::arg("path"), "Load a surface file (.exr, .ply, .obj, .off)");
+
+  m.def("_run", [](const std::vector<std::string>& args, const std::map<std::string, Surface>& inputs,
+                   bool write_files) {
+    std::map<std::string, std::shared_ptr<const Microsurface>> surfaces;
+    for (const auto& [name, s] : inputs) surfaces[name] = s.s;
+    RunResult r;
+    {
+      py::gil_scoped_release nogil;  // measurements run on TBB threads without the GIL
+      r = run(args, surfaces, write_files);
+    }
+    py::object record = r.record ? python::to_python(*r.record) : py::none();
+    py::object failure = py::none();
+    if (!r.failure.empty()) failure = py::str(r.failure);
+    return py::make_tuple(record, r.surfaces, failure);
+  }, py::arg("args"), py::arg("surfaces"), py::arg("write_files"),
+     "Run a command (arguments without the program name) on surfaces in memory; returns "
+     "(record or None, generated surfaces, failure message or None)");
+
+  m.def("_help", &help, py::arg("command"), "The command line's help of a command");
+
+  py::module_ models = m.def_submodule("models", "Analytic microfacet theory (include/microsim/models)");
+  python::bind_models(models);
+}

@@ -1,0 +1,145 @@
+"""The module runs the command line's code: the same surfaces, records and error messages."""
+import json
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import microsim
+
+# Fields that depend on the clock or on where the surface came from.
+VOLATILE = {"wall_seconds", "rays_per_second", "build_seconds", "seconds", "facet_seconds",
+            "raycast_seconds", "sample_seconds"}
+
+
+def differences(a, b, path="", skip=VOLATILE):
+    """Paths where the module's record a differs from the parsed JSON b (exact comparison)."""
+    if isinstance(a, dict):
+        if not isinstance(b, dict) or list(a) != list(b):
+            return [f"{path}: keys {list(a) if isinstance(a, dict) else a} vs {list(b) if isinstance(b, dict) else b}"]
+        out = []
+        for k in a:
+            if k not in skip:
+                out += differences(a[k], b[k], f"{path}/{k}", skip)
+        return out
+    if isinstance(a, np.ndarray):
+        bb = np.asarray(b)
+        same_kind = (a.dtype.kind == "i") == (bb.dtype.kind in "iu")
+        if a.shape != bb.shape or not same_kind or not np.array_equal(a, bb):
+            return [f"{path}: {a!r} vs {b!r}"]
+        return []
+    if isinstance(a, list):
+        if not isinstance(b, list) or len(a) != len(b):
+            return [f"{path}: length"]
+        return [d for k, (x, y) in enumerate(zip(a, b)) for d in differences(x, y, f"{path}[{k}]", skip)]
+    if type(a) is not type(b) or a != b:
+        return [f"{path}: {a!r} vs {b!r}"]
+    return []
+
+
+@pytest.fixture(scope="module")
+def tile(tmp_path_factory, cli):
+    """The same Beckmann tile from the module and from the program (saved as EXR)."""
+    path = tmp_path_factory.mktemp("tile") / "tile.exr"
+    cli("generate", "gaussian", "--alpha", 0.5, "--resolution", 32, "--seed", 9, "-o", path)
+    return microsim.generate("gaussian", alpha=0.5, resolution=32, seed=9), str(path)
+
+
+def test_surface_heights_are_a_view(tile):
+    s, path = tile
+    h = s.heights
+    assert h.shape == (32, 32) and h.dtype == np.float32
+    assert not h.flags.writeable
+    assert np.shares_memory(h, s.heights)  # the surface's own storage, not a copy
+    assert s.kind == "heightfield" and s.periodic and s.num_facets == 2 * 32 * 32
+    assert s.description["kind"] == "gaussian"
+    assert s.nominal == {"distribution": "beckmann", "alpha_x": 0.5, "alpha_y": 0.5}
+    # The program's file holds the same heights and description.
+    f = microsim.load(path)
+    assert f.path == path
+    assert np.array_equal(f.heights, h)
+    assert f.description == s.description
+    other = microsim.generate("gaussian", alpha=0.5, resolution=32, seed=10)
+    assert not np.array_equal(other.heights, h)
+
+
+def test_measure_g1_equals_the_program_bit_for_bit(tile, cli, tmp_path):
+    s, path = tile
+    out = tmp_path / "g1.json"
+    cli("measure", "g1", path, "--theta", "30,80", "--phi", 0, "--rays", 20000, "--seed", 4, "-o", out)
+    expected = json.loads(out.read_text())
+    # The generated surface in memory, and the program's file loaded: identical records.
+    generated = microsim.measure_g1(s, theta=[30, 80], phi=0, rays=20000, seed=4)
+    loaded = microsim.measure_g1(microsim.load(path), theta=[30, 80], phi=0, rays=20000, seed=4)
+    assert differences(generated, expected, skip=VOLATILE | {"file"}) == []
+    assert differences(loaded, expected) == []
+    assert loaded["file"] == path
+    assert isinstance(loaded["rows"][0]["bins"][0]["m"], np.ndarray)
+    # The comparison can fail: another seed differs in the measured values.
+    other = microsim.measure_g1(s, theta=[30, 80], phi=0, rays=20000, seed=5)
+    assert any("/rows" in d for d in differences(other, expected, skip=VOLATILE | {"file"}))
+
+
+def test_ensemble_and_vndf_equal_the_program(tile, cli, tmp_path):
+    s, path = tile
+    second = tmp_path / "second.exr"
+    cli("generate", "gaussian", "--alpha", 0.5, "--resolution", 32, "--seed", 10, "-o", second)
+    surfaces = [microsim.load(path), microsim.load(str(second))]
+    out = tmp_path / "g1.json"
+    cli("measure", "g1", path, second, "--theta", 60, "--rays", 8000, "--seed", 2, "-o", out)
+    record = microsim.measure_g1(surfaces, theta=60, rays=8000, seed=2)
+    assert record["rows"][0]["surfaces"] == 2
+    assert differences(record, json.loads(out.read_text())) == []
+    out = tmp_path / "vndf.json"
+    cli("measure", "vndf", path, "--theta", 45, "--rays", 8000, "--seed", 3, "--sampler-samples", 20000,
+        "-o", out)
+    assert differences(microsim.measure_vndf(surfaces[0], theta=45, rays=8000, seed=3, sampler_samples=20000),
+                       json.loads(out.read_text())) == []
+
+
+def test_errors_carry_the_program_message(tile, cli, tmp_path):
+    s, path = tile
+    p = cli("measure", "g1", path, "--rays", 0, "-o", tmp_path / "x.json", check=False)
+    assert p.returncode == 2
+    message = p.stderr.strip().removeprefix("microsim: error: ")
+    with pytest.raises(microsim.UsageError) as e:
+        microsim.measure_g1(s, rays=0)
+    assert str(e.value) == message
+    assert isinstance(e.value, ValueError)
+    with pytest.raises(microsim.UsageError, match=r"unknown surface kind 'nonsense' \(known: .*gaussian"):
+        microsim.generate("nonsense")
+    with pytest.raises(microsim.UsageError, match="--frobnicate"):
+        microsim.measure_g1(s, frobnicate=3)
+    with pytest.raises(microsim.UsageError, match="--alpha"):
+        microsim.generate("gaussian", alpha=-1.0)
+    assert not list(tmp_path.iterdir())  # nothing half-written
+
+
+def test_measurement_releases_the_gil(tile):
+    s, _ = tile
+    started, times = threading.Event(), {}
+
+    def work():
+        started.set()
+        microsim.measure_g1(s, theta=[40, 80], rays=200000, seed=1)
+        times["end"] = time.perf_counter()
+
+    t = threading.Thread(target=work)
+    t.start()
+    started.wait()
+    time.sleep(0.05)  # with the GIL held by the measurement this could not return before it ends
+    times["main"] = time.perf_counter()
+    t.join()
+    assert times["main"] < times["end"]
+
+
+def test_output_option_writes_the_file(tile, tmp_path):
+    s, _ = tile
+    out = tmp_path / "g1.json"
+    record = microsim.measure_g1(s, theta=30, rays=2000, seed=1, output=str(out))
+    assert differences(record, json.loads(out.read_text())) == []
+    saved = tmp_path / "s.exr"
+    microsim.generate("gaussian", resolution=16, seed=1, output=str(saved))
+    assert microsim.load(str(saved)).heights.shape == (16, 16)
+    assert "--rays" in microsim.help("measure g1")
