@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <fstream>
 
 #include "cli_helpers.hpp"
 #include "microsim/surface/discretization.hpp"
@@ -145,4 +146,28 @@ TEST(Discretization, InfoPrintsAndRecordsTheGrid) {
   EXPECT_DOUBLE_EQ(rec["surface"]["cells_per_correlation_length"].get<double>(), 2.0);
   EXPECT_DOUBLE_EQ(rec["discretization"]["correlation_lengths_per_tile"].get<double>(), 32.0);
   EXPECT_FALSE(rec["discretization"]["coarser_than_converged"].empty());
+}
+
+TEST(Discretization, ConvergedPresetIsAtLeastEveryConvergedLevel) {
+  // surfaces/beckmann-1.0-converged.toml: its grid and tile against the study's levels.
+  std::ifstream f(std::string(MICROSIM_SOURCE_DIR) + "/surfaces/beckmann-1.0-converged.toml");
+  ASSERT_TRUE(f.good());
+  double resolution = 0, size = 0, ell = 0;
+  for (std::string line; std::getline(f, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    const auto eq = line.find('=');
+    if (eq == std::string::npos) continue;
+    std::string key = line.substr(0, eq);
+    key.erase(key.find_last_not_of(' ') + 1);
+    const double v = std::stod(line.substr(eq + 1));
+    if (key == "resolution") resolution = v;
+    if (key == "size") size = v;
+    if (key == "correlation-length") ell = v;
+  }
+  ASSERT_GT(resolution * size * ell, 0);
+  const double cells = ell / (size / resolution), tiles = size / ell;
+  for (const auto& l : converged_levels()) {
+    EXPECT_GE(cells, l.cells_per_correlation_length) << l.quantity;
+    EXPECT_GE(tiles, l.correlation_lengths_per_tile) << l.quantity;
+  }
 }
