@@ -259,7 +259,7 @@ def figures(levels, kind, alpha, cells_keys, tiles_keys, img, tag, paired=False)
         ax.set_title(f"{kind} α = {alpha}: " + ("grid sweep, L/l = %d" % keys[0][3] if which == 2
                                                else "tile sweep, %d cells per l" % keys[0][2]), fontsize=10)
         ax.set_ylim(-25, 25)
-        ax.legend(fontsize=6, loc="lower right", ncol=2)
+        ax.legend(fontsize=6, loc="upper right", ncol=2)
         fig.tight_layout()
         name = os.path.join(img, f"convergence_{tag}_{'cells' if which == 2 else 'tile'}.png")
         fig.savefig(name)
@@ -334,7 +334,7 @@ def main():
                         f"Grid check at L/l = {t}; reference: the finest grid.", lines, None, pr, diffs)
         lines.extend(diffs)
         lines.append("\nCost per level (every quantity above; /usr/bin/time -v, niced, on a shared 2-core machine):")
-        cost_table(levels, sorted(set(cells_keys + tiles_keys), key=lambda k: (k[3], k[2])), lines)
+        cost_table(levels, sorted(mine, key=lambda k: (k[3], k[2])), lines)
         smith = {}
         for k in cells_keys:
             for th in (0, 60, 80):

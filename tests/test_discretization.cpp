@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <tuple>
 
 #include "cli_helpers.hpp"
 #include "microsim/surface/discretization.hpp"
@@ -148,10 +149,11 @@ TEST(Discretization, InfoPrintsAndRecordsTheGrid) {
   EXPECT_FALSE(rec["discretization"]["coarser_than_converged"].empty());
 }
 
-TEST(Discretization, ConvergedPresetIsAtLeastEveryConvergedLevel) {
-  // surfaces/beckmann-1.0-converged.toml: its grid and tile against the study's levels.
-  std::ifstream f(std::string(MICROSIM_SOURCE_DIR) + "/surfaces/beckmann-1.0-converged.toml");
-  ASSERT_TRUE(f.good());
+namespace {
+// Cells per l and l per tile of a preset (resolution, size, correlation-length).
+std::pair<double, double> preset_level(const std::string& name) {
+  std::ifstream f(std::string(MICROSIM_SOURCE_DIR) + "/surfaces/" + name);
+  EXPECT_TRUE(f.good()) << name;
   double resolution = 0, size = 0, ell = 0;
   for (std::string line; std::getline(f, line);) {
     if (line.empty() || line[0] == '#') continue;
@@ -164,8 +166,20 @@ TEST(Discretization, ConvergedPresetIsAtLeastEveryConvergedLevel) {
     if (key == "size") size = v;
     if (key == "correlation-length") ell = v;
   }
-  ASSERT_GT(resolution * size * ell, 0);
-  const double cells = ell / (size / resolution), tiles = size / ell;
+  EXPECT_GT(resolution * size * ell, 0) << name;
+  return {ell / (size / resolution), size / ell};
+}
+}  // namespace
+
+TEST(Discretization, PresetsMatchTheConvergedLevelsTheyClaim) {
+  // beckmann-1.0-converged: every group but G2 and the high orders of the BSDF.
+  auto [cells, tiles] = preset_level("beckmann-1.0-converged.toml");
+  for (const char* q : {"d_nominal", "g1", "vndf"}) {
+    EXPECT_GE(cells, converged_level(q)->cells_per_correlation_length) << q;
+    EXPECT_GE(tiles, converged_level(q)->correlation_lengths_per_tile) << q;
+  }
+  // beckmann-1.0-fine: every group.
+  std::tie(cells, tiles) = preset_level("beckmann-1.0-fine.toml");
   for (const auto& l : converged_levels()) {
     EXPECT_GE(cells, l.cells_per_correlation_length) << l.quantity;
     EXPECT_GE(tiles, l.correlation_lengths_per_tile) << l.quantity;

@@ -91,7 +91,7 @@ void print_metrology(const Metrology& m, const Microsurface& s) {
                     ? "  WARNING: well under generate gaussian's default of 4 cells per l: D, G1 and the "
                       "multiple scattering of the triangles are far from the continuous surface's"
                     : m.cells_per_gaussian_length < 16
-                          ? " (multiple scattering converges by 8-16 cells per l: see the convergence table)"
+                          ? " (mirror orders 1-2 converge by 8, order 3 by 16 cells per l: README \"Converged surfaces\")"
                           : "")
             << "\n"
             << "fit chi2/dof heights vs Gaussian " << fmt(m.height_fit.chi2_per_dof(), 3)
