@@ -322,7 +322,7 @@ def main():
                          "reference: the finest grid.", lines, marked, paired, diffs) if cells_keys else {}
         s2 = sweep_table(levels, tiles_keys, [f"L/l = {k[3]}" for k in tiles_keys], len(tiles_keys) - 1,
                          f"Tile sweep at {a.fixed_cells} cells per l; reference: the largest tile.",
-                         lines, None, False, diffs) if tiles_keys else {}
+                         lines, None, False, diffs) if len(tiles_keys) > 1 else {}
         # Further grids at other tile sizes (the check of a proposed default against a finer grid
         # on the same tiles).
         for t in sorted({k[3] for k in mine if k[3] != a.fixed_tile}):
