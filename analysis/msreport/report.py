@@ -400,8 +400,66 @@ def section_objects_grooves(ctx):
     return s
 
 
+def _markdown_tables_html(text):
+    """The headings, paragraphs and pipe tables of a Markdown file as HTML (enough for the study's tables)."""
+    esc = html.escape
+    out, table = [], []
+
+    def flush():
+        if table:
+            rows = [r for r in table if not set(r.replace("|", "").strip()) <= set("-: ")]
+            out.append("<table>")
+            for i, r in enumerate(rows):
+                cells = [c.strip() for c in r.strip().strip("|").split("|")]
+                tag = "th" if i == 0 else "td"
+                out.append("<tr>" + "".join("<%s>%s</%s>" % (tag, esc(c).replace("**", ""), tag) for c in cells) + "</tr>")
+            out.append("</table>")
+            table.clear()
+
+    for line in text.splitlines():
+        if line.startswith("|"):
+            table.append(line)
+            continue
+        flush()
+        if line.startswith("#"):
+            level = min(4, 2 + line.count("#", 0, line.find(" ")))
+            out.append("<h%d>%s</h%d>" % (level, esc(line.lstrip("# ")), level))
+        elif line.strip():
+            out.append("<p>%s</p>" % esc(line))
+    flush()
+    return "\n".join(out)
+
+
+def section_convergence(ctx):
+    s = Section("convergence", "Converged surfaces: the discretization study",
+                "What a triangulated Gaussian heightfield measures depends on the cells per correlation length "
+                "(l / dx) and on the correlation lengths per tile (L / l). The study (analysis/convergence.sh, "
+                "a long run not repeated here) measures every reported quantity on ensembles of tiles at "
+                "2 ... 32 cells per l and 16 ... 256 l per tile; shown: its recorded table and figures.")
+    root = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+    table = os.path.join(root, "analysis", "convergence_output.md")
+    img = os.path.join(root, "docs", "img")
+    figs = sorted(f for f in os.listdir(img) if f.startswith("convergence_") and f.endswith(".png")) \
+        if os.path.isdir(img) else []
+    if not os.path.isfile(table) or not figs:
+        return s.skip("no recorded study (analysis/convergence_output.md, docs/img/convergence_*.png)")
+    import shutil
+    captions = {"cells": "Difference from the finest grid (32 cells per l; paired: the same tiles on every "
+                         "grid) against cells per correlation length; grey band: 1%.",
+                "tile": "Difference from the largest tile (256 l per tile) against correlation lengths per "
+                        "tile (independent tiles per level); grey band: 1%.",
+                "lobe80": "In-plane lobe of a mirror at theta_i = 80 deg per grid level (order 1, and all orders dotted)."}
+    for f in figs:
+        kind = f[:-4].rsplit("_", 1)[-1]
+        s.figure(ctx, f, lambda path, src=os.path.join(img, f): shutil.copyfile(src, path),
+                 captions.get(kind, f))
+    with open(table) as fh:
+        s.html = _markdown_tables_html(fh.read())
+    return s
+
+
 SECTIONS = [section_validation, section_ndf, section_g1, section_g2, section_bsdf, section_table4,
-            section_tiled_boxes, section_objects_grooves]
+            section_tiled_boxes, section_objects_grooves, section_convergence]
 
 
 # ----------------------------------------------------------------------------------------------

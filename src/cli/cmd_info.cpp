@@ -7,6 +7,7 @@
 #include "commands.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/measure/ndf_measure.hpp"
+#include "microsim/surface/discretization.hpp"
 #include "microsim/surface/heightmap_import.hpp"
 #include "microsim/surface/metrology.hpp"
 #include "microsim/surface/surface_io.hpp"
@@ -28,6 +29,36 @@ std::string sig(double x) {
   std::ostringstream o;
   o << std::setprecision(4) << x;
   return o.str();
+}
+
+// The grid's resolution of the continuous surface against the converged levels of the study.
+Json discretization_json(const Discretization& d) {
+  Json j = {{"cells_per_correlation_length", d.cells_per_correlation_length},
+            {"correlation_lengths_per_tile", d.correlation_lengths_per_tile},
+            {"coarser_than_converged", Json::array()}};
+  for (const ConvergedLevel& l : converged_levels())
+    if (d.cells_per_correlation_length < l.cells_per_correlation_length * (1 - 1e-9) ||
+        d.correlation_lengths_per_tile < l.correlation_lengths_per_tile * (1 - 1e-9))
+      j["coarser_than_converged"].push_back(l.quantity);
+  return j;
+}
+
+void print_discretization(const Json& j) {
+  std::cout << "correlation  " << sig(j["cells_per_correlation_length"].get<double>())
+            << " cells per correlation length l, " << sig(j["correlation_lengths_per_tile"].get<double>())
+            << " correlation lengths per tile";
+  const Json& c = j["coarser_than_converged"];
+  if (c.empty()) {
+    std::cout << " (converged for every quantity of the study)\n";
+    return;
+  }
+  std::cout << "\n             coarser than the converged level (README \"Converged surfaces\") for:";
+  for (const Json& q : c) {
+    const auto l = converged_level(q.get<std::string>());
+    std::cout << " " << q.get<std::string>() << " (" << sig(l->cells_per_correlation_length) << " cells per l, "
+              << sig(l->correlation_lengths_per_tile) << " l per tile)";
+  }
+  std::cout << "\n";
 }
 
 void print_metrology(const Metrology& m, const Microsurface& s) {
@@ -60,7 +91,7 @@ void print_metrology(const Metrology& m, const Microsurface& s) {
                     ? "  WARNING: well under generate gaussian's default of 4 cells per l: D, G1 and the "
                       "multiple scattering of the triangles are far from the continuous surface's"
                     : m.cells_per_gaussian_length < 16
-                          ? " (multiple scattering converges by 8-16 cells per l: see the convergence table)"
+                          ? " (mirror orders 1-2 converge by 8, order 3 by 16 cells per l: README \"Converged surfaces\")"
                           : "")
             << "\n"
             << "fit chi2/dof heights vs Gaussian " << fmt(m.height_fit.chi2_per_dof(), 3)
@@ -107,6 +138,8 @@ int run_info(const std::string& path, const std::string& json_out, const GlobalO
   j["macrosurface"] = {{"area", s.macro().area}, {"periodic", s.macro().periodic},
                        {"size_x", s.macro().size_x}, {"size_y", s.macro().size_y}};
   j["checks"] = surface_checks_json(f, s);
+  const auto disc = discretization_of(s.description);
+  if (disc) j["discretization"] = discretization_json(*disc);
   Metrology m;
   if (s.kind() == Microsurface::Kind::Heightfield) {
     m = measure_metrology(grid_view(s));
@@ -133,6 +166,7 @@ int run_info(const std::string& path, const std::string& json_out, const GlobalO
               << "000 eq. 1c   sum A_f (n.m_f) / A = " << c["eq_1c_sum_area_cos_over_A"].get<double>()
               << "  |error| " << c["eq_1c_error"].get<double>() << "\n"
               << "area ratio   sum A_f / A = " << c["total_area_over_A"].get<double>() << "\n";
+    if (disc) print_discretization(j["discretization"]);
     if (s.kind() == Microsurface::Kind::Heightfield) print_metrology(m, s);
   }
   if (!json_out.empty()) write_json(json_out, j);

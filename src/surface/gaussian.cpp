@@ -1,6 +1,7 @@
 #include "microsim/surface/gaussian.hpp"
 
 #include "microsim/io/checks.hpp"
+#include "microsim/surface/discretization.hpp"
 
 #include <unsupported/Eigen/FFT>
 
@@ -170,6 +171,7 @@ Microsurface generate_gaussian(const GaussianParams& p) {
                    {"seed", p.seed},
                    {"nominal_ndf", "beckmann"},
                    {"expected_slope_var_y", f.var_dy_scaled}};
+  add_discretization(s.description, dx, p.size, std::min(ell_x, ell_y), std::max(ell_x, ell_y));
   return s;
 }
 
@@ -228,6 +230,7 @@ Microsurface generate_gaussian_ggx(const GaussianGgxParams& p) {
                    {"max_local_alpha_factor", 1.0 / std::sqrt(e_min)},
                    {"seed", p.seed},
                    {"nominal_ndf", "ggx"}};
+  add_discretization(s.description, dx, p.size, std::min(ell_x, ell_y), std::max(ell_x, ell_y));
   return s;
 }
 

@@ -21,6 +21,7 @@
 #include "microsim/validate/bsdf_object_rows.hpp"
 #include "microsim/measure/ndf_measure.hpp"
 #include "microsim/models/ndf.hpp"
+#include "microsim/surface/discretization.hpp"
 #include "microsim/trace/tracer.hpp"
 
 namespace microsim::validation {
@@ -977,6 +978,44 @@ void check_bsdf_albedo(const SurfaceSet& set, Progress& progress, CheckOutput& o
   out.measurements = per_surface;
 }
 
+// An info row when the set's coarsest surface is coarser than the converged level of the study
+// for the quantities of `check` (README "Converged surfaces"): the rows then describe the
+// triangulated grid more than the continuous surface it stands for.
+std::optional<Row> discretization_row(const SurfaceSet& set, const std::string& check) {
+  const auto level = converged_level(check);
+  if (!level) return std::nullopt;
+  std::optional<Discretization> coarsest;
+  for (const Microsurface& m : set.surfaces) {
+    const auto d = discretization_of(m.description);
+    if (!d) continue;
+    if (!coarsest) coarsest = d;
+    coarsest->cells_per_correlation_length =
+        std::min(coarsest->cells_per_correlation_length, d->cells_per_correlation_length);
+    coarsest->correlation_lengths_per_tile =
+        std::min(coarsest->correlation_lengths_per_tile, d->correlation_lengths_per_tile);
+  }
+  if (!coarsest) return std::nullopt;
+  const bool coarse_grid = coarsest->cells_per_correlation_length < level->cells_per_correlation_length * (1 - 1e-9);
+  const bool small_tile = coarsest->correlation_lengths_per_tile < level->correlation_lengths_per_tile * (1 - 1e-9);
+  if (!coarse_grid && !small_tile) return std::nullopt;
+  Row r = make_row(set, "", coarse_grid ? "cells_per_correlation_length" : "correlation_lengths_per_tile",
+                   "converged_level", Kind::Info, "discretization study (analysis/convergence.sh)");
+  r.measured = coarse_grid ? coarsest->cells_per_correlation_length : coarsest->correlation_lengths_per_tile;
+  r.model = coarse_grid ? level->cells_per_correlation_length : level->correlation_lengths_per_tile;
+  r.condition += ": coarser than the converged level for " + check + " (" + level->what + "): " +
+                 num(coarsest->cells_per_correlation_length, 3) + " cells per l (converged " +
+                 num(level->cells_per_correlation_length, 3) + "), " +
+                 num(coarsest->correlation_lengths_per_tile, 4) + " l per tile (converged " +
+                 num(level->correlation_lengths_per_tile, 4) + ")";
+  r.error = "none";
+  r.extra = {{"check", check},
+             {"cells_per_correlation_length", coarsest->cells_per_correlation_length},
+             {"correlation_lengths_per_tile", coarsest->correlation_lengths_per_tile},
+             {"converged_cells_per_correlation_length", level->cells_per_correlation_length},
+             {"converged_correlation_lengths_per_tile", level->correlation_lengths_per_tile}};
+  return r;
+}
+
 }  // namespace
 
 const std::vector<Check>& checks() {
@@ -1073,6 +1112,7 @@ Result run(const std::vector<SurfaceSet>& sets, double significance,
       c->run(set, progress, out);
       result.rows.insert(result.rows.end(), out.rows.begin(), out.rows.end());
       e.measurements[c->name] = out.measurements;
+      if (auto row = discretization_row(set, c->name)) result.rows.push_back(*row);
     }
     result.entries.push_back(std::move(e));
   }
