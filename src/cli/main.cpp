@@ -9,7 +9,8 @@
 using namespace microsim;
 using namespace microsim::cli;
 
-int main(int argc, char** argv) {
+namespace {
+int run_main(int argc, char** argv) {
   GlobalOptions g;
   std::unique_ptr<CLI::App> app = build_app(g);
   const std::vector<std::string> args(argv + 1, argv + argc);
@@ -36,8 +37,16 @@ int main(int argc, char** argv) {
     std::cerr << "microsim: error: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {
+    wait_if_interrupted();  // a failure caused by the interrupt's own cleanup is not reported
     std::cerr << "microsim: failed: " << e.what() << "\n";
     return 1;
   }
   return 0;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int status = run_main(argc, argv);
+  wait_if_interrupted();
+  return status;
 }

@@ -66,7 +66,10 @@ void remove_path_raw(const char* path, int depth) {
   rmdir(path);
 }
 
+std::atomic<bool> g_interrupting{false};
+
 void on_interrupt(int sig) {
+  g_interrupting.store(true);
   for (int k = 0; k < kSlots; ++k)
     if (g_used[k].load()) remove_path_raw(g_paths[k], 0);
   signal(sig, SIG_DFL);
@@ -97,6 +100,11 @@ void unregister_temporary(const std::string& path) {
       g_paths[k][0] = 0;
       return;
     }
+}
+
+void wait_if_interrupted() {
+  if (!g_interrupting.load()) return;
+  for (;;) pause();  // the handler re-raises the signal with its default action
 }
 
 void install_interrupt_cleanup() {

@@ -44,6 +44,10 @@ class OutputTransaction {
 void register_temporary(const std::string& path);
 void unregister_temporary(const std::string& path);
 void install_interrupt_cleanup();
+// The handler runs on whichever thread took the signal while the others go on: one of them can
+// meet the files the handler is removing, fail and reach exit before the handler re-raises. Exit
+// paths call this first: during an interrupt it waits for the handler to end the process.
+void wait_if_interrupted();
 // A temporary folder (mkdtemp under TMPDIR, registered), removed with its contents when destroyed.
 class TemporaryFolder {
  public:
