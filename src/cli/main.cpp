@@ -67,6 +67,7 @@ int main(int argc, char** argv) {
   register_measure_vndf(*measure, g);
   register_validate(app, g);
   register_measure_bsdf(*measure, g);
+  register_render(app, g);
 
   if (!check_command_words(app, argc, argv)) return 2;
   // Every output of the command (main file, sidecar, tables) is renamed into place together once
