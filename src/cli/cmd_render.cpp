@@ -146,7 +146,7 @@ int run_render(const RenderCliOptions& o, const GlobalOptions& g) {
   directional.light = direction_from_angles(rad(o.light_theta), rad(o.light_phi));  // camera frame
   environment.environment = true;
 
-  const render::TablePreview measured(table);
+  const render::TablePreview measured(table, &ndf);
   const render::SingleScatteringPreview single(models::MicrofacetBsdf{ndf, material, models::Masking::SmithHeightCorrelated});
   const render::SmithWalkPreview walk(models::SmithRandomWalk(ndf, material));
   const render::PreviewBsdf* bsdfs[3] = {&measured, &single, &walk};

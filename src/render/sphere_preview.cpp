@@ -28,9 +28,21 @@ double LambertPreview::environment(const Vec3& v, CounterRng& rng) const {
 
 double TablePreview::eval_cos(const Vec3& v, const Vec3& l, CounterRng&) const { return table_.eval(v, l); }
 double TablePreview::environment(const Vec3& v, CounterRng& rng) const {
-  const Vec3 l = cosine_direction(rng);
+  constexpr double share = 0.8;  // of the NDF proposal
+  Vec3 l;
+  if (has_proposal_ && rng.uniform() < share) {
+    const double u1 = rng.uniform(), u2 = rng.uniform();
+    l = models::reflect(v, proposal_.sample_visible_normal(v, u1, u2));
+  } else {
+    l = cosine_direction(rng);
+  }
   if (!(l.z() > 0)) return 0.0;
-  return table_.eval(v, l) * kPi / l.z();
+  double pdf = l.z() / kPi;
+  if (has_proposal_) {
+    const Vec3 m = (v + l).normalized();
+    pdf = (1 - share) * pdf + share * proposal_.D_visible(v, m) / (4.0 * std::abs(l.dot(m)));
+  }
+  return pdf > 0 ? table_.eval(v, l) / pdf : 0.0;
 }
 
 double SingleScatteringPreview::eval_cos(const Vec3& v, const Vec3& l, CounterRng&) const {

@@ -17,8 +17,11 @@
 //
 // Estimators (per pixel, from a counter-based generator keyed by (seed, stream, pixel): the
 // image does not depend on the thread count):
-//   measured table: eval exact; environment by cosine-weighted sampling of l, weight
-//     pi eval / cos(theta_l) (the table's own importance sampling is not used);
+//   measured table: eval exact; environment by one-sample multiple importance sampling: l from
+//     a mixture, 80 % reflected about the visible normals of v of the models' NDF (001 eq. 13;
+//     density D_v(m) / (4 v.m), 000 eq. 19b), 20 % cosine-weighted (density cos(theta_l) / pi,
+//     which covers every direction the table can send light to), weight eval / mixture density
+//     (unbiased for any table; the table's own sampling is not used);
 //   single scattering (000 eq. 21d with the height-correlated Smith G2, 001 eq. 21): eval exact;
 //     environment by sampling the visible normals of v (001 eq. 13), weight F G2 / G1(v);
 //   Smith random walk (models/smith_random_walk.hpp): the directional light by the walk's point
@@ -63,12 +66,17 @@ class LambertPreview : public PreviewBsdf {
 
 class TablePreview : public PreviewBsdf {
  public:
-  explicit TablePreview(const RglMaterial& table) : table_(table) {}
+  // `proposal`: an NDF whose visible normals, reflected about them, give the environment
+  // directions (mixed with cosine-weighted ones); without it, cosine-weighted only.
+  explicit TablePreview(const RglMaterial& table, const models::Ndf* proposal = nullptr)
+      : table_(table), proposal_(proposal ? *proposal : models::Ndf()), has_proposal_(proposal != nullptr) {}
   double eval_cos(const Vec3& v, const Vec3& l, CounterRng& rng) const override;
   double environment(const Vec3& v, CounterRng& rng) const override;
 
  private:
   const RglMaterial& table_;
+  models::Ndf proposal_;
+  bool has_proposal_;
 };
 
 class SingleScatteringPreview : public PreviewBsdf {
