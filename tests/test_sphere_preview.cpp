@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <map>
 
+#include "microsim/io/output.hpp"
 #include "microsim/io/rgl_bsdf.hpp"
 #include "microsim/io/rgl_reader.hpp"
 #include "microsim/measure/bsdf_table.hpp"
@@ -15,6 +16,7 @@
 #include "microsim/render/sphere_preview.hpp"
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/trace/tracer.hpp"
+#include "cli_helpers.hpp"
 #include "table_readers.hpp"
 
 using namespace microsim;
@@ -220,7 +222,7 @@ const Microsurface& tile(double alpha) {
   return it->second;
 }
 std::string mirror_table(double alpha) {
-  const std::string path = ::testing::TempDir() + "microsim_preview_" + std::to_string(alpha) + ".bsdf";
+  const std::string path = microsim::testing::temp_path("preview", std::to_string(alpha) + ".bsdf");
   const Microsurface& s = tile(alpha);
   const Tracer tracer(s);
   BsdfTableOptions o;
@@ -342,4 +344,30 @@ TEST(SpherePreview, MeasuredTableFollowsSingleScatteringAtLowRoughness) {
   table.scale(1.05);
   EXPECT_FALSE(agree(means(render::TablePreview(table)), model)) << "power check: scaled table";
   std::remove(path.c_str());
+}
+
+// The command: one run writes the PNG panel, the EXR of linear images and the JSON record; the
+// models' parameters come from the table's description; a table of another format is refused
+// with exit 2 and no output.
+TEST(RenderCli, WritesThePanelTheImagesAndTheRecord) {
+  using microsim::testing::exists;
+  using microsim::testing::run_microsim;
+  using microsim::testing::temp_path;
+  const std::string table = mirror_table(0.5), png = temp_path("render", "s.png"), exr = temp_path("render", "s.exr"),
+                    json = temp_path("render", "s.json");
+  const auto r = run_microsim("render " + table + " --size 24 --samples 4 -o " + png + " -o " + exr + " -o " + json);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(exists(png));
+  const Json j = Json::parse(microsim::testing::slurp(json));
+  EXPECT_EQ(j["parameters"]["distribution"], "beckmann");
+  EXPECT_DOUBLE_EQ(j["parameters"]["alpha_x"].get<double>(), 0.5);
+  EXPECT_EQ(j["parameters"]["material"], "mirror");
+  EXPECT_NEAR(j["summary"]["environment"]["walk"]["mean"].get<double>(), 1.0, 1e-6);  // mirror furnace
+  const ExrTable t = read_exr(exr);
+  EXPECT_EQ(t.width, 24);
+  EXPECT_EQ(t.channel_names.size(), 16u);
+  const auto bad = run_microsim("render " + exr + " -o " + temp_path("render", "bad.png"));
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_FALSE(exists(temp_path("render", "bad.png")));
+  std::remove(table.c_str());
 }
