@@ -233,7 +233,10 @@ std::string mirror_table(double alpha) {
   o.base.seed = 3;
   for (double t : {0.0, 20.0, 40.0, 60.0, 80.0}) o.theta_i.push_back(rad(t));
   o.phi_i = {0.0};
-  write_rgl_bsdf(path, build_rgl_table(measure_bsdf_table(tracer, o), s, RglOptions()));
+  RglOptions ro;  // the description as measure bsdf writes it (render reads the models from it)
+  ro.description = "microsim measured BSDF of an explicit microsurface (" + s.description.dump() +
+                   "), material mirror; reflection, all scattering orders";
+  write_rgl_bsdf(path, build_rgl_table(measure_bsdf_table(tracer, o), s, ro));
   return path;
 }
 }  // namespace
