@@ -1,5 +1,6 @@
-// Reads one channel of an image through OpenImageIO, behind a C entry point. microsim loads this
-// module only when it imports an image (heightmap_import.cpp): OpenImageIO pulls in a few
+// Reads one channel of an image (and writes 8-bit previews) through OpenImageIO, behind C entry
+// points. microsim loads this module only when it imports an image (heightmap_import.cpp) or
+// writes a PNG preview (render/sphere_preview.cpp): OpenImageIO pulls in a few
 // hundred shared libraries, which would otherwise cost every microsim command seconds of start-up.
 #include <OpenImageIO/imageio.h>
 
@@ -70,5 +71,19 @@ extern "C" int microsim_oiio_read_channel(const char* path, const char* channel,
   *height = spec.height;
   *data = z;
   std::snprintf(chosen, static_cast<std::size_t>(chosen_cap), "%s", spec.channelnames[ch].c_str());
+  return 0;
+}
+
+// Writes an 8-bit RGB image (width*height*3 bytes, row 0 at the top) in the format named by
+// `format` ("png"), whatever the file's name (callers write to a temporary, then rename).
+// Returns 0, or nonzero and a one-line message in err[cap].
+extern "C" int microsim_oiio_write_rgb8(const char* path, const char* format, int width, int height,
+                                        const unsigned char* rgb, char* err, int err_cap) {
+  auto out = OIIO::ImageOutput::create(format);
+  if (!out) return fail(err, err_cap, std::string("no ") + format + " writer in OpenImageIO (" + OIIO::geterror() + ")");
+  const OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+  if (!out->open(path, spec)) return fail(err, err_cap, std::string(path) + ": " + out->geterror());
+  if (!out->write_image(OIIO::TypeDesc::UINT8, rgb)) return fail(err, err_cap, std::string(path) + ": " + out->geterror());
+  if (!out->close()) return fail(err, err_cap, std::string(path) + ": " + out->geterror());
   return 0;
 }

@@ -35,6 +35,12 @@ PROFILES = {
         "vcavity_grooves": 4096,
         "vcavity_rays": 200000,
         "vcavity_theta": "0,30,60,80",
+        "preview_resolution": 256,
+        "preview_rays": 200000,
+        "preview_theta": "0:85:5",
+        "preview_size": 160,
+        "preview_samples": 64,
+        "preview_cases": [(0.5, "mirror"), (1.0, "mirror"), (0.5, "gold")],
     },
     "smoke": {
         "suite": "smoke",
@@ -52,6 +58,12 @@ PROFILES = {
         "vcavity_grooves": 256,
         "vcavity_rays": 20000,
         "vcavity_theta": "0,60",
+        "preview_resolution": 64,
+        "preview_rays": 5000,
+        "preview_theta": "0:80:40",
+        "preview_size": 24,
+        "preview_samples": 4,
+        "preview_cases": [(0.5, "mirror")],
     },
 }
 
@@ -458,8 +470,61 @@ def section_convergence(ctx):
     return s
 
 
+# Gold-like conductor (index at about 600 nm) for the previews.
+GOLD_ETA, GOLD_K = 0.47, 2.4
+
+
+def section_previews(ctx):
+    s = Section("previews", "Sphere previews of the measured tables",
+                "A Beckmann tile measured into an RGL .bsdf table (measure bsdf), rendered on a sphere (render) "
+                "beside the single-scattering microfacet BRDF (height-correlated Smith G2) and the Smith random "
+                "walk (all orders) of the same alpha and material. Rows: directional light (irradiance pi, from "
+                "upper left, 45 deg off the view axis), uniform white environment (radiance = albedo). Columns: "
+                "measured, single scattering, Smith walk, measured - Smith walk (red +, blue -, full colour at "
+                "+-0.1).")
+    if not ctx.has_command("render"):
+        return s.skip("`microsim render` is not in this build")
+    p = ctx.profile
+    rows = []
+    for alpha, material in p["preview_cases"]:
+        surf = os.path.join(ctx.surf_dir, "preview-alpha%g.exr" % alpha)
+        if not os.path.isfile(surf):
+            ctx.run(["generate", "gaussian", "--alpha", "%g" % alpha, "--resolution", str(p["preview_resolution"]),
+                     "--seed", "1", "-o", surf])
+        mat = ["--material", "mirror"] if material == "mirror" else \
+            ["--material", "conductor", "--eta", str(GOLD_ETA), "--k", str(GOLD_K)]
+        name = "preview_alpha%g_%s" % (alpha, material)
+        table = ctx.data(name + ".bsdf")
+        ctx.run(["measure", "bsdf", surf] + mat + ["--theta-i", p["preview_theta"], "--rays", str(p["preview_rays"]),
+                                                    "--no-models", "-o", table])
+        record = ctx.data(name + "_render.json")
+
+        def draw(path, table=table, record=record):
+            ctx.run(["render", table, "--size", str(p["preview_size"]), "--samples", str(p["preview_samples"]),
+                     "-o", path, "-o", record])
+        s.figure(ctx, name + ".png", draw,
+                 "alpha = %g, %s: measured | single scattering | Smith walk | measured - walk; top: directional "
+                 "light, bottom: white environment." % (alpha, "mirror" if material == "mirror" else
+                                                       "gold-like conductor (eta %g + %gi)" % (GOLD_ETA, GOLD_K)))
+        if os.path.isfile(record):
+            summ = load_json(record)["summary"]
+            rows.append((alpha, material, summ))
+    if rows:
+        h = ["<table><tr><th>alpha</th><th>material</th><th>light</th><th>measured</th><th>single</th>"
+             "<th>Smith walk</th><th>rms(measured - walk)</th></tr>"]
+        for alpha, material, summ in rows:
+            for light in ("directional", "environment"):
+                d = summ[light]
+                h.append("<tr><td>%g</td><td>%s</td><td>%s</td><td>%.4f</td><td>%.4f</td><td>%.4f</td><td>%.4f</td></tr>"
+                         % (alpha, material, light, d["measured"]["mean"], d["single"]["mean"], d["walk"]["mean"],
+                            d["difference"]["rms"]))
+        h.append("</table><p>Means of the radiance over the sphere's pixels.</p>")
+        s.html = "".join(h)
+    return s
+
+
 SECTIONS = [section_validation, section_ndf, section_g1, section_g2, section_bsdf, section_table4,
-            section_tiled_boxes, section_objects_grooves, section_convergence]
+            section_tiled_boxes, section_objects_grooves, section_convergence, section_previews]
 
 
 # ----------------------------------------------------------------------------------------------

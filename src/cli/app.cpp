@@ -44,6 +44,7 @@ std::unique_ptr<CLI::App> build_app(GlobalOptions& g) {
   register_measure_vndf(*measure, g);
   register_validate(app, g);
   register_measure_bsdf(*measure, g);
+  register_render(app, g);
   return owned;
 }
 

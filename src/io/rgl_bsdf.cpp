@@ -147,6 +147,45 @@ double BilinearWarp::pdf(const Vec2& p) const {
   return val * (nx_ - 1) * (ny_ - 1) / marg_[ny_ - 1];
 }
 
+// Integrals in vertex-index units, as cond_ and marg_ are kept: within a cell the density is
+// linear along each axis, so each partial integral is a quadratic in the cell fraction.
+namespace {
+void locate(double u, int n, int* k, double* f) {
+  const double x = std::clamp(u, 0.0, 1.0) * (n - 1);
+  *k = std::min(static_cast<int>(x), n - 2);
+  *f = x - *k;
+}
+}  // namespace
+
+double BilinearWarp::row(double y) const {
+  int j;
+  double t;
+  locate(y, ny_, &j, &t);
+  const double T0 = cond_[static_cast<std::size_t>(j + 1) * nx_ - 1], T1 = cond_[static_cast<std::size_t>(j + 2) * nx_ - 1];
+  return (1 - t) * T0 + t * T1;
+}
+
+double BilinearWarp::marginal(double y) const {
+  int j;
+  double t;
+  locate(y, ny_, &j, &t);
+  const double T0 = cond_[static_cast<std::size_t>(j + 1) * nx_ - 1], T1 = cond_[static_cast<std::size_t>(j + 2) * nx_ - 1];
+  return marg_[j] + T0 * t + 0.5 * (T1 - T0) * t * t;
+}
+
+double BilinearWarp::conditional(double x, double y) const {
+  int i, j;
+  double tau, t;
+  locate(x, nx_, &i, &tau);
+  locate(y, ny_, &j, &t);
+  auto part = [&](int r) {
+    const std::size_t b = static_cast<std::size_t>(r) * nx_;
+    const double a = v_[b + i], c = v_[b + i + 1];
+    return cond_[b + i] + a * tau + 0.5 * (c - a) * tau * tau;
+  };
+  return (1 - t) * part(j) + t * part(j + 1);
+}
+
 // ---------------------------------------------------------------------------------------------
 // The table
 // ---------------------------------------------------------------------------------------------

@@ -1,8 +1,5 @@
 #include "microsim/surface/heightmap_import.hpp"
 
-#include <dlfcn.h>
-#include <unistd.h>
-
 #include <Eigen/Dense>
 
 #include <cstdlib>
@@ -11,6 +8,7 @@
 #include <map>
 #include <sstream>
 
+#include "microsim/io/oiio_module.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/surface/metrology.hpp"
 
@@ -23,29 +21,11 @@ bool is_text_extension(const std::string& ext) {
   return ext == "txt" || ext == "csv" || ext == "asc" || ext == "xyz" || ext == "dat" || ext == "tsv";
 }
 
-// Images are read by the OpenImageIO module (plugins/oiio_reader.cpp), loaded on first use from
-// the executable's folder, else from where the build put it.
+// Images are read by the OpenImageIO module (plugins/oiio_reader.cpp, io/oiio_module.hpp).
 using ReadChannel = int (*)(const char*, const char*, int*, int*, double**, char*, int, char*, int);
 
 ReadChannel image_reader() {
-  static ReadChannel fn = [] {
-    std::vector<std::string> candidates;
-    char exe[4096];
-    const ssize_t len = readlink("/proc/self/exe", exe, sizeof exe - 1);
-    if (len > 0) {
-      std::string dir(exe, static_cast<std::size_t>(len));
-      candidates.push_back(dir.substr(0, dir.find_last_of('/')) + "/libmicrosim_oiio_reader.so");
-    }
-    candidates.push_back(MICROSIM_OIIO_READER);
-    std::string errors;
-    for (const auto& c : candidates) {
-      if (void* h = dlopen(c.c_str(), RTLD_NOW | RTLD_LOCAL))
-        if (void* f = dlsym(h, "microsim_oiio_read_channel")) return reinterpret_cast<ReadChannel>(f);
-      const char* e = dlerror();
-      errors += std::string(" ") + (e ? e : c);
-    }
-    throw RuntimeFailure("cannot load the image reader (OpenImageIO module):" + errors);
-  }();
+  static ReadChannel fn = reinterpret_cast<ReadChannel>(oiio_module_symbol("microsim_oiio_read_channel"));
   return fn;
 }
 

@@ -67,6 +67,13 @@ class BilinearWarp {
   Vec2 sample(const Vec2& s) const;
   // Density (integrates to 1) at a point.
   double pdf(const Vec2& p) const;
+  // The integrals behind the warp, unnormalized (divide by total()): of the whole density, of
+  // the rows below y (the marginal CDF), of row y itself and of row y left of x (the
+  // conditional CDF). Readers blend these between tables to invert an interpolated warp.
+  double total() const { return marg_[ny_ - 1]; }
+  double marginal(double y) const;
+  double row(double y) const;
+  double conditional(double x, double y) const;
 
  private:
   std::vector<double> v_, cond_, marg_;  // vertex values, per-row cumulative, row marginal

@@ -155,6 +155,16 @@ struct WalkExit {
   double weight = 1.0;      // product of conductor Fresnel factors (1 for mirror/dielectric)
 };
 
+// A scattering event of the walk: v points back along the arriving ray (current frame), h is
+// the height (current frame), `above` tells the frame, weight the product of the Fresnel factors
+// before this event.
+struct WalkVertex {
+  Vec3 v;
+  double h;
+  bool above;
+  double weight;
+};
+
 class SmithRandomWalk {
  public:
   SmithRandomWalk(const Ndf& ndf, const Material& material,
@@ -168,6 +178,12 @@ class SmithRandomWalk {
   // One walk for light arriving from direction wi (pointing away from the surface, wi.z > 0).
   template <class Rng>
   WalkExit walk(const Vec3& wi, Rng& rng) const {
+    return walk(wi, rng, [](const WalkVertex&) {});
+  }
+  // The same walk, calling at_vertex(WalkVertex) at every scattering event before it scatters
+  // (the point estimators of models/smith_walk_eval.hpp evaluate the phase function there).
+  template <class Rng, class Visitor>
+  WalkExit walk(const Vec3& wi, Rng& rng, Visitor&& at_vertex) const {
     WalkExit out;
     Vec3 w = -wi;       // propagation direction in the current frame
     double h = detail::kInf;
@@ -216,6 +232,7 @@ class SmithRandomWalk {
         out.order = order;
         return out;
       }
+      at_vertex(WalkVertex{v, h, above, out.weight});
       // --- scattering
       switch (material_.kind) {
         case MaterialKind::Mirror:
