@@ -10,11 +10,19 @@
 
 #include "microsim/common.hpp"
 
+namespace microsim {
+class TallySplit;
+}
+
 namespace microsim::cli {
 
 struct GlobalOptions {
   int threads = 0;  // 0 = all cores
   bool quiet = false;
+  // Work shared with other processes (shards, MPI ranks, a merge's replay; scaleout.hpp):
+  // passed to the estimators' options. `ranks` > 0 under MPI (written to the record).
+  TallySplit* split = nullptr;
+  int ranks = 0;
 };
 
 // A progress bar with ETA on a terminal; silent in pipes, CI and with --quiet.
@@ -39,7 +47,7 @@ void require_surface_extension(const std::string& path);
 // JSON or CSV (rows only) by extension, atomically.
 void write_record(const std::string& path, const Json& j);
 std::string fmt(double x, int precision = 4);
-// Fields every JSON record starts with: command, version, threads.
+// Fields every JSON record starts with: command, version, threads (and ranks under MPI).
 Json run_header(const std::string& command, const GlobalOptions& g);
 // "a:b:step" (inclusive), "a,b,c" or "a", in degrees.
 std::vector<double> parse_angle_list(const std::string& text, const std::string& option);

@@ -154,6 +154,7 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
       set.labels.push_back(o.files.size() > 1 ? fs::path(f).filename().string() : "");
     }
     set.options = cli_options;
+    set.options.split = g.split;  // shards and MPI ranks (scaleout.hpp)
     sets.push_back(std::move(set));
     j["files"] = o.files;
   } else {
@@ -180,6 +181,7 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
         set.name = e.name;
         set.options = e.options;
         apply_overrides(set.options);
+        set.options.split = g.split;  // shards and MPI ranks (scaleout.hpp)
         const std::string ext = e.format;
         std::vector<std::optional<std::uint64_t>> seeds;
         for (auto s : e.seeds) seeds.emplace_back(s);
