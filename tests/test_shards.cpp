@@ -103,8 +103,8 @@ TEST(ShardParse, AcceptsKOverNOnly) {
 
 namespace {
 // Three shards of one fake run with a replicate-split entry (rows) and a ray-split one (tails).
-std::vector<std::pair<std::string, json>> fake_parts(int n, const std::string& command = "measure g1 x") {
-  std::vector<std::pair<std::string, json>> parts;
+std::vector<std::pair<std::string, Json>> fake_parts(int n, const std::string& command = "measure g1 x") {
+  std::vector<std::pair<std::string, Json>> parts;
   RunIdentity run;
   run.command = {command, "-o", kOutputPlaceholder};
   run.output = "out.json";
@@ -123,11 +123,11 @@ std::vector<std::pair<std::string, json>> fake_parts(int n, const std::string& c
     Tallies rays("vndf", 1000, s.share(1000), 0, 0, 3, 0);
     rays.tail_counts = {s.share(1000).size(), 1, static_cast<std::uint64_t>(k)};
     s.exchange(rays);
-    parts.emplace_back("part" + std::to_string(k), json::parse(partial_json(run, s, 1.0).dump()));
+    parts.emplace_back("part" + std::to_string(k), Json::parse(partial_json(run, s, 1.0).dump()));
   }
   return parts;
 }
-std::string usage_message(const std::vector<std::pair<std::string, json>>& parts) {
+std::string usage_message(const std::vector<std::pair<std::string, Json>>& parts) {
   try {
     merge_partials(parts);
   } catch (const UsageError& e) {
@@ -178,7 +178,7 @@ TEST(MergePartials, RefusesMissingDuplicatedAndForeignParts) {
   EXPECT_NE(usage_message(damaged).find("damaged"), std::string::npos) << usage_message(damaged);
   auto overlap = parts;
   overlap[1].second["tallies"][0]["covered"] = {0, 5};
-  overlap[1].second["tallies"][0]["counts"] = json::array();
+  overlap[1].second["tallies"][0]["counts"] = Json::array();
   for (int i = 0; i < 10; ++i) overlap[1].second["tallies"][0]["counts"].push_back(1);
   overlap[1].second["tallies"][0]["reals"] = {1, 1, 1, 1, 1};
   EXPECT_NE(usage_message(overlap).find("covered twice"), std::string::npos) << usage_message(overlap);

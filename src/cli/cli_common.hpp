@@ -23,6 +23,9 @@ struct GlobalOptions {
   // passed to the estimators' options. `ranks` > 0 under MPI (written to the record).
   TallySplit* split = nullptr;
   int ranks = 0;
+  // A shard, or an MPI rank other than 0: this process's outputs are not the run's (they are
+  // never written) and its verdicts do not end the run.
+  bool partial = false;
 };
 
 // A progress bar with ETA on a terminal; silent in pipes, CI and with --quiet.

@@ -84,12 +84,13 @@ int run_cli(const std::vector<std::string>& args, TallyReplay* replay) {
       shard = std::make_unique<ShardRecorder>(k, n);
       g.split = shard.get();
       g.quiet = true;  // the shard's own table is partial
+      g.partial = true;
     } else if (replay) {
       g.split = replay;
     } else if (g_mpi.active) {
       g.split = g_mpi.split.get();
       g.ranks = g_mpi.size;
-      if (!root) g.quiet = true;
+      if (!root) g.quiet = g.partial = true;
     }
   });
 
