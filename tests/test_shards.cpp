@@ -296,7 +296,8 @@ TEST_F(Shards, MpiTwoRanksRecordsEqualOneProcess) {
         "measure g2 " + surface_ + " --theta-o 40 --theta-i 60 --rays 4000",
         "measure vndf " + surface_ + " --theta 45 --rays 20000",
         "measure bsdf " + surface_ + " --material mirror --theta-i 50 --rays 6000 --resolution 8",
-        "measure bsdf " + surface_ + " --material dielectric --eta 1.5 --theta-i 20 --rays 6000 --resolution 8"}) {
+        "measure bsdf " + surface_ + " --material dielectric --eta 1.5 --theta-i 20 --rays 6000 --resolution 8",
+        "validate " + surface_ + " --checks g1,g2,vndf,bsdf_albedo --theta 50 --rays 4000"}) {
     const std::string one = tmp("mpi_one.json"), two = tmp("mpi_two.json");
     std::remove(two.c_str());
     Result r = run_microsim(cmd + " --threads 1 -q -o " + one);
