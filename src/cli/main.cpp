@@ -48,6 +48,7 @@ int run_cli(const std::vector<std::string>& args, TallyReplay* replay) {
   CLI::App app{"microsim: explicit microsurface Monte Carlo simulator.\n"
                "Builds microgeometry, ray-traces it with Embree, measures D, G1 (and more) with "
                "standard errors beside the analytic Smith model."};
+  app.name("microsim");  // usage lines name the program (the words come without argv[0])
   app.require_subcommand(1);
   app.fallthrough();  // --threads and --quiet are accepted after the subcommand too
   GlobalOptions g;
