@@ -10,12 +10,26 @@
 #include <vector>
 
 #include "cli_common.hpp"
+#include "scaleout.hpp"
 
 namespace microsim::cli {
 
-// An App with every command registered on g. --threads, once parsed, limits TBB through a
-// global_control the returned App owns (released with it).
-std::unique_ptr<CLI::App> build_app(GlobalOptions& g);
+// The command tree with what its global options own: the TBB limit set by --threads and the
+// shard recorder set by --shard K/N.
+struct MicrosimApp : CLI::App {
+  using CLI::App::App;
+  std::unique_ptr<tbb::global_control> threads;
+  std::string shard_text;
+  std::unique_ptr<ShardRecorder> shard;
+};
+
+// An App with every command registered on g. `replay` (merge): the command computes nothing and
+// takes every estimator call's tallies from it. Under MPI (mpi_session()) the estimators share
+// the work between ranks.
+std::unique_ptr<MicrosimApp> build_app(GlobalOptions& g, TallyReplay* replay = nullptr);
+
+// The process's MPI session (one process unless main started MPI under mpirun / srun).
+MpiSession& mpi_session();
 
 // "unknown surface kind 'x' (known: ...)" or "unknown command ..." when the leading words of
 // args (without the program name) do not name a command of the tree (CLI11 would only say that a

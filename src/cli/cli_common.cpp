@@ -69,9 +69,11 @@ std::string fmt(double x, int precision) {
 }
 
 Json run_header(const std::string& command, const GlobalOptions& g) {
-  return {{"command", command},
-          {"microsim_version", "0.1.0"},
-          {"threads", g.threads > 0 ? g.threads : tbb::this_task_arena::max_concurrency()}};
+  Json j = {{"command", command},
+            {"microsim_version", "0.1.0"},
+            {"threads", g.threads > 0 ? g.threads : tbb::this_task_arena::max_concurrency()}};
+  if (g.ranks > 0) j["ranks"] = g.ranks;  // MPI processes that shared the work
+  return j;
 }
 
 std::vector<double> parse_angle_list(const std::string& text, const std::string& option) {

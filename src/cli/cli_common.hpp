@@ -12,6 +12,10 @@
 #include "microsim/common.hpp"
 #include "microsim/surface/microsurface.hpp"
 
+namespace microsim {
+class TallySplit;
+}
+
 namespace microsim::cli {
 
 struct GlobalOptions {
@@ -23,6 +27,13 @@ struct GlobalOptions {
   std::function<Microsurface(const std::string&)> surface_by_name;
   std::function<void(const std::string&, const Json&)> keep_record;
   std::function<void(const std::string&, const Microsurface&)> keep_surface;
+  // Work shared with other processes (shards, MPI ranks, a merge's replay; scaleout.hpp):
+  // passed to the estimators' options. `ranks` > 0 under MPI (written to the record).
+  TallySplit* split = nullptr;
+  int ranks = 0;
+  // A shard, or an MPI rank other than 0: this process's outputs are not the run's (they are
+  // never written) and its verdicts do not end the run.
+  bool partial = false;
 };
 
 // A command's input surface: the file `path`, or the surface of that name when embedded.
@@ -54,7 +65,7 @@ void write_record(const std::string& path, const Json& j);
 // The same, or the record handed over when embedded.
 void write_record(const GlobalOptions& g, const std::string& path, const Json& j);
 std::string fmt(double x, int precision = 4);
-// Fields every JSON record starts with: command, version, threads.
+// Fields every JSON record starts with: command, version, threads (and ranks under MPI).
 Json run_header(const std::string& command, const GlobalOptions& g);
 // "a:b:step" (inclusive), "a,b,c" or "a", in degrees.
 std::vector<double> parse_angle_list(const std::string& text, const std::string& option);

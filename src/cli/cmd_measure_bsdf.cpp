@@ -180,6 +180,7 @@ int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
   to.base.material = material;
   to.base.orders = o.orders;
   to.base.rays = static_cast<std::uint64_t>(o.rays);
+  to.base.split = g.split;  // shards and MPI ranks (scaleout.hpp)
   to.base.seed = o.seed;
   to.base.resolution = o.resolution;
   to.base.replicates = o.replicates;

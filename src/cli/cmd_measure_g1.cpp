@@ -112,6 +112,7 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   auto t0 = std::chrono::steady_clock::now();
 
   G1Options go;
+  go.split = g.split;  // shards and MPI ranks (scaleout.hpp)
   go.rays = static_cast<std::uint64_t>(o.rays);
   go.seed = o.seed;
   go.replicates = o.replicates;

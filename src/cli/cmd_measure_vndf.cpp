@@ -124,6 +124,7 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
   auto t0 = std::chrono::steady_clock::now();
 
   VndfOptions vo;
+  vo.split = g.split;  // shards and MPI ranks (scaleout.hpp)
   vo.rays = static_cast<std::uint64_t>(o.rays);
   vo.seed = o.seed;
   vo.theta_bins = o.theta_bins;

@@ -290,14 +290,20 @@ std::uint64_t direction_stream(std::uint64_t base, double theta, double phi) {
 // Runs body(i, tally) for i in [0, n) in chunks, `batches` sequential parallel passes (progress
 // between them), each reduced deterministically; the merge order is fixed, so the sums are
 // identical for any thread count.
+std::uint64_t path_batches(std::uint64_t n) {
+  return std::min<std::uint64_t>((n + kChunk - 1) / kChunk, 64);
+}
+// With `parts` (measure/shards.hpp), only the batches in `share` are run and each batch's sum is
+// stored in (*parts)[batch] for the caller to add in batch order (the same sums, same order).
 template <class Body>
 BsdfTally run_paths(std::uint64_t n, int K, int npix, int nplane,
                     const std::function<void(double)>& progress, double progress0, double progress_span,
-                    Body&& body) {
+                    Body&& body, std::vector<BsdfTally>* parts = nullptr, UnitRange share = {}) {
   const std::uint64_t nchunks = (n + kChunk - 1) / kChunk;
-  const std::uint64_t batches = std::min<std::uint64_t>(nchunks, 64);
+  const std::uint64_t batches = path_batches(n);
   BsdfTally total(K, npix, nplane);
   for (std::uint64_t bt = 0; bt < batches; ++bt) {
+    if (parts && !share.contains(bt)) continue;
     const std::uint64_t c0 = nchunks * bt / batches, c1 = nchunks * (bt + 1) / batches;
     BsdfTally part = tbb::parallel_deterministic_reduce(
         tbb::blocked_range<std::uint64_t>(c0, c1, 1), BsdfTally(),
@@ -313,10 +319,55 @@ BsdfTally run_paths(std::uint64_t n, int K, int npix, int nplane,
           a += b;
           return a;
         });
-    total += part;
+    if (parts) (*parts)[bt] = std::move(part);
+    else total += part;
     if (progress) progress(progress0 + progress_span * static_cast<double>(bt + 1) / batches);
   }
   return total;
+}
+
+// Tallies of path sums (replicates == 0) as rows (measure/shards.hpp): first moments, and the
+// second moments when `second`; counts: paths, lost, unterminated, events, trace counters.
+constexpr std::size_t kPathCounts = 4 + kCounterValues;
+std::size_t path_reals(const BsdfTally& t, bool second) {
+  return (t.albedo.size() + t.pix.size() + t.plane.size()) * (second ? 2 : 1) + (second ? 1 : 0);
+}
+void pack_paths(const BsdfTally& t, bool second, std::uint64_t* c, double* x) {
+  c[0] = t.paths;
+  c[1] = t.lost;
+  c[2] = t.unterminated;
+  c[3] = t.events;
+  put_counters(t.counters, c + 4);
+  for (const auto* v : {&t.albedo, &t.pix, &t.plane}) x = std::copy(v->begin(), v->end(), x);
+  if (!second) return;
+  for (const auto* v : {&t.albedo2, &t.pix2, &t.plane2}) x = std::copy(v->begin(), v->end(), x);
+  *x = t.both2;
+}
+void unpack_paths(BsdfTally& t, bool second, const std::uint64_t* c, const double* x) {
+  t.paths = c[0];
+  t.lost = c[1];
+  t.unterminated = c[2];
+  t.events = c[3];
+  t.counters = get_counters(c + 4);
+  for (auto* v : {&t.albedo, &t.pix, &t.plane}) {
+    std::copy(x, x + v->size(), v->begin());
+    x += v->size();
+  }
+  if (!second) return;
+  for (auto* v : {&t.albedo2, &t.pix2, &t.plane2}) {
+    std::copy(x, x + v->size(), v->begin());
+    x += v->size();
+  }
+  t.both2 = *x;
+}
+// Completes per-unit path sums from the other processes.
+void exchange_paths(TallySplit& split, const char* kind, UnitRange share, bool second,
+                    std::vector<BsdfTally>& units) {
+  Tallies t(kind, units.size(), share, kPathCounts, path_reals(units[0], second), 0, 0);
+  for (std::size_t u = 0; u < units.size(); ++u)
+    if (share.contains(u)) pack_paths(units[u], second, t.count_row(u), t.real_row(u));
+  split.exchange(t);
+  for (std::size_t u = 0; u < units.size(); ++u) unpack_paths(units[u], second, t.count_row(u), t.real_row(u));
 }
 
 }  // namespace
@@ -367,18 +418,28 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
     // Replicates one after the other, each a stratified pass of its own stream; their sums
     // and spread give the calibrated errors (measure/replicates.hpp).
     r.measured = BsdfTally(K, npix, nplane);
-    const double span = share / plan.replicates;
-    for (int q = 0; q < plan.replicates; ++q) {
+    const UnitRange reps = share_of(o.split, static_cast<std::uint64_t>(plan.replicates));
+    const double span = share / std::max<std::uint64_t>(1, reps.size());
+    // With a split, the replicates of this process are kept until the others' arrive; the
+    // replicates then enter add_replicate in order, as in one process.
+    std::vector<BsdfTally> kept(o.split ? plan.replicates : 0, BsdfTally(K, npix, nplane));
+    for (int q = static_cast<int>(reps.first); q < static_cast<int>(reps.end); ++q) {
       const std::uint64_t rep_stream = ReplicatePlan::stream(stream, q);
-      r.measured.add_replicate(run_paths(plan.per_replicate(), K, npix, nplane, o.progress, q * span,
-                                         span, [&](std::uint64_t i, BsdfTally& t) {
+      BsdfTally rep = run_paths(plan.per_replicate(), K, npix, nplane, o.progress, (q - reps.first) * span,
+                                span, [&](std::uint64_t i, BsdfTally& t) {
         CounterRng rng(o.seed, rep_stream, i);
         ++t.paths;
         const Vec2 ab = plan.strata.point(i, rng);
         const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
                                          -wi, mat, rng, o.max_events, finite, t.counters, t.events);
         record_walk_end(t, e, ray_weight, r.map, r.plane);
-      }));
+      });
+      if (o.split) kept[q] = std::move(rep);
+      else r.measured.add_replicate(rep);
+    }
+    if (o.split) {
+      exchange_paths(*o.split, "bsdf", reps, false, kept);
+      for (const BsdfTally& rep : kept) r.measured.add_replicate(rep);
     }
   }
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -391,8 +452,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
       CounterRng c;
       double uniform() { return c.uniform(); }
     };
-    r.smith_walk = run_paths(o.model_walks, K, npix, nplane, o.progress, share, 1.0 - share,
-                             [&](std::uint64_t i, BsdfTally& t) {
+    auto model_path = [&](std::uint64_t i, BsdfTally& t) {
       Rng rng{CounterRng(o.seed, mstream, i)};
       ++t.paths;
       const WalkExit e = walk.walk(wi, rng);
@@ -402,7 +462,20 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
         return;
       }
       leave(t, e.reflected, e.order, e.weight, e.direction);
-    });
+    };
+    if (!o.split) {
+      r.smith_walk = run_paths(o.model_walks, K, npix, nplane, o.progress, share, 1.0 - share, model_path);
+    } else {
+      // The model's sequential batches shared like replicates, then summed in batch order.
+      const std::uint64_t nb = path_batches(o.model_walks);
+      const UnitRange mine = o.split->share(nb);
+      std::vector<BsdfTally> parts(nb, BsdfTally(K, npix, nplane));
+      run_paths(o.model_walks, K, npix, nplane, o.progress, share, 1.0 - share, model_path, &parts, mine);
+      exchange_paths(*o.split, "bsdf_model", mine, true, parts);
+      BsdfTally total(K, npix, nplane);
+      for (const BsdfTally& p : parts) total += p;
+      r.smith_walk = std::move(total);
+    }
     r.model_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - tm).count();
   }
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -29,14 +29,15 @@ constexpr std::uint64_t kChunk = 1 << 14;
 // chunk tallies per replicate in chunk order (integer counts: identical for any thread count).
 template <class Body>
 std::vector<Tally> run_replicates(int R, std::uint64_t n, int nbins, TraceCounters& counters,
-                                  std::atomic<std::uint64_t>& done, Body&& body) {
+                                  std::atomic<std::uint64_t>& done, UnitRange share, Body&& body) {
   const std::uint64_t nc = chunks_per_replicate(n, kChunk);
   std::vector<Tally> parts = run_replicate_chunks<Tally>(
       R, n, kChunk, [&] { return Tally(nbins); },
       [&](int rep, std::uint64_t j, Tally& t) {
         body(rep, j, t);
         if ((j + 1) % kChunk == 0 || j + 1 == n) done += (j % kChunk) + 1;
-      });
+      },
+      share);
   std::vector<Tally> reps(R, Tally(nbins));
   for (std::size_t c = 0; c < parts.size(); ++c) {
     Tally& total = reps[c / nc];
@@ -51,6 +52,29 @@ std::vector<Tally> run_replicates(int R, std::uint64_t n, int nbins, TraceCounte
 }
 
 double per_replicate(std::uint64_t total, int R) { return static_cast<double>(total) / R; }
+
+// Completes the replicates' tallies from the other processes (measure/shards.hpp): per
+// replicate the ray-casting hits and the area samples and visible samples of every bin.
+void exchange_g1(TallySplit& split, UnitRange reps, std::vector<Tally>& ray_reps,
+                 std::vector<Tally>& sample_reps, TraceCounters& counters, int nbins) {
+  const std::size_t R = ray_reps.size(), nb = static_cast<std::size_t>(nbins);
+  Tallies t("g1", R, reps, 3 * nb, 0, kCounterValues, 0);
+  for (std::size_t q = 0; q < R; ++q) {
+    std::uint64_t* row = t.count_row(q);
+    std::copy(ray_reps[q].hits.begin(), ray_reps[q].hits.end(), row);
+    std::copy(sample_reps[q].samples.begin(), sample_reps[q].samples.end(), row + nb);
+    std::copy(sample_reps[q].visible.begin(), sample_reps[q].visible.end(), row + 2 * nb);
+  }
+  put_counters(counters, t.tail_counts.data());
+  split.exchange(t);
+  for (std::size_t q = 0; q < R; ++q) {
+    const std::uint64_t* row = t.count_row(q);
+    std::copy(row, row + nb, ray_reps[q].hits.begin());
+    std::copy(row + nb, row + 2 * nb, sample_reps[q].samples.begin());
+    std::copy(row + 2 * nb, row + 3 * nb, sample_reps[q].visible.begin());
+  }
+  counters = get_counters(t.tail_counts.data());
+}
 
 }  // namespace
 
@@ -254,7 +278,8 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   r.replicates = R;
   r.raycast_rays = plan.total();
   r.sample_rays = plan.total();
-  const std::uint64_t total_work = 2 * plan.total();
+  const UnitRange reps = share_of(o.split, static_cast<std::uint64_t>(R));
+  const std::uint64_t total_work = 2 * n_rep * std::max<std::uint64_t>(1, reps.size());
   std::atomic<std::uint64_t> done{0};
   TraceCounters counters;
 
@@ -266,8 +291,8 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   auto t_raycast = std::chrono::steady_clock::now();
   const std::uint64_t key = static_cast<std::uint64_t>(r.theta * 1e6) * 7919 +
                             static_cast<std::uint64_t>(r.phi * 1e6);
-  const std::vector<Tally> ray_reps =
-      run_replicates(R, n_rep, nbins, counters, done, [&](int rep, std::uint64_t j, Tally& t) {
+  std::vector<Tally> ray_reps =
+      run_replicates(R, n_rep, nbins, counters, done, reps, [&](int rep, std::uint64_t j, Tally& t) {
         CounterRng rng(o.seed, ReplicatePlan::stream(0xA000 + key, rep), j);
         Vec2 ab = plan.strata.point(j, rng);
         Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
@@ -282,8 +307,8 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   // (b) area sampling, per replicate strata along the CDF (facet order is spatially coherent).
   auto t_sample = std::chrono::steady_clock::now();
   const double total = r.front_projected;
-  const std::vector<Tally> sample_reps =
-      run_replicates(R, n_rep, nbins, counters, done, [&](int rep, std::uint64_t j, Tally& t) {
+  std::vector<Tally> sample_reps =
+      run_replicates(R, n_rep, nbins, counters, done, reps, [&](int rep, std::uint64_t j, Tally& t) {
         CounterRng rng(o.seed, ReplicatePlan::stream(0xB000 + key, rep), j);
         double u = (static_cast<double>(j) + rng.uniform()) / n_rep * total;
         std::size_t k = std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin();
@@ -302,6 +327,7 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
         if (!tracer.occluded(p, v, &plane, t.counters)) ++t.visible[b];
       });
   report();
+  if (o.split) exchange_g1(*o.split, reps, ray_reps, sample_reps, counters, nbins);
   set_g1_counts(r, ray_reps, sample_reps);
   r.counters = counters;
   r.sample_seconds =

@@ -256,7 +256,9 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
   const std::uint64_t nc = chunks_per_replicate(n_rep, kChunk);
   // Two halves of the replicates (progress between them); chunk tallies merged per replicate
   // in chunk order: identical for any thread count.
-  const int halves[3] = {0, R / 2, R};
+  const UnitRange reps = share_of(opt.split, static_cast<std::uint64_t>(R));
+  const int share0 = static_cast<int>(reps.first), share1 = static_cast<int>(reps.end);
+  const int halves[3] = {share0, share0 + (share1 - share0) / 2, share1};
   for (int h = 0; h < 2; ++h) {
     const int r0 = halves[h], r1 = halves[h + 1];
     if (r1 <= r0) continue;
@@ -274,7 +276,33 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
       }
       r.counters += parts[c].counters;
     }
-    if (opt.progress) opt.progress(static_cast<double>(done.load()) / r.samples);
+    if (opt.progress) opt.progress(static_cast<double>(done.load()) / (n_rep * (share1 - share0)));
+  }
+  if (opt.split) {
+    // Completes the replicates' counts from the other processes (measure/shards.hpp).
+    const std::size_t nb = static_cast<std::size_t>(nbins);
+    Tallies t("g2", R, reps, 4 * nb, 0, kCounterValues, 0);
+    for (int q = 0; q < R; ++q)
+      for (std::size_t b = 0; b < nb; ++b) {
+        const G2NormalBin& bin = r.bins[b];
+        std::uint64_t* row = t.count_row(q);
+        row[b] = bin.samples_r[q];
+        row[nb + b] = bin.visible_o_r[q];
+        row[2 * nb + b] = bin.visible_i_r[q];
+        row[3 * nb + b] = bin.visible_both_r[q];
+      }
+    put_counters(r.counters, t.tail_counts.data());
+    opt.split->exchange(t);
+    for (int q = 0; q < R; ++q)
+      for (std::size_t b = 0; b < nb; ++b) {
+        G2NormalBin& bin = r.bins[b];
+        const std::uint64_t* row = t.count_row(q);
+        bin.samples_r[q] = row[b];
+        bin.visible_o_r[q] = row[nb + b];
+        bin.visible_i_r[q] = row[2 * nb + b];
+        bin.visible_both_r[q] = row[3 * nb + b];
+      }
+    r.counters = get_counters(t.tail_counts.data());
   }
   for (G2NormalBin& nb : r.bins) {
     for (int q = 0; q < R; ++q) {

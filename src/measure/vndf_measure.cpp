@@ -139,6 +139,9 @@ VndfResult measure_vndf(const Tracer& tracer, const Vec3& v_in, const VndfOption
   const std::uint64_t batch = std::uint64_t(1) << 22;
   std::vector<std::uint64_t> counts(nbins + 1, 0);
   std::vector<std::pair<std::uint64_t, Vec2>> origins;
+  // This process traces the rays at positions [first, end) of the sequence of sorted batches
+  // (every process draws and sorts every batch: the sort is cheap beside the tracing).
+  const UnitRange share = share_of(o.split, r.rays);
   for (std::uint64_t first = 0; first < r.rays; first += batch) {
     const std::uint64_t n = std::min(batch, r.rays - first);
     origins.resize(n);
@@ -166,6 +169,7 @@ VndfResult measure_vndf(const Tracer& tracer, const Vec3& v_in, const VndfOption
     std::vector<std::uint64_t> part;
     histogram_chunks(n, nbins, part, r.counters,
                      [&](std::uint64_t j, std::vector<std::uint64_t>& c, TraceCounters& tc) {
+                       if (!share.contains(first + j)) return;
                        const Vec2& ab = origins[j].second;
                        const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
                        const TraceHit h = tracer.first_hit(org, -v, nullptr, tc);
@@ -175,6 +179,16 @@ VndfResult measure_vndf(const Tracer& tracer, const Vec3& v_in, const VndfOption
                      });
     for (int b = 0; b <= nbins; ++b) counts[b] += part[b];
     if (o.progress) o.progress(static_cast<double>(first + n) / r.rays);
+  }
+  if (o.split) {
+    // Integer bin counts and counters: the other processes' rays are added (measure/shards.hpp).
+    Tallies t("vndf", r.rays, share, 0, 0, counts.size() + kCounterValues, 0);
+    std::copy(counts.begin(), counts.end(), t.tail_counts.begin());
+    put_counters(r.counters, t.tail_counts.data() + counts.size());
+    o.split->exchange(t);
+    std::copy(t.tail_counts.begin(), t.tail_counts.begin() + static_cast<std::ptrdiff_t>(counts.size()),
+              counts.begin());
+    r.counters = get_counters(t.tail_counts.data() + counts.size());
   }
   r.bin_hits.assign(counts.begin(), counts.begin() + nbins);
   r.hits_below = counts[nbins];

@@ -420,6 +420,7 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
   G1Options go;
   go.rays = o.rays;
   go.seed = o.seed;
+  go.split = o.split;
   const DirectionBinning binning = g1_normal_binning(go);
   const std::size_t K = set.surfaces.size();
   const bool periodic = set.surfaces[0].macro().periodic;
@@ -603,6 +604,7 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
   G2Options go;
   go.rays = share_of_rays(o, 4);
   go.seed = o.seed;
+  go.split = o.split;
   const DirectionBinning binning = g2_normal_binning(go);
   const std::size_t K = set.surfaces.size();
   Json per_surface = Json::array();
@@ -666,6 +668,7 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
       G1Options g1o;
       g1o.rays = go.rays;
       g1o.seed = o.seed + 0x9e3779b9ULL;
+      g1o.split = o.split;
       g1o.normal_theta_bins = go.normal_theta_bins;
       g1o.normal_phi_bins = go.normal_phi_bins;
       const double unit = 2.0 * static_cast<double>(g1o.rays);
@@ -769,6 +772,7 @@ void check_vndf(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
   VndfOptions vo;
   vo.rays = share_of_rays(o, 4);
   vo.seed = o.seed;
+  vo.split = o.split;
   const DirectionBinning binning = vndf_binning(vo);
   Json per_surface = Json::array();
   // Per direction and bin, the density of each surface (ensemble rows below).
@@ -902,6 +906,7 @@ void check_bsdf_albedo(const SurfaceSet& set, Progress& progress, CheckOutput& o
       bo.orders = K;
       bo.rays = share_of_rays(o, 4);
       bo.seed = o.seed;
+      bo.split = o.split;
       bo.resolution = 16;
       // The walk depends only on the nominal NDF: run once, with the first surface.
       bo.model_walks = s.nominal && k == 0 ? bo.rays : 0;

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "microsim/io/output.hpp"
+#include "microsim/measure/shards.hpp"
 #include "microsim/models/microfacet_bsdf.hpp"
 #include "microsim/models/smith_random_walk.hpp"
 #include "microsim/trace/tracer.hpp"
@@ -99,6 +100,9 @@ struct BsdfOptions {
   int replicates = 32;
   // Called from the calling thread with the fraction of work done (progress display).
   std::function<void(double)> progress;
+  // Other processes sharing the replicates and the model's batches (measure/shards.hpp);
+  // nullptr: all computed here.
+  TallySplit* split = nullptr;
 };
 
 // Mergeable sums. Index conventions: side s (0 reflected, 1 transmitted), slot k (0 .. K-1 for

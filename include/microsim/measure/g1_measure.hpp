@@ -29,6 +29,8 @@ struct G1Options {
   int replicates = 32;
   // Called from the calling thread with the fraction of work done (progress display).
   std::function<void(double)> progress;
+  // Other processes sharing the replicates (measure/shards.hpp); nullptr: all computed here.
+  TallySplit* split = nullptr;
 };
 
 struct G1NormalBin {

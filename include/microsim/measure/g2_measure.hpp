@@ -41,6 +41,8 @@ struct G2Options {
   int normal_phi_bins = 8;     // 45 degree sectors
   int replicates = 32;         // independent randomized replicates (standard errors)
   std::function<void(double)> progress;
+  // Other processes sharing the replicates (measure/shards.hpp); nullptr: all computed here.
+  TallySplit* split = nullptr;
 };
 
 struct G2NormalBin {

@@ -14,6 +14,7 @@
 
 #include "microsim/common.hpp"
 #include "microsim/measure/sampling.hpp"
+#include "microsim/measure/shards.hpp"
 
 namespace microsim {
 
@@ -37,19 +38,22 @@ struct ReplicatePlan {
 // of at most `chunk` rays inside one replicate, each chunk filling its own part (made by
 // make()). The parts come back in (replicate, chunk) order, so merging them in that order gives
 // integer tallies identical for any thread count. chunks_per_replicate(n, chunk) parts belong
-// to each replicate.
+// to each replicate. Only the replicates in `reps` are traced (measure/shards.hpp: the share of
+// this process); the parts of the others are left as make() returns them.
 inline std::uint64_t chunks_per_replicate(std::uint64_t n, std::uint64_t chunk) {
   return (n + chunk - 1) / chunk;
 }
 template <class Part, class Make, class Body>
 std::vector<Part> run_replicate_chunks(int R, std::uint64_t n, std::uint64_t chunk, Make&& make,
-                                       Body&& body) {
+                                       Body&& body,
+                                       UnitRange reps = {0, ~std::uint64_t(0)}) {
   const std::uint64_t nc = chunks_per_replicate(n, chunk);
   std::vector<Part> parts(static_cast<std::size_t>(R) * nc);
   tbb::parallel_for(std::uint64_t(0), static_cast<std::uint64_t>(R) * nc, [&](std::uint64_t c) {
     const int rep = static_cast<int>(c / nc);
     const std::uint64_t first = (c % nc) * chunk, end = std::min(n, first + chunk);
     parts[c] = make();
+    if (!reps.contains(static_cast<std::uint64_t>(rep))) return;
     for (std::uint64_t j = first; j < end; ++j) body(rep, j, parts[c]);
   });
   return parts;

@@ -37,6 +37,8 @@ struct VndfOptions {
   // Sidak-corrected over the bins tested.
   double family_alpha = 0.0027;
   std::function<void(double)> progress;
+  // Other processes sharing the rays (measure/shards.hpp); nullptr: all traced here.
+  TallySplit* split = nullptr;
 };
 
 DirectionBinning vndf_binning(const VndfOptions& options);

@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "microsim/common.hpp"
+#include "microsim/measure/shards.hpp"
 #include "microsim/surface/microsurface.hpp"
 
 namespace microsim::validation {
@@ -98,6 +99,8 @@ struct Options {
   double min_ring_mass = 1e-4;   // D rings tested where the model holds this much area or more
   std::uint64_t min_bin_count = 100;  // per-bin G1 tests need this many samples and hits
   std::vector<std::string> checks;  // names to run (empty: every applicable check)
+  // Other processes sharing the estimators' work (measure/shards.hpp); nullptr: all here.
+  TallySplit* split = nullptr;
 };
 
 // One entry of a validation: a surface, or several independent surfaces with the same

@@ -1,0 +1,359 @@
+#include "microsim/measure/shards.hpp"
+
+#include <sys/stat.h>
+
+#include <cstdio>
+#include <fstream>
+#include <map>
+
+namespace microsim {
+
+UnitRange shard_range(std::uint64_t units, int k, int n) {
+  // 128-bit products: units * n never overflows.
+  const auto at = [&](int i) {
+    return static_cast<std::uint64_t>(static_cast<unsigned __int128>(units) * static_cast<unsigned>(i) /
+                                      static_cast<unsigned>(n));
+  };
+  return {at(k), at(k + 1)};
+}
+
+Tallies::Tallies(std::string kind_, std::uint64_t units_, UnitRange covered_, std::size_t rc,
+                 std::size_t rr, std::size_t tc, std::size_t tr)
+    : kind(std::move(kind_)), units(units_), covered(covered_), row_counts(rc), row_reals(rr),
+      counts(units_ * rc, 0), reals(units_ * rr, 0.0), tail_counts(tc, 0), tail_reals(tr, 0.0) {}
+
+void put_counters(const TraceCounters& c, std::uint64_t* out) {
+  out[0] = c.rays;
+  out[1] = c.border_crossings;
+  out[2] = c.lost_below;
+  out[3] = c.backface_hits;
+  out[4] = c.unresolved;
+}
+
+TraceCounters get_counters(const std::uint64_t* in) {
+  TraceCounters c;
+  c.rays = in[0];
+  c.border_crossings = in[1];
+  c.lost_below = in[2];
+  c.backface_hits = in[3];
+  c.unresolved = in[4];
+  return c;
+}
+
+ShardRecorder::ShardRecorder(int k, int n) : k_(k), n_(n) {
+  if (!(n >= 1 && k >= 1 && k <= n)) throw UsageError("--shard must be K/N with 1 <= K <= N");
+}
+
+std::pair<int, int> parse_shard(const std::string& text) {
+  const auto bad = [&] {
+    return UsageError("--shard must be K/N with integers 1 <= K <= N <= 4096 (got '" + text + "')");
+  };
+  const auto slash = text.find('/');
+  if (slash == std::string::npos) throw bad();
+  const auto number = [&](const std::string& s) {
+    if (s.empty() || s.size() > 4 || s.find_first_not_of("0123456789") != std::string::npos) throw bad();
+    return std::stoi(s);
+  };
+  const int k = number(text.substr(0, slash)), n = number(text.substr(slash + 1));
+  if (!(n >= 1 && n <= 4096 && k >= 1 && k <= n)) throw bad();
+  return {k, n};
+}
+
+namespace {
+std::string describe(const Tallies& t) {
+  return t.kind + " (" + std::to_string(t.units) + " units, " + std::to_string(t.values()) + " values)";
+}
+bool same_layout(const Tallies& a, const Tallies& b) {
+  return a.kind == b.kind && a.units == b.units && a.row_counts == b.row_counts &&
+         a.row_reals == b.row_reals && a.tail_counts.size() == b.tail_counts.size() &&
+         a.tail_reals.size() == b.tail_reals.size();
+}
+}  // namespace
+
+void TallyReplay::exchange(Tallies& t) {
+  if (next_ >= entries_.size())
+    throw RuntimeFailure("the merged parts hold " + std::to_string(entries_.size()) +
+                         " estimator calls, the command made more");
+  Tallies& e = entries_[next_];
+  if (!same_layout(e, t))
+    throw RuntimeFailure("estimator call " + std::to_string(next_ + 1) + " of the command is " +
+                         describe(t) + ", the parts hold " + describe(e));
+  t = std::move(e);
+  ++next_;
+}
+
+void TallyReplay::finish() const {
+  if (next_ != entries_.size())
+    throw RuntimeFailure("the merged parts hold " + std::to_string(entries_.size()) +
+                         " estimator calls, the command made " + std::to_string(next_));
+}
+
+// --- identity -------------------------------------------------------------------------------
+
+std::string file_hash(const std::string& path, std::uint64_t* bytes) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw RuntimeFailure("cannot read " + path);
+  std::uint64_t h = 0xcbf29ce484222325ull, n = 0;
+  std::vector<char> buf(1 << 20);
+  while (in) {
+    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+    const std::streamsize got = in.gcount();
+    for (std::streamsize i = 0; i < got; ++i) {
+      h ^= static_cast<unsigned char>(buf[i]);
+      h *= 0x100000001b3ull;
+    }
+    n += static_cast<std::uint64_t>(got);
+  }
+  if (bytes) *bytes = n;
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  return hex;
+}
+
+namespace {
+bool is_regular_file(const std::string& p) {
+  struct stat st;
+  return stat(p.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+std::string hex64(std::uint64_t h) {
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  return hex;
+}
+std::uint64_t fnv(std::uint64_t h, const std::string& s) {
+  for (unsigned char c : s) {
+    h ^= c;
+    h *= 0x100000001b3ull;
+  }
+  h ^= 0xff;  // separator: ("ab", "c") and ("a", "bc") differ
+  return h * 0x100000001b3ull;
+}
+}  // namespace
+
+std::string RunIdentity::fingerprint() const {
+  std::uint64_t h = fnv(0xcbf29ce484222325ull, version);
+  for (const auto& w : command) h = fnv(h, w);
+  for (const auto& in : inputs) h = fnv(fnv(h, in.path), in.hash);
+  return hex64(h);
+}
+
+RunIdentity identify_run(const std::vector<std::string>& args, const std::string& version) {
+  RunIdentity run;
+  run.version = version;
+  for (std::size_t k = 0; k < args.size(); ++k) {
+    const std::string& a = args[k];
+    const auto has_value = [&](const char* name) { return a == name && k + 1 < args.size(); };
+    const auto prefixed = [&](const char* name) { return a.rfind(name, 0) == 0; };
+    if (has_value("--shard") || has_value("--threads")) {
+      ++k;
+      continue;
+    }
+    if (prefixed("--shard=") || prefixed("--threads=") || a == "--quiet" || a == "-q") continue;
+    if (has_value("-o") || has_value("--output")) {
+      run.output = args[++k];
+      run.command.push_back("-o");
+      run.command.push_back(kOutputPlaceholder);
+      continue;
+    }
+    if (prefixed("--output=") || (prefixed("-o") && a.size() > 2 && a[2] != '-')) {
+      run.output = a.substr(prefixed("--output=") ? 9 : 2);
+      run.command.push_back("-o");
+      run.command.push_back(kOutputPlaceholder);
+      continue;
+    }
+    run.command.push_back(a);
+    if (a[0] != '-' && is_regular_file(a)) {
+      RunIdentity::Input in;
+      in.path = a;
+      in.hash = file_hash(a, &in.bytes);
+      run.inputs.push_back(in);
+    }
+  }
+  return run;
+}
+
+// --- partial records ------------------------------------------------------------------------
+
+namespace {
+
+Json identity_json(const RunIdentity& run) {
+  Json inputs = Json::array();
+  for (const auto& in : run.inputs)
+    inputs.push_back({{"path", in.path}, {"bytes", in.bytes}, {"hash", in.hash}});
+  return {{"command", run.command}, {"output", run.output}, {"inputs", inputs},
+          {"microsim_version", run.version}, {"fingerprint", run.fingerprint()}};
+}
+
+RunIdentity identity_of(const Json& j) {
+  RunIdentity run;
+  run.command = j.at("command").get<std::vector<std::string>>();
+  run.output = j.at("output").get<std::string>();
+  run.version = j.at("microsim_version").get<std::string>();
+  for (const auto& in : j.at("inputs"))
+    run.inputs.push_back({in.at("path").get<std::string>(), in.at("bytes").get<std::uint64_t>(),
+                          in.at("hash").get<std::string>()});
+  return run;
+}
+
+// Rows of the covered units only; the rest are zero by construction.
+Json tallies_json(const Tallies& t) {
+  const auto rows = [&](const auto& v, std::size_t width) {
+    using T = typename std::decay_t<decltype(v)>::value_type;
+    return std::vector<T>(v.begin() + static_cast<std::ptrdiff_t>(t.covered.first * width),
+                          v.begin() + static_cast<std::ptrdiff_t>(t.covered.end * width));
+  };
+  return {{"kind", t.kind},
+          {"units", t.units},
+          {"covered", {t.covered.first, t.covered.end}},
+          {"row_counts", t.row_counts},
+          {"row_reals", t.row_reals},
+          {"counts", rows(t.counts, t.row_counts)},
+          {"reals", rows(t.reals, t.row_reals)},
+          {"tail_counts", t.tail_counts},
+          {"tail_reals", t.tail_reals}};
+}
+
+Tallies tallies_of(const Json& j, const std::string& part) {
+  const auto bad = [&](const std::string& why) {
+    return UsageError("part " + part + " is not a valid partial record: " + why);
+  };
+  const UnitRange covered{j.at("covered").at(0).get<std::uint64_t>(),
+                          j.at("covered").at(1).get<std::uint64_t>()};
+  const auto units = j.at("units").get<std::uint64_t>();
+  if (covered.first > covered.end || covered.end > units) throw bad("covered range outside the units");
+  Tallies t(j.at("kind").get<std::string>(), units, covered, j.at("row_counts").get<std::size_t>(),
+            j.at("row_reals").get<std::size_t>(), j.at("tail_counts").size(), j.at("tail_reals").size());
+  const auto counts = j.at("counts").get<std::vector<std::uint64_t>>();
+  const auto reals = j.at("reals").get<std::vector<double>>();
+  if (counts.size() != covered.size() * t.row_counts || reals.size() != covered.size() * t.row_reals)
+    throw bad("row sizes do not match the covered range");
+  std::copy(counts.begin(), counts.end(), t.counts.begin() + static_cast<std::ptrdiff_t>(covered.first * t.row_counts));
+  std::copy(reals.begin(), reals.end(), t.reals.begin() + static_cast<std::ptrdiff_t>(covered.first * t.row_reals));
+  t.tail_counts = j.at("tail_counts").get<std::vector<std::uint64_t>>();
+  t.tail_reals = j.at("tail_reals").get<std::vector<double>>();
+  return t;
+}
+
+}  // namespace
+
+Json partial_json(const RunIdentity& run, const ShardRecorder& shard, double seconds) {
+  Json j;
+  j["format"] = kPartialFormat;
+  j["run"] = identity_json(run);
+  j["shard"] = {{"index", shard.index()}, {"count", shard.count()}};
+  j["seconds"] = seconds;
+  Json entries = Json::array();
+  for (const Tallies& t : shard.entries()) entries.push_back(tallies_json(t));
+  j["tallies"] = entries;
+  return j;
+}
+
+MergedRun merge_partials(const std::vector<std::pair<std::string, Json>>& parts) {
+  if (parts.empty()) throw UsageError("merge needs at least one partial record");
+  MergedRun m;
+  std::map<int, std::string> seen;  // shard index -> part name
+  std::string fingerprint, first_name;
+  std::vector<std::vector<Tallies>> all;
+  for (const auto& [name, j] : parts) {
+    if (!j.is_object() || j.value("format", std::string()) != kPartialFormat)
+      throw UsageError("part " + name + " is not a partial record (no \"format\": \"" +
+                       std::string(kPartialFormat) + "\"; written by measure ... --shard K/N)");
+    RunIdentity run;
+    int k = 0, n = 0;
+    try {
+      run = identity_of(j.at("run"));
+      k = j.at("shard").at("index").get<int>();
+      n = j.at("shard").at("count").get<int>();
+    } catch (const Json::exception& e) {
+      throw UsageError("part " + name + " is not a valid partial record: " + e.what());
+    }
+    const std::string fp = run.fingerprint();
+    if (fp != j.at("run").value("fingerprint", std::string()))
+      throw UsageError("part " + name + " is damaged: its fingerprint does not match its run");
+    if (all.empty()) {
+      m.run = run;
+      m.shards = n;
+      fingerprint = fp;
+      first_name = name;
+    } else if (fp != fingerprint) {
+      throw UsageError("part " + name + " belongs to another run than " + first_name +
+                       " (different command, inputs or version: fingerprint " + fp + " vs " +
+                       fingerprint + ")");
+    } else if (n != m.shards) {
+      throw UsageError("part " + name + " is shard " + std::to_string(k) + "/" + std::to_string(n) +
+                       ", " + first_name + " one of " + std::to_string(m.shards) + " shards");
+    }
+    if (!(k >= 1 && k <= n)) throw UsageError("part " + name + " has an invalid shard index");
+    if (seen.count(k))
+      throw UsageError("shard " + std::to_string(k) + "/" + std::to_string(n) + " is given twice (" +
+                       seen[k] + " and " + name + ")");
+    seen[k] = name;
+    std::vector<Tallies> entries;
+    try {
+      for (const auto& e : j.at("tallies")) entries.push_back(tallies_of(e, name));
+    } catch (const Json::exception& e) {
+      throw UsageError("part " + name + " is not a valid partial record: " + e.what());
+    }
+    all.push_back(std::move(entries));
+  }
+  std::string missing;
+  for (int k = 1; k <= m.shards; ++k)
+    if (!seen.count(k)) missing += (missing.empty() ? "" : ", ") + std::to_string(k) + "/" + std::to_string(m.shards);
+  if (!missing.empty())
+    throw UsageError("shard" + std::string(missing.find(',') != std::string::npos ? "s " : " ") + missing +
+                     " missing (run them with --shard K/N, then merge all " +
+                     std::to_string(m.shards) + " parts)");
+
+  // Entry by entry: the same layout in every part, covered ranges tiling the units.
+  const std::size_t ne = all[0].size();
+  for (std::size_t p = 1; p < all.size(); ++p)
+    if (all[p].size() != ne)
+      throw UsageError("part " + parts[p].first + " holds " + std::to_string(all[p].size()) +
+                       " estimator calls, " + first_name + " " + std::to_string(ne));
+  // Parts in shard order, so that real totals are summed in a fixed order.
+  std::vector<std::size_t> order(all.size());
+  for (std::size_t p = 0; p < all.size(); ++p)
+    order[static_cast<std::size_t>(parts[p].second.at("shard").at("index").get<int>() - 1)] = p;
+  for (std::size_t e = 0; e < ne; ++e) {
+    Tallies merged = all[order[0]][e];
+    merged.covered = {0, merged.units};
+    std::fill(merged.counts.begin(), merged.counts.end(), 0);
+    std::fill(merged.reals.begin(), merged.reals.end(), 0.0);
+    std::fill(merged.tail_counts.begin(), merged.tail_counts.end(), 0);
+    std::fill(merged.tail_reals.begin(), merged.tail_reals.end(), 0.0);
+    std::vector<UnitRange> ranges;
+    for (std::size_t p : order) {
+      const Tallies& t = all[p][e];
+      if (!same_layout(t, merged))
+        throw UsageError("part " + parts[p].first + ": estimator call " + std::to_string(e + 1) +
+                         " is " + describe(t) + ", " + first_name + " has " + describe(merged));
+      for (std::uint64_t u = t.covered.first; u < t.covered.end; ++u) {
+        std::copy_n(t.counts.begin() + static_cast<std::ptrdiff_t>(u * t.row_counts), t.row_counts,
+                    merged.counts.begin() + static_cast<std::ptrdiff_t>(u * t.row_counts));
+        std::copy_n(t.reals.begin() + static_cast<std::ptrdiff_t>(u * t.row_reals), t.row_reals,
+                    merged.reals.begin() + static_cast<std::ptrdiff_t>(u * t.row_reals));
+      }
+      for (std::size_t i = 0; i < t.tail_counts.size(); ++i) merged.tail_counts[i] += t.tail_counts[i];
+      for (std::size_t i = 0; i < t.tail_reals.size(); ++i) merged.tail_reals[i] += t.tail_reals[i];
+      ranges.push_back(t.covered);
+    }
+    std::sort(ranges.begin(), ranges.end(),
+              [](const UnitRange& a, const UnitRange& b) { return a.first < b.first; });
+    std::uint64_t at = 0;
+    for (const UnitRange& r : ranges) {
+      if (r.size() == 0) continue;
+      if (r.first != at)
+        throw UsageError("estimator call " + std::to_string(e + 1) + " (" + merged.kind + "): units " +
+                         (r.first > at ? "[" + std::to_string(at) + ", " + std::to_string(r.first) + ") missing"
+                                       : "from " + std::to_string(r.first) + " covered twice"));
+      at = r.end;
+    }
+    if (at != merged.units)
+      throw UsageError("estimator call " + std::to_string(e + 1) + " (" + merged.kind + "): units [" +
+                       std::to_string(at) + ", " + std::to_string(merged.units) + ") missing");
+    m.entries.push_back(std::move(merged));
+  }
+  return m;
+}
+
+}  // namespace microsim
