@@ -38,6 +38,8 @@ struct Value {
 };
 
 // Every quantity of the table for one surface (window or reference).
+double phi_deg = 0;  // azimuth of the G1 views and of the BSDF incidence
+
 std::vector<Value> measure_all(const Microsurface& s, std::uint64_t rays, std::uint64_t bsdf_rays,
                                std::uint64_t seed, double& side_fraction) {
   Tracer tracer(s);
@@ -47,7 +49,7 @@ std::vector<Value> measure_all(const Microsurface& s, std::uint64_t rays, std::u
   go.rays = rays;
   go.seed = seed;
   for (double t : {60.0, 80.0, 85.0}) {
-    const G1Result r = measure_g1(tracer, direction_from_angles(rad(t), 0.0), go);
+    const G1Result r = measure_g1(tracer, direction_from_angles(rad(t), rad(phi_deg)), go);
     const Estimate b = r.g1_area_sampling(), a = r.g1_raycast();
     char name[64];
     std::snprintf(name, sizeof name, "G1(%g) area sampling", t);
@@ -70,6 +72,7 @@ std::vector<Value> measure_all(const Microsurface& s, std::uint64_t rays, std::u
   bo.rays = bsdf_rays;
   bo.seed = seed;
   bo.theta_i = rad(60.0);
+  bo.phi_i = rad(phi_deg);
   bo.models = false;
   bo.resolution = 8;
   const BsdfResult br = measure_bsdf(tracer, bo);
@@ -108,6 +111,7 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[k], "--bsdf-rays")) bsdf_rays = std::strtoull(next(), nullptr, 10);
     else if (!std::strcmp(argv[k], "--seed")) seed = std::strtoull(next(), nullptr, 10);
     else if (!std::strcmp(argv[k], "--csv")) csv = next();
+    else if (!std::strcmp(argv[k], "--phi")) phi_deg = std::atof(next());
     else {
       std::fprintf(stderr, "unknown option %s\n", argv[k]);
       return 2;
@@ -148,7 +152,7 @@ int main(int argc, char** argv) {
         std::printf("| %s | %.5f +- %.5f | %.5f +- %.5f | %+.5f | %+.2f |\n", w[q].name.c_str(), w[q].mean,
                     w[q].se, r[q].mean, r[q].se, d, z);
         if (f)
-          std::fprintf(f, "%g,%g,%d,%d,%s,%.8g,%.8g,%.8g,%.8g,%.8g,%.4f,%.6g\n", alpha, g, gc, cx - 2 * gc,
+          std::fprintf(f, "%g,%g,%d,%d,\"%s\",%.8g,%.8g,%.8g,%.8g,%.8g,%.4f,%.6g\n", alpha, g, gc, cx - 2 * gc,
                        w[q].name.c_str(), w[q].mean, w[q].se, r[q].mean, r[q].se, d, z, side_w);
       }
       std::fflush(stdout);

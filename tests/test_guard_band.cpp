@@ -93,7 +93,11 @@ TEST(GuardBand, FlatWindowRaysFromAboveAllHitAndSideWallsEndRays) {
   o.rays = 4096;
   o.replicates = 16;
   const G1Result r = measure_g1(t, direction_from_angles(rad(80.0), 1.0), o);
-  EXPECT_EQ(r.raycast_hits, r.raycast_rays);
+  // Every sample point sees the sky; ray casting counts the interior's hits among the rays
+  // of the stretched window, whose expected share is exactly the interior's.
+  EXPECT_EQ(r.g1_area_sampling().mean, 1.0);
+  const Estimate a = r.g1_raycast();
+  EXPECT_LT(std::abs(a.mean - 1.0), 4 * a.stderr_ + 1e-12) << a.mean << " +- " << a.stderr_;
   EXPECT_EQ(r.counters.lost_below, 0u);
   TraceCounters c;
   const Vec3 p(0.0, 0.0, 1e-4), d = direction_from_angles(rad(89.9), 0.0);
@@ -106,7 +110,8 @@ TEST(GuardBand, FlatWindowRaysFromAboveAllHitAndSideWallsEndRays) {
 TEST(GuardBand, DefaultGuardAgreesWithThePeriodicTileAtGrazingAngles) {
   // Default guard (kDefaultGuardCorrelationLengths l) on a 256^2 tile, Beckmann 1.0, G1 at 85
   // degrees by area sampling (the quantity most exposed to the missing surroundings): within
-  // 3 sigma of both errors plus the bias measured at this guard (README table, <= 0.002).
+  // 3 sigma of both errors plus an allowance of 0.002 for the bias (README table: +0.0007 at
+  // 8 l, +0.0019 at 4 l on a 512^2 tile).
   const Microsurface tile = tile256(1.0);
   const int gc = static_cast<int>(std::lround(kDefaultGuardCorrelationLengths * 8));
   const Pair q = g1_pair(tile, gc, 85.0, false, 200000);
@@ -115,20 +120,21 @@ TEST(GuardBand, DefaultGuardAgreesWithThePeriodicTileAtGrazingAngles) {
       << q.window.mean << " vs " << q.periodic.mean << " +- " << se;
   // Ray casting too (rays from above; side entries are what the guard removes).
   const Pair a = g1_pair(tile, gc, 85.0, true, 200000);
-  EXPECT_LT(std::abs(a.window.mean - a.periodic.mean), 3 * std::hypot(a.window.stderr_, a.periodic.stderr_) + 0.002);
+  EXPECT_LT(std::abs(a.window.mean - a.periodic.mean), 3 * std::hypot(a.window.stderr_, a.periodic.stderr_) + 0.002)
+      << a.window.mean << " vs " << a.periodic.mean;
 }
 
 TEST(GuardBand, NoGuardOverestimatesG1AtGrazingAngles) {
   // Power check: without a guard, sample points near the border see past the missing
-  // surroundings (their rays escape through the side wall), so G1 by area sampling is too
-  // high at grazing angles; ray casting loses the rays entering through a side wall below the
-  // surface, so it is too low. Both many sigma away.
+  // surroundings (their rays escape through the side wall), so G1 is too high at grazing
+  // angles, by area sampling and by ray casting alike (the same rule): many sigma away
+  // (README bias table: +0.022 at 512^2, alpha 1, 85 degrees).
   const Microsurface tile = tile256(1.0);
   const Pair q = g1_pair(tile, 0, 85.0, false, 200000);
   EXPECT_GT(z_of(q), 5.0) << q.window.mean << " vs " << q.periodic.mean;
   EXPECT_GT(q.counters.side_exits, 0u);
   const Pair a = g1_pair(tile, 0, 85.0, true, 200000);
-  EXPECT_LT(z_of(a), -5.0) << a.window.mean << " vs " << a.periodic.mean;
+  EXPECT_GT(z_of(a), 5.0) << a.window.mean << " vs " << a.periodic.mean;
 }
 
 TEST(GuardBand, GuardWiderThanHalfThePatchIsRefused) {

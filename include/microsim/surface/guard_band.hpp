@@ -15,7 +15,7 @@ namespace microsim {
 // Default guard width in correlation lengths l (Gaussian convention exp(-r^2/l^2), i.e.
 // Sal / sqrt(ln 5)): the smallest width of the bias table whose bias is within the ray-count
 // error at the default ray counts.
-constexpr double kDefaultGuardCorrelationLengths = 4.0;
+constexpr double kDefaultGuardCorrelationLengths = 8.0;
 
 // The correlation length l of a heightfield's heights (from its autocorrelation's Sal, over
 // the overlapping pairs: the patch is not periodic).
