@@ -46,6 +46,7 @@ PROFILES = {
         "tiles_rays": 10000,
         "measured_resolution": 64,
         "measured_rays": 10000,
+        "measured_guard": 2,  # correlation lengths: the default 8 leaves no interior at this size
     },
 }
 
@@ -338,8 +339,9 @@ def section_measured(ctx):
     dx = 1.0 / res
     np.savetxt(csv, z[:n, :n], delimiter=",", fmt="%.9g")
     surf = os.path.join(ctx.surf_dir, "measured-patch.exr")
+    guard = ["--guard", str(ctx.profile["measured_guard"])] if "measured_guard" in ctx.profile else []
     ctx.run(["generate", "heightmap", "--input", csv, "--pixel-size", "%.9g" % dx, "--detrend", "plane",
-             "-o", surf])
+             "-o", surf] + guard)
     info = ctx.data("measured_info.json")
     ctx.run(["info", surf, "--json", info])
     rec_info = load_json(info)
