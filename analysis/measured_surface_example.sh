@@ -11,7 +11,7 @@ M="$BUILD/microsim"
 mkdir -p "$OUT"
 # The stand-in for an instrument's export: 192 x 192 heights of a 256^2 tile, as CSV.
 "$M" generate gaussian --alpha 0.5 --resolution 256 --seed 7 -o "$OUT/source.exr" --quiet
-python3 - "$OUT/source.exr" "$OUT/scan.csv" <<'PY'
+/usr/bin/python3 - "$OUT/source.exr" "$OUT/scan.csv" <<'PY'
 import sys
 import numpy as np
 import OpenImageIO as oiio
