@@ -485,7 +485,7 @@ TEST(HeightmapCli, ImportedTileGoesThroughEveryEstimator) {
   EXPECT_TRUE(j["metrology"].contains("sal"));
 }
 
-TEST(HeightmapCli, NonPeriodicWindowIsRefusedByEstimatorsButNotByInfo) {
+TEST(HeightmapCli, NonPeriodicWindowIsMeasuredInsideItsGuardBand) {
   Tile t = original_tile();
   const std::string w = tmp("w.exr");
   ExrTable z;
@@ -495,8 +495,12 @@ TEST(HeightmapCli, NonPeriodicWindowIsRefusedByEstimatorsButNotByInfo) {
   z.channels = {t.s.heights()};
   write_exr(tmp("wz.exr"), z);
   ASSERT_EQ(run_microsim("generate heightmap --input " + tmp("wz.exr") + " --pixel-size 1 --detrend plane -o " + w).code, 0);
-  expect_refused("measure g1 " + w + " --theta 60 -o " + tmp("w_g1.json"), tmp("w_g1.json"), "non-periodic");
-  expect_refused("validate " + w + " -o " + tmp("w_v.json"), tmp("w_v.json"), "non-periodic");
+  // The estimators measure the interior inside the default guard band (tests/test_guard_band.cpp);
+  // a guard that leaves no interior is refused.
+  Result g1 = run_microsim("measure g1 " + w + " --theta 60 --rays 20000 -o " + tmp("w_g1.json"));
+  EXPECT_EQ(g1.code, 0) << g1.err;
+  expect_refused("generate heightmap --input " + tmp("wz.exr") + " --pixel-size 1 --guard 30 -o " + tmp("w2.exr"),
+                 tmp("w2.exr"), "--guard");
   Result info = run_microsim("info " + w);
   EXPECT_EQ(info.code, 0) << info.err;
   EXPECT_NE(info.out.find("non-periodic measured window"), std::string::npos);

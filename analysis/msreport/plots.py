@@ -708,3 +708,81 @@ def vcavity_lobes(path, record, thetas):
     fig.suptitle("V-cavity ensemble: in-plane lobes per order (a finite ensemble's lobe is a sum of the "
                  "beams of the grooves whose exits fall in the band)", fontsize=10)
     return _save(fig, path)
+
+
+# Measured surfaces (generate heightmap; info's metrology)
+
+
+def measured_surface(path, heights, dx, dy, guard_band=None, title=""):
+    """The heightmap as an image, with the interior the estimators measure (inside the guard
+    band) outlined."""
+    z = np.asarray(heights, dtype=float)
+    if z.ndim != 2 or z.size < 4:
+        raise NoData("no 2D heightmap")
+    ny, nx = z.shape
+    fig, ax = plt.subplots(figsize=(5.6, 4.6))
+    x0, y0 = -0.5 * nx * dx, -0.5 * ny * dy
+    im = ax.imshow(z, origin="lower", cmap="viridis", extent=(x0, x0 + nx * dx, y0, y0 + ny * dy))
+    fig.colorbar(im, ax=ax, label="height")
+    if isinstance(guard_band, dict) and isinstance(guard_band.get("interior"), dict):
+        i = guard_band["interior"]
+        from matplotlib.patches import Rectangle
+        ax.add_patch(Rectangle((i["x0"], i["y0"]), i["x1"] - i["x0"], i["y1"] - i["y0"],
+                                                  fill=False, ec="w", lw=1.2, ls="--"))
+        ax.set_title("%s%d x %d pixels; dashed: measured interior (guard %d x %d cells)"
+                     % (title + ": " if title else "", nx, ny, guard_band.get("cells_x", 0),
+                        guard_band.get("cells_y", 0)), fontsize=9)
+    else:
+        ax.set_title("%s%d x %d pixels" % (title + ": " if title else "", nx, ny), fontsize=9)
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    return _save(fig, path)
+
+
+def measured_slopes(path, heights, dx, dy, metrology, title=""):
+    """Density of the slope radius q = |grad h| of the triangles (two per cell, split as traced)
+    against Beckmann and GGX with the alphas `info` fitted (moment and maximum likelihood),
+    and the observed / expected counts in info's equal-probability bins."""
+    z = np.asarray(heights, dtype=float)
+    if z.ndim != 2 or not isinstance(metrology, dict) or "beckmann_alpha_x" not in metrology:
+        raise NoData("no slope metrology")
+    h00, h10, h01, h11 = z[:-1, :-1], z[:-1, 1:], z[1:, :-1], z[1:, 1:]
+    sx = np.concatenate([((h10 - h00) / dx).ravel(), ((h11 - h01) / dx).ravel()])
+    sy = np.concatenate([((h01 - h00) / dy).ravel(), ((h11 - h10) / dy).ravel()])
+    q = np.hypot(sx - sx.mean(), sy - sy.mean())
+    ab = math.sqrt(0.5 * (num(metrology["beckmann_alpha_x"]) ** 2 + num(metrology["beckmann_alpha_y"]) ** 2))
+    ag = num(metrology.get("ggx_alpha"))
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    top = np.quantile(q, 0.999)
+    counts, edges = np.histogram(q, bins=60, range=(0, top))
+    width = edges[1] - edges[0]
+    dens = counts / (len(q) * width)
+    err = np.sqrt(counts) / (len(q) * width)
+    c = 0.5 * (edges[1:] + edges[:-1])
+    ax.errorbar(c, dens, yerr=err, fmt="o", ms=2.5, capsize=1.5, color="k", label="measured (triangles)")
+    t = np.linspace(0, top, 400)
+    ax.plot(t, 2 * t / ab ** 2 * np.exp(-t ** 2 / ab ** 2), "C0-", label="Beckmann, alpha %.3f (moment)" % ab)
+    if ag == ag and ag > 0:
+        ax.plot(t, 2 * t / ag ** 2 / (1 + t ** 2 / ag ** 2) ** 2, "C3--", label="GGX, alpha %.3f (max. likelihood)" % ag)
+    ax.set_xlabel("slope radius |grad h|")
+    ax.set_ylabel("density")
+    ax.set_yscale("log")
+    ax.set_ylim(bottom=max(1e-4 * np.max(dens), 0.5 / (len(q) * width)))
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    for k, (key, label) in enumerate((("slope_fit_beckmann", "Beckmann"), ("slope_fit_ggx", "GGX"))):
+        fit = metrology.get(key)
+        if not isinstance(fit, dict) or not fit.get("observed"):
+            continue
+        o, e = np.array(fit["observed"], float), np.array(fit["expected"], float)
+        x = np.arange(len(o)) + (k - 0.5) * 0.35
+        ax2.errorbar(x, o / e, yerr=np.sqrt(np.maximum(o, 1)) / e, fmt="o", ms=3, capsize=2, color="C0" if k == 0 else "C3",
+                     label="%s: chi2/dof %.3g" % (label, num(fit.get("chi2")) / max(1, num(fit.get("dof"), 1))))
+    ax2.axhline(1, color="k", lw=1)
+    ax2.set_xlabel("equal-probability bin of the model (slope radius, increasing)")
+    ax2.set_ylabel("observed / expected")
+    ax2.grid(True, alpha=0.3)
+    ax2.legend(fontsize=7)
+    fig.suptitle((title + ": " if title else "") + "slope distribution against Beckmann and GGX "
+                 "(pixels are correlated: compare the models, not absolute chi2)", fontsize=10)
+    return _save(fig, path)

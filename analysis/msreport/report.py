@@ -41,6 +41,8 @@ PROFILES = {
         "preview_size": 160,
         "preview_samples": 64,
         "preview_cases": [(0.5, "mirror"), (1.0, "mirror"), (0.5, "gold")],
+        "measured_resolution": 256,
+        "measured_rays": 200000,
     },
     "smoke": {
         "suite": "smoke",
@@ -64,6 +66,9 @@ PROFILES = {
         "preview_size": 24,
         "preview_samples": 4,
         "preview_cases": [(0.5, "mirror")],
+        "measured_resolution": 64,
+        "measured_rays": 10000,
+        "measured_guard": 2,  # correlation lengths: the default 8 leaves no interior at this size
     },
 }
 
@@ -523,8 +528,77 @@ def section_previews(ctx):
     return s
 
 
+def section_measured(ctx):
+    s = Section("measured", "A measured surface",
+                "From a plain heightmap file, as an instrument exports it: a crop of a generated Beckmann tile "
+                "(alpha 0.5, not periodic) written as a CSV grid, imported with `generate heightmap` (a "
+                "non-periodic window: the estimators measure its interior inside the default guard band, the "
+                "border geometry masks), then `info` (metrology), `measure g1` (per normal against Smith) and "
+                "`measure bsdf`. analysis/measured_surface_example.sh runs the same chain to `validate` and a "
+                "renderer's .bsdf table.")
+    if not ctx.has_command("generate", "heightmap"):
+        return s.skip("`microsim generate heightmap` is not in this build")
+    import numpy as np
+    res = ctx.profile["measured_resolution"]
+    tile = os.path.join(ctx.surf_dir, "measured-source.exr")
+    ctx.run(["generate", "gaussian", "--alpha", "0.5", "--resolution", str(res), "--seed", "7", "-o", tile])
+    ch, _ = read_exr(tile)
+    z = ch["Z"]
+    n = (3 * res) // 4  # a crop: not periodic
+    csv = ctx.data("measured-patch.csv")
+    dx = 1.0 / res
+    np.savetxt(csv, z[:n, :n], delimiter=",", fmt="%.9g")
+    surf = os.path.join(ctx.surf_dir, "measured-patch.exr")
+    guard = ["--guard", str(ctx.profile["measured_guard"])] if "measured_guard" in ctx.profile else []
+    ctx.run(["generate", "heightmap", "--input", csv, "--pixel-size", "%.9g" % dx, "--detrend", "plane",
+             "-o", surf] + guard)
+    info = ctx.data("measured_info.json")
+    ctx.run(["info", surf, "--json", info])
+    rec_info = load_json(info)
+    met = rec_info.get("metrology", {})
+    desc = rec_info.get("surface", {})
+    hz, _ = read_exr(surf)
+    s.figure(ctx, "measured_surface.png", plots.measured_surface,
+             "The imported patch (%d x %d heights from a CSV grid, plane removed) and the interior the "
+             "estimators measure." % (n, n), hz["Z"], dx, dx, desc.get("guard_band"), "measured patch")
+    s.figure(ctx, "measured_slopes.png", plots.measured_slopes,
+             "Slopes of the patch's triangles against Beckmann (moment alpha) and GGX (maximum-likelihood "
+             "alpha), the fits of `info`.", hz["Z"], dx, dx, met, "measured patch")
+    g1 = ctx.data("measured_g1.json")
+    ctx.run(["measure", "g1", surf, "--theta", "30,60,80", "--phi", "0", "--rays", str(ctx.profile["measured_rays"]),
+             "-o", g1])
+    rec = load_json(g1)
+    for row in rec.get("rows", []):
+        for b in row.get("bins", []):
+            if "vcavity_numeric" in b:
+                b["vcavity"] = b["vcavity_numeric"]
+    s.figure(ctx, "measured_g1_bins.png", plots.g1_per_normal,
+             "G1(v, m) per normal bin on the measured patch against Smith with its own facets and V-cavity "
+             "(ray-count errors).", {"name": "measured patch", "measurements": {"g1": [rec]}})
+    bsdf = ctx.data("measured_bsdf.json")
+    ctx.run(["measure", "bsdf", surf, "--material", "mirror", "--theta-i", "60", "--phi-i", "0", "--orders", "4",
+             "--rays", str(ctx.profile["measured_rays"]), "-o", bsdf])
+    rb = load_json(bsdf)
+    s.figure(ctx, "measured_bsdf_albedo.png", plots.bsdf_albedo,
+             "Measured patch, mirror, theta_i = 60 deg: albedo per order (rays leaving through the patch's side "
+             "walls downward are lost: the total is 1 minus those).", rb, "measured patch")
+    s.figure(ctx, "measured_bsdf_lobe.png", plots.bsdf_lobes,
+             "Measured patch, mirror, theta_i = 60 deg: in-plane lobe, order 1 and all orders.", rb, "measured patch")
+    gb = desc.get("guard_band") or {}
+    s.html = ("<p>Metrology: Sq %s, Sdq %s, Beckmann alpha (%s, %s), GGX alpha %s, Sal %s; guard band %s x %s "
+              "cells (%s correlation lengths), interior %s x %s cells.</p>"
+              % tuple(_fmt(x, 4) for x in (met.get("sq"), met.get("sdq"), met.get("beckmann_alpha_x"),
+                                            met.get("beckmann_alpha_y"), met.get("ggx_alpha"), met.get("sal"),
+                                            gb.get("cells_x"), gb.get("cells_y"),
+                                            gb.get("width_correlation_lengths"),
+                                            (gb.get("interior") or {}).get("cells_x"),
+                                            (gb.get("interior") or {}).get("cells_y"))))
+    return s
+
+
 SECTIONS = [section_validation, section_ndf, section_g1, section_g2, section_bsdf, section_table4,
-            section_tiled_boxes, section_objects_grooves, section_convergence, section_previews]
+            section_tiled_boxes, section_objects_grooves, section_convergence, section_previews,
+            section_measured]
 
 
 # ----------------------------------------------------------------------------------------------

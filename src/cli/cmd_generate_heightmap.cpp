@@ -4,6 +4,7 @@
 
 #include "cli_common.hpp"
 #include "microsim/io/output.hpp"
+#include "microsim/surface/guard_band.hpp"
 #include "microsim/surface/heightmap_import.hpp"
 #include "microsim/surface/metrology.hpp"
 #include "microsim/surface/surface_io.hpp"
@@ -67,7 +68,12 @@ void register_generate_heightmap(CLI::App& gen, const GlobalOptions& g) {
                 "Unit of the scaled file values (converted to --length-unit; default: the same)");
   k->add_flag("--periodic", p->periodic,
               "The map is one period of a periodic surface: a tile every estimator measures");
-  k->add_flag("--window", *window, "A non-periodic patch (the default): info only, estimators refuse it");
+  k->add_flag("--window", *window,
+              "A non-periodic patch (the default): the estimators measure its interior, inside a guard band");
+  k->add_option("--guard", p->guard_correlation_lengths,
+                "Window guard band in correlation lengths l (Sal / sqrt(ln 5)) of the patch (default " +
+                    fmt(kDefaultGuardCorrelationLengths, 3) + ", from the guard-band bias table)");
+  k->add_option("--guard-width", p->guard_width, "Window guard band in --length-unit (instead of --guard)");
   k->add_option("--detrend", *detrend,
                 "Least-squares form removed: none, mean, plane (tilt) or poly2 (quadratic form)")
       ->capture_default_str();
@@ -83,6 +89,14 @@ void register_generate_heightmap(CLI::App& gen, const GlobalOptions& g) {
     if (k->count("--pixel-size-y")) require_finite_positive(p->pixel_size_y, "--pixel-size-y");
     if (k->count("--max-missing") && !(p->max_missing_fraction >= 0 && p->max_missing_fraction < 1))
       throw UsageError("--max-missing: must be in [0, 1)");
+    if ((k->count("--guard") || k->count("--guard-width")) && p->periodic)
+      throw UsageError("--guard/--guard-width: a periodic tile has no guard band (a window option)");
+    if (k->count("--guard") && k->count("--guard-width"))
+      throw UsageError("--guard and --guard-width exclude each other");
+    if (k->count("--guard") && !(std::isfinite(p->guard_correlation_lengths) && p->guard_correlation_lengths >= 0))
+      throw UsageError("--guard: must be a finite number >= 0 (correlation lengths)");
+    if (k->count("--guard-width") && !(std::isfinite(p->guard_width) && p->guard_width >= 0))
+      throw UsageError("--guard-width: must be a finite number >= 0");
     p->has_nodata = k->count("--nodata") > 0;
     p->detrend = parse_detrend(*detrend);
     if (!crop->empty()) {
@@ -123,6 +137,14 @@ void register_generate_heightmap(CLI::App& gen, const GlobalOptions& g) {
               << fmt(m.slopes.beckmann_alpha_x) << ", " << fmt(m.slopes.beckmann_alpha_y) << "), Sal "
               << m.acf.sal << " (" << fmt(m.cells_per_correlation_length, 3)
               << " cells); microsim info " << *out << " for the full report\n";
+    if (d.contains("guard_band")) {
+      const Json& gb = d["guard_band"];
+      std::cout << "guard band " << gb["cells_x"] << " x " << gb["cells_y"] << " cells ("
+                << fmt(gb.value("width_correlation_lengths", 0.0), 3) << " correlation lengths); interior "
+                << gb["interior"]["cells_x"] << " x " << gb["interior"]["cells_y"] << " cells measured\n";
+    } else if (d.contains("guard_band_note")) {
+      std::cerr << "microsim: warning: " << d["guard_band_note"].get<std::string>() << "\n";
+    }
   });
 }
 

@@ -165,7 +165,7 @@ int run_measure_bsdf(const BsdfCliOptions& o, const GlobalOptions& g) {
                        fmt(need / (1 << 30), 1) + " GiB of tallies, more than half of this machine's memory");
   }
   Microsurface s = input_surface(g, o.surface);
-  if (!s.macro().periodic && (ext == "bsdf" || ext == "binary"))
+  if (s.macro().finite_object() && (ext == "bsdf" || ext == "binary"))
     throw UsageError(o.surface + ": -o ." + ext + " tables need a periodic tile (this surface is a finite object)");
   const bool anisotropic_surface = s.nominal && std::abs(s.nominal->alpha_x - s.nominal->alpha_y) > 1e-12;
   if (ext == "binary" && anisotropic_surface)

@@ -102,7 +102,7 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   // Check every file before the long run starts.
   std::vector<Microsurface> first;
   first.push_back(input_surface(g, files[0]));
-  const bool periodic = first[0].macro().periodic;
+  const bool periodic = !first[0].macro().finite_object();  // every ray from above meets it
   for (std::size_t k = 1; k < files.size(); ++k) input_surface(g, files[k]);
   if (below && first[0].kind() == Microsurface::Kind::Heightfield)
     throw UsageError("--theta must be in [0, 90) degrees for a heightfield (theta in (90, 180], the "

@@ -179,7 +179,7 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
         const Vec3 v = direction_from_angles(rad(t), rad(p));
         VndfResult r = measure_vndf(tracer, v, vo, &table);
         counters += r.counters;
-        lost += s.macro().periodic ? r.counters.lost_below + r.counters.unresolved : r.counters.unresolved;
+        lost += !s.macro().finite_object() ? r.counters.lost_below + r.counters.unresolved : r.counters.unresolved;
         std::optional<SamplerTest> sampler;
         // The sampler does not depend on the surface: tested once, with the first one.
         if (s.nominal && vo.sampler_samples > 0 && k == 0)

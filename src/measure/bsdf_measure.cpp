@@ -399,9 +399,12 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
   // covering its projection; each ray carries W_perp / (A cos theta_i), so that the tallies are
   // per unit of the flux falling on the macrosurface (000 eq. 4a with the declared area A) and
   // rays that miss the object add nothing.
-  const bool finite = !macro.periodic;
+  const bool finite = macro.finite_object();
   const RayWindow window = make_ray_window(tracer, wi);
-  const double ray_weight = finite ? window.area_perp / (macro.area * wi.z()) : 1.0;
+  // A measured region (a window inside its guard band): rays cover the region's reach and those
+  // whose first hit is outside it are misses (measure/bsdf_walk.cpp), weighted like a finite
+  // object's.
+  const double ray_weight = finite || macro.region ? window.area_perp / (macro.area * wi.z()) : 1.0;
   const std::uint64_t stream = direction_stream(0xB5DF0000ull, o.theta_i, o.phi_i);
   const bool with_model = o.models && s.nominal && o.model_walks > 0;
   const double share = with_model ? 0.8 : 1.0;

@@ -14,6 +14,13 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
   for (int order = 0;; ++order) {
     e.order = order;
     e.direction = dir;
+    // A measured region: a first hit outside it is a miss (measure/sampling.hpp), and so is a
+    // first ray that meets nothing (it entered the patch through a side wall, below it).
+    const bool region = s.macro().region;
+    if (order == 0 && region && (!hit.hit || hit.facet >= s.num_facets())) {
+      e.kind = WalkEnd::Missed;
+      return e;
+    }
     if (!hit.hit) {
       if (side == RaySide::Front && order == 0 && finite) e.kind = WalkEnd::Missed;
       else if (side == RaySide::Front && order > 0 && (finite || dir.z() > 0.0)) e.kind = WalkEnd::Reflected;

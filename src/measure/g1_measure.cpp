@@ -299,7 +299,8 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
         TraceHit h = tracer.first_hit(org, -v, nullptr, t.counters);
         // Hits on back faces (counted in counters) are left out of the visible area: a ray
         // that meets a facet from behind crossed the surface through a rounding gap.
-        if (h.hit && !h.backface) ++t.hits[r.binning.bin_of(h.normal)];
+        // A measured region: hits outside it (facet index >= num_facets()) are misses.
+        if (h.hit && !h.backface && h.facet < nf) ++t.hits[r.binning.bin_of(h.normal)];
       });
   report();
   r.raycast_seconds =
@@ -374,7 +375,11 @@ Json g1_row_json(const G1Result& r, const Microsurface& s) {
   row["rays"] = r.raycast_rays;
   row["area_samples"] = r.sample_rays;
   row["replicates"] = r.replicates;
-  if (s.macro().periodic) {
+  if (s.macro().region) {  // a measured window: rays that met its side walls (Tracer rule)
+    row["side_exits"] = r.counters.side_exits;
+    row["side_entries"] = r.counters.side_entries;
+  }
+  if (!s.macro().finite_object()) {
     row["lost_rays"] = r.counters.lost_below + r.counters.unresolved;
   } else {
     // A finite object: window rays that pass beside it are misses, not losses.

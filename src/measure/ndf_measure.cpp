@@ -25,10 +25,17 @@ NdfResult measure_ndf(const Microsurface& s, const NdfOptions& o) {
   const int nb = o.blocks * o.blocks, nbins = r.bins.size();
   const Macrosurface& macro = s.macro();
   Eigen::AlignedBox3d box = s.bounds();
-  const double x0 = macro.periodic ? -0.5 * macro.size_x : box.min().x();
-  const double y0 = macro.periodic ? -0.5 * macro.size_y : box.min().y();
-  const double wx = macro.periodic ? macro.size_x : box.sizes().x();
-  const double wy = macro.periodic ? macro.size_y : box.sizes().y();
+  // Blocks tile the region a measured patch is sampled in, else the tile or the object's box.
+  double x0 = macro.periodic ? -0.5 * macro.size_x : box.min().x();
+  double y0 = macro.periodic ? -0.5 * macro.size_y : box.min().y();
+  double wx = macro.periodic ? macro.size_x : box.sizes().x();
+  double wy = macro.periodic ? macro.size_y : box.sizes().y();
+  if (macro.region) {
+    x0 = macro.region_x0;
+    y0 = macro.region_y0;
+    wx = macro.region_x1 - macro.region_x0;
+    wy = macro.region_y1 - macro.region_y0;
+  }
 
   const std::size_t n = s.num_facets();
   const std::size_t grain = std::max<std::size_t>(1 << 16, n / 256);

@@ -5,7 +5,20 @@ namespace microsim {
 RayWindow make_ray_window(const Tracer& tracer, const Vec3& v) {
   const Macrosurface& m = tracer.surface().macro();
   RayWindow w;
-  if (m.periodic) {
+  if (m.region && !m.periodic) {
+    // A measured region: a horizontal rectangle at the top of the slab holding every ray along
+    // -v that can meet a facet of the region (the region stretched toward v_xy by the slab's
+    // height H: (H / v.z) v_xy). Only hits on the region's facets count (hit.facet <
+    // num_facets()); the rest are misses, as for a finite object. (A periodic tile measured in a
+    // region keeps the tile's window below: a longer one would wrap onto the region twice.)
+    const double H = tracer.z_top() - tracer.z_bottom();
+    const double sx = H * v.x() / v.z(), sy = H * v.y() / v.z();
+    const double x0 = m.region_x0 + std::min(0.0, sx), x1 = m.region_x1 + std::max(0.0, sx);
+    const double y0 = m.region_y0 + std::min(0.0, sy), y1 = m.region_y1 + std::max(0.0, sy);
+    w.origin0 = Vec3(x0, y0, tracer.z_top());
+    w.e1 = Vec3(x1 - x0, 0, 0);
+    w.e2 = Vec3(0, y1 - y0, 0);
+  } else if (m.periodic) {
     w.origin0 = Vec3(-0.5 * m.size_x, -0.5 * m.size_y, tracer.z_top());
     w.e1 = Vec3(m.size_x, 0, 0);
     w.e2 = Vec3(0, m.size_y, 0);

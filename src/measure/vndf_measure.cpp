@@ -174,6 +174,7 @@ VndfResult measure_vndf(const Tracer& tracer, const Vec3& v_in, const VndfOption
                        const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
                        const TraceHit h = tracer.first_hit(org, -v, nullptr, tc);
                        if (!h.hit || h.backface) return;  // back faces: rounding gaps (counted)
+                       if (h.facet >= nf) return;  // a measured region: a hit outside it, a miss
                        const int b = r.binning.bin_of(h.normal);
                        ++c[b >= 0 ? b : nbins];
                      });
@@ -269,8 +270,13 @@ Json vndf_row_json(const VndfResult& r, const Microsurface& s, const VndfOptions
   // A finite object is missed by the rays of its window that pass beside it (they leave the
   // slab downward): those are misses, not lost rays.
   const std::uint64_t gone = r.counters.lost_below + r.counters.unresolved;
-  row["lost_rays"] = s.macro().periodic ? gone : r.counters.unresolved;
-  row["missed_rays"] = s.macro().periodic ? 0 : r.counters.lost_below;
+  const bool finite = s.macro().finite_object();
+  row["lost_rays"] = !finite ? gone : r.counters.unresolved;
+  row["missed_rays"] = !finite ? 0 : r.counters.lost_below;
+  if (s.macro().region) {  // a measured window: rays that met its side walls (Tracer rule)
+    row["side_exits"] = r.counters.side_exits;
+    row["side_entries"] = r.counters.side_entries;
+  }
   row["backface_hits"] = r.counters.backface_hits;
   row["seconds"] = r.seconds;
   Json bins = Json::array();

@@ -1,4 +1,5 @@
 #include "microsim/surface/heightmap_import.hpp"
+#include "microsim/surface/guard_band.hpp"
 
 #include <Eigen/Dense>
 
@@ -313,6 +314,30 @@ double length_unit_in_metres(const std::string& u) {
   return -1;
 }
 
+namespace {
+// The window's guard band, recorded in the description (the loader applies it). An explicit
+// width that leaves no interior is refused; the default one is only noted (the estimators
+// then refuse the file, metrology still reads it).
+void record_guard_band(Microsurface& s, const HeightmapImportParams& p) {
+  const bool given = p.guard_width >= 0 || p.guard_correlation_lengths >= 0;
+  const double l = patch_correlation_length(s);
+  const double k = p.guard_correlation_lengths >= 0 ? p.guard_correlation_lengths : kDefaultGuardCorrelationLengths;
+  const double w = p.guard_width >= 0 ? p.guard_width : k * l;
+  const std::string option = p.guard_width >= 0 ? "--guard-width " + num(p.guard_width)
+                                                : "--guard " + num(k) + " (correlation lengths, l = " + num(l) + ")";
+  Microsurface region = s;
+  try {
+    apply_guard_band(region, guard_cells(w, s.dx()), guard_cells(w, s.dy()), false, l, option);
+  } catch (const UsageError&) {
+    if (given) throw;
+    s.description["guard_band_note"] = "the default guard (" + num(k) + " l) leaves no interior: "
+                                       "import with a narrower --guard to measure this patch";
+    return;
+  }
+  s.description["guard_band"] = region.description["guard_band"];
+}
+}  // namespace
+
 Microsurface import_heightmap(const HeightmapImportParams& p) {
   const std::string& path = p.input;
   if (p.pixel_size_x != 0 && !finite_positive(p.pixel_size_x))
@@ -429,6 +454,7 @@ Microsurface import_heightmap(const HeightmapImportParams& p) {
                        {"slope_rms_x_without_wrap", inner.rms_x}, {"slope_rms_y_without_wrap", inner.rms_y}};
   }
   s.description = d;
+  if (!p.periodic) record_guard_band(s, p);
   return s;
 }
 

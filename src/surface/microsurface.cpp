@@ -36,7 +36,40 @@ Microsurface Microsurface::mesh(std::vector<Eigen::Vector3f> vertices,
 }
 
 std::size_t Microsurface::num_facets() const {
-  return kind_ == Kind::Heightfield ? 2 * static_cast<std::size_t>(nx_) * ny_ : triangles_.size();
+  if (kind_ == Kind::Mesh) return triangles_.size();
+  if (macro_.region) return 2 * static_cast<std::size_t>(ri1_ - ri0_) * (rj1_ - rj0_);
+  return 2 * static_cast<std::size_t>(nx_) * ny_;
+}
+
+std::size_t Microsurface::facet_index(long i, long j, int half) const {
+  if (macro_.region) {
+    if (i >= ri0_ && i < ri1_ && j >= rj0_ && j < rj1_)
+      return 2 * (static_cast<std::size_t>(j - rj0_) * (ri1_ - ri0_) + (i - ri0_)) + half;
+    return num_facets() + 2 * (static_cast<std::size_t>(j) * nx_ + i) + half;
+  }
+  return 2 * (static_cast<std::size_t>(j) * nx_ + i) + half;
+}
+
+void Microsurface::set_sample_region(int i0, int i1, int j0, int j1, bool periodic) {
+  if (kind_ != Kind::Heightfield) throw UsageError("a sample region needs a heightfield");
+  macro_.periodic = periodic;
+  const int cx = traced_cells_x(), cy = traced_cells_y();
+  if (!(0 <= i0 && i0 < i1 && i1 <= cx && 0 <= j0 && j0 < j1 && j1 <= cy))
+    throw UsageError("sample region [" + std::to_string(i0) + ", " + std::to_string(i1) + ") x [" +
+                     std::to_string(j0) + ", " + std::to_string(j1) + ") is empty or outside the " +
+                     std::to_string(cx) + " x " + std::to_string(cy) + " cells");
+  ri0_ = i0;
+  ri1_ = i1;
+  rj0_ = j0;
+  rj1_ = j1;
+  macro_.region = true;
+  macro_.region_x0 = -0.5 * macro_.size_x + i0 * dx();
+  macro_.region_x1 = -0.5 * macro_.size_x + i1 * dx();
+  macro_.region_y0 = -0.5 * macro_.size_y + j0 * dy();
+  macro_.region_y1 = -0.5 * macro_.size_y + j1 * dy();
+  macro_.guard_x = std::min(i0, cx - i1) * dx();
+  macro_.guard_y = std::min(j0, cy - j1) * dy();
+  macro_.area = (macro_.region_x1 - macro_.region_x0) * (macro_.region_y1 - macro_.region_y0);
 }
 
 float Microsurface::height(long i, long j) const {
@@ -58,8 +91,17 @@ Triangle Microsurface::facet(std::size_t k) const {
     return {vertices_[t[0]].cast<double>(), vertices_[t[1]].cast<double>(),
             vertices_[t[2]].cast<double>()};
   }
-  std::size_t cell = k / 2;
-  long i = static_cast<long>(cell % nx_), j = static_cast<long>(cell / nx_);
+  long i, j;
+  const std::size_t nr = macro_.region ? num_facets() : 0;
+  if (k < nr) {  // region facets first
+    const std::size_t cell = k / 2, w = static_cast<std::size_t>(ri1_ - ri0_);
+    i = ri0_ + static_cast<long>(cell % w);
+    j = rj0_ + static_cast<long>(cell / w);
+  } else {
+    const std::size_t cell = (k - nr) / 2;
+    i = static_cast<long>(cell % nx_);
+    j = static_cast<long>(cell / nx_);
+  }
   if (k % 2 == 0) return {grid_point(i, j), grid_point(i + 1, j), grid_point(i, j + 1)};
   return {grid_point(i + 1, j), grid_point(i + 1, j + 1), grid_point(i, j + 1)};
 }

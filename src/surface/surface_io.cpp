@@ -1,4 +1,5 @@
 #include "microsim/surface/surface_io.hpp"
+#include "microsim/surface/guard_band.hpp"
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
@@ -134,11 +135,8 @@ Microsurface load_heightfield_exr(const std::string& path, bool allow_window) {
     m = macro_from_json(mj, path);
     require_in_range(m.size_x, closed(1e-6, 1e6), path + ": macrosurface field 'size_x'");
     require_in_range(m.size_y, closed(1e-6, 1e6), path + ": macrosurface field 'size_y'");
-    if (!m.periodic && !allow_window)
-      throw UsageError(path + " is a non-periodic measured window: the estimators need a periodic "
-                       "tile (a guard-band window is not supported); microsim info reports its "
-                       "metrology; import periodic data with generate heightmap --periodic");
-    // In memory a window is a grid like a tile; its description's "boundary" says "window".
+    // A window is loaded as a grid like a tile; for the estimators it is then made a window
+    // measured inside its guard band (surface/guard_band.hpp); metrology reads the grid.
   });
   auto it = std::find(t.channel_names.begin(), t.channel_names.end(), "Z");
   for (float h : t.channels[it - t.channel_names.begin()])
@@ -149,6 +147,7 @@ Microsurface load_heightfield_exr(const std::string& path, bool allow_window) {
     if (t.attributes.contains("microsim_description") && t.attributes["microsim_description"].is_string())
       s.description = Json::parse(t.attributes["microsim_description"].get<std::string>());
     restore_nominal(s, path);
+    if (!m.periodic && !allow_window) apply_recorded_guard_band(s);
     return s;
   } catch (const Json::exception& e) {
     throw UsageError(path + " has a corrupt microsim header (" + std::string(e.what()) + ")");

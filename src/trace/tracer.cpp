@@ -70,8 +70,16 @@ Tracer::Tracer(const Microsurface& surface) : surface_(surface) {
   RTCGeometry geom;
   if (surface.kind() == Microsurface::Kind::Heightfield) {
     geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_GRID);
-    grid_width_ = surface.nx() + 1 + 2 * pad_;
-    grid_height_ = surface.ny() + 1 + 2 * pad_;
+    if (!macro.periodic) {  // a measured window: its own vertices only, no periodic copy
+      window_ = true;
+      pad_ = 0;
+      foot_x0_ = surface.grid_point(0, 0).x();
+      foot_y0_ = surface.grid_point(0, 0).y();
+      foot_x1_ = surface.grid_point(surface.traced_cells_x(), 0).x();
+      foot_y1_ = surface.grid_point(0, surface.traced_cells_y()).y();
+    }
+    grid_width_ = surface.traced_cells_x() + 1 + 2 * pad_;
+    grid_height_ = surface.traced_cells_y() + 1 + 2 * pad_;
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
         geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
         static_cast<std::size_t>(grid_width_) * grid_height_));
@@ -182,15 +190,20 @@ std::size_t Tracer::facet_of_hit(unsigned prim_id, float u, float v, const Vec3&
     if (hf == 0) return Vec3(-(h10 - h00) * dy, -(h01 - h00) * dx, dx * dy);
     return Vec3(-(h11 - h01) * dy, -(h11 - h10) * dx, dx * dy);
   };
-  auto index = [&](long i, long j, int hf) {
-    return 2 * static_cast<std::size_t>(wrap(j, ny) * nx + wrap(i, nx)) + hf;
-  };
+  auto index = [&](long i, long j, int hf) { return surface_.facet_index(wrap(i, nx), wrap(j, ny), hf); };
+  // A window has no periodic neighbours: cells outside it are never candidates.
+  const long cx = surface_.traced_cells_x(), cy = surface_.traced_cells_y();
+  auto exists = [&](long i, long j) { return !window_ || (i >= 0 && i < cx && j >= 0 && j < cy); };
   const double ng2 = ng.squaredNorm();
   auto alignment = [&](const Vec3& c) {  // cos^2 of the angle between c and Ng (sign kept)
     double d = c.dot(ng);
     return (d > 0 ? 1 : -1) * d * d / (c.squaredNorm() * ng2);
   };
   long i = ci - pad_, j = cj - pad_;
+  if (window_) {
+    i = std::min(std::max(i, 0L), cx - 1);
+    j = std::min(std::max(j, 0L), cy - 1);
+  }
   Vec3 c = cell_cross(i, j, half);
   if (alignment(c) > 1 - 2e-6) {
     if (normal) *normal = c.normalized();
@@ -201,6 +214,7 @@ std::size_t Tracer::facet_of_hit(unsigned prim_id, float u, float v, const Vec3&
   for (long dj = -1; dj <= 1; ++dj)
     for (long di = -1; di <= 1; ++di)
       for (int hf = 0; hf < 2; ++hf) {
+        if (!exists(i + di, j + dj)) continue;
         Vec3 cc = cell_cross(i + di, j + dj, hf);
         double a = alignment(cc);
         if (a > best_align) {
@@ -228,6 +242,11 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
 
   Vec3 o = org;
   const double hx = 0.5 * macro.size_x, hy = 0.5 * macro.size_y;
+  if (macro.periodic && surface_.kind() == Microsurface::Kind::Heightfield) {
+    // An origin off the tile (a measured region's ray window reaches past it): its periodic copy.
+    if (o.x() < -hx || o.x() > hx) o.x() -= macro.size_x * std::floor((o.x() + hx) / macro.size_x);
+    if (o.y() < -hy || o.y() > hy) o.y() -= macro.size_y * std::floor((o.y() + hy) / macro.size_y);
+  }
   // Beyond the tile border a ray may travel this far inside the padded copy before it is cut
   // (half a cell), so a hit exactly on the border is found inside the geometry.
   double dxy = std::max(std::abs(dir.x()), std::abs(dir.y()));
@@ -236,6 +255,40 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
                     : 0.02 * std::min(macro.size_x, macro.size_y);
   const double margin = dxy > 0 ? 0.5 * cell / dxy : 0.0;
   const int max_segments = 100000;
+  // Window: distance along the ray to where it leaves the footprint (+inf if it never does).
+  auto footprint_exit = [&](const Vec3& p) {
+    double t = std::numeric_limits<double>::infinity();
+    if (dir.x() > 0) t = std::min(t, (foot_x1_ - p.x()) / dir.x());
+    if (dir.x() < 0) t = std::min(t, (foot_x0_ - p.x()) / dir.x());
+    if (dir.y() > 0) t = std::min(t, (foot_y1_ - p.y()) / dir.y());
+    if (dir.y() < 0) t = std::min(t, (foot_y0_ - p.y()) / dir.y());
+    return std::max(t, 0.0);
+  };
+  if (window_) {
+    // Start where the ray enters the footprint (rays from above the guard band start outside
+    // it when they are long enough); one that never enters has nothing to meet.
+    double t_in = 0, t_out = std::numeric_limits<double>::infinity();
+    const double lo[2] = {foot_x0_, foot_y0_}, hi[2] = {foot_x1_, foot_y1_};
+    for (int a = 0; a < 2; ++a) {
+      if (dir[a] == 0) {
+        if (o[a] < lo[a] || o[a] > hi[a]) t_out = -1;
+        continue;
+      }
+      double t0 = (lo[a] - o[a]) / dir[a], t1 = (hi[a] - o[a]) / dir[a];
+      if (t0 > t1) std::swap(t0, t1);
+      t_in = std::max(t_in, t0);
+      t_out = std::min(t_out, t1);
+    }
+    if (!(t_in <= t_out)) {
+      ++c.side_exits;
+      return false;
+    }
+    if (t_in > 0) {
+      o += t_in * dir;
+      for (int a = 0; a < 2; ++a) o[a] = std::min(std::max(o[a], lo[a]), hi[a]);
+      if (o.z() < z_top_) ++c.side_entries;  // entered through a side wall, inside the slab
+    }
+  }
 
   for (int segment = 0; segment < max_segments; ++segment) {
     double t_exit = std::numeric_limits<double>::infinity();
@@ -245,6 +298,8 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
       if (dir.y() > 0) t_exit = std::min(t_exit, (hy - o.y()) / dir.y());
       if (dir.y() < 0) t_exit = std::min(t_exit, (-hy - o.y()) / dir.y());
       t_exit = std::max(t_exit, 0.0);
+    } else if (window_) {
+      t_exit = footprint_exit(o);
     }
     // Distance to the slab face the ray is heading for.
     double t_slab = std::numeric_limits<double>::infinity();
@@ -258,7 +313,7 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
       }
       return false;
     }
-    double tfar = std::min(t_exit + margin, t_slab);
+    double tfar = std::min(t_exit + (window_ ? 0.0 : margin), t_slab);
 
     RTCRayHit rh;
     rh.ray.org_x = static_cast<float>(o.x());
@@ -315,6 +370,10 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
         if (back && out) out->exit_below = true;
         else ++c.lost_below;
       }
+      return false;
+    }
+    if (window_) {  // reached a side wall inside the slab: ends here (see first_hit)
+      ++c.side_exits;
       return false;
     }
     if (!macro.periodic) return false;

@@ -58,6 +58,11 @@ struct HeightmapImportParams {
   bool has_nodata = false;
   double nodata = 0;                   // file value meaning "no measurement" (NaN always does)
   double max_missing_fraction = 0.05;  // refuse to fill more than this
+  // Window guard band (surface/guard_band.hpp): a width in surface units (>= 0), else in
+  // correlation lengths (>= 0), else the default; recorded in the description ("guard_band"),
+  // applied when the window is loaded for the estimators.
+  double guard_width = -1;
+  double guard_correlation_lengths = -1;
 };
 
 // load_surface, except that with allow_window a heightfield saved as a non-periodic window is

@@ -20,6 +20,15 @@ struct Macrosurface {
   bool periodic = true;   // periodic tile: rays leaving through a side re-enter opposite
   double size_x = 1.0;    // tile (or window) extent along x, centered on the origin
   double size_y = 1.0;    // tile (or window) extent along y
+  // A heightfield measured in a region only (a measured patch inset by its guard band, or a
+  // periodic tile restricted to the same cells for comparison): estimators take sample points
+  // and ray footprints in x in [region_x0, region_x1], y in [region_y0, region_y1]; `area` is
+  // the region's. The geometry around it is traced too (wrapped only when `periodic`).
+  bool region = false;
+  double region_x0 = 0, region_x1 = 0, region_y0 = 0, region_y1 = 0;
+  double guard_x = 0, guard_y = 0;  // inset of the region from the patch border (surface units)
+  // A finite object: rays cover a window around its projection and may miss it.
+  bool finite_object() const { return !periodic && !region; }
 };
 
 struct Triangle {
@@ -49,8 +58,26 @@ class Microsurface {
   // The generator's nominal NDF, when it has one (e.g. gaussian: Beckmann with the requested alpha).
   std::optional<models::Ndf> nominal;
 
+  // The facets the estimators sum over and sample (a region's facets when one is set).
   std::size_t num_facets() const;
+  // Any traced facet: k < num_facets() as above; with a region, the other traced cells follow
+  // as num_facets() + 2 (j nx + i) + half (never summed over, only named by tracer hits).
   Triangle facet(std::size_t k) const;
+  // Index of facet `half` of traced cell (i, j) (0 <= i < traced_cells_x(), likewise j).
+  std::size_t facet_index(long i, long j, int half) const;
+  // Cells the tracer builds: nx x ny for a periodic tile, (nx-1) x (ny-1) for a window.
+  int traced_cells_x() const { return macro_.periodic ? nx_ : nx_ - 1; }
+  int traced_cells_y() const { return macro_.periodic ? ny_ : ny_ - 1; }
+
+  // Heightfields: restrict the estimators to the cells [i0, i1) x [j0, j1); `periodic` false
+  // makes the grid a non-periodic window (no wrap-around; cells between vertices only). The
+  // macro area becomes the region's area. UsageError when the region is empty or outside.
+  void set_sample_region(int i0, int i1, int j0, int j1, bool periodic);
+  bool has_region() const { return macro_.region; }
+  int region_i0() const { return ri0_; }
+  int region_i1() const { return ri1_; }
+  int region_j0() const { return rj0_; }
+  int region_j1() const { return rj1_; }
 
   // Heightfield access (periodic indices).
   int nx() const { return nx_; }
@@ -74,6 +101,7 @@ class Microsurface {
   Macrosurface macro_;
   int nx_ = 0, ny_ = 0;
   std::vector<float> heights_;  // nx * ny, row-major in j
+  int ri0_ = 0, ri1_ = 0, rj0_ = 0, rj1_ = 0;  // sample region (cells), when macro_.region
   std::vector<Eigen::Vector3f> vertices_;
   std::vector<std::array<std::uint32_t, 3>> triangles_;
 };

@@ -45,7 +45,14 @@ struct TraceCounters {
   std::uint64_t backface_hits = 0;     // first hit on the unexpected side (a back face for a
                                        // Front ray, a front face for a Back ray)
   std::uint64_t unresolved = 0;        // still inside the slab after the wrap limit
+  // Non-periodic heightfield windows (a measured patch): rays that leave the patch through a
+  // side wall inside the slab (ended there: the rule of Tracer::first_hit), and rays from
+  // above that enter the patch through a side wall.
+  std::uint64_t side_exits = 0;
+  std::uint64_t side_entries = 0;
   TraceCounters& operator+=(const TraceCounters& o) {
+    side_exits += o.side_exits;
+    side_entries += o.side_entries;
     rays += o.rays;
     border_crossings += o.border_crossings;
     lost_below += o.lost_below;
@@ -64,6 +71,12 @@ class Tracer {
 
   // First hit along org + t dir, t > 0, following periodic wrap-around. `source`, when given,
   // is the plane the ray leaves. `side`: see RaySide (Back rays should always pass `source`).
+  // A non-periodic heightfield window (a measured patch) is traced as it is, without wrap: a
+  // ray starting outside its footprint starts where it enters the footprint (a side wall if
+  // it is low, counted in side_entries); a ray that reaches a side wall inside the slab ends
+  // there without a hit (counted in side_exits): upward it has escaped (the rule for the
+  // unmeasured surroundings; its bias is what the guard band keeps small), downward it is
+  // lost. occluded() likewise: a ray leaving through a side wall is not occluded.
   TraceHit first_hit(const Vec3& org, const Vec3& dir, const SourcePlane* source,
                      TraceCounters& counters, RaySide side = RaySide::Front) const;
   // True when anything blocks the ray before it leaves the surface's slab upward (or, for a
@@ -94,6 +107,8 @@ class Tracer {
   int pad_ = 1;            // heightfield: cells of periodic copy around the tile
   int grid_width_ = 0;     // heightfield: vertices per grid row in Embree
   int grid_height_ = 0;
+  bool window_ = false;    // non-periodic heightfield: traced without wrap, footprint below
+  double foot_x0_ = 0, foot_x1_ = 0, foot_y0_ = 0, foot_y1_ = 0;
   std::vector<std::uint32_t> mesh_prim_to_facet_;  // periodic meshes: copies map back
   double build_seconds_ = 0;
   double scale_ = 1;  // scene size, for relative tolerances (read by the filter)
