@@ -47,7 +47,7 @@ TEST(FacetTable, HeightfieldTableKeepsTheExactFacetIdentities) {
   EXPECT_NEAR(sum.z() / A, 1.0, 1e-12);
 }
 
-TEST(FacetSampler, DrawsTheSameFacetsAsTheFullCdf) {
+TEST(BlockFacetSampler, DrawsTheSameFacetsAsTheFullCdf) {
   // Against a plain per-facet CDF: the same facet for every u except where u falls within
   // rounding of a slice boundary; never a facet of zero weight.
   const Microsurface s = beckmann_tile(64, 5);
@@ -59,7 +59,7 @@ TEST(FacetSampler, DrawsTheSameFacetsAsTheFullCdf) {
     t.normal_area(k, m, a);
     return std::max(0.0, a * m.dot(v));
   };
-  const FacetSampler sampler(t.size(), weight);
+  const BlockFacetSampler sampler(t.size(), weight);
   std::vector<double> cdf(t.size());
   double acc = 0;
   for (std::size_t k = 0; k < t.size(); ++k) cdf[k] = acc += weight(k);
@@ -86,7 +86,7 @@ TEST(FacetSampler, DrawsTheSameFacetsAsTheFullCdf) {
     t.normal_area(k, m, a);
     return std::max(0.0, a * m.dot(v2));
   };
-  const FacetSampler other(t.size(), weight2);
+  const BlockFacetSampler other(t.size(), weight2);
   std::size_t differ = 0;
   for (std::size_t j = 0; j < 1000; ++j) {
     CounterRng rng(9, 1, j);
@@ -96,7 +96,7 @@ TEST(FacetSampler, DrawsTheSameFacetsAsTheFullCdf) {
   EXPECT_GT(differ, 100u);
 }
 
-TEST(FacetSampler, G1IsIdenticalForAnyThreadCount) {
+TEST(BlockFacetSampler, G1IsIdenticalForAnyThreadCount) {
   const Microsurface s = beckmann_tile(128, 7);
   const Tracer tracer(s);
   G1Options o;

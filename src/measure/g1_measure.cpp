@@ -186,13 +186,8 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   (DESIGN.md, 001 App. A)
   r.lambda_numeric = sums[width - 1] / (v.dot(s.macro().normal) * s.macro().area);
   // Estimator (b) draws facets by front-facing projected area A_f max(0, v.m_f).
-  const auto weight = [&](std::size_t k) {
-    Vec3 m;
-    double a;
-    ft.normal_area(k, m, a);
-    return std::max(0.0, a * m.dot(v));
-  };
-  const FacetSampler sampler(nf, weight);
+  const auto weight = [&](std::size_t k) { return std::max(0.0, 0.5 * ft.cross(k).dot(v)); };
+  const BlockFacetSampler sampler(nf, weight);
   r.front_projected = sampler.total();
   if (!(r.front_projected > 0)) throw RuntimeFailure("no facet faces the direction");
   r.facet_seconds =

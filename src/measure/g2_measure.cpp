@@ -216,13 +216,12 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
   const Vec3 n = s.macro().normal;
   r.lambda_o = sums[width - 2] / (o.dot(n) * s.macro().area);
   r.lambda_i = sums[width - 1] / (i.dot(n) * s.macro().area);
-  const auto weight = [&](std::size_t k) {
-    Vec3 m;
-    double a;
-    ft.normal_area(k, m, a);
-    return weight_of(m, a);
+  const auto weight = [&](std::size_t k) {  // w_f from 2 A_f m_f, without a square root
+    const Vec3 c = ft.cross(k);
+    const double oc = o.dot(c), ic = i.dot(c);
+    return oc > 0 && ic > 0 ? 0.25 * (oc + ic) : 0.0;
   };
-  const FacetSampler sampler(nf, weight);  // places the samples
+  const BlockFacetSampler sampler(nf, weight);  // places the samples
   r.weight = sampler.total();
   if (!(r.weight > 0)) throw RuntimeFailure("no facet faces both directions");
   r.vcavity = vcav_total / r.weight;

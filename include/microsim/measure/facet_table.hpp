@@ -37,6 +37,11 @@ class FacetTable {
     m = normal_[k].cast<double>();
     a = area_[k];
   }
+  // 2 A_f m_f: the facet's weights A_f (v.m_f) as 0.5 cross(k).v without a square root.
+  Vec3 cross(std::size_t k) const {
+    if (heights_) return heightfield_cross(k);
+    return (2.0 * static_cast<double>(area_[k])) * normal_[k].cast<double>();
+  }
   Vec3 normal(std::size_t k) const {
     Vec3 m;
     double a;
@@ -96,12 +101,12 @@ const FacetTable& facet_table_for(const Microsurface& s, const DirectionBinning&
 // inside the chosen block a scan of its weights. `weight(k)` must be the same deterministic
 // function at construction and at every draw. Everything is summed in a fixed order: the
 // draws do not depend on the thread count.
-class FacetSampler {
+class BlockFacetSampler {
  public:
   static constexpr std::size_t kBlock = 16;
 
   template <class Weight>
-  FacetSampler(std::size_t n, const Weight& weight) : n_(n), cdf_((n + kBlock - 1) / kBlock) {
+  BlockFacetSampler(std::size_t n, const Weight& weight) : n_(n), cdf_((n + kBlock - 1) / kBlock) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cdf_.size(), 4096),
                       [&](const tbb::blocked_range<std::size_t>& r) {
                         for (std::size_t b = r.begin(); b != r.end(); ++b) {
