@@ -22,9 +22,9 @@ int main(int argc, char** argv) {
   for (int k = 1; k < argc; ++k) resolutions.push_back(std::atoi(argv[k]));
   if (resolutions.empty()) resolutions = {1024, 2048, 4096};
   const std::uint64_t rays = 2000000;
-  std::printf("%-13s %6s %8s %8s %10s %10s %10s %10s %8s %9s\n", "tile", "gen_s", "build_s",
+  std::printf("%-13s %6s %8s %8s %10s %10s %10s %10s %8s %9s %7s\n", "tile", "gen_s", "build_s",
               "facet_s", "g1_Mray/s", "(a)Mray/s", "(b)Mray/s", "bare_Mray/s", "(a)/bare",
-              "peak_MiB");
+              "peak_MiB", "B/facet");
   for (int res : resolutions) {
     GaussianParams p;
     p.resolution = res;
@@ -45,10 +45,10 @@ int main(int argc, char** argv) {
       double raycast_rate = r.raycast_rays / r.raycast_seconds;
       double sample_rate = r.sample_rays / r.sample_seconds;
       double bare = bare_loop_rays_per_second(tracer, v, rays, 0xA000);
-      std::printf("%4d^2 %3.0fdeg %6.2f %8.2f %8.3f %10.2f %10.2f %10.2f %10.2f %8.2f %9.0f\n",
+      std::printf("%4d^2 %3.0fdeg %6.2f %8.2f %8.3f %10.2f %10.2f %10.2f %10.2f %8.2f %9.0f %7.1f\n",
                   res, theta_deg, gen, tracer.build_seconds(), r.facet_seconds, g1_rate / 1e6,
                   raycast_rate / 1e6, sample_rate / 1e6, bare / 1e6, raycast_rate / bare,
-                  peak_rss_mib());
+                  peak_rss_mib(), peak_rss_mib() * 1048576.0 / s.num_facets());
     }
   }
   return 0;

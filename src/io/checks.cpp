@@ -6,7 +6,10 @@
 #include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <algorithm>
 #include <cstdlib>
+#include <fstream>
+#include <string>
 #include <limits>
 #include <sstream>
 
@@ -95,6 +98,18 @@ std::uint64_t parse_seed(const std::string& text, const std::string& name) {
 
 double available_memory_bytes() {
   double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
+  // What the kernel can give without swapping, on a machine shared with other processes.
+  if (std::ifstream meminfo("/proc/meminfo"); meminfo) {
+    std::string key;
+    double kib;
+    while (meminfo >> key >> kib) {
+      if (key == "MemAvailable:") {
+        if (kib > 0) have = std::min(have, kib * 1024.0);
+        break;
+      }
+      meminfo.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
+    }
+  }
   struct rlimit rl;
   if (getrlimit(RLIMIT_AS, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY)
     have = std::min(have, static_cast<double>(rl.rlim_cur));

@@ -136,60 +136,6 @@ DirectionBinning g1_normal_binning(const G1Options& o) {
   return DirectionBinning(o.normal_theta_bins, o.normal_phi_bins, kPi);
 }
 
-FacetTable build_facet_table(const Microsurface& s, const DirectionBinning& binning) {
-  FacetTable t;
-  const std::size_t nf = s.num_facets();
-  t.normal.resize(nf);
-  t.area.resize(nf);
-  t.bin.resize(nf);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf, 1 << 14),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t k = range.begin(); k != range.end(); ++k) {
-                        Vec3 c = s.facet(k).cross();
-                        double a = 0.5 * c.norm();
-                        Vec3 m = a > 0 ? Vec3(c / (2 * a)) : Vec3::UnitZ();
-                        t.normal[k] = m.cast<float>();
-                        t.area[k] = static_cast<float>(a);
-                        t.bin[k] = binning.bin_of(m);
-                      }
-                    });
-  if (s.kind() == Microsurface::Kind::Mesh) {
-    // Twins: same vertex positions (as a set), opposite normals.
-    using Key = std::array<float, 9>;
-    std::vector<std::pair<Key, std::uint32_t>> keys(nf);
-    for (std::size_t k = 0; k < nf; ++k) {
-      std::array<Eigen::Vector3f, 3> p;
-      for (int c = 0; c < 3; ++c) p[c] = s.vertices()[s.triangles()[k][c]];
-      std::sort(p.begin(), p.end(), [](const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
-        return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
-      });
-      Key key;
-      for (int c = 0; c < 3; ++c)
-        for (int d = 0; d < 3; ++d) key[3 * c + d] = p[c][d];
-      keys[k] = {key, static_cast<std::uint32_t>(k)};
-    }
-    std::sort(keys.begin(), keys.end());
-    t.buried.assign(nf, 0);
-    for (std::size_t i = 0; i + 1 < nf; ++i)
-      for (std::size_t j = i + 1; j < nf && keys[j].first == keys[i].first; ++j) {
-        const std::uint32_t a = keys[i].second, b = keys[j].second;
-        if (t.normal[a].dot(t.normal[b]) < 0) t.buried[a] = t.buried[b] = 1;
-      }
-  }
-  return t;
-}
-
-const FacetTable& facet_table_for(const Microsurface& s, const DirectionBinning& binning,
-                                  const FacetTable* given, FacetTable& own) {
-  if (!given) {
-    own = build_facet_table(s, binning);
-    return own;
-  }
-  if (given->area.size() != s.num_facets())
-    throw RuntimeFailure("facet table does not match the surface");
-  return *given;
-}
-
 G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
                     const FacetTable* table, const Tracer* under) {
   const Microsurface& s = tracer.surface();
@@ -233,24 +179,23 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   FacetTable own;
   const FacetTable& ft = facet_table_for(s, r.binning, table, own);
   const std::size_t nf = s.num_facets();
-  const std::vector<int>& facet_bin = ft.bin;
-  std::vector<double> cdf(nf);
   // Per bin: area, front projected area, projected-area-weighted normal (3), V-cavity-weighted
   // front projected area; then back area.
   using Sums = std::vector<double>;
   const std::size_t width = 6 * static_cast<std::size_t>(nbins) + 1;
-  const Eigen::Vector3f vf = v.cast<float>();
   Sums sums = sum_over_facets(nf, width, [&](std::size_t k, double* acc) {
-    const double a = ft.area[k];
-    const double proj = a * static_cast<double>(ft.normal[k].dot(vf));  // A_f (v.m_f)
-    cdf[k] = std::max(0.0, proj);
-    double* bin = acc + 6 * static_cast<std::size_t>(facet_bin[k]);
+    Vec3 m;
+    double a;
+    ft.normal_area(k, m, a);
+    const double proj = a * m.dot(v);  // A_f (v.m_f)
+    const double front = std::max(0.0, proj);
+    double* bin = acc + 6 * static_cast<std::size_t>(ft.bin(k));
     bin[0] += a;
-    bin[1] += cdf[k];
-    bin[2] += cdf[k] * ft.normal[k].x();
-    bin[3] += cdf[k] * ft.normal[k].y();
-    bin[4] += cdf[k] * ft.normal[k].z();
-    if (cdf[k] > 0) bin[5] += cdf[k] * models::vcavity_G1(v, ft.normal[k].cast<double>());
+    bin[1] += front;
+    bin[2] += front * m.x();
+    bin[3] += front * m.y();
+    bin[4] += front * m.z();
+    if (front > 0) bin[5] += front * models::vcavity_G1(v, m);
     acc[width - 1] += std::max(0.0, -proj);
   });
   for (int b = 0; b < nbins; ++b) {
@@ -264,8 +209,10 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   }
   // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   (DESIGN.md, 001 App. A)
   r.lambda_numeric = sums[width - 1] / (v.dot(s.macro().normal) * s.macro().area);
-  for (std::size_t k = 1; k < nf; ++k) cdf[k] += cdf[k - 1];  // sequential: deterministic
-  r.front_projected = nf ? cdf[nf - 1] : 0.0;
+  // Estimator (b) draws facets by front-facing projected area A_f max(0, v.m_f).
+  const auto weight = [&](std::size_t k) { return std::max(0.0, 0.5 * ft.cross(k).dot(v)); };
+  const BlockFacetSampler sampler(nf, weight);
+  r.front_projected = sampler.total();
   if (!(r.front_projected > 0)) throw RuntimeFailure("no facet faces the direction");
   r.facet_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_facets).count();
@@ -312,18 +259,16 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
       run_replicates(R, n_rep, nbins, counters, done, reps, [&](int rep, std::uint64_t j, Tally& t) {
         CounterRng rng(o.seed, ReplicatePlan::stream(0xB000 + key, rep), j);
         double u = (static_cast<double>(j) + rng.uniform()) / n_rep * total;
-        std::size_t k = std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin();
-        k = std::min(k, nf - 1);
-        while (k > 0 && cdf[k] == cdf[k - 1]) --k;  // never land on a zero-weight facet
-        if (!ft.buried.empty() && ft.buried[k]) {  // pressed against a twin: never visible
-          ++t.samples[facet_bin[k]];
+        const std::size_t k = sampler.draw(u, weight);
+        const int b = ft.bin(k);
+        if (ft.buried(k)) {  // pressed against a twin: never visible
+          ++t.samples[b];
           return;
         }
         Triangle f = s.facet(k);
         double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
         Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
         SourcePlane plane = SourcePlane::of(f);
-        int b = facet_bin[k];
         ++t.samples[b];
         if (!tracer.occluded(p, v, &plane, t.counters)) ++t.visible[b];
       });

@@ -170,18 +170,22 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
   // Exact facet sums. Per bin: area, area facing both, weight w_f, w-weighted normal (3),
   // V-cavity sum; then the back-facing projected areas toward o and toward i (Smith Lambda
   // from facets). The CDF of w_f places the samples.
-  std::vector<double> cdf(nf);
   using Sums = std::vector<double>;
   constexpr std::size_t kW = 7;
   const std::size_t width = kW * static_cast<std::size_t>(nbins) + 2;
+  // w_f: symmetric in (o, i); A_f (v.m) at o = i = v.
+  const auto weight_of = [&](const Vec3& m, double a) {
+    const double om = o.dot(m), im = i.dot(m);
+    return om > 0 && im > 0 ? 0.5 * a * (om + im) : 0.0;
+  };
   Sums sums = sum_over_facets(nf, width, [&](std::size_t k, double* acc) {
-    const double a = ft.area[k];
-    const Vec3 m = ft.normal[k].cast<double>();
+    Vec3 m;
+    double a;
+    ft.normal_area(k, m, a);
     const double om = o.dot(m), im = i.dot(m);
     const bool front = om > 0 && im > 0;
-    const double wf = front ? 0.5 * a * (om + im) : 0.0;  // symmetric; A_f (v.m) at o = i = v
-    cdf[k] = wf;
-    double* bin = acc + kW * static_cast<std::size_t>(ft.bin[k]);
+    const double wf = weight_of(m, a);
+    double* bin = acc + kW * static_cast<std::size_t>(ft.bin(k));
     bin[0] += a;
     if (front) {
       bin[1] += a;
@@ -212,8 +216,13 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
   const Vec3 n = s.macro().normal;
   r.lambda_o = sums[width - 2] / (o.dot(n) * s.macro().area);
   r.lambda_i = sums[width - 1] / (i.dot(n) * s.macro().area);
-  for (std::size_t k = 1; k < nf; ++k) cdf[k] += cdf[k - 1];  // sequential: deterministic
-  r.weight = nf ? cdf[nf - 1] : 0.0;
+  const auto weight = [&](std::size_t k) {  // w_f from 2 A_f m_f, without a square root
+    const Vec3 c = ft.cross(k);
+    const double oc = o.dot(c), ic = i.dot(c);
+    return oc > 0 && ic > 0 ? 0.25 * (oc + ic) : 0.0;
+  };
+  const BlockFacetSampler sampler(nf, weight);  // places the samples
+  r.weight = sampler.total();
   if (!(r.weight > 0)) throw RuntimeFailure("no facet faces both directions");
   r.vcavity = vcav_total / r.weight;
 
@@ -232,14 +241,12 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
   auto body = [&](int rep, std::uint64_t j, Tally& t) {
     CounterRng rng(opt.seed, ReplicatePlan::stream(stream, rep), j);
     const double u = (static_cast<double>(j) + rng.uniform()) / n_rep * front;
-    std::size_t k = std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin();
-    k = std::min(k, nf - 1);
-    while (k > 0 && cdf[k] == cdf[k - 1]) --k;  // never land on a zero-weight facet
+    const std::size_t k = sampler.draw(u, weight);
     const Triangle f = s.facet(k);
     const double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
     const Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
     const SourcePlane plane = SourcePlane::of(f);
-    const int b = ft.bin[k];
+    const int b = ft.bin(k);
     const bool vo = !tracer.occluded(p, o, &plane, t.counters);
     const bool vi = o == i ? vo : !tracer.occluded(p, i, &plane, t.counters);
     ++t.samples[b];

@@ -118,8 +118,12 @@ VndfResult measure_vndf(const Tracer& tracer, const Vec3& v_in, const VndfOption
   const std::size_t nf = s.num_facets();
   using Sums = std::vector<double>;
   Sums sums = sum_over_facets(nf, nbins + 1, [&](std::size_t k, double* acc) {
-    const double proj = std::max(0.0, ft.area[k] * ft.normal[k].cast<double>().dot(v));
-    acc[ft.bin[k] >= 0 ? ft.bin[k] : nbins] += proj;
+    Vec3 m;
+    double a;
+    ft.normal_area(k, m, a);
+    const double proj = std::max(0.0, a * m.dot(v));
+    const int b = ft.bin(k);
+    acc[b >= 0 ? b : nbins] += proj;
   });
   r.front_projected.assign(sums.begin(), sums.begin() + nbins);
   for (double x : sums) r.front_projected_total += x;

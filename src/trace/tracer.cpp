@@ -62,13 +62,18 @@ Tracer::Tracer(const Microsurface& surface) : surface_(surface) {
   scene_ = rtcNewScene(device_);
   // ROBUST: without it a few rays per million slip through shared edges (DESIGN.md).
   // Context filter: only rays that leave a facet pay for the filter; primary rays run bare.
-  rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+  // COMPACT (heightfields): the grid's BVH in about half the memory (5 instead of 10 bytes
+  // per facet at 4096^2), for a few percent of speed.
+  const bool grid = surface.kind() == Microsurface::Kind::Heightfield;
+  rtcSetSceneFlags(scene_, static_cast<RTCSceneFlags>(
+                               RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION |
+                               (grid ? RTC_SCENE_FLAG_COMPACT : 0)));
   rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
 
   const Macrosurface& macro = surface.macro();
   Eigen::AlignedBox3d box = surface.bounds();
   RTCGeometry geom;
-  if (surface.kind() == Microsurface::Kind::Heightfield) {
+  if (grid) {
     geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_GRID);
     if (!macro.periodic) {  // a measured window: its own vertices only, no periodic copy
       window_ = true;

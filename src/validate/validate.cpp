@@ -382,17 +382,21 @@ void check_d_nominal(const SurfaceSet& set, Progress& progress, CheckOutput& out
 // Per normal bin: sum_f A_f (v.m_f)+ G1_vcavity(v, m_f) / sum_f A_f (v.m_f)+ .
 std::vector<double> vcavity_bin_model(const FacetTable& t, const Vec3& v, int nbins) {
   using Acc = std::vector<double>;
-  const std::size_t nf = t.area.size();
+  const std::size_t nf = t.size();
   Acc acc = tbb::parallel_deterministic_reduce(
       tbb::blocked_range<std::size_t>(0, nf, std::max<std::size_t>(1 << 15, nf / 64)), Acc{},
       [&](const tbb::blocked_range<std::size_t>& range, Acc a) {
         if (a.empty()) a.assign(2 * static_cast<std::size_t>(nbins), 0.0);
         for (std::size_t k = range.begin(); k != range.end(); ++k) {
-          const Vec3 m = t.normal[k].cast<double>().normalized();
-          const double w = t.area[k] * std::max(0.0, v.dot(m));
-          if (w <= 0 || t.bin[k] < 0) continue;
-          a[2 * t.bin[k]] += w * models::vcavity_G1(v, m);  // 001 eq. (24)
-          a[2 * t.bin[k] + 1] += w;
+          Vec3 m;
+          double area;
+          t.normal_area(k, m, area);
+          m.normalize();
+          const double w = area * std::max(0.0, v.dot(m));
+          const int b = t.bin(k);
+          if (w <= 0 || b < 0) continue;
+          a[2 * b] += w * models::vcavity_G1(v, m);  // 001 eq. (24)
+          a[2 * b + 1] += w;
         }
         return a;
       },

@@ -33,7 +33,8 @@ long long parse_integer_in(const std::string& text, long long lo, long long hi, 
 // Parses a seed: a decimal integer in [0, 2^64 - 1].
 std::uint64_t parse_seed(const std::string& text, const std::string& name);
 
-// Bytes the process may use: physical memory, or the address-space limit when lower.
+// Bytes the process may use: the memory available now (MemAvailable), physical memory, or the
+// address-space limit, whichever is lowest.
 double available_memory_bytes();
 // UsageError "WHAT needs about X GiB, more than 80% of the Y GiB available" when
 // bytes > 0.8 * available (or bytes is not finite).

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "microsim/measure/binning.hpp"
+#include "microsim/measure/facet_table.hpp"
 #include "microsim/measure/replicates.hpp"
 #include "microsim/trace/tracer.hpp"
 
@@ -79,22 +80,7 @@ struct G1Result {
   Estimate bin_g1_raycast(int b) const;
 };
 
-// Direction-independent facet data (unit normal, area, normal bin), computed once and shared
-// by the directions of a run.
-struct FacetTable {
-  std::vector<Eigen::Vector3f> normal;
-  std::vector<float> area;
-  std::vector<int> bin;
-  // Meshes: facets pressed against an opposite-facing twin with the same three vertex positions
-  // (walls of touching boxes, 000 Fig. 6): no ray can reach them, so area sampling counts them
-  // occluded without tracing (an occlusion ray leaving one starts inside the neighbour).
-  std::vector<std::uint8_t> buried;
-};
-FacetTable build_facet_table(const Microsurface& s, const DirectionBinning& binning);
 DirectionBinning g1_normal_binning(const G1Options& options);
-// The caller's table when given (checked against the surface), else one built into `own`.
-const FacetTable& facet_table_for(const Microsurface& s, const DirectionBinning& binning,
-                                  const FacetTable* given, FacetTable& own);
 // Deterministic parallel sums over the facets: body(k, acc) adds facet k's terms into
 // acc[0 .. width); the result does not depend on the thread count.
 template <class Body>

@@ -1,0 +1,149 @@
+// Per-facet data the estimators need (unit normal m_f, area A_f, normal bin) and the draw of
+// facets with probability proportional to a per-facet weight, in little memory: a heightfield's
+// normals and areas are derived from its heights when needed (a cross product of two grid
+// edges), so that only the bin index is stored per facet (2 bytes for up to 65534 bins).
+#pragma once
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "microsim/measure/binning.hpp"
+#include "microsim/surface/microsurface.hpp"
+
+namespace microsim {
+
+// Direction-independent facet data, computed once and shared by the directions of a run.
+// It refers to the heights of the surface it was built from (which must outlive it; moving
+// the surface is fine, copying it and dropping the original is not).
+class FacetTable {
+ public:
+  FacetTable() = default;
+  FacetTable(const Microsurface& s, const DirectionBinning& binning);
+
+  std::size_t size() const { return size_; }
+  // Unit normal m_f and area A_f of facet k. Heightfields: exact from the heights (the same
+  // cross product as Tracer::facet_of_hit), in double.
+  void normal_area(std::size_t k, Vec3& m, double& a) const {
+    if (heights_) {
+      const Vec3 c = heightfield_cross(k);
+      const double len = c.norm();
+      a = 0.5 * len;
+      m = len > 0 ? Vec3(c / len) : Vec3::UnitZ();
+      return;
+    }
+    m = normal_[k].cast<double>();
+    a = area_[k];
+  }
+  // 2 A_f m_f: the facet's weights A_f (v.m_f) as 0.5 cross(k).v without a square root.
+  Vec3 cross(std::size_t k) const {
+    if (heights_) return heightfield_cross(k);
+    return (2.0 * static_cast<double>(area_[k])) * normal_[k].cast<double>();
+  }
+  Vec3 normal(std::size_t k) const {
+    Vec3 m;
+    double a;
+    normal_area(k, m, a);
+    return m;
+  }
+  double area(std::size_t k) const {
+    Vec3 m;
+    double a;
+    normal_area(k, m, a);
+    return a;
+  }
+  int bin(std::size_t k) const {
+    if (!bin16_.empty()) return bin16_[k] == kNoBin16 ? -1 : bin16_[k];
+    return bin32_[k];
+  }
+  // Meshes: facets pressed against an opposite-facing twin with the same three vertex
+  // positions (walls of touching boxes, 000 Fig. 6): no ray can reach them, so area sampling
+  // counts them occluded without tracing (an occlusion ray leaving one starts inside the
+  // neighbour).
+  bool buried(std::size_t k) const { return !buried_.empty() && buried_[k]; }
+  // Bytes held per facet (for the memory reports of the benchmark).
+  double bytes_per_facet() const;
+
+ private:
+  static constexpr std::uint16_t kNoBin16 = 0xFFFF;
+  // 2 x area x normal of heightfield facet k; facet 2c = (v00, v10, v01), 2c+1 = (v10, v11, v01)
+  // of cell c (Microsurface::facet).
+  Vec3 heightfield_cross(std::size_t k) const {
+    const std::size_t cell = k / 2;
+    const std::size_t i0 = cell % nx_, j0 = cell / nx_;
+    const std::size_t i1 = i0 + 1 == nx_ ? 0 : i0 + 1, j1 = j0 + 1 == ny_ ? 0 : j0 + 1;
+    const double h00 = heights_[j0 * nx_ + i0], h10 = heights_[j0 * nx_ + i1];
+    const double h01 = heights_[j1 * nx_ + i0], h11 = heights_[j1 * nx_ + i1];
+    if (k % 2 == 0) return Vec3(-(h10 - h00) * dy_, -(h01 - h00) * dx_, dx_ * dy_);
+    return Vec3(-(h11 - h01) * dy_, -(h11 - h10) * dx_, dx_ * dy_);
+  }
+
+  std::size_t size_ = 0;
+  const float* heights_ = nullptr;  // heightfields only
+  std::size_t nx_ = 0, ny_ = 0;
+  double dx_ = 0, dy_ = 0;
+  std::vector<Eigen::Vector3f> normal_;  // meshes only
+  std::vector<float> area_;              // meshes only
+  std::vector<std::uint16_t> bin16_;     // bins when fewer than 65535, else bin32_
+  std::vector<int> bin32_;
+  std::vector<std::uint8_t> buried_;
+};
+
+FacetTable build_facet_table(const Microsurface& s, const DirectionBinning& binning);
+// The caller's table when given (checked against the surface), else one built into `own`.
+const FacetTable& facet_table_for(const Microsurface& s, const DirectionBinning& binning,
+                                  const FacetTable* given, FacetTable& own);
+
+// Draws facet indices with probability proportional to weights w_k >= 0 that are computed on
+// demand: the cumulative sums of blocks of kBlock consecutive facets (8 bytes per block), and
+// inside the chosen block a scan of its weights. `weight(k)` must be the same deterministic
+// function at construction and at every draw. Everything is summed in a fixed order: the
+// draws do not depend on the thread count.
+class BlockFacetSampler {
+ public:
+  static constexpr std::size_t kBlock = 16;
+
+  template <class Weight>
+  BlockFacetSampler(std::size_t n, const Weight& weight) : n_(n), cdf_((n + kBlock - 1) / kBlock) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cdf_.size(), 4096),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t b = r.begin(); b != r.end(); ++b) {
+                          double s = 0;
+                          for (std::size_t k = b * kBlock, e = std::min(n_, k + kBlock); k < e; ++k)
+                            s += weight(k);
+                          cdf_[b] = s;
+                        }
+                      });
+    for (std::size_t b = 1; b < cdf_.size(); ++b) cdf_[b] += cdf_[b - 1];
+  }
+  double total() const { return cdf_.empty() ? 0.0 : cdf_.back(); }
+
+  // The facet k whose slice [W_{k-1}, W_k) of the cumulative weights holds u, u in [0, total);
+  // never a facet of zero weight.
+  template <class Weight>
+  std::size_t draw(double u, const Weight& weight) const {
+    std::size_t b = std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin();
+    b = std::min(b, cdf_.size() - 1);
+    while (b > 0 && cdf_[b] == cdf_[b - 1]) --b;  // never an empty block
+    const double local = u - (b > 0 ? cdf_[b - 1] : 0.0);
+    std::size_t last = b * kBlock;  // last facet of positive weight seen (rounding fallback)
+    double s = 0;
+    for (std::size_t k = b * kBlock, e = std::min(n_, k + kBlock); k < e; ++k) {
+      const double w = weight(k);
+      if (w <= 0) continue;
+      s += w;
+      last = k;
+      if (s > local) return k;
+    }
+    return last;
+  }
+  double bytes() const { return 8.0 * cdf_.size(); }
+
+ private:
+  std::size_t n_;
+  std::vector<double> cdf_;
+};
+
+}  // namespace microsim
