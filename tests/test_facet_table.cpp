@@ -29,6 +29,27 @@ TEST(FacetTable, HeightfieldFacetsFromHeightsMatchTheTriangles) {
   EXPECT_EQ(t.bytes_per_facet(), 2.0);
 }
 
+TEST(FacetTable, SampleRegionFacetsMatchTheTriangles) {
+  // A measured window's region (its facets numbered first) and a periodic tile restricted to
+  // the same cells: the derived normals and areas follow Microsurface::facet's numbering.
+  for (bool periodic : {true, false}) {
+    Microsurface s = beckmann_tile(32, 4);
+    s.set_sample_region(5, 21, 3, 30, periodic);
+    const DirectionBinning bins(18, 8, kPi);
+    const FacetTable t = build_facet_table(s, bins);
+    ASSERT_EQ(t.size(), s.num_facets());
+    ASSERT_EQ(t.size(), 2u * 16 * 27);
+    for (std::size_t k = 0; k < s.num_facets(); ++k) {
+      const Triangle f = s.facet(k);
+      Vec3 m;
+      double a;
+      t.normal_area(k, m, a);
+      ASSERT_NEAR((m - f.normal()).norm(), 0.0, 1e-12) << k << (periodic ? " periodic" : " window");
+      ASSERT_NEAR(a, f.area(), 1e-12 * f.area()) << k;
+    }
+  }
+}
+
 TEST(FacetTable, HeightfieldTableKeepsTheExactFacetIdentities) {
   // 000 eq. 1b/1c from the derived normals and areas: sum A_f m_f = n A, sum A_f (n.m_f) = A,
   // to rounding (a wrong cross product, e.g. dx and dy swapped on a non-square tile, is far off).

@@ -16,6 +16,12 @@ FacetTable::FacetTable(const Microsurface& s, const DirectionBinning& binning) {
     ny_ = static_cast<std::size_t>(s.ny());
     dx_ = s.dx();
     dy_ = s.dy();
+    if (s.has_region()) {
+      region_facets_ = size_;
+      region_i0_ = static_cast<std::size_t>(s.region_i0());
+      region_j0_ = static_cast<std::size_t>(s.region_j0());
+      region_w_ = static_cast<std::size_t>(s.region_i1() - s.region_i0());
+    }
   } else {
     normal_.resize(size_);
     area_.resize(size_);

@@ -70,9 +70,18 @@ class FacetTable {
   static constexpr std::uint16_t kNoBin16 = 0xFFFF;
   // 2 x area x normal of heightfield facet k; facet 2c = (v00, v10, v01), 2c+1 = (v10, v11, v01)
   // of cell c (Microsurface::facet).
+  // With a sample region, its facets come first (Microsurface::facet numbering).
   Vec3 heightfield_cross(std::size_t k) const {
-    const std::size_t cell = k / 2;
-    const std::size_t i0 = cell % nx_, j0 = cell / nx_;
+    std::size_t i0, j0;
+    if (k < region_facets_) {
+      const std::size_t cell = k / 2;
+      i0 = region_i0_ + cell % region_w_;
+      j0 = region_j0_ + cell / region_w_;
+    } else {
+      const std::size_t cell = (k - region_facets_) / 2;
+      i0 = cell % nx_;
+      j0 = cell / nx_;
+    }
     const std::size_t i1 = i0 + 1 == nx_ ? 0 : i0 + 1, j1 = j0 + 1 == ny_ ? 0 : j0 + 1;
     const double h00 = heights_[j0 * nx_ + i0], h10 = heights_[j0 * nx_ + i1];
     const double h01 = heights_[j1 * nx_ + i0], h11 = heights_[j1 * nx_ + i1];
@@ -84,6 +93,7 @@ class FacetTable {
   const float* heights_ = nullptr;  // heightfields only
   std::size_t nx_ = 0, ny_ = 0;
   double dx_ = 0, dy_ = 0;
+  std::size_t region_facets_ = 0, region_i0_ = 0, region_j0_ = 0, region_w_ = 1;
   std::vector<Eigen::Vector3f> normal_;  // meshes only
   std::vector<float> area_;              // meshes only
   std::vector<std::uint16_t> bin16_;     // bins when fewer than 65535, else bin32_
