@@ -9,6 +9,7 @@
 #include <string>
 
 #include "../src/cli/option_checks.hpp"
+#include "microsim/common.hpp"
 #include "fuzz_common.hpp"
 
 namespace cli = microsim::cli;
