@@ -4,8 +4,6 @@
 // Contract checked by every target: a loader either returns or throws its usage error (exit 2
 // with a one-line message naming the file). Any other exception aborts the run with its message,
 // as do sanitizer reports, timeouts and allocations beyond -rss_limit_mb / -malloc_limit_mb.
-// MICROSIM_FUZZ_LENIENT=1 tolerates other std::exception types (exit 1 with a library message)
-// and keeps only memory errors, undefined behaviour, aborts, hangs and memory blow-ups as crashes.
 #pragma once
 #include <cstdint>
 #include <cstdio>
@@ -19,14 +17,6 @@
 
 namespace microsim::fuzz {
 
-inline bool lenient() {
-  static const bool on = [] {
-    const char* v = std::getenv("MICROSIM_FUZZ_LENIENT");
-    return v && *v && std::string(v) != "0";
-  }();
-  return on;
-}
-
 // Runs load(); Expected is the documented refusal.
 template <class Expected, class F>
 void expect_only(F&& load) {
@@ -34,7 +24,6 @@ void expect_only(F&& load) {
     load();
   } catch (const Expected&) {
   } catch (const std::exception& e) {
-    if (lenient()) return;
     std::fprintf(stderr, "refused with an exception other than the usage error: %s\n", e.what());
     std::abort();
   }

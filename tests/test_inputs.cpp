@@ -121,6 +121,36 @@ class Inputs : public ::testing::Test {
     write_file(tmp("neg.ply"), "ply\nformat ascii 1.0\nelement vertex -3\n" + ply_tail);
     write_file(tmp("huge.off"), "OFF\n2000000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
     write_file(tmp("neg.off"), "OFF\n3 -1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    // Mesh bodies that OpenMesh's readers trust: a face list of 3e9 vertices, a comment where
+    // a count belongs, a face naming a missing vertex, a file ending early, a token that is not
+    // a number, counts on the OFF line, binary OFF, a binary PLY list count of 2^31 - 1.
+    const std::string tri = "0 0 0\n1 0 0\n0 1 0\n";
+    write_file(tmp("tri.off"), "OFF\n3 1 0\n" + tri + "3 0 1 2\n");
+    write_file(tmp("list.off"), "OFF\n3 1 0\n" + tri + "3000000000 0 1 2\n");
+    write_file(tmp("comment.off"), "OFF\n# made by hand\n3 1 0\n" + tri + "3 0 1 2\n");
+    write_file(tmp("index.off"), "OFF\n3 1 0\n" + tri + "3 0 1 4\n");
+    write_file(tmp("short.off"), "OFF\n3 2 0\n" + tri + "3 0 1 2\n");
+    write_file(tmp("nan.off"), "OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n");
+    write_file(tmp("oneline.off"), "OFF 3 1 0\n" + tri + "3 0 1 2\n");
+    write_file(tmp("binary.off"), "OFF BINARY\n" + std::string(64, '\0'));
+    const std::string ply_ascii =
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    write_file(tmp("tri.ply"), ply_ascii + tri + "3 0 1 2\n");
+    write_file(tmp("list.ply"), ply_ascii + tri + "200 0 1 2\n");
+    write_file(tmp("token.ply"), ply_ascii + "0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n");
+    write_file(tmp("version.ply"), "ply\nformat ascii one\nelement vertex 3\nend_header\n");
+    {
+      std::string b =
+          "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+          "property float z\nelement face 1\nproperty list int int vertex_indices\nend_header\n";
+      const float v[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+      const std::int32_t face[4] = {2147483647, 0, 1, 2};
+      b.append(reinterpret_cast<const char*>(v), sizeof v);
+      write_file(tmp("tri_bin.ply"), b + std::string("\3\0\0\0\0\0\0\0\1\0\0\0\2\0\0\0", 16));
+      b.append(reinterpret_cast<const char*>(face), sizeof face);
+      write_file(tmp("list_bin.ply"), b);
+    }
     auto with_sidecar = [&](const std::string& name, const std::function<void(nlohmann::json&)>& edit) {
       fs::copy_file(mesh_, tmp(name), fs::copy_options::overwrite_existing);
       auto j = nlohmann::json::parse(slurp(mesh_ + ".json"));
@@ -298,6 +328,20 @@ const std::vector<Case>& cases() {
       {"generate mesh --input {T}neg.off -o {o}", 2, "neg.off", "ply"},
       {"info {T}huge.ply --json {o}", 2, "huge.ply"},
       {"info {T}neg.off --json {o}", 2, "neg.off"},
+      {"info {T}tri.off --json {o}", 0, ""},
+      {"info {T}list.off --json {o}", 2, "list.off"},
+      {"info {T}comment.off --json {o}", 2, "comment.off"},
+      {"info {T}index.off --json {o}", 2, "index.off"},
+      {"info {T}short.off --json {o}", 2, "short.off"},
+      {"info {T}nan.off --json {o}", 2, "nan.off"},
+      {"info {T}oneline.off --json {o}", 2, "oneline.off"},
+      {"info {T}binary.off --json {o}", 2, "binary.off"},
+      {"info {T}tri.ply --json {o}", 0, ""},
+      {"info {T}tri_bin.ply --json {o}", 0, ""},
+      {"info {T}list.ply --json {o}", 2, "list.ply"},
+      {"info {T}token.ply --json {o}", 2, "token.ply"},
+      {"info {T}version.ply --json {o}", 2, "version.ply"},
+      {"generate mesh --input {T}list_bin.ply -o {o}", 2, "list_bin.ply", "ply"},
       {"info {T}alphastr.ply --json {o}", 2, "alpha_x"},
       {"info {T}area0.ply --json {o}", 2, "area"},
       {"info {T}normalnan.ply --json {o}", 2, "normal"},

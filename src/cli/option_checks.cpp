@@ -98,7 +98,12 @@ void apply_preset(CLI::App& cmd) {
   if (!cfg || cfg->count() == 0) return;
   const std::string path = cfg->results().at(0);
   std::istringstream in(read_preset_text(path));
-  const std::vector<CLI::ConfigItem> items = CLI::ConfigTOML().from_config(in);
+  std::vector<CLI::ConfigItem> items;
+  try {
+    items = CLI::ConfigTOML().from_config(in);
+  } catch (const CLI::ParseError& e) {
+    throw UsageError("--config " + path + ": " + e.what());
+  }
   std::set<std::string> seen;
   for (const CLI::ConfigItem& item : items) {
     const std::string key = item.fullname();

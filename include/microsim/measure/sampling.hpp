@@ -21,7 +21,11 @@ struct Strata {
   Vec2 point(std::uint64_t i, CounterRng& rng) const {
     std::uint32_t sx, sy;
     morton_decode(i / per_stratum, sx, sy);
-    return Vec2((sx + rng.uniform()) / grid, (sy + rng.uniform()) / grid);
+    // Two statements: the order of a call's arguments is unspecified (GCC and Clang differ),
+    // and the draws must not depend on the compiler. y first keeps earlier GCC results.
+    const double jy = rng.uniform();
+    const double jx = rng.uniform();
+    return Vec2((sx + jx) / grid, (sy + jy) / grid);
   }
 };
 
