@@ -4,7 +4,7 @@ import subprocess
 import pytest
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def cli():
     """Runs the command-line program (MICROSIM_BINARY, set by CTest); returns the completed process."""
     binary = os.environ.get("MICROSIM_BINARY")

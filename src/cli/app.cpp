@@ -7,9 +7,9 @@
 
 namespace microsim::cli {
 
-MpiSession& mpi_session() {
-  static MpiSession session;
-  return session;
+MpiRanks& mpi_ranks() {
+  static MpiRanks ranks;
+  return ranks;
 }
 
 std::unique_ptr<MicrosimApp> build_app(GlobalOptions& g, TallyReplay* replay) {
@@ -19,7 +19,7 @@ std::unique_ptr<MicrosimApp> build_app(GlobalOptions& g, TallyReplay* replay) {
       "standard errors beside the analytic Smith model.",
       "microsim");
   MicrosimApp& app = *owned;
-  const MpiSession& mpi = mpi_session();
+  const MpiRanks& mpi = mpi_ranks();
   app.require_subcommand(1);
   app.fallthrough();  // --threads and --quiet are accepted after the subcommand too
   app.add_option("--threads", g.threads, "Worker threads (default: all cores)")
@@ -105,7 +105,7 @@ void run_app(CLI::App& app, const std::vector<std::string>& args) {
 
 int run_cli(const std::vector<std::string>& args, TallyReplay* replay) {
   GlobalOptions g;
-  const MpiSession& mpi = mpi_session();
+  const MpiRanks& mpi = mpi_ranks();
   const bool root = mpi.rank == 0;
   std::unique_ptr<MicrosimApp> app = build_app(g, replay);
   const std::string unknown = unknown_command(*app, args);

@@ -24,12 +24,12 @@ struct MicrosimApp : CLI::App {
 };
 
 // An App with every command registered on g. `replay` (merge): the command computes nothing and
-// takes every estimator call's tallies from it. Under MPI (mpi_session()) the estimators share
+// takes every estimator call's tallies from it. Under MPI (mpi_ranks()) the estimators share
 // the work between ranks.
 std::unique_ptr<MicrosimApp> build_app(GlobalOptions& g, TallyReplay* replay = nullptr);
 
-// The process's MPI session (one process unless main started MPI under mpirun / srun).
-MpiSession& mpi_session();
+// The process's MPI ranks (one process unless main started MPI under mpirun / srun).
+MpiRanks& mpi_ranks();
 
 // "unknown surface kind 'x' (known: ...)" or "unknown command ..." when the leading words of
 // args (without the program name) do not name a command of the tree (CLI11 would only say that a

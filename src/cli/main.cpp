@@ -12,10 +12,10 @@ using namespace microsim;
 using namespace microsim::cli;
 
 int main(int argc, char** argv) {
-  mpi_session() = mpi_start(argc, argv);
+  mpi_ranks() = mpi_start(argc, argv);
   install_interrupt_cleanup();
   const int status = run_cli(std::vector<std::string>(argv + 1, argv + argc));
   wait_if_interrupted();
-  mpi_finish(mpi_session());
+  mpi_finish(mpi_ranks());
   return status;
 }

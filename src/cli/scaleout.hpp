@@ -30,14 +30,14 @@ std::string shard_path(const std::string& output, int k, int n);
 void register_merge(CLI::App& app, const GlobalOptions& g);
 
 // MPI (compiled with MICROSIM_MPI; otherwise these say "one process").
-struct MpiSession {
+struct MpiRanks {
   int rank = 0, size = 1;
   bool active = false;  // launched by mpirun / srun and initialized
   std::unique_ptr<TallySplit> split;
 };
 // Initializes MPI when the process was launched by an MPI launcher (Open MPI or PMI variables).
-MpiSession mpi_start(int& argc, char**& argv);
-void mpi_finish(const MpiSession& s);
+MpiRanks mpi_start(int& argc, char**& argv);
+void mpi_finish(const MpiRanks& s);
 [[noreturn]] void mpi_abort(int code);
 
 }  // namespace microsim::cli

@@ -54,8 +54,8 @@ bool launched_by_mpi() {
 
 }  // namespace
 
-MpiSession mpi_start(int& argc, char**& argv) {
-  MpiSession s;
+MpiRanks mpi_start(int& argc, char**& argv) {
+  MpiRanks s;
   if (!launched_by_mpi()) return s;
   if (MPI_Init(&argc, &argv) != MPI_SUCCESS) {
     std::cerr << "microsim: failed: MPI_Init\n";
@@ -68,7 +68,7 @@ MpiSession mpi_start(int& argc, char**& argv) {
   return s;
 }
 
-void mpi_finish(const MpiSession& s) {
+void mpi_finish(const MpiRanks& s) {
   if (s.active) MPI_Finalize();
 }
 
@@ -80,8 +80,8 @@ void mpi_abort(int code) {
 
 #else
 
-MpiSession mpi_start(int&, char**&) { return {}; }
-void mpi_finish(const MpiSession&) {}
+MpiRanks mpi_start(int&, char**&) { return {}; }
+void mpi_finish(const MpiRanks&) {}
 void mpi_abort(int code) { std::exit(code); }
 
 #endif
