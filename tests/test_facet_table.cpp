@@ -11,6 +11,31 @@
 using namespace microsim;
 using namespace microsim::testing;
 
+namespace {
+// Facet weights A_f max(0, v.m_f) of the view v (the area-sampling density of G1).
+auto view_weight(const FacetTable& t, const Vec3& v) {
+  return [&t, v](std::size_t k) {
+    Vec3 m;
+    double a;
+    t.normal_area(k, m, a);
+    return std::max(0.0, a * m.dot(v));
+  };
+}
+
+// Every facet of the table equals Microsurface::facet's triangle (normal, area).
+void expect_table_matches_triangles(const Microsurface& s, const FacetTable& t, const char* label) {
+  ASSERT_EQ(t.size(), s.num_facets());
+  for (std::size_t k = 0; k < s.num_facets(); ++k) {
+    const Triangle f = s.facet(k);
+    Vec3 m;
+    double a;
+    t.normal_area(k, m, a);
+    ASSERT_NEAR((m - f.normal()).norm(), 0.0, 1e-12) << k << " " << label;
+    ASSERT_NEAR(a, f.area(), 1e-12 * f.area()) << k << " " << label;
+  }
+}
+}  // namespace
+
 TEST(FacetTable, HeightfieldFacetsFromHeightsMatchTheTriangles) {
   const Microsurface s = beckmann_tile(64, 3);
   const DirectionBinning bins(18, 8, kPi);
@@ -37,16 +62,8 @@ TEST(FacetTable, SampleRegionFacetsMatchTheTriangles) {
     s.set_sample_region(5, 21, 3, 30, periodic);
     const DirectionBinning bins(18, 8, kPi);
     const FacetTable t = build_facet_table(s, bins);
-    ASSERT_EQ(t.size(), s.num_facets());
     ASSERT_EQ(t.size(), 2u * 16 * 27);
-    for (std::size_t k = 0; k < s.num_facets(); ++k) {
-      const Triangle f = s.facet(k);
-      Vec3 m;
-      double a;
-      t.normal_area(k, m, a);
-      ASSERT_NEAR((m - f.normal()).norm(), 0.0, 1e-12) << k << (periodic ? " periodic" : " window");
-      ASSERT_NEAR(a, f.area(), 1e-12 * f.area()) << k;
-    }
+    expect_table_matches_triangles(s, t, periodic ? "periodic" : "window");
   }
 }
 
@@ -73,13 +90,7 @@ TEST(BlockFacetSampler, DrawsTheSameFacetsAsTheFullCdf) {
   // rounding of a slice boundary; never a facet of zero weight.
   const Microsurface s = beckmann_tile(64, 5);
   const FacetTable t = build_facet_table(s, DirectionBinning(18, 8, kPi));
-  const Vec3 v = direction_from_angles(rad(75), rad(20));
-  const auto weight = [&](std::size_t k) {
-    Vec3 m;
-    double a;
-    t.normal_area(k, m, a);
-    return std::max(0.0, a * m.dot(v));
-  };
+  const auto weight = view_weight(t, direction_from_angles(rad(75), rad(20)));
   const BlockFacetSampler sampler(t.size(), weight);
   std::vector<double> cdf(t.size());
   double acc = 0;
@@ -100,13 +111,7 @@ TEST(BlockFacetSampler, DrawsTheSameFacetsAsTheFullCdf) {
   EXPECT_EQ(zero, 0u);
   EXPECT_LE(mismatches, n / 10000);
   // Power: a sampler built on other weights (another view) draws other facets.
-  const Vec3 v2 = direction_from_angles(rad(60), rad(20));
-  const auto weight2 = [&](std::size_t k) {
-    Vec3 m;
-    double a;
-    t.normal_area(k, m, a);
-    return std::max(0.0, a * m.dot(v2));
-  };
+  const auto weight2 = view_weight(t, direction_from_angles(rad(60), rad(20)));
   const BlockFacetSampler other(t.size(), weight2);
   std::size_t differ = 0;
   for (std::size_t j = 0; j < 1000; ++j) {
