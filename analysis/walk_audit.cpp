@@ -36,6 +36,7 @@
 #include "microsim/models/smith_random_walk.hpp"
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/trace/tracer.hpp"
+#include "../tests/reference_heightfield_tracer.hpp"
 
 using namespace microsim;
 
@@ -58,102 +59,6 @@ std::vector<double> parse_list(const char* s) {
   while (std::getline(ss, item, ',')) v.push_back(std::atof(item.c_str()));
   return v;
 }
-
-// ---------------------------------------------------------------------------------------------
-// (b) The independent tracer.
-class RefTracer {
- public:
-  explicit RefTracer(const Microsurface& s)
-      : s_(s), n_(s.nx()), dx_(s.dx()), dy_(s.dy()), x0_(-0.5 * s.macro().size_x),
-        y0_(-0.5 * s.macro().size_y) {
-    hmin_ = 1e300;
-    hmax_ = -1e300;
-    for (float h : s.heights()) {
-      hmin_ = std::min(hmin_, double(h));
-      hmax_ = std::max(hmax_, double(h));
-    }
-  }
-  struct Hit {
-    bool hit = false, backface = false, lost = false;
-    Vec3 p, n;
-    std::size_t facet = 0;
-  };
-  double h(long i, long j) const { return s_.height(i, j); }
-
-  Hit first_hit(const Vec3& o, const Vec3& d, long skip) const {
-    Hit out;
-    const double ox = (o.x() - x0_) / dx_, oy = (o.y() - y0_) / dy_;
-    const double ux = d.x() / dx_, uy = d.y() / dy_;
-    long i = static_cast<long>(std::floor(ox)), j = static_cast<long>(std::floor(oy));
-    const double inf = std::numeric_limits<double>::infinity();
-    const int sx = ux > 0 ? 1 : (ux < 0 ? -1 : 0), sy = uy > 0 ? 1 : (uy < 0 ? -1 : 0);
-    double tmx = sx > 0 ? (i + 1 - ox) / ux : (sx < 0 ? (i - ox) / ux : inf);
-    double tmy = sy > 0 ? (j + 1 - oy) / uy : (sy < 0 ? (j - oy) / uy : inf);
-    const double tdx = sx ? 1.0 / std::abs(ux) : inf, tdy = sy ? 1.0 / std::abs(uy) : inf;
-    double t_in = 0;
-    const double tmin = 1e-12 * dx_, eps = 1e-10;
-    for (long step = 0; step < 100000000; ++step) {
-      const double t_out = std::min(tmx, tmy);
-      const double za = o.z() + d.z() * t_in;
-      const double zb = std::isfinite(t_out) ? o.z() + d.z() * t_out : (d.z() > 0 ? inf : -inf);
-      const double h00 = h(i, j), h10 = h(i + 1, j), h01 = h(i, j + 1), h11 = h(i + 1, j + 1);
-      const double cmax = std::max({h00, h10, h01, h11});
-      if (std::min(za, zb) <= cmax + 1e-12) {
-        double best = inf;
-        for (int half = 0; half < 2; ++half) {
-          const std::size_t f = s_.facet_index(wrap(i), wrap(j), half);
-          if (static_cast<long>(f) == skip) continue;
-          double A, B, C;
-          if (half == 0) A = h00, B = h10 - h00, C = h01 - h00;
-          else A = h10 + h01 - h11, B = h11 - h01, C = h11 - h10;
-          const double u0 = ox - i, v0 = oy - j;
-          const double denom = d.z() - B * ux - C * uy;  // d . (-B/dx, -C/dy, 1)
-          if (denom == 0) continue;
-          const double t = (A + B * u0 + C * v0 - o.z()) / denom;
-          if (!(t > tmin) || t >= best) continue;
-          const double u = u0 + t * ux, v = v0 + t * uy;
-          const bool in = half == 0 ? (u >= -eps && v >= -eps && u + v <= 1 + eps)
-                                    : (u <= 1 + eps && v <= 1 + eps && u + v >= 1 - eps);
-          if (!in) continue;
-          best = t;
-          out.hit = true;
-          out.backface = denom > 0;
-          out.facet = f;
-          out.n = Vec3(-B / dx_, -C / dy_, 1.0).normalized();
-        }
-        if (out.hit) {
-          out.p = o + best * d;
-          const double L = s_.macro().size_x;
-          out.p.x() -= L * std::floor((out.p.x() - x0_) / L);
-          out.p.y() -= L * std::floor((out.p.y() - y0_) / L);
-          return out;
-        }
-      }
-      if (d.z() > 0 && zb > hmax_) return out;  // above every vertex: escaped
-      if (d.z() < 0 && zb < hmin_ - 1e-9) {
-        out.lost = true;
-        return out;
-      }
-      if (!std::isfinite(t_out)) return out;
-      t_in = t_out;
-      if (tmx < tmy) {
-        i += sx;
-        tmx += tdx;
-      } else {
-        j += sy;
-        tmy += tdy;
-      }
-    }
-    out.lost = true;
-    return out;
-  }
-
- private:
-  long wrap(long i) const { return ((i % n_) + n_) % n_; }
-  const Microsurface& s_;
-  long n_;
-  double dx_, dy_, x0_, y0_, hmin_, hmax_;
-};
 
 // ---------------------------------------------------------------------------------------------
 // Geometry helpers for the diagnostics.
@@ -356,7 +261,7 @@ int main(int argc, char** argv) {
       const double lap_rms = std::sqrt(lap2 / s.heights().size());
       sigma_sum += sigma;
       Tracer tracer(s);
-      RefTracer ref(s);
+      ReferenceHeightfieldTracer ref(s);
       const models::Material mirror = models::Material::mirror();
       for (std::uint64_t p = 0; p < a.paths; ++p) {
         if (a.replay >= 0 && p != static_cast<std::uint64_t>(a.replay)) continue;
@@ -402,13 +307,13 @@ int main(int argc, char** argv) {
         }
         // (b) the independent tracer.
         std::vector<std::size_t> rfacets;
-        std::vector<RefTracer::Hit> rhits;
+        std::vector<ReferenceHeightfieldTracer::Hit> rhits;
         Vec3 rd = -wi, rp = origin;
         long skip = -1;
         int rorder = 0;
         bool rlost = false;
         for (;; ++rorder) {
-          RefTracer::Hit h = ref.first_hit(rp, rd, skip);
+          ReferenceHeightfieldTracer::Hit h = ref.first_hit(rp, rd, skip);
           if (!h.hit) {
             rlost = h.lost || rd.z() <= 0 || rorder == 0;
             break;
@@ -444,7 +349,7 @@ int main(int argc, char** argv) {
                           edge_distance(s, r.facet, r.p), r.o.x(), r.o.y(), r.o.z());
             }
             if (k < rhits.size()) {
-              const RefTracer::Hit& r = rhits[k];
+              const ReferenceHeightfieldTracer::Hit& r = rhits[k];
               const CellPos c = cell_of(s, r.facet);
               std::printf("  independent hit %zu: facet (%ld,%ld,%d) p (%.9f %.9f %.9f) n (%+.6f %+.6f %+.6f) "
                           "edge %.3e cells\n",
