@@ -55,8 +55,9 @@ Microsurface rough_tile() {
 }  // namespace
 
 // Measured with analysis/walk_audit: 9 of 5.4e6 paths (alpha = 1; 8, 16, 32 cells per l;
-// theta_i = 0, 60, 80 deg) differ, each at a hit within 1e-4 cells of a facet edge, where float
-// hit points and double ones fall on different sides (both ways). 60000 paths expect 0.1 such.
+// theta_i = 0, 60, 80 deg) differ, each first at a hit within 1e-3 cells of a facet edge, where
+// float hit points and double ones fall on different sides (both ways: 3 higher, 6 lower orders).
+// 60000 paths expect 0.1 such.
 TEST(MirrorWalkReference, OrdersEqualAnIndependentTracer) {
   const Microsurface s = rough_tile();
   const ReferenceHeightfieldTracer ref(s);
