@@ -256,10 +256,15 @@ const ChiSquareResult& ChiSquareTest::run() {
   return result_;
 }
 
-ChiSquareResult ChiSquareTest::run_against(const Pdf& other) {
+ChiSquareResult ChiSquareTest::run_against(const Pdf& other, bool normalize) {
   draw();
   double total = 0;
-  const std::vector<double> e = integrate(other, &total);
+  std::vector<double> e = integrate(other, &total);
+  if (normalize && total > 0) {
+    for (std::size_t c = 0; c + 1 < e.size(); ++c) e[c] /= total;
+    e.back() = 0;  // all of the mass inside the domain
+    total = 1;
+  }
   return finish(e, total);
 }
 

@@ -186,6 +186,10 @@ TEST(ChiSquareHarness, WrongDensitiesFail) {
   const ChiSquareResult no_cos = cosine.run_against([](const Vec3&) { return 1 / (2 * kPi); });
   EXPECT_LT(no_cos.p_value, 1e-6) << no_cos.summary();
   EXPECT_FALSE(no_cos.passed());
+  // Renormalized, a density three times too large has the same shape: the same statistic.
+  const ChiSquareResult no_cos3 = cosine.run_against([](const Vec3&) { return 3 / (2 * kPi); }, true);
+  EXPECT_NEAR(no_cos3.chi2, no_cos.chi2, 1e-9 * no_cos.chi2);
+  EXPECT_TRUE(no_cos3.error.empty()) << no_cos3.error;
   // A roughness 5% off: GGX 0.5 visible normals against the D_v of 0.525.
   const models::Ndf ggx = models::Ndf::ggx(0.5, 0.5), wrong = models::Ndf::ggx(0.525, 0.525);
   const Vec3 v = direction_from_angles(rad(40.0), 0.0);

@@ -87,8 +87,9 @@ class ChiSquareTest {
 
   // Draws the samples and integrates the pdf (once each, cached), then the statistic.
   const ChiSquareResult& run();
-  // The same samples against another pdf (power checks: a deliberately wrong density).
-  ChiSquareResult run_against(const Pdf& other);
+  // The same samples against another pdf (power checks: a deliberately wrong density);
+  // `normalize` rescales it to integrate to 1 over the domain (a wrong shape, not a wrong mass).
+  ChiSquareResult run_against(const Pdf& other, bool normalize = false);
 
   // Row-major res_v x res_u tables, u fastest; the extra last entry is the "refused or outside"
   // cell. Valid after run().
