@@ -221,12 +221,15 @@ std::vector<double> ChiSquareTest::integrate(const Pdf& pdf, double* total) cons
       };
   const std::size_t cells = static_cast<std::size_t>(nu) * nv;
   std::vector<double> p(cells + 1, 0.0);
-  const double tol = opt_.tolerance / n;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t c = r.begin(); c != r.end(); ++c) {
       const int iu = static_cast<int>(c % nu), iv = static_cast<int>(c / nu);
       const double u0 = double(iu) / nu, u1 = double(iu + 1) / nu, v0 = double(iv) / nv, v1 = double(iv + 1) / nv;
-      p[c] = adapt(u0, u1, v0, v1, rule(u0, u1, v0, v1), tol, 0);
+      // Allowed error: `tolerance` Poisson standard deviations of the cell's count, so that
+      // quadrature adds at most ~tolerance^2 per cell to chi2.
+      const double whole = rule(u0, u1, v0, v1);
+      const double tol = opt_.tolerance * std::sqrt(std::max(1.0, n * std::abs(whole))) / n;
+      p[c] = adapt(u0, u1, v0, v1, whole, tol, 0);
     }
   });
   double sum = 0;
@@ -258,12 +261,13 @@ const ChiSquareResult& ChiSquareTest::run() {
 
 ChiSquareResult ChiSquareTest::run_against(const Pdf& other, bool normalize) {
   draw();
+  if (expected_.empty()) expected_ = integrate(pdf_, &integral_);
   double total = 0;
   std::vector<double> e = integrate(other, &total);
   if (normalize && total > 0) {
-    for (std::size_t c = 0; c + 1 < e.size(); ++c) e[c] /= total;
-    e.back() = 0;  // all of the mass inside the domain
-    total = 1;
+    for (std::size_t c = 0; c + 1 < e.size(); ++c) e[c] *= integral_ / total;
+    e.back() = expected_.back();
+    total = integral_;
   }
   return finish(e, total);
 }

@@ -80,7 +80,7 @@ class ChiSquareTest {
     double min_expected = 5.0;        // pooling threshold
     int quadrature = 4;               // Gauss-Legendre points per side of a (sub)rectangle
     int max_depth = 7;                // adaptive bisections per cell
-    double tolerance = 1e-3;          // quadrature error allowed per cell, in expected counts
+    double tolerance = 1e-2;          // quadrature error allowed per cell, in Poisson sd of its count
   };
 
   ChiSquareTest(ChiSquareDomain domain, Sampler sampler, Pdf pdf, Options options);
@@ -88,7 +88,8 @@ class ChiSquareTest {
   // Draws the samples and integrates the pdf (once each, cached), then the statistic.
   const ChiSquareResult& run();
   // The same samples against another pdf (power checks: a deliberately wrong density);
-  // `normalize` rescales it to integrate to 1 over the domain (a wrong shape, not a wrong mass).
+  // `normalize` rescales it to the integral of the test's own pdf over the domain (a wrong shape,
+  // not a wrong mass).
   ChiSquareResult run_against(const Pdf& other, bool normalize = false);
 
   // Row-major res_v x res_u tables, u fastest; the extra last entry is the "refused or outside"
