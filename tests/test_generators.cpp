@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "microsim/measure/stats.hpp"
+#include "microsim/statistics.hpp"
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/measure/ndf_measure.hpp"
 #include "microsim/measure/vcavity_measure.hpp"
@@ -25,12 +26,6 @@ namespace {
 
 using microsim::sidak_t;  // microsim/measure/stats.hpp
 using microsim::sidak_z;
-
-// Upper quantile of chi^2 with k degrees of freedom (Wilson-Hilferty), z = normal quantile.
-double chi2_quantile(int k, double z) {
-  double a = 2.0 / (9.0 * k);
-  return k * std::pow(1 - a + z * std::sqrt(a), 3);
-}
 
 G1Options opts(std::uint64_t rays, std::uint64_t seed = 1) {
   G1Options o;
@@ -262,36 +257,27 @@ TEST(ExactCases, EllipsoidDIsGgxByChiSquare) {
   G1Options o = opts(3000000);
   o.normal_theta_bins = 18;  // 10 degree rings over the sphere, 45 degree sectors
   G1Result r = measure_g1(tracer, Vec3::UnitZ(), o);
-  auto chi2 = [&](const models::Ndf& ndf, int& dof) {
+  // Cells: the normal bins plus the misses; pooling and p-value by microsim/statistics.hpp.
+  auto chi2 = [&](const models::Ndf& ndf) {
     const double n = static_cast<double>(r.raycast_rays), aw = s.macro().area / r.window_area_perp;
-    double c = 0, e_rest = 0, o_rest = 0;
-    std::uint64_t hits = 0;
-    dof = 0;
+    std::vector<double> observed, expected;
+    double hits = 0;
     for (int b = 0; b < r.binning.size(); ++b) {
-      const double e = n * aw * r.binning.solid_angle(b) *
-                       r.binning.bin_average(b, [&](const Vec3& m) { return m.z() * ndf.D(m); });
-      const double obs = static_cast<double>(r.bins[b].raycast_hits);
-      hits += r.bins[b].raycast_hits;
-      if (e < 20) {
-        e_rest += e;
-        o_rest += obs;
-        continue;
-      }
-      c += (obs - e) * (obs - e) / e;
-      ++dof;
+      expected.push_back(n * aw * r.binning.solid_angle(b) *
+                         r.binning.bin_average(b, [&](const Vec3& m) { return m.z() * ndf.D(m); }));
+      observed.push_back(static_cast<double>(r.bins[b].raycast_hits));
+      hits += observed.back();
     }
-    const double miss = n - static_cast<double>(hits), e_miss = n * (1 - aw);
-    c += (miss - e_miss) * (miss - e_miss) / e_miss;
-    if (e_rest > 0) c += (o_rest - e_rest) * (o_rest - e_rest) / e_rest;
-    return c;
+    observed.push_back(n - hits);
+    expected.push_back(n * (1 - aw));
+    return pearson_chi2(observed, expected);
   };
-  int dof = 0;
-  const double c = chi2(models::Ndf::ggx(0.5, 0.35), dof);
-  ASSERT_GT(dof, 40);
-  EXPECT_LT(c, chi2_quantile(dof, 3.09)) << "chi2 " << c << " dof " << dof;
-  int dof2 = 0;
-  const double c2 = chi2(models::Ndf::ggx(0.5 * 1.03, 0.35 * 1.03), dof2);
-  EXPECT_GT(c2, chi2_quantile(dof2, 3.09));
+  const ChiSquareResult c = chi2(models::Ndf::ggx(0.5, 0.35));
+  ASSERT_GT(c.dof, 40);
+  EXPECT_GT(c.p_value, 1e-3) << c.summary();
+  const ChiSquareResult c2 = chi2(models::Ndf::ggx(0.5 * 1.03, 0.35 * 1.03));
+  EXPECT_LT(c2.p_value, 1e-3) << c2.summary();
+  std::printf("[ info ] %s\n[ info ] alpha x1.03: %s\n", c.summary().c_str(), c2.summary().c_str());
 }
 
 TEST(ExactCases, EllipsoidLambdaIsGgxLambda) {
