@@ -323,38 +323,47 @@ TEST(MicrofacetBsdf, SmoothLimitGivesEq7dAndEq10b) {
       }
 }
 
-TEST(MicrofacetBsdf, AlbedoFromVisibleNormalsMatchesIntegralOfEval) {
-  // single_scattering_albedo (VNDF quadrature, G2/G1) against int f(o, i) |o.z| d omega_o (eval:
-  // D, Jacobians, eta factors; midpoint rule in (theta_o, phi_o)): two independent routes.
-  struct Case {
-    Masking masking;
-    double eta, tdeg;
-  };
-  for (const auto& [masking, eta, tdeg] : {Case{Masking::SmithHeightCorrelated, 1.5, 60.0},
-                                           Case{Masking::SmithHeightCorrelated, 1 / 1.5, 0.0},
-                                           Case{Masking::VCavity, 1.5, 0.0}, Case{Masking::VCavity, 1 / 1.5, 60.0}}) {
-        const double alpha = 0.5;
-        const MicrofacetBsdf f{Ndf::beckmann(alpha, alpha), Material::dielectric(eta), masking};
-        const Vec3 i = dir(rad(tdeg), 0.0);
-        const auto a = mm::single_scattering_albedo(f, i, 1024);
-        const int N = 700, M = 700;  // theta_o in [0, pi], phi_o in [0, pi] (mirror symmetric in y)
-        double R = 0, T = 0;
-        for (int p = 0; p < N; ++p) {
-          const double th = (p + 0.5) / N * kPi, st = std::sin(th), ct = std::cos(th);
-          for (int q = 0; q < M; ++q) {
-            const double ph = (q + 0.5) / M * kPi;
-            const double v = f.eval(Vec3(st * std::cos(ph), st * std::sin(ph), ct), i) * std::abs(ct) * st;
-            (ct > 0 ? R : T) += v;
-          }
-        }
-        R *= 2 * (kPi / N) * (kPi / M);
-        T *= 2 * (kPi / N) * (kPi / M);
-        EXPECT_NEAR(a.reflected, R, 1e-4) << mm::to_string(masking) << " eta=" << eta << " theta=" << tdeg;
-        EXPECT_NEAR(a.transmitted, T, 1e-4) << mm::to_string(masking) << " eta=" << eta << " theta=" << tdeg;
-        EXPECT_LT(a.reflected + a.transmitted, 1.0);
-        EXPECT_GT(a.reflected + a.transmitted, 0.7);
-      }
+// single_scattering_albedo (VNDF quadrature, G2/G1) against int f(o, i) |o.z| d omega_o (eval:
+// D, Jacobians, eta factors; midpoint rule in (theta_o, phi_o)): two independent routes.
+struct AlbedoCase {
+  Masking masking;
+  double eta, tdeg;
+};
+class AlbedoFromVisibleNormals : public ::testing::TestWithParam<AlbedoCase> {};
+
+TEST_P(AlbedoFromVisibleNormals, MatchesIntegralOfEval) {
+  const auto [masking, eta, tdeg] = GetParam();
+  const double alpha = 0.5;
+  const MicrofacetBsdf f{Ndf::beckmann(alpha, alpha), Material::dielectric(eta), masking};
+  const Vec3 i = dir(rad(tdeg), 0.0);
+  const auto a = mm::single_scattering_albedo(f, i, 1024);
+  const int N = 700, M = 700;  // theta_o in [0, pi], phi_o in [0, pi] (mirror symmetric in y)
+  double R = 0, T = 0;
+  for (int p = 0; p < N; ++p) {
+    const double th = (p + 0.5) / N * kPi, st = std::sin(th), ct = std::cos(th);
+    for (int q = 0; q < M; ++q) {
+      const double ph = (q + 0.5) / M * kPi;
+      const double v = f.eval(Vec3(st * std::cos(ph), st * std::sin(ph), ct), i) * std::abs(ct) * st;
+      (ct > 0 ? R : T) += v;
+    }
+  }
+  R *= 2 * (kPi / N) * (kPi / M);
+  T *= 2 * (kPi / N) * (kPi / M);
+  EXPECT_NEAR(a.reflected, R, 1e-4);
+  EXPECT_NEAR(a.transmitted, T, 1e-4);
+  EXPECT_LT(a.reflected + a.transmitted, 1.0);
+  EXPECT_GT(a.reflected + a.transmitted, 0.7);
 }
+INSTANTIATE_TEST_SUITE_P(MicrofacetBsdf, AlbedoFromVisibleNormals,
+                         ::testing::Values(AlbedoCase{Masking::SmithHeightCorrelated, 1.5, 60.0},
+                                           AlbedoCase{Masking::SmithHeightCorrelated, 1 / 1.5, 0.0},
+                                           AlbedoCase{Masking::VCavity, 1.5, 0.0},
+                                           AlbedoCase{Masking::VCavity, 1 / 1.5, 60.0}),
+                         [](const ::testing::TestParamInfo<AlbedoCase>& i) {
+                           return std::string(i.param.masking == Masking::VCavity ? "vcavity" : "smith_height_correlated") +
+                                  (i.param.eta > 1 ? "_eta150" : "_eta067") + "_theta" +
+                                  std::to_string(static_cast<int>(i.param.tdeg));
+                         });
 
 // ---------------------------------------------------------------------------------------------
 // Smith random walk
@@ -429,44 +438,47 @@ INSTANTIATE_TEST_SUITE_P(SmithWalk, VisibleNormalsBelowTheHorizon,
                                            BelowHorizonCase{mm::Distribution::GGX, 160.0}),
                          below_horizon_name);
 
-TEST(SmithWalk, OrderOneEqualsSingleScatteringAlbedo) {
-  // The walk's order-1 term is the single-scattering BSDF with height-correlated Smith G2.
-  struct Case {
-    Ndf ndf;
-    Material mat;
-    double theta_deg;
-  };
-  const std::vector<Case> cases = {
-      {Ndf::beckmann(0.5, 0.5), Material::mirror(), 0.0},
-      {Ndf::beckmann(1.0, 1.0), Material::mirror(), 60.0},
-      {Ndf::ggx(0.7, 0.7), Material::mirror(), 70.0},
-      {Ndf::beckmann(0.5, 0.5), Material::conductor(0.2, 3.4), 60.0},
-      {Ndf::beckmann(0.5, 0.5), Material::dielectric(1.5), 0.0},
-      {Ndf::beckmann(0.5, 0.5), Material::dielectric(1.5), 60.0},
-      {Ndf::ggx(0.6, 0.6), Material::dielectric(1.0 / 1.5), 30.0},
-      // large Lambda on both sides: distinguishes the transmission G2 B(1+Lo, 1+Li) from
-      // 1/(1 + Lo + Li) (they differ at second order in Lambda)
-      {Ndf::beckmann(1.0, 1.0), Material::dielectric(1.5), 80.0},
-  };
+// The walk's order-1 term is the single-scattering BSDF with height-correlated Smith G2.
+struct OrderOneCase {
+  const char* name;
+  Ndf ndf;
+  Material mat;
+  double theta_deg;
+};
+const OrderOneCase kOrderOneCases[] = {
+    {"beckmann50_mirror_theta0", Ndf::beckmann(0.5, 0.5), Material::mirror(), 0.0},
+    {"beckmann100_mirror_theta60", Ndf::beckmann(1.0, 1.0), Material::mirror(), 60.0},
+    {"ggx70_mirror_theta70", Ndf::ggx(0.7, 0.7), Material::mirror(), 70.0},
+    {"beckmann50_conductor_theta60", Ndf::beckmann(0.5, 0.5), Material::conductor(0.2, 3.4), 60.0},
+    {"beckmann50_dielectric150_theta0", Ndf::beckmann(0.5, 0.5), Material::dielectric(1.5), 0.0},
+    {"beckmann50_dielectric150_theta60", Ndf::beckmann(0.5, 0.5), Material::dielectric(1.5), 60.0},
+    {"ggx60_dielectric067_theta30", Ndf::ggx(0.6, 0.6), Material::dielectric(1.0 / 1.5), 30.0},
+    // large Lambda on both sides: distinguishes the transmission G2 B(1+Lo, 1+Li) from
+    // 1/(1 + Lo + Li) (they differ at second order in Lambda)
+    {"beckmann100_dielectric150_theta80", Ndf::beckmann(1.0, 1.0), Material::dielectric(1.5), 80.0},
+};
+constexpr int kOrderOneTests = 2 * static_cast<int>(sizeof(kOrderOneCases) / sizeof(kOrderOneCases[0]));
+class OrderOne : public ::testing::TestWithParam<int> {};
+
+TEST_P(OrderOne, EqualsSingleScatteringAlbedo) {
+  const int c = GetParam();
+  const OrderOneCase& cs = kOrderOneCases[c];
   const int n = 200000;
-  const double zmax = sidak_z(0.01, 2 * static_cast<int>(cases.size()));
-  int c = 0;
-  for (const auto& cs : cases) {
-    const Vec3 wi = dir(rad(cs.theta_deg), 0.4);
-    const mm::SmithRandomWalk walk(cs.ndf, cs.mat);
-    const auto a = mm::smith_walk_albedos(walk, wi, n, 4, rng_factory(5, 100 + c++));
-    const auto ref = mm::single_scattering_albedo(MicrofacetBsdf{cs.ndf, cs.mat, Masking::SmithHeightCorrelated}, wi, 384);
-    EXPECT_EQ(a.lost, 0u);
-    const double zr = (a.mean(0, 0) - ref.reflected) / a.stderr_(0, 0);
-    EXPECT_LT(std::abs(zr), zmax) << "case " << c << " R1 walk " << a.mean(0, 0) << " +- " << a.stderr_(0, 0)
-                                  << " model " << ref.reflected;
-    if (cs.mat.transmits()) {
-      const double zt = (a.mean(1, 0) - ref.transmitted) / a.stderr_(1, 0);
-      EXPECT_LT(std::abs(zt), zmax) << "case " << c << " T1 walk " << a.mean(1, 0) << " +- " << a.stderr_(1, 0)
-                                    << " model " << ref.transmitted;
-    }
+  const double zmax = sidak_z(0.01, kOrderOneTests);
+  const Vec3 wi = dir(rad(cs.theta_deg), 0.4);
+  const mm::SmithRandomWalk walk(cs.ndf, cs.mat);
+  const auto a = mm::smith_walk_albedos(walk, wi, n, 4, rng_factory(5, 100 + c));
+  const auto ref = mm::single_scattering_albedo(MicrofacetBsdf{cs.ndf, cs.mat, Masking::SmithHeightCorrelated}, wi, 384);
+  EXPECT_EQ(a.lost, 0u);
+  const double zr = (a.mean(0, 0) - ref.reflected) / a.stderr_(0, 0);
+  EXPECT_LT(std::abs(zr), zmax) << "R1 walk " << a.mean(0, 0) << " +- " << a.stderr_(0, 0) << " model " << ref.reflected;
+  if (cs.mat.transmits()) {
+    const double zt = (a.mean(1, 0) - ref.transmitted) / a.stderr_(1, 0);
+    EXPECT_LT(std::abs(zt), zmax) << "T1 walk " << a.mean(1, 0) << " +- " << a.stderr_(1, 0) << " model " << ref.transmitted;
   }
 }
+INSTANTIATE_TEST_SUITE_P(SmithWalk, OrderOne, ::testing::Range(0, kOrderOneTests / 2),
+                         [](const ::testing::TestParamInfo<int>& i) { return std::string(kOrderOneCases[i.param].name); });
 
 TEST(SmithWalk, OrderOneRejectsTheWrongShadowing) {
   // Power: the separable G2 (001 eq. 20) is far outside the walk's error at grazing incidence.
