@@ -492,45 +492,48 @@ TEST(MeshFiles, RoundTripKeepsFacetsMacrosurfaceAndKind) {
   }
 }
 
-TEST(MeshFiles, BadMeshesAreRefusedWithOneLine) {
-  struct Case {
-    const char* name;
-    const char* off;
-    const char* needle;
-  };
-  const Case cases[] = {
-      // Three triangles on one edge.
-      {"nonmanifold", "OFF\n5 3 0\n0 0 1\n1 0 1\n0 1 1\n0 -1 1\n0 0 2\n3 0 1 2\n3 1 0 3\n3 0 1 4\n",
-       "non-manifold"},
-      // Two triangles running their shared edge the same way.
-      {"flipped", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 0 1 3\n", "non-manifold"},
-      {"repeated", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 0 1\n", "degenerate"},
-      {"zero-area", "OFF\n3 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n", "degenerate"},
-      // A box without its top: open where it must be closed.
-      {"open", "OFF\n8 8 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
-               "3 1 2 6\n3 1 6 5\n3 0 4 7\n3 0 7 3\n3 3 7 6\n3 3 6 2\n3 0 1 5\n3 0 5 4\n",
-       "open mesh"},
-      // A closed tetrahedron has no rim: zero signed projected area.
-      {"closed", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n",
-       "closed mesh"},
-      {"notamesh", "hello\n", "not a readable mesh"},
-  };
-  for (const Case& c : cases) {
-    const std::string path = tmp(std::string(c.name) + ".off");
-    write_file(path, c.off);
-    MeshImportParams p;
-    p.input = path;
-    try {
-      import_mesh(p);
-      ADD_FAILURE() << c.name << " was accepted";
-    } catch (const UsageError& e) {
-      const std::string msg = e.what();
-      EXPECT_NE(msg.find(c.needle), std::string::npos) << c.name << ": " << msg;
-      EXPECT_EQ(msg.find('\n'), std::string::npos) << c.name;
-    }
-    std::remove(path.c_str());
+struct BadMesh {
+  const char* name;
+  const char* off;
+  const char* needle;
+};
+const BadMesh kBadMeshes[] = {
+    // Three triangles on one edge.
+    {"nonmanifold", "OFF\n5 3 0\n0 0 1\n1 0 1\n0 1 1\n0 -1 1\n0 0 2\n3 0 1 2\n3 1 0 3\n3 0 1 4\n",
+     "non-manifold"},
+    // Two triangles running their shared edge the same way.
+    {"flipped", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 0 1 3\n", "non-manifold"},
+    {"repeated", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 0 1\n", "degenerate"},
+    {"zero_area", "OFF\n3 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n", "degenerate"},
+    // A box without its top: open where it must be closed.
+    {"open", "OFF\n8 8 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+             "3 1 2 6\n3 1 6 5\n3 0 4 7\n3 0 7 3\n3 3 7 6\n3 3 6 2\n3 0 1 5\n3 0 5 4\n",
+     "open mesh"},
+    // A closed tetrahedron has no rim: zero signed projected area.
+    {"closed", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n",
+     "closed mesh"},
+    {"notamesh", "hello\n", "not a readable mesh"},
+};
+class BadMeshes : public ::testing::TestWithParam<BadMesh> {};
+
+TEST_P(BadMeshes, AreRefusedWithOneLine) {
+  const BadMesh& c = GetParam();
+  const std::string path = tmp(std::string(c.name) + ".off");
+  write_file(path, c.off);
+  MeshImportParams p;
+  p.input = path;
+  try {
+    import_mesh(p);
+    ADD_FAILURE() << c.name << " was accepted";
+  } catch (const UsageError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find(c.needle), std::string::npos) << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos);
   }
+  std::remove(path.c_str());
 }
+INSTANTIATE_TEST_SUITE_P(MeshFiles, BadMeshes, ::testing::ValuesIn(kBadMeshes),
+                         [](const ::testing::TestParamInfo<BadMesh>& i) { return std::string(i.param.name); });
 
 TEST(MeshFiles, ImportOfAPeriodicTileChecksItsBorders) {
   // The square wave without its sidecar, declared periodic: accepted with the right tile,
