@@ -163,6 +163,14 @@ ChiSquareTest::ChiSquareTest(ChiSquareDomain domain, Sampler sampler, Pdf pdf, O
     throw std::invalid_argument("ChiSquareTest: resolution, samples and quadrature must be positive");
 }
 
+ChiSquareTest::ChiSquareTest(ChiSquareDomain domain, std::vector<Vec3> points, Pdf pdf, Options options)
+    : domain_(std::move(domain)), points_(std::move(points)), pdf_(std::move(pdf)), opt_(options) {
+  if (points_.empty()) throw std::invalid_argument("ChiSquareTest: no points");
+  opt_.samples = points_.size();
+  if (opt_.res_u < 1 || opt_.res_v < 1 || opt_.quadrature < 1)
+    throw std::invalid_argument("ChiSquareTest: resolution and quadrature must be positive");
+}
+
 void ChiSquareTest::draw() {
   if (drawn_) return;
   const int nu = opt_.res_u, nv = opt_.res_v;
@@ -174,8 +182,13 @@ void ChiSquareTest::draw() {
                     [&](const tbb::blocked_range<std::uint64_t>& range) {
                       auto& h = local.local();
                       for (std::uint64_t k = range.begin(); k != range.end(); ++k) {
-                        CounterRng rng(opt_.seed, 0xC41507E57ull, k);
-                        const std::optional<Vec3> p = sampler_(rng);
+                        std::optional<Vec3> p;
+                        if (points_.empty()) {
+                          CounterRng rng(opt_.seed, 0xC41507E57ull, k);
+                          p = sampler_(rng);
+                        } else {
+                          p = points_[k];
+                        }
                         double u, v;
                         if (!p || !domain_.param(*p, u, v) || !(u >= 0 && u <= 1 && v >= 0 && v <= 1)) {
                           ++h[cells];

@@ -261,4 +261,13 @@ TEST(ChiSquareHarness, SameHistogramForAnyThreadCountAndSeedsDiffer) {
   c.run();
   EXPECT_EQ(a.observed(), b.observed());
   EXPECT_NE(a.observed(), c.observed());
+  // The same draws handed over as a fixed set of points give the same histogram and statistic.
+  std::vector<Vec3> points;
+  for (std::uint64_t k = 0; k < 50000; ++k) {
+    CounterRng rng(3, 0xC41507E57ull, k);
+    points.push_back(*cosine_sample(rng));
+  }
+  ChiSquareTest d(ChiSquareDomain::hemisphere(), points, cosine_pdf, small(1, 8, 8));
+  EXPECT_DOUBLE_EQ(d.run().chi2, a.result().chi2);
+  EXPECT_EQ(d.observed(), a.observed());
 }

@@ -84,6 +84,9 @@ class ChiSquareTest {
   };
 
   ChiSquareTest(ChiSquareDomain domain, Sampler sampler, Pdf pdf, Options options);
+  // A fixed set of draws made elsewhere (e.g. a generator's random normals); options.samples
+  // and options.seed are ignored.
+  ChiSquareTest(ChiSquareDomain domain, std::vector<Vec3> points, Pdf pdf, Options options);
 
   // Draws the samples and integrates the pdf (once each, cached), then the statistic.
   const ChiSquareResult& run();
@@ -108,6 +111,7 @@ class ChiSquareTest {
 
   ChiSquareDomain domain_;
   Sampler sampler_;
+  std::vector<Vec3> points_;
   Pdf pdf_;
   Options opt_;
   bool drawn_ = false;
