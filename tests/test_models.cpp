@@ -294,25 +294,43 @@ TEST(Lambda, MarginalFormulaMatchesClosedForms) {
   EXPECT_TRUE(std::isinf(mm::lambda_from_slope_marginal(beck, 0.0)));
 }
 
-TEST(Lambda, ClosedFormMatchesSlopeDistribution) {
+struct LambdaCase {
+  Distribution kind;
+  double ax, ay;
+  std::vector<double> phis;
+};
+class LambdaClosedForm : public ::testing::TestWithParam<LambdaCase> {};
+
+TEST_P(LambdaClosedForm, MatchesSlopeDistribution) {
+  const LambdaCase& c = GetParam();
+  const Ndf ndf = make(c.kind, c.ax, c.ay);
   double worst = 0.0;
-  struct Case { double ax, ay; std::vector<double> phis; };
-  const std::vector<Case> cases = {{0.3, 0.3, {0.7}}, {0.2, 0.8, {0.0, 0.5, 2.2}}, {1.2, 0.5, {1.1, 4.0}}};
-  for (auto kind : {Distribution::Beckmann, Distribution::GGX})
-    for (const auto& c : cases)
-      for (double th : {20.0, 60.0, 85.0})
-        for (double ph : c.phis) {
-          const Ndf ndf = make(kind, c.ax, c.ay);
-          const Vec3 v = dir(deg(th), ph);
-          const double exact = ndf.Lambda(v);
-          const double num = mm::lambda_from_slope_distribution(
-              [&](double x, double y) { return ndf.P22(x, y); }, v);
-          const double rel = std::abs(num / exact - 1.0);
-          EXPECT_LT(rel, 1e-6) << mm::to_string(kind) << " " << c.ax << "," << c.ay << " th=" << th
-                               << " ph=" << ph << " closed=" << exact << " numeric=" << num;
-          worst = std::max(worst, rel);
-        }
+  for (double th : {20.0, 60.0, 85.0})
+    for (double ph : c.phis) {
+      const Vec3 v = dir(deg(th), ph);
+      const double exact = ndf.Lambda(v);
+      const double num = mm::lambda_from_slope_distribution([&](double x, double y) { return ndf.P22(x, y); }, v);
+      const double rel = std::abs(num / exact - 1.0);
+      EXPECT_LT(rel, 1e-6) << "th=" << th << " ph=" << ph << " closed=" << exact << " numeric=" << num;
+      worst = std::max(worst, rel);
+    }
   std::printf("[ info ] max relative |Lambda closed - Lambda numeric| = %.2e\n", worst);
+}
+std::string lambda_case_name(const ::testing::TestParamInfo<LambdaCase>& i) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%s_a%03.0fx%03.0f", mm::to_string(i.param.kind), 100 * i.param.ax, 100 * i.param.ay);
+  return buf;
+}
+INSTANTIATE_TEST_SUITE_P(Lambda, LambdaClosedForm,
+                         ::testing::Values(LambdaCase{Distribution::Beckmann, 0.3, 0.3, {0.7}},
+                                           LambdaCase{Distribution::Beckmann, 0.2, 0.8, {0.0, 0.5, 2.2}},
+                                           LambdaCase{Distribution::Beckmann, 1.2, 0.5, {1.1, 4.0}},
+                                           LambdaCase{Distribution::GGX, 0.3, 0.3, {0.7}},
+                                           LambdaCase{Distribution::GGX, 0.2, 0.8, {0.0, 0.5, 2.2}},
+                                           LambdaCase{Distribution::GGX, 1.2, 0.5, {1.1, 4.0}}),
+                         lambda_case_name);
+
+TEST(Lambda, NumericOfAConstantAtNormalViewIsZero) {
   EXPECT_EQ(mm::lambda_from_slope_distribution([](double, double) { return 1.0; }, Vec3(0, 0, 1)), 0.0);
 }
 
