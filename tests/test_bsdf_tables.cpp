@@ -2,16 +2,18 @@
 // tensor file (io/rgl_bsdf.hpp) and the MERL file (io/merl.hpp), checked through readers written
 // from the format descriptions (table_readers.hpp): the files give back the measured f within
 // its standard errors, a mirror's table conserves energy (white furnace), and the RGL importance
-// sampling draws directions with the density it reports (chi-square) and weights eval / pdf.
+// sampling draws directions with the density it reports (chi-square harness) and weights eval / pdf.
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <optional>
 #include <random>
 
 #include "microsim/io/merl.hpp"
 #include "microsim/io/rgl_bsdf.hpp"
 #include "microsim/measure/bsdf_table.hpp"
 #include "microsim/measure/stats.hpp"
+#include "microsim/statistics.hpp"
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/surface/surface_io.hpp"
 #include "cli_helpers.hpp"
@@ -213,58 +215,39 @@ TEST(RglFile, ImportanceSamplingMatchesItsDensityAndEval) {
   const std::string path = temp("gold_sampling.bsdf");
   write_rgl_bsdf(path, build_rgl_table(t, surface(), o));
   const RglReader reader(path, 0, 0);
-  // Histogram of sampled directions on an 8 x 8 equal-area map plus a "below the horizon" cell,
-  // against N int_bin pdf d omega (6 x 6 midpoint quadrature per bin).
-  const int R = 8, N = 40000;
-  const HemisphereMap map(R);
-  std::vector<double> observed(R * R + 1, 0.0), expected(R * R + 1, 0.0);
+  // The sampled density is the one pdf() reports.
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> U(0.0, 1.0);
   double max_rel = 0.0;
-  for (int n = 0; n < N; ++n) {
+  for (int n = 0; n < 400; ++n) {
     Vec3 wo;
     double pdf;
-    if (!reader.sample(Vec2(U(rng), U(rng)), &wo, &pdf)) {
-      observed[R * R] += 1;
-      continue;
-    }
-    observed[map.pixel_of(wo)] += 1;
-    if (n % 100 == 0) {  // the sampled density is the one pdf() reports
-      const double p2 = reader.pdf(wo);
-      max_rel = std::max(max_rel, std::abs(p2 - pdf) / pdf);
-    }
+    if (!reader.sample(Vec2(U(rng), U(rng)), &wo, &pdf)) continue;
+    max_rel = std::max(max_rel, std::abs(reader.pdf(wo) - pdf) / pdf);
   }
   EXPECT_LT(max_rel, 1e-3);
-  double inside = 0.0;
-  const int q = 6;
-  for (int px = 0; px < R * R; ++px) {
-    const int i = px % R, j = px / R;
-    double s = 0.0;
-    for (int a = 0; a < q; ++a)
-      for (int b = 0; b < q; ++b)
-        s += reader.pdf(map.from_square(-1 + (i + (a + 0.5) / q) * 2.0 / R, -1 + (j + (b + 0.5) / q) * 2.0 / R));
-    expected[px] = N * s / (q * q) * map.pixel_solid_angle();
-    inside += expected[px];
-  }
-  expected[R * R] = std::max(0.0, N - inside);
-  auto chi2_of = [&](const std::vector<double>& e) {
-    double chi2 = 0.0;
-    int dof = -1;
-    for (std::size_t k = 0; k < e.size(); ++k)
-      if (e[k] >= 5) {
-        chi2 += (observed[k] - e[k]) * (observed[k] - e[k]) / e[k];
-        ++dof;
-      }
-    return chi2_p_value(chi2, dof);
-  };
-  EXPECT_GT(chi2_of(expected), 1e-3);
-  // Power: a density 10% too high on half of the sphere (and renormalized) is rejected.
-  std::vector<double> wrong = expected;
-  for (int px = 0; px < R * R / 2; ++px) wrong[px] *= 1.10;
-  double sw = 0.0;
-  for (double x : wrong) sw += x;
-  for (double& x : wrong) x *= N / sw;
-  EXPECT_LT(chi2_of(wrong), 1e-3);
+  // Chi-square harness on equal-area cells of the hemisphere; refused samples (below the
+  // horizon) against the mass the pdf leaves outside.
+  ChiSquareTest::Options o2;
+  o2.samples = 40000;
+  o2.res_u = 8;
+  o2.res_v = 16;
+  o2.seed = 5;
+  ChiSquareTest chi2(ChiSquareDomain::hemisphere(),
+                     [&](CounterRng& r) -> std::optional<Vec3> {
+                       Vec3 wo;
+                       double pdf;
+                       const double u1 = r.uniform(), u2 = r.uniform();
+                       if (!reader.sample(Vec2(u1, u2), &wo, &pdf)) return std::nullopt;
+                       return wo;
+                     },
+                     [&](const Vec3& wo) { return reader.pdf(wo); }, o2);
+  EXPECT_TRUE(chi2.run().passed()) << chi2.describe();
+  // Power: a density 10% too high on half of the hemisphere (renormalized) is rejected.
+  const ChiSquareResult wrong =
+      chi2.run_against([&](const Vec3& wo) { return (wo.y() > 0 ? 1.1 : 1.0) * reader.pdf(wo); }, true);
+  EXPECT_LT(wrong.p_value, 1e-3) << wrong.summary();
+  std::printf("[ info ] %s\n[ info ] 10%% high on half: %s\n", chi2.result().summary().c_str(), wrong.summary().c_str());
   std::remove(path.c_str());
 }
 

@@ -15,7 +15,7 @@
 #include "microsim/measure/stats.hpp"
 #include "microsim/models/g2_forms.hpp"
 #include "microsim/surface/gaussian.hpp"
-#include "shapes.hpp"
+#include "microsim/surface/generators.hpp"
 #include "test_helpers.hpp"
 
 using namespace microsim;
@@ -31,6 +31,52 @@ G2Options opts(std::uint64_t rays, std::uint64_t seed = 1) {
 }
 
 Vec3 dir(double theta_deg, double phi_deg) { return direction_from_angles(rad(theta_deg), rad(phi_deg)); }
+
+// The generator's square wave (surface/generators.hpp): ridges of width `top` and height `h`,
+// trenches of width period - top between them, vertical walls.
+struct SquareWave {
+  double period = 1.0, top = 0.5, h = 0.25;
+  double bottom() const { return period - top; }
+};
+Microsurface square_wave_mesh(const SquareWave& w) {
+  SquareWaveParams p;
+  p.period = w.period;
+  p.duty = w.top / w.period;
+  p.height = w.h;
+  return generate_square_wave(p);
+}
+
+// Exact visibility on the square wave (000 after eq. 16c), for directions o, i (z > 0); only
+// their x components matter. For direction d the shift s_d = h d_x / d_z is the horizontal run
+// of a ray rising over the wall height.
+struct SquareWaveExact {
+  double g2 = 0, g1_o = 0, g1_i = 0;
+};
+// Normal-n area (tops and bottoms): tops are always visible; a bottom point at x in the trench
+// [a, a + b] is seen along d iff a + max(0, -s_d) <= x <= a + b - max(0, s_d).
+SquareWaveExact square_wave_exact_n(const SquareWave& w, const Vec3& o, const Vec3& i) {
+  const double so = w.h * o.x() / o.z(), si = w.h * i.x() / i.z(), b = w.bottom();
+  auto seen = [&](double lo, double hi) { return std::max(0.0, b - lo - hi); };
+  SquareWaveExact e;
+  const double total = w.top + b;
+  e.g1_o = (w.top + seen(std::max(0.0, -so), std::max(0.0, so))) / total;
+  e.g1_i = (w.top + seen(std::max(0.0, -si), std::max(0.0, si))) / total;
+  e.g2 = (w.top + seen(std::max({0.0, -so, -si}), std::max({0.0, so, si}))) / total;
+  return e;
+}
+// A wall with normal (sign, 0, 0): faces d iff sign d_x > 0; a point at height z is seen along
+// d iff z >= h - b d_z / |d_x| (the ray clears the opposite wall of the trench).
+SquareWaveExact square_wave_exact_wall(const SquareWave& w, double sign, const Vec3& o, const Vec3& i) {
+  auto seen = [&](const Vec3& d) {
+    if (!(sign * d.x() > 0)) return 0.0;
+    return std::min(w.h, w.bottom() * d.z() / std::abs(d.x())) / w.h;
+  };
+  SquareWaveExact e;
+  e.g1_o = seen(o);
+  e.g1_i = seen(i);
+  e.g2 = std::min(e.g1_o, e.g1_i);  // both visible iff above the higher of the two limits
+  return e;
+}
 
 
 // Bins of a run whose facets face both directions and were sampled.

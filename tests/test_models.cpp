@@ -1,16 +1,18 @@
 // Tests of include/microsim/models/ndf.hpp: NDFs, Smith Lambda / G1 / G2, VNDF and its sampler,
 // V-cavity. Where theory is exact the tests use deterministic quadrature with tolerances far above
 // the quadrature error and far below the size of a plausible formula mistake; the statistical
-// tests use fixed seeds and thresholds derived from the estimator's own standard error or a
-// chi-square p-value.
+// tests use fixed seeds and thresholds derived from the estimator's own standard error or the
+// chi-square harness of microsim/statistics.hpp.
 #include <gtest/gtest.h>
 
 #include <microsim/models/ndf.hpp>
+#include <microsim/statistics.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -112,50 +114,6 @@ double weak_white_furnace(const Ndf& ndf, const Vec3& o, const G1& g1) {
     sum += th.w[a] * std::sin(th.x[a]) * row;
   }
   return sum;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Chi-square p-value: Q(k/2, x/2), the regularized upper incomplete gamma function, computed by
-// its power series for x < a + 1 and by its continued fraction (modified Lentz) otherwise.
-// ---------------------------------------------------------------------------------------------
-double gamma_q(double a, double x) {
-  if (x <= 0.0) return 1.0;
-  const double log_pref = -x + a * std::log(x) - std::lgamma(a);
-  if (x < a + 1.0) {
-    double term = 1.0 / a, sum = term;
-    for (int n = 1; n < 10000; ++n) {
-      term *= x / (a + n);
-      sum += term;
-      if (std::abs(term) < 1e-16 * std::abs(sum)) break;
-    }
-    return 1.0 - sum * std::exp(log_pref);
-  }
-  const double tiny = 1e-300;
-  double b = x + 1.0 - a, c = 1.0 / tiny, d = 1.0 / b, h = d;
-  for (int n = 1; n < 10000; ++n) {
-    const double an = -n * (n - a);
-    b += 2.0;
-    d = an * d + b;
-    if (std::abs(d) < tiny) d = tiny;
-    c = b + an / c;
-    if (std::abs(c) < tiny) c = tiny;
-    d = 1.0 / d;
-    const double delta = d * c;
-    h *= delta;
-    if (std::abs(delta - 1.0) < 1e-16) break;
-  }
-  return std::exp(log_pref) * h;
-}
-double chi2_pvalue(double chi2, int dof) { return gamma_q(0.5 * dof, 0.5 * chi2); }
-
-TEST(ChiSquare, PValueMatchesClosedForms) {
-  for (double x : {0.1, 1.0, 3.0, 10.0, 40.0}) {
-    EXPECT_NEAR(chi2_pvalue(x, 2), std::exp(-x / 2), 1e-13);                    // k = 2
-    EXPECT_NEAR(chi2_pvalue(x, 1), std::erfc(std::sqrt(x / 2)), 1e-13);         // k = 1
-    EXPECT_NEAR(chi2_pvalue(x, 4), std::exp(-x / 2) * (1 + x / 2), 1e-13);      // k = 4
-  }
-  // k = 100: 99.9th percentile is 149.449 (standard tables)
-  EXPECT_NEAR(chi2_pvalue(149.449, 100), 1e-3, 2e-6);
 }
 
 TEST(Quadrature, GaussLegendreIsExactForPolynomials) {
@@ -336,25 +294,43 @@ TEST(Lambda, MarginalFormulaMatchesClosedForms) {
   EXPECT_TRUE(std::isinf(mm::lambda_from_slope_marginal(beck, 0.0)));
 }
 
-TEST(Lambda, ClosedFormMatchesSlopeDistribution) {
+struct LambdaCase {
+  Distribution kind;
+  double ax, ay;
+  std::vector<double> phis;
+};
+class LambdaClosedForm : public ::testing::TestWithParam<LambdaCase> {};
+
+TEST_P(LambdaClosedForm, MatchesSlopeDistribution) {
+  const LambdaCase& c = GetParam();
+  const Ndf ndf = make(c.kind, c.ax, c.ay);
   double worst = 0.0;
-  struct Case { double ax, ay; std::vector<double> phis; };
-  const std::vector<Case> cases = {{0.3, 0.3, {0.7}}, {0.2, 0.8, {0.0, 0.5, 2.2}}, {1.2, 0.5, {1.1, 4.0}}};
-  for (auto kind : {Distribution::Beckmann, Distribution::GGX})
-    for (const auto& c : cases)
-      for (double th : {20.0, 60.0, 85.0})
-        for (double ph : c.phis) {
-          const Ndf ndf = make(kind, c.ax, c.ay);
-          const Vec3 v = dir(deg(th), ph);
-          const double exact = ndf.Lambda(v);
-          const double num = mm::lambda_from_slope_distribution(
-              [&](double x, double y) { return ndf.P22(x, y); }, v);
-          const double rel = std::abs(num / exact - 1.0);
-          EXPECT_LT(rel, 1e-6) << mm::to_string(kind) << " " << c.ax << "," << c.ay << " th=" << th
-                               << " ph=" << ph << " closed=" << exact << " numeric=" << num;
-          worst = std::max(worst, rel);
-        }
+  for (double th : {20.0, 60.0, 85.0})
+    for (double ph : c.phis) {
+      const Vec3 v = dir(deg(th), ph);
+      const double exact = ndf.Lambda(v);
+      const double num = mm::lambda_from_slope_distribution([&](double x, double y) { return ndf.P22(x, y); }, v);
+      const double rel = std::abs(num / exact - 1.0);
+      EXPECT_LT(rel, 1e-6) << "th=" << th << " ph=" << ph << " closed=" << exact << " numeric=" << num;
+      worst = std::max(worst, rel);
+    }
   std::printf("[ info ] max relative |Lambda closed - Lambda numeric| = %.2e\n", worst);
+}
+std::string lambda_case_name(const ::testing::TestParamInfo<LambdaCase>& i) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%s_a%03.0fx%03.0f", mm::to_string(i.param.kind), 100 * i.param.ax, 100 * i.param.ay);
+  return buf;
+}
+INSTANTIATE_TEST_SUITE_P(Lambda, LambdaClosedForm,
+                         ::testing::Values(LambdaCase{Distribution::Beckmann, 0.3, 0.3, {0.7}},
+                                           LambdaCase{Distribution::Beckmann, 0.2, 0.8, {0.0, 0.5, 2.2}},
+                                           LambdaCase{Distribution::Beckmann, 1.2, 0.5, {1.1, 4.0}},
+                                           LambdaCase{Distribution::GGX, 0.3, 0.3, {0.7}},
+                                           LambdaCase{Distribution::GGX, 0.2, 0.8, {0.0, 0.5, 2.2}},
+                                           LambdaCase{Distribution::GGX, 1.2, 0.5, {1.1, 4.0}}),
+                         lambda_case_name);
+
+TEST(Lambda, NumericOfAConstantAtNormalViewIsZero) {
   EXPECT_EQ(mm::lambda_from_slope_distribution([](double, double) { return 1.0; }, Vec3(0, 0, 1)), 0.0);
 }
 
@@ -566,74 +542,30 @@ TEST(VCavity, G2MatchesGrooveGeometry) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// VNDF sampling: chi-square goodness of fit against D_visible
+// VNDF sampling: chi-square goodness of fit against D_visible (microsim/statistics.hpp), on cells
+// u = tan(theta) / (tan(theta) + s) x phi that follow the lobe for any roughness (s = sqrt(ax ay)).
 // ---------------------------------------------------------------------------------------------
-struct Chi2Result {
-  double chi2;
-  int dof;
-  double p;
-};
-
-// Bins: u = tan(theta)/(tan(theta) + s) in [0, 1) (nu bins, s the roughness scale, so that bins
-// follow the lobe for any alpha) x phi in [0, 2 pi) (nphi bins). Expected probabilities by 6x6
-// Gauss-Legendre per bin of D_visible sin(theta) dtheta/du. Bins with expected count < 5 are
-// pooled into one bin; dof = bins - 1.
-Chi2Result vndf_chi2(const Ndf& expected, const std::vector<Vec3>& samples, const Vec3& v, int nu = 20,
-                     int nphi = 32) {
-  const double s = std::sqrt(expected.alpha_x * expected.alpha_y);
-  std::vector<double> counts(nu * nphi, 0.0), prob(nu * nphi, 0.0);
-  for (const Vec3& m : samples) {
-    const double tn = std::hypot(m.x(), m.y()) / std::max(m.z(), 1e-300);
-    const double uu = tn / (tn + s);
-    double ph = std::atan2(m.y(), m.x());
-    if (ph < 0) ph += 2 * kPi;
-    const int iu = std::min(nu - 1, static_cast<int>(uu * nu));
-    const int ip = std::min(nphi - 1, static_cast<int>(ph / (2 * kPi) * nphi));
-    counts[iu * nphi + ip] += 1;
-  }
-  const auto gl = mm::detail::gauss_legendre(6);
-  for (int iu = 0; iu < nu; ++iu)
-    for (int ip = 0; ip < nphi; ++ip) {
-      const double u0 = double(iu) / nu, u1 = double(iu + 1) / nu;
-      const double p0 = 2 * kPi * ip / nphi, p1 = 2 * kPi * (ip + 1) / nphi;
-      double sum = 0.0;
-      for (const auto& [xa, wa] : gl)
-        for (const auto& [xb, wb] : gl) {
-          const double uu = 0.5 * (u0 + u1) + 0.5 * (u1 - u0) * xa;
-          const double ph = 0.5 * (p0 + p1) + 0.5 * (p1 - p0) * xb;
-          const double tn = s * uu / (1 - uu), th = std::atan(tn);
-          const double dth_du = s / ((1 - uu) * (1 - uu) * (1 + tn * tn));
-          sum += wa * wb * expected.D_visible(v, dir(th, ph)) * std::sin(th) * dth_du;
-        }
-      prob[iu * nphi + ip] = sum * 0.25 * (u1 - u0) * (p1 - p0);
-    }
-  const double N = static_cast<double>(samples.size());
-  double chi2 = 0.0, pooled_e = 0.0, pooled_o = 0.0;
-  int bins = 0;
-  for (std::size_t b = 0; b < counts.size(); ++b) {
-    const double e = prob[b] * N;
-    if (e < 5.0) {
-      pooled_e += e;
-      pooled_o += counts[b];
-      continue;
-    }
-    chi2 += (counts[b] - e) * (counts[b] - e) / e;
-    ++bins;
-  }
-  if (pooled_e > 0.0 || pooled_o > 0.0) {
-    chi2 += (pooled_o - pooled_e) * (pooled_o - pooled_e) / std::max(pooled_e, 1e-3);
-    ++bins;
-  }
-  const int dof = bins - 1;
-  return {chi2, dof, chi2_pvalue(chi2, dof)};
-}
-
 std::vector<Vec3> draw(const Ndf& ndf, const Vec3& v, int N, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::vector<Vec3> out(N);
   for (int k = 0; k < N; ++k) out[k] = ndf.sample_visible_normal(v, u(rng), u(rng));
   return out;
+}
+
+microsim::ChiSquareTest vndf_test(const Ndf& ndf, const Vec3& v, std::uint64_t seed, std::uint64_t n = 100000) {
+  microsim::ChiSquareTest::Options o;
+  o.samples = n;
+  o.seed = seed;
+  o.res_u = 20;
+  o.res_v = 32;
+  return microsim::ChiSquareTest(
+      microsim::ChiSquareDomain::hemisphere_slopes(std::sqrt(ndf.alpha_x * ndf.alpha_y)),
+      [ndf, v](microsim::CounterRng& rng) -> std::optional<Vec3> {
+        const double u1 = rng.uniform(), u2 = rng.uniform();
+        return ndf.sample_visible_normal(v, u1, u2);
+      },
+      [ndf, v](const Vec3& m) { return ndf.D_visible(v, m); }, o);
 }
 
 TEST(VndfSampling, SamplesAreFrontFacingUnitNormals) {
@@ -649,38 +581,42 @@ TEST(VndfSampling, SamplesAreFrontFacingUnitNormals) {
     }
 }
 
-TEST(VndfSampling, ChiSquareAgainstDVisible) {
-  struct Case { Distribution kind; double ax, ay, th, ph; };
-  const std::vector<Case> cases = {
-      {Distribution::Beckmann, 0.3, 0.7, 60.0, 0.5}, {Distribution::GGX, 0.3, 0.7, 60.0, 0.5},
-      {Distribution::Beckmann, 0.5, 0.5, 85.0, 2.0}, {Distribution::GGX, 0.5, 0.5, 85.0, 2.0},
-      {Distribution::Beckmann, 0.8, 0.2, 0.0, 0.0},  {Distribution::GGX, 0.8, 0.2, 0.0, 0.0},
-      {Distribution::Beckmann, 1.2, 0.4, 40.0, 4.0}, {Distribution::GGX, 1.2, 0.4, 40.0, 4.0}};
-  const int N = 100000;
-  std::uint64_t seed = 2024;
-  for (const auto& c : cases) {
-    const Ndf ndf = make(c.kind, c.ax, c.ay);
-    const Vec3 v = dir(deg(c.th), c.ph);
-    const auto r = vndf_chi2(ndf, draw(ndf, v, N, seed++), v);
-    std::printf("[ info ] %s a=(%.1f,%.1f) th=%.0f: chi2=%.1f dof=%d p=%.3g\n", mm::to_string(c.kind), c.ax,
-                c.ay, c.th, r.chi2, r.dof, r.p);
-    EXPECT_GT(r.dof, 100);
-    EXPECT_GT(r.p, 1e-3) << mm::to_string(c.kind) << " chi2=" << r.chi2 << " dof=" << r.dof;
-  }
+struct VndfCase {
+  Distribution kind;
+  double ax, ay, th, ph;
+};
+std::string vndf_case_name(const ::testing::TestParamInfo<VndfCase>& i) {
+  const VndfCase& c = i.param;
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "%s_a%03.0fx%03.0f_theta%02.0f", mm::to_string(c.kind), 100 * c.ax, 100 * c.ay, c.th);
+  return buf;
 }
+const VndfCase kVndfCases[] = {
+    {Distribution::Beckmann, 0.3, 0.7, 60.0, 0.5}, {Distribution::GGX, 0.3, 0.7, 60.0, 0.5},
+    {Distribution::Beckmann, 0.5, 0.5, 85.0, 2.0}, {Distribution::GGX, 0.5, 0.5, 85.0, 2.0},
+    {Distribution::Beckmann, 0.8, 0.2, 0.0, 0.0},  {Distribution::GGX, 0.8, 0.2, 0.0, 0.0},
+    {Distribution::Beckmann, 1.2, 0.4, 40.0, 4.0}, {Distribution::GGX, 1.2, 0.4, 40.0, 4.0}};
+constexpr int kVndfTests = sizeof(kVndfCases) / sizeof(kVndfCases[0]);
 
-// The same test must reject samples drawn with a 10% larger roughness.
-TEST(VndfSampling, ChiSquareRejectsWrongRoughness) {
-  const int N = 100000;
-  for (auto kind : {Distribution::Beckmann, Distribution::GGX}) {
-    const Ndf ndf = make(kind, 0.3, 0.7);
-    const Ndf wrong = make(kind, 0.33, 0.77);
-    const Vec3 v = dir(deg(60.0), 0.5);
-    const auto r = vndf_chi2(ndf, draw(wrong, v, N, 77), v);
-    std::printf("[ info ] %s wrong alpha x1.1: chi2=%.1f dof=%d p=%.3g\n", mm::to_string(kind), r.chi2, r.dof, r.p);
-    EXPECT_LT(r.p, 1e-3);
-  }
+class VndfSamplingChi2 : public ::testing::TestWithParam<VndfCase> {};
+
+// The sampler passes against its own D_visible (family-wise 1% over the cases), and the same
+// samples refuse a D_visible whose roughness is 5% larger.
+TEST_P(VndfSamplingChi2, MatchesDVisibleAndRejectsFivePercentWrongRoughness) {
+  const VndfCase& c = GetParam();
+  const Ndf ndf = make(c.kind, c.ax, c.ay), wrong = make(c.kind, 1.05 * c.ax, 1.05 * c.ay);
+  const Vec3 v = dir(deg(c.th), c.ph);
+  const std::uint64_t seed = 2024 + 1000 * static_cast<int>(c.kind) + static_cast<int>(100 * c.ax + c.th);
+  microsim::ChiSquareTest t = vndf_test(ndf, v, seed);
+  const microsim::ChiSquareResult& r = t.run();
+  std::printf("[ info ] %s\n", r.summary().c_str());
+  EXPECT_GT(r.dof, 100);
+  EXPECT_TRUE(r.passed(0.01, kVndfTests)) << t.describe();
+  const microsim::ChiSquareResult w = t.run_against([&](const Vec3& m) { return wrong.D_visible(v, m); });
+  std::printf("[ info ] alpha x1.05: %s\n", w.summary().c_str());
+  EXPECT_LT(w.p_value, 1e-4) << w.summary();
 }
+INSTANTIATE_TEST_SUITE_P(Cases, VndfSamplingChi2, ::testing::ValuesIn(kVndfCases), vndf_case_name);
 
 // ---------------------------------------------------------------------------------------------
 // 001 sec. 5: joint masking-shadowing forms

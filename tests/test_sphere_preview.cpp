@@ -127,41 +127,45 @@ TEST(SmithWalkEval, FirstEventIsTheSingleScatteringBrdf) {
     }
 }
 
-TEST(SmithWalkEval, AllEventsIntegrateToTheWalkAlbedo) {
-  struct Case {
-    mm::Ndf ndf;
-    mm::Material mat;
-  };
-  const std::vector<Case> cases = {{mm::Ndf::beckmann(1.0, 1.0), mm::Material::mirror()},
-                                   {mm::Ndf::ggx(0.6, 0.6), mm::Material::conductor(0.47, 2.4)},
-                                   {mm::Ndf::beckmann(0.7, 0.7), mm::Material::dielectric(1.5)}};
-  for (const Case& c : cases) {
-    const mm::SmithRandomWalk walk(c.ndf, c.mat);
-    for (double theta : {20.0, 70.0}) {
-      const Vec3 i = direction_from_angles(rad(theta), 0.3);
-      Mean integral, albedo, single_only;
-      for (int k = 0; k < 60000; ++k) {
-        CounterRng rng(9, 1, k);
-        // o cosine-weighted: f cos / (cos / pi)
-        const double u1 = rng.uniform(), u2 = rng.uniform();
-        const Vec3 o(std::sqrt(u1) * std::cos(2 * kPi * u2), std::sqrt(u1) * std::sin(2 * kPi * u2), std::sqrt(1 - u1));
-        integral.add(mm::smith_walk_eval_cos(walk, i, o, rng) * kPi / o.z());
-        CounterRng rng2(9, 2, k);
-        const mm::WalkExit e = walk.walk(i, rng2);
-        albedo.add(!e.lost && e.reflected ? e.weight : 0.0);
-        CounterRng rng3(9, 3, k);
-        single_only.add(mm::smith_walk_eval_cos(walk, i, o, rng3, 1) * kPi / o.z());
-      }
-      const double se = std::hypot(integral.se(), albedo.se());
-      const double z = (integral.mean() - albedo.mean()) / se;
-      EXPECT_LT(std::abs(z), z_limit(6)) << to_string(c.mat.kind) << " theta " << theta << ": "
-                                         << integral.mean() << " vs " << albedo.mean();
-      // Power: the first event alone misses the multiple scattering.
-      const double z1 = (single_only.mean() - albedo.mean()) / std::hypot(single_only.se(), albedo.se());
-      EXPECT_GT(std::abs(z1), z_limit(6)) << "power check " << to_string(c.mat.kind);
+struct WalkEvalCase {
+  const char* name;
+  mm::Ndf ndf;
+  mm::Material mat;
+};
+class WalkEvalEvents : public ::testing::TestWithParam<WalkEvalCase> {};
+
+TEST_P(WalkEvalEvents, IntegrateToTheWalkAlbedo) {
+  const WalkEvalCase& c = GetParam();
+  const mm::SmithRandomWalk walk(c.ndf, c.mat);
+  for (double theta : {20.0, 70.0}) {
+    const Vec3 i = direction_from_angles(rad(theta), 0.3);
+    Mean integral, albedo, single_only;
+    for (int k = 0; k < 60000; ++k) {
+      CounterRng rng(9, 1, k);
+      // o cosine-weighted: f cos / (cos / pi)
+      const double u1 = rng.uniform(), u2 = rng.uniform();
+      const Vec3 o(std::sqrt(u1) * std::cos(2 * kPi * u2), std::sqrt(u1) * std::sin(2 * kPi * u2), std::sqrt(1 - u1));
+      integral.add(mm::smith_walk_eval_cos(walk, i, o, rng) * kPi / o.z());
+      CounterRng rng2(9, 2, k);
+      const mm::WalkExit e = walk.walk(i, rng2);
+      albedo.add(!e.lost && e.reflected ? e.weight : 0.0);
+      CounterRng rng3(9, 3, k);
+      single_only.add(mm::smith_walk_eval_cos(walk, i, o, rng3, 1) * kPi / o.z());
     }
+    const double se = std::hypot(integral.se(), albedo.se());
+    const double z = (integral.mean() - albedo.mean()) / se;
+    EXPECT_LT(std::abs(z), z_limit(6)) << to_string(c.mat.kind) << " theta " << theta << ": "
+                                       << integral.mean() << " vs " << albedo.mean();
+    // Power: the first event alone misses the multiple scattering.
+    const double z1 = (single_only.mean() - albedo.mean()) / std::hypot(single_only.se(), albedo.se());
+    EXPECT_GT(std::abs(z1), z_limit(6)) << "power check " << to_string(c.mat.kind);
   }
 }
+INSTANTIATE_TEST_SUITE_P(SmithWalkEval, WalkEvalEvents,
+                         ::testing::Values(WalkEvalCase{"beckmann100_mirror", mm::Ndf::beckmann(1.0, 1.0), mm::Material::mirror()},
+                                           WalkEvalCase{"ggx60_conductor", mm::Ndf::ggx(0.6, 0.6), mm::Material::conductor(0.47, 2.4)},
+                                           WalkEvalCase{"beckmann70_dielectric", mm::Ndf::beckmann(0.7, 0.7), mm::Material::dielectric(1.5)}),
+                         [](const ::testing::TestParamInfo<WalkEvalCase>& i) { return std::string(i.param.name); });
 
 // White furnace: a mirror's Smith walk reflects everything (radiance 1 exactly); the single
 // scattering sphere shows the single-scattering albedo at each pixel's view direction.
