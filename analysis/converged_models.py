@@ -71,10 +71,14 @@ if j:
     print(f"## G1 per normal bin at θ = 80°, φ = 0, {K} tiles\n")
     print("Deviation = measured / model − 1, per bin populated (front-facing, sampled) on every tile; z with")
     print("the combined error sqrt(between² + rays²); Šidák 1% threshold over the populated bins.\n")
-    nb = len(P[0][0]["bins"])
+    def key(x):
+        return (tuple(x["theta_m_range_deg"]), tuple(x["phi_m_range_deg"]))
+    by_key = [{key(x): x for x in P[k][0]["bins"]} for k in range(K)]
     rows = []
-    for b in range(nb):
-        bins = [P[k][0]["bins"][b] for k in range(K)]
+    for kb in sorted(by_key[0]):
+        if any(kb not in by_key[k] for k in range(K)):
+            continue
+        bins = [by_key[k][kb] for k in range(K)]
         if any("g1_stderr" not in x or "smith_numeric" not in x or x.get("g1", 0) <= 0 for x in bins):
             continue
         g = [x["g1"] for x in bins]
@@ -107,9 +111,12 @@ if j:
     print()
 
 # --- G2 at o = i against G1
-j2, j1 = load(f"g2_same_c{cells}.json"), load(f"g1_same_c{cells}.json")
+j2 = [load(f"g2_same{t}_c{cells}.json") for t in (30, 60, 70, 80)]
+j1 = load(f"g1_same_c{cells}.json")
+j2 = [j for j in j2 if j]
 if j2 and j1:
-    P2, P1 = per_surface_rows(j2), per_surface_rows(j1)
+    P1 = per_surface_rows(j1)
+    P2 = [sum((per_surface_rows(j)[k] for j in j2), []) for k in range(len(j2[0]["per_surface"]))]
     K = len(P2)
     print(f"## G2(o, o) against G1(o) (000 eq. 16), φ = 0, {K} tiles, independent ray seeds\n")
     print("| θ | G2(o, o) | G1(o) | G2 − G1, paired per tile | z (rays) |")

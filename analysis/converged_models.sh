@@ -46,19 +46,7 @@ tiles() {  # tiles ALPHA: generates the ensemble, prints the file names
 
 t05=$(tiles 0.5)
 # shellcheck disable=SC2086
-run "$out/g1_avg_c$cells.json" measure g1 $t05 --theta 0:85:5 --phi 0 --rays $((rays_g / 4)) --seed 1 -o "$out/g1_avg_c$cells.json"
-# shellcheck disable=SC2086
 run "$out/g1_80_c$cells.json" measure g1 $t05 --theta 80 --phi 0 --rays "$rays_g" --seed 2 -o "$out/g1_80_c$cells.json"
-# G2 at o = i against an independent G1 run (other seed), and at opposite azimuths.
-# shellcheck disable=SC2086
-run "$out/g2_same_c$cells.json" measure g2 $t05 --theta-o 30,60,70,80 --phi-o 0 --theta-i 30,60,70,80 --phi-i 0 \
-  --rays "$rays_g" --seed 7 -o "$out/g2_same_c$cells.json"
-# shellcheck disable=SC2086
-run "$out/g1_same_c$cells.json" measure g1 $t05 --theta 30,60,70,80 --phi 0 --rays "$rays_g" --seed 8 -o "$out/g1_same_c$cells.json"
-# shellcheck disable=SC2086
-run "$out/g2_opp_c$cells.json" measure g2 $t05 --theta-o 75 --phi-o 0 --theta-i 75 --phi-i 180 \
-  --rays "$rays_g" --seed 9 -o "$out/g2_opp_c$cells.json"
-
 th15=$(/usr/bin/python3 -c "import math; print(repr(math.degrees(1.5)))")
 for a in $alphas_t4; do
   for f in $(tiles "$a"); do
@@ -67,4 +55,18 @@ for a in $alphas_t4; do
       --resolution 64 --seed 1 -o "${j%.json}.exr"
   done
 done
+# G2 at o = i against an independent G1 run (other seed), and at opposite azimuths.
+for t in 30 60 70 80; do
+  # shellcheck disable=SC2086
+  run "$out/g2_same${t}_c$cells.json" measure g2 $t05 --theta-o "$t" --phi-o 0 --theta-i "$t" --phi-i 0 \
+    --rays "$rays_g" --seed 7 -o "$out/g2_same${t}_c$cells.json"
+done
+# shellcheck disable=SC2086
+run "$out/g1_same_c$cells.json" measure g1 $t05 --theta 30,60,70,80 --phi 0 --rays "$rays_g" --seed 8 -o "$out/g1_same_c$cells.json"
+# shellcheck disable=SC2086
+run "$out/g2_opp_c$cells.json" measure g2 $t05 --theta-o 75 --phi-o 0 --theta-i 75 --phi-i 180 \
+  --rays "$rays_g" --seed 9 -o "$out/g2_opp_c$cells.json"
+
+# shellcheck disable=SC2086
+run "$out/g1_avg_c$cells.json" measure g1 $t05 --theta 0:85:5 --phi 0 --rays $((rays_g / 4)) --seed 1 -o "$out/g1_avg_c$cells.json"
 echo "done: /usr/bin/python3 $here/converged_models.py $out $cells" >&2
