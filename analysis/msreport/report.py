@@ -463,7 +463,7 @@ def section_convergence(ctx):
     import shutil
     captions = {"cells": "Difference from the finest grid that ran (32 cells per l; 16 for alpha = 0.2; paired: "
                          "the same tiles on every grid) against cells per correlation length; grey band: 1%.",
-                "tile": "Difference from the largest tile that ran (256 l per tile for alpha = 1, 64 for 0.5) "
+                "tile": "Difference from the largest tile that ran (256 l per tile for alpha = 1, 128 for 0.5) "
                         "against correlation lengths per tile (independent tiles per level); grey band: 1%.",
                 "lobe80": "In-plane lobe of a mirror at theta_i = 80 deg per grid level (order 1, and all orders dotted)."}
     for f in figs:
