@@ -10,7 +10,8 @@
 #   analysis/converged_models.sh [BUILD_DIR] [OUT_DIR]
 #
 # Runs are skipped when their output exists. Environment: SEEDS ["1 2 3 4"], CELLS_PER_L [16]
-# (4 reproduces the earlier 4-cells-per-l tiles), RAYS_G [1000000] per tile and direction,
+# (4 reproduces the earlier 4-cells-per-l tiles), RAYS_G [1000000] per tile and direction (the
+# recorded tables: 500000, RAYS_T4=1048576, ALPHAS_T4="0.4 0.7 1.0 1.3"),
 # RAYS_T4 [4194304] per tile, ALPHAS_T4 ["1.0"], NICE [10]. Then analysis/converged_models.py.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
