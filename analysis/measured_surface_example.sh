@@ -10,7 +10,7 @@ OUT=${2:-$(mktemp -d)}
 M="$BUILD/microsim"
 mkdir -p "$OUT"
 # The stand-in for an instrument's export: 192 x 192 heights of a 256^2 tile, as CSV.
-"$M" generate gaussian --alpha 0.5 --resolution 256 --seed 7 -o "$OUT/source.exr" --quiet
+"$M" generate gaussian --alpha 0.5 --resolution 256 --correlation-length 0.015625 --seed 7 -o "$OUT/source.exr" --quiet
 /usr/bin/python3 - "$OUT/source.exr" "$OUT/scan.csv" <<'PY'
 import sys
 import numpy as np

@@ -18,6 +18,9 @@ seeds="${SEEDS:-1 2 3 4}"
 scale="${RAYS_SCALE:-1}"
 rays() { /usr/bin/python3 -c "print(int($1 * $scale))"; }
 mkdir -p "$out"
+# The tables in the README were made on 4 cells per correlation length (CELLS_PER_L, default 4;
+# 16 is the converged grid, analysis/converged_models.sh re-measures the model statements there).
+ell=$(/usr/bin/python3 -c "print(repr(${CELLS_PER_L:-4} / 1024))")
 [ -x "$M" ] || { echo "no microsim binary in $build (cmake --build $build --target microsim)" >&2; exit 1; }
 
 run() {  # run JSON_PATH args...: skip when the JSON exists
@@ -46,7 +49,7 @@ done
 #    an ensemble of independent tiles for the between-surface error.
 for a in 0.5 1.0; do
   for s in $seeds; do
-    surface "$out/beckmann_a${a}_s${s}.exr" gaussian --resolution 1024 --alpha "$a" --seed "$s"
+    surface "$out/beckmann_a${a}_s${s}.exr" gaussian --resolution 1024 --correlation-length "$ell" --alpha "$a" --seed "$s"
     for th in 0 60; do
       j="$out/mirror_a${a}_s${s}_t${th}.json"
       run "$j" measure bsdf "$out/beckmann_a${a}_s${s}.exr" --material mirror --theta-i "$th" --phi-i 0 \
@@ -61,7 +64,7 @@ done
 th15=$(/usr/bin/python3 -c "import math; print(repr(math.degrees(1.5)))")
 for a in 0.1 0.4 0.7 1.0 1.3; do
   for s in $seeds; do
-    surface "$out/beckmann_a${a}_s${s}.exr" gaussian --resolution 1024 --alpha "$a" --seed "$s"
+    surface "$out/beckmann_a${a}_s${s}.exr" gaussian --resolution 1024 --correlation-length "$ell" --alpha "$a" --seed "$s"
     j="$out/table4_a${a}_s${s}.json"
     run "$j" measure bsdf "$out/beckmann_a${a}_s${s}.exr" --material mirror --theta-i "$th15" --phi-i 0 \
       --rays "$(rays 4194304)" --resolution 32 -o "${j%.json}.exr"
@@ -82,7 +85,7 @@ d() {  # d NAME SURFACE ETA THETA PHI
     --rays "$(rays 4194304)" --resolution 32 -o "${j%.json}.exr"
 }
 for s in $seeds; do                       # lobes on the ensemble of tiles
-  surface "$out/beckmann_a0.5_s${s}.exr" gaussian --resolution 1024 --alpha 0.5 --seed "$s"
+  surface "$out/beckmann_a0.5_s${s}.exr" gaussian --resolution 1024 --correlation-length "$ell" --alpha 0.5 --seed "$s"
   d e1.5_t53_p0_s$s "$out/beckmann_a0.5_s${s}.exr" 1.5 53.4375 0   # glass below: 53.4 -> ~32 deg
   d e${inv}_t31_p0_s$s "$out/beckmann_a0.5_s${s}.exr" "$inv" 30.9375 0   # less dense below: 30.9 -> ~50 deg
 done

@@ -37,8 +37,8 @@ for r in j["rows"]:
 PY
 
 echo
-echo "== 2. Beckmann alpha = 0.5, 4 tiles of 512^2: G2 against the four forms =="
-for s in 1 2 3 4; do [ -f beck$s.exr ] || "$BIN" -q generate gaussian --resolution 512 --alpha 0.5 --seed $s -o beck$s.exr; done
+echo "== 2. Beckmann alpha = 0.5, 4 tiles of 512^2 (4 cells per correlation length): G2 against the four forms =="
+for s in 1 2 3 4; do [ -f beck$s.exr ] || "$BIN" -q generate gaussian --resolution 512 --correlation-length 0.0078125 --alpha 0.5 --seed $s -o beck$s.exr; done
 "$BIN" -q measure g2 beck1.exr beck2.exr beck3.exr beck4.exr --theta-o 40,60,75,85 --theta-i 40,60,75,85 \
   --phi-i 0,90,180 --rays $((RAYS / 4)) -o beck_g2.json
 $PY - <<'PY'

@@ -254,6 +254,7 @@ TEST(BsdfMeasure, MeasuredTablesAreReciprocal) {
   // f_t(i <- o) / eta_i^2.
   GaussianParams gp;
   gp.resolution = 128;
+  gp.correlation_length = 4.0 / 128;  // 4 cells per l
   gp.alpha_x = gp.alpha_y = 0.5;
   gp.seed = 3;
   Microsurface s = generate_gaussian(gp);

@@ -30,6 +30,7 @@ const Microsurface& surface() {
   static const Microsurface s = [] {
     GaussianParams g;
     g.resolution = 128;
+    g.correlation_length = 4.0 / 128;  // 4 cells per l
     g.alpha_x = g.alpha_y = 0.5;
     g.seed = 7;
     return generate_gaussian(g);

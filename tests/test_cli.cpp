@@ -125,10 +125,10 @@ TEST_F(Cli, PresetConfigGeneratesTheDocumentedSurface) {
   EXPECT_EQ(j["surface"]["alpha_x"], 0.5);
   EXPECT_EQ(j["surface"]["resolution"], 64);
   EXPECT_EQ(j["surface"]["correlation_length"], 0.0625);
-  // The preset applies: its correlation length (4 cells of 1024) is below one cell of 64.
+  // The preset applies: its correlation length (16 cells of 1024) is below one cell of 32.
   std::remove(out.c_str());
   r = run("generate gaussian --config " + std::string(MICROSIM_SOURCE_DIR) +
-          "/surfaces/beckmann-0.5.toml --resolution 64 -o " + out);
+          "/surfaces/beckmann-0.5.toml --resolution 32 -o " + out);
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("--correlation-length"), std::string::npos) << r.err;
   EXPECT_FALSE(exists(out));

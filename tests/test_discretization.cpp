@@ -39,11 +39,40 @@ TEST(Discretization, GaussianDescriptionStatesTheGrid) {
   auto d = discretization_of(s.description);
   ASSERT_TRUE(d);
   EXPECT_DOUBLE_EQ(d->cells_per_correlation_length, 12.0);
-  // Default length: 4 cells.
+  // Default length on a small tile: 16 correlation lengths per tile, here 4 cells.
   GaussianParams p = params(64, 0.0, 1.0, 1.0);
   Microsurface t = generate_gaussian(p);
   EXPECT_DOUBLE_EQ(t.description["cells_per_correlation_length"].get<double>(), 4.0);
   EXPECT_DOUBLE_EQ(t.description["correlation_lengths_per_tile"].get<double>(), 16.0);
+}
+
+TEST(Discretization, DefaultTileIsAtTheConvergedLevelOfEveryGroup) {
+  // 16 cells per l, at least 16 l per tile and 4 cells: the default 1024^2 tile is the study's
+  // recommended level (16 cells, 64 l), smaller tiles keep 16 l per tile down to 4 cells.
+  auto level = [](int n, double size) {
+    const double ell = default_correlation_length(n, size);
+    return std::pair{ell / (size / n), size / ell};
+  };
+  const std::vector<std::tuple<int, double, double>> expected = {
+      {1024, 16, 64}, {2048, 16, 128}, {512, 16, 32}, {256, 16, 16}, {128, 8, 16}, {64, 4, 16}, {16, 4, 4}};
+  for (const auto& [n, cells, tiles] : expected) {
+    const auto [c, t] = level(n, 2.0);
+    EXPECT_NEAR(c, cells, 1e-12) << n;
+    EXPECT_NEAR(t, tiles, 1e-12) << n;
+  }
+  const GaussianParams defaults;
+  Microsurface s = generate_gaussian(params(defaults.resolution, 0.0, 1.0, 1.0));
+  const auto d = discretization_of(s.description);
+  ASSERT_TRUE(d);
+  EXPECT_DOUBLE_EQ(d->cells_per_correlation_length, 16.0);
+  EXPECT_DOUBLE_EQ(d->correlation_lengths_per_tile, 64.0);
+  for (const auto& l : converged_levels()) {
+    EXPECT_GE(d->cells_per_correlation_length, l.cells_per_correlation_length) << l.quantity;
+    EXPECT_GE(d->correlation_lengths_per_tile, l.correlation_lengths_per_tile) << l.quantity;
+  }
+  // A coarser default (8 cells per l) would be flagged for G2 and the mirror albedos.
+  EXPECT_LT(8.0, converged_level("bsdf_albedo")->cells_per_correlation_length);
+  EXPECT_LT(8.0, converged_level("g2")->cells_per_correlation_length);
 }
 
 TEST(Discretization, AnisotropicUsesShortLengthForCellsAndLongForTile) {
@@ -172,16 +201,15 @@ std::pair<double, double> preset_level(const std::string& name) {
 }  // namespace
 
 TEST(Discretization, PresetsMatchTheConvergedLevelsTheyClaim) {
-  // beckmann-1.0-converged: every group but G2 and the high orders of the BSDF.
-  auto [cells, tiles] = preset_level("beckmann-1.0-converged.toml");
-  for (const char* q : {"d_nominal", "g1", "vndf"}) {
-    EXPECT_GE(cells, converged_level(q)->cells_per_correlation_length) << q;
-    EXPECT_GE(tiles, converged_level(q)->correlation_lengths_per_tile) << q;
+  // The default presets, beckmann-1.0-converged (16 cells per l) and beckmann-1.0-fine (32, for
+  // the few quantities that still move at 16): every group.
+  for (const char* preset : {"beckmann-0.5.toml", "gaussian-ggx.toml", "beckmann-1.0-converged.toml",
+                             "beckmann-1.0-fine.toml"}) {
+    const auto [cells, tiles] = preset_level(preset);
+    for (const auto& l : converged_levels()) {
+      EXPECT_GE(cells, l.cells_per_correlation_length) << preset << " " << l.quantity;
+      EXPECT_GE(tiles, l.correlation_lengths_per_tile) << preset << " " << l.quantity;
+    }
   }
-  // beckmann-1.0-fine: every group.
-  std::tie(cells, tiles) = preset_level("beckmann-1.0-fine.toml");
-  for (const auto& l : converged_levels()) {
-    EXPECT_GE(cells, l.cells_per_correlation_length) << l.quantity;
-    EXPECT_GE(tiles, l.correlation_lengths_per_tile) << l.quantity;
-  }
+  EXPECT_GT(preset_level("beckmann-1.0-fine.toml").first, preset_level("beckmann-1.0-converged.toml").first);
 }

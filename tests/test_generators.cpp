@@ -460,6 +460,7 @@ TEST(GaussianGgx, TheScaleMixtureIdentityHolds) {
 TEST(GaussianGgx, TileHasHeavierTailsThanBeckmannWithTheSameCore) {
   GaussianGgxParams p;
   p.resolution = 512;
+  p.correlation_length = 4.0 / 512;  // 4 cells per l
   p.alpha_x = p.alpha_y = 0.3;
   // Roughness field E(x) correlated over 16 cells (4 correlation lengths of the heights): 1024
   // roughness patches on the tile.

@@ -227,6 +227,7 @@ TEST(Metrology, GeneratedGaussianTileMatchesItsParameters) {
   // The generator's ACF exp(-r^2/l^2) decays to 0.2 at l sqrt(ln 5); its slopes are Beckmann.
   GaussianParams p = small_tile(9);
   p.resolution = 128;
+  p.correlation_length = 4.0 / 128;  // 4 cells per l
   Microsurface s = generate_gaussian(p);
   Metrology m = measure_metrology(grid_view(s));
   FacetSums f = facet_sums(s);

@@ -12,6 +12,7 @@ namespace microsim::testing {
 inline Microsurface beckmann_tile(int resolution, std::uint64_t seed, double alpha = 0.5) {
   GaussianParams p;
   p.resolution = resolution;
+  p.correlation_length = 4.0 / resolution;  // 4 cells per l, as the estimator tests were set on
   p.alpha_x = p.alpha_y = alpha;
   p.seed = seed;
   return generate_gaussian(p);

@@ -20,6 +20,7 @@ Vec3 dir(double theta_deg, double phi_deg) { return direction_from_angles(rad(th
 Microsurface gaussian(int resolution, std::uint64_t seed, double ax, double ay) {
   GaussianParams p;
   p.resolution = resolution;
+  p.correlation_length = 4.0 / resolution;  // 4 cells per l
   p.alpha_x = ax;
   p.alpha_y = ay;
   p.seed = seed;

@@ -48,6 +48,7 @@ TEST(NdfMeasure, FlatPlaneIsADeltaAtTheNormal) {
 TEST(NdfMeasure, BeckmannTileMatchesNominalDWithinBlockErrors) {
   GaussianParams p;
   p.resolution = 256;
+  p.correlation_length = 4.0 / 256;  // 4 cells per l
   p.alpha_x = p.alpha_y = 0.5;
   p.seed = 3;
   Microsurface s = generate_gaussian(p);
@@ -119,6 +120,7 @@ TEST(G1Measure, VGroovePerFacetG1IsExact) {
 TEST(G1Measure, BeckmannTileEstimatorsAgreeAndMatchSmithFromFacets) {
   GaussianParams p;
   p.resolution = 256;
+  p.correlation_length = 4.0 / 256;  // 4 cells per l
   p.alpha_x = p.alpha_y = 0.5;
   p.seed = 9;
   Microsurface s = generate_gaussian(p);
@@ -158,6 +160,7 @@ TEST(G1Measure, PerNormalG1ShowsFacetsTiltedTowardTheViewerAreLessMasked) {
   // tilted away from v (toward -x when v is at +x) are masked more.
   GaussianParams p;
   p.resolution = 256;
+  p.correlation_length = 4.0 / 256;  // 4 cells per l
   p.seed = 4;
   Microsurface s = generate_gaussian(p);
   Tracer tracer(s);
@@ -171,6 +174,7 @@ TEST(G1Measure, PerNormalG1ShowsFacetsTiltedTowardTheViewerAreLessMasked) {
 TEST(G1Measure, ResultsDoNotDependOnThreadCount) {
   GaussianParams p;
   p.resolution = 128;
+  p.correlation_length = 4.0 / 128;  // 4 cells per l
   Microsurface s = generate_gaussian(p);
   Tracer tracer(s);
   auto run = [&](int threads) {

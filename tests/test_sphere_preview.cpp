@@ -219,6 +219,7 @@ const Microsurface& tile(double alpha) {
   if (it == cache.end()) {
     GaussianParams g;
     g.resolution = 128;
+    g.correlation_length = 4.0 / 128;  // 4 cells per l
     g.alpha_x = g.alpha_y = alpha;
     g.seed = 7;
     it = cache.emplace(alpha, generate_gaussian(g)).first;

@@ -21,6 +21,7 @@ namespace {
 GaussianParams small(double alpha, std::uint64_t seed, int res = 128) {
   GaussianParams p;
   p.resolution = res;
+  p.correlation_length = 4.0 / res;  // 4 cells per l
   p.alpha_x = p.alpha_y = alpha;
   p.seed = seed;
   return p;

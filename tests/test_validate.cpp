@@ -45,6 +45,7 @@ mv::SurfaceSet one_surface(Microsurface s, const std::string& name, mv::Options 
 Microsurface gaussian(int resolution, double alpha, std::uint64_t seed) {
   GaussianParams p;
   p.resolution = resolution;
+  p.correlation_length = 4.0 / resolution;  // 4 cells per l
   p.alpha_x = p.alpha_y = alpha;
   p.seed = seed;
   return generate_gaussian(p);

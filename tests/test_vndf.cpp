@@ -226,6 +226,7 @@ TEST(VndfMeasure, HeightfieldAtNormalIncidenceIsSmithWithItsFacetsButNotAtGrazin
   // Smith's independence assumption ignores: the same test rejects.
   GaussianParams gp;
   gp.resolution = 256;
+  gp.correlation_length = 4.0 / 256;  // 4 cells per l
   gp.seed = 12;
   Microsurface s = generate_gaussian(gp);
   Tracer tracer(s);

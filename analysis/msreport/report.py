@@ -461,10 +461,10 @@ def section_convergence(ctx):
     if not os.path.isfile(table) or not figs:
         return s.skip("no recorded study (analysis/convergence_output.md, docs/img/convergence_*.png)")
     import shutil
-    captions = {"cells": "Difference from the finest grid (32 cells per l; paired: the same tiles on every "
-                         "grid) against cells per correlation length; grey band: 1%.",
-                "tile": "Difference from the largest tile (256 l per tile) against correlation lengths per "
-                        "tile (independent tiles per level); grey band: 1%.",
+    captions = {"cells": "Difference from the finest grid that ran (32 cells per l; 16 for alpha = 0.2; paired: "
+                         "the same tiles on every grid) against cells per correlation length; grey band: 1%.",
+                "tile": "Difference from the largest tile that ran (256 l per tile for alpha = 1, 128 for 0.5) "
+                        "against correlation lengths per tile (independent tiles per level); grey band: 1%.",
                 "lobe80": "In-plane lobe of a mirror at theta_i = 80 deg per grid level (order 1, and all orders dotted)."}
     for f in figs:
         kind = f[:-4].rsplit("_", 1)[-1]
@@ -472,6 +472,11 @@ def section_convergence(ctx):
                  captions.get(kind, f))
     with open(table) as fh:
         s.html = _markdown_tables_html(fh.read())
+    # The model statements re-measured on the default (converged) grid, when recorded.
+    models = os.path.join(root, "analysis", "converged_models_output.md")
+    if os.path.isfile(models):
+        with open(models) as fh:
+            s.html += _markdown_tables_html(fh.read())
     return s
 
 

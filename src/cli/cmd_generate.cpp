@@ -287,7 +287,8 @@ void register_structured_kinds(CLI::App& gen, const GlobalOptions& g) {
         ->check(integer_in(4, 32760));
     k->add_option("--size", p->size, "Tile side length")->capture_default_str()
         ->check(number_in(closed(1e-6, 1e6)));
-    k->add_option("--correlation-length", p->correlation_length, "Of the heights (default: 4 cells)")
+    k->add_option("--correlation-length", p->correlation_length,
+                  "Of the heights (default: 16 cells, at least 16 per tile and 4 cells)")
         ->check(number_in(positive()));
     k->add_option("--roughness-correlation-length", p->roughness_correlation_length,
                   "Of the local roughness field (default: 16 correlation lengths)")
@@ -387,7 +388,8 @@ void add_gaussian_options(CLI::App& cmd, GenerateOptions& go) {
   cmd.add_option("--size", go.gaussian.size, "Tile side length")->capture_default_str()
         ->check(number_in(closed(1e-6, 1e6)));
   cmd.add_option("--correlation-length", go.gaussian.correlation_length,
-                 "Correlation length of the heights exp(-r^2/l^2), tile units (default: 4 cells)")
+                 "Correlation length of the heights exp(-r^2/l^2), tile units (default: 16 cells, "
+                 "at least 16 per tile and 4 cells; converged grid)")
         ->check(number_in(positive()));
   cmd.add_option("--alpha", go.alpha, "Isotropic Beckmann roughness alpha (> 0)")
         ->check(number_in(open_closed(0, 10)));

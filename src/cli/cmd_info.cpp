@@ -88,9 +88,9 @@ void print_metrology(const Metrology& m, const Microsurface& s) {
             << " per Gaussian correlation length l = Sal / sqrt(ln 5)"
             << (!m.acf.decayed_in_every_direction ? ""
                 : m.cells_per_gaussian_length < 3.5
-                    ? "  WARNING: well under generate gaussian's default of 4 cells per l: D, G1 and the "
+                    ? "  WARNING: well under 4 cells per l: D, G1 and the "
                       "multiple scattering of the triangles are far from the continuous surface's"
-                    : m.cells_per_gaussian_length < 16
+                    : m.cells_per_gaussian_length < 13  // 16 cells per l, less one tile's ~10% spread
                           ? " (mirror orders 1-2 converge by 8, order 3 by 16 cells per l: README \"Converged surfaces\")"
                           : "")
             << "\n"

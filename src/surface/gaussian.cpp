@@ -8,6 +8,7 @@
 #include <tbb/parallel_for.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <complex>
 #include <numeric>
 #include <sstream>
@@ -19,6 +20,11 @@ double gaussian_memory_estimate(int resolution) {
   // complex<double> work array, float heights and the float row buffer written to EXR (the
   // tracing costs are checked when a tile is loaded for a measurement).
   return n2 * (16.0 + 4.0 + 4.0 + 4.0);
+}
+
+double default_correlation_length(int resolution, double size) {
+  const double dx = size / resolution;
+  return std::max(4.0 * dx, std::min(16.0 * dx, size / 16.0));
 }
 
 void validate(const GaussianParams& p) {
@@ -116,7 +122,7 @@ GaussianField gaussian_field(int n, double size, double ell_x, double ell_y, dou
 // alpha_x^2 : alpha_y^2 on this grid. The spectrum exp(-(kx^2 lx^2 + ky^2 ly^2)/4) is
 // separable, so Var[dh_y] / Var[dh_x] = g(l_y) / g(l_x) with
 //   g(l) = sum_k e^{-k^2 l^2/4} 4 sin^2(k dx/2) / sum_k e^{-k^2 l^2/4},
-// decreasing in l. The rougher axis keeps l (at least 4 cells by default: well resolved); the
+// decreasing in l. The rougher axis keeps l (at least 4 cells by default: resolved); the
 // smoother axis gets the longer length that solves the ratio (bisection). A continuum rule such
 // as l_y = l alpha_x/alpha_y is not enough: a short length is under-resolved by the grid.
 std::pair<double, double> anisotropic_lengths(int n, double size, double ell, double alpha_x,
@@ -152,7 +158,7 @@ Microsurface generate_gaussian(const GaussianParams& p) {
   validate(p);
   const int n = p.resolution;
   const double dx = p.size / n;
-  const double ell = p.correlation_length > 0 ? p.correlation_length : 4.0 * dx;
+  const double ell = p.correlation_length > 0 ? p.correlation_length : default_correlation_length(n, p.size);
   // Anisotropy by the spectrum's shape (exact on the grid); the x scale fixes the amplitude.
   const auto [ell_x, ell_y] = anisotropic_lengths(n, p.size, ell, p.alpha_x, p.alpha_y);
   GaussianField f = gaussian_field(n, p.size, ell_x, ell_y, p.alpha_x, p.seed, 0x6A05);
@@ -186,7 +192,7 @@ Microsurface generate_gaussian_ggx(const GaussianGgxParams& p) {
   validate(base);
   const int n = p.resolution;
   const double dx = p.size / n;
-  const double ell = p.correlation_length > 0 ? p.correlation_length : 4.0 * dx;
+  const double ell = p.correlation_length > 0 ? p.correlation_length : default_correlation_length(n, p.size);
   const double big = p.roughness_correlation_length > 0 ? p.roughness_correlation_length
                                                         : std::min(16 * ell, 0.25 * p.size);
   if (!(big >= ell && big <= 0.5 * p.size))
