@@ -41,12 +41,8 @@ double sidak_z(double alpha, std::size_t k) {
 }
 
 Estimate proportion(std::uint64_t k, std::uint64_t n) {
-  Estimate e;
-  e.n = n;
-  if (n == 0) return e;
-  e.mean = static_cast<double>(k) / static_cast<double>(n);
-  const double pt = (static_cast<double>(k) + 0.5) / (static_cast<double>(n) + 1.0);
-  e.stderr_ = std::sqrt(pt * (1 - pt) / static_cast<double>(n));
+  Estimate e = binomial_estimate(k, n);
+  e.stderr_ = std::max(e.stderr_, proportion_floor(n));
   return e;
 }
 
@@ -145,21 +141,15 @@ std::string angle(double d) { return num(d, 4); }
 
 // Mean and between-surface standard error (sd / sqrt(K)) of per-surface values.
 std::pair<double, double> mean_and_se(const std::vector<double>& x) {
-  const double k = static_cast<double>(x.size());
-  double sum = 0;
-  for (double v : x) sum += v;
-  const double mean = x.empty() ? 0 : sum / k;
-  double ss = 0;
-  for (double v : x) ss += (v - mean) * (v - mean);
-  const double se = x.size() > 1 ? std::sqrt(ss / (k - 1) / k) : 0.0;
-  return {mean, se};
+  const SampleMean m = sample_mean(x);
+  return {m.mean, m.stderr_};
 }
 
 // The estimator's error with a floor at the resolution of n samples: a proportion at 0 or 1
 // has no spread but is known only to ~1/n (the error of (k + 1/2)/(n + 1) at k = n), so a
 // comparison with a model there is not an infinite z.
 Estimate floored(Estimate e, std::uint64_t n, double scale = 1.0) {
-  if (n > 0) e.stderr_ = std::max(e.stderr_, scale * proportion(n, n).stderr_);
+  if (n > 0) e.stderr_ = std::max(e.stderr_, scale * proportion_floor(n));
   return e;
 }
 
@@ -170,15 +160,13 @@ struct EnsembleMean {
   int dof = 0;  // K - 1
 };
 EnsembleMean ensemble_mean(const std::vector<Estimate>& per_surface) {
-  std::vector<double> x;
-  double rays2 = 0;
+  std::vector<double> x, rays;
   for (const Estimate& e : per_surface) {
     x.push_back(e.mean);
-    rays2 += e.stderr_ * e.stderr_;
+    rays.push_back(e.stderr_);
   }
-  auto [mean, se] = mean_and_se(x);
-  const double k = static_cast<double>(per_surface.size());
-  return {mean, std::max(se, std::sqrt(rays2) / k), static_cast<int>(per_surface.size()) - 1};
+  const SampleMean m = sample_mean(x);
+  return {m.mean, std::max(m.stderr_, mean_of_errors(rays)), static_cast<int>(per_surface.size()) - 1};
 }
 
 // A comparison of K surfaces with a nominal model: a model row with the between-surface error
@@ -533,10 +521,11 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
                         set.name + "/g1_bin_vcavity/" + dir, bx);
         }
 
-        Json row = g1_row_json(r, s);
+        Table g1_rows = g1_table();
+        Json& row = add_row(g1_rows, r, s);
         row["theta_deg"] = t;
         row["phi_deg"] = p;
-        // Models per bin beside the measured G1(v, m), in the order g1_row_json lists the bins.
+        // Models per bin beside the measured G1(v, m), in the order add_row lists the bins.
         std::size_t jb = 0;
         for (int b = 0; b < binning.size() && jb < row["bins"].size(); ++b) {
           if (r.bins[b].area <= 0) continue;
@@ -663,7 +652,8 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
       model_row("height_direction_correlated_numeric", fn.height_direction_correlated,
                 "001 eq. (23), Lambda from the facets");
       model_row("vcavity", a.vcavity, "001 eq. (24)-(25), averaged over the facets facing both");
-      rows.push_back(g2_row_json(a, s));
+      Table g2_rows = g2_table();
+      rows.push_back(add_row(g2_rows, a, s));
     }
     Json hotspot = Json::array();
     // Hotspot (000 eq. 16: G2(v,m,v) = G1(v,m)): G2 at o = i against `measure g1` run
@@ -839,7 +829,8 @@ void check_vndf(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         }
         progress.completed += unit;
         progress.update();
-        Json row = vndf_row_json(r, s, vo, sampler);
+        Table vndf_rows = vndf_table(vo.family_alpha);
+        Json& row = add_row(vndf_rows, r, s, vo, sampler);
         row["theta_deg"] = t;
         row["phi_deg"] = p;
         rows.push_back(row);
