@@ -39,7 +39,7 @@ void print_g1_table(const Json& rows, bool ensemble) {
               << fmt(row["g1_stderr"].get<double>(), 5) << std::setw(10)
               << fmt(row["g1_raycast"].get<double>()) << std::setw(10)
               << fmt(row["smith_numeric"].get<double>()) << std::setw(8)
-              << fmt(row["z_numeric"].get<double>(), 2);
+              << fmt(row["z_numeric"], 2);
     if (!row["smith_nominal"].is_null())
       std::cout << std::setw(10) << fmt(row["smith_nominal"].get<double>()) << std::setw(9)
                 << fmt(100 * row["rel_dev_nominal"].get<double>(), 2) << "%";

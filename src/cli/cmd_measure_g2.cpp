@@ -47,7 +47,7 @@ void print_g2_table(const Json& rows, bool ensemble) {
       std::cout << std::setw(9) << fmt(row[std::string("smith_") + f].get<double>());
     std::cout << std::setw(9) << fmt(row["vcavity"].get<double>()) << " |";
     for (const char* f : kForms)
-      std::cout << std::setw(8) << fmt(row[std::string("z_") + f + "_from_g1"].get<double>(), 1);
+      std::cout << std::setw(8) << fmt(row[std::string("z_") + f + "_from_g1"], 1);
     std::cout << "\n";
   }
 }

@@ -63,7 +63,7 @@ int run_measure_ndf(const MeasureOptions& o, const GlobalOptions& g) {
                 << fmt(row["d_stderr"].get<double>(), 5);
       if (!row["d_nominal"].is_null())
         std::cout << std::setw(14) << fmt(row["d_nominal"].get<double>(), 5) << std::setw(9)
-                  << fmt(row["z"].get<double>(), 2);
+                  << fmt(row["z"], 2);
       std::cout << "\n";
     }
     std::cout << "wrote " << o.output << "\n";

@@ -326,7 +326,7 @@ Json& add_row(Table& t, const G1Result& r, const Microsurface& s) {
   row["lambda_numeric"] = r.lambda_numeric;
   double smith_numeric = 1.0 / (1.0 + r.lambda_numeric);
   row["smith_numeric"] = smith_numeric;
-  row["z_numeric"] = z_score(g.mean, smith_numeric, g.stderr_);
+  row["z_numeric"] = z_json(g.mean, smith_numeric, g.stderr_);
   if (s.nominal) {
     // Undersurface rows: the nominal model with v reversed (000 "Inherent Assumptions").
     double model = s.nominal->G1(r.undersurface ? Vec3(-r.v) : r.v);
@@ -379,8 +379,8 @@ Json& add_row(Table& t, const G1Result& r, const Microsurface& s) {
       jb["g1_raycast"] = ea.mean;
       jb["g1_raycast_stderr"] = ea.stderr_;
       const double z = z_score(eb.mean, ea.mean, std::hypot(eb.stderr_, ea.stderr_));
-      jb["z_estimators"] = z;
-      max_abs_z = std::max(max_abs_z, std::abs(z));
+      jb["z_estimators"] = z_json(eb.mean, ea.mean, std::hypot(eb.stderr_, ea.stderr_));
+      if (std::isfinite(z)) max_abs_z = std::max(max_abs_z, std::abs(z));
       const double smith = 1.0 / (1.0 + r.lambda_numeric);     // 000 eq. 3Xc: W1, no m dependence
       const double vcav = nb.vcavity_weighted / nb.front_projected;  // 001 eq. (24), bin average
       jb["smith_numeric"] = smith;
@@ -420,8 +420,8 @@ void add_undersurface_approximations(Json& row, const G1Result& under, const G1R
                          std::pair<std::string, Estimate>{"reflect_v", reflect_v.g1_area_sampling()}}) {
     row["g1_" + name] = e.mean;
     row["g1_" + name + "_stderr"] = e.stderr_;
-    row["z_" + name] = z_score(e.mean, g.mean, std::hypot(g.stderr_, e.stderr_));
-    row["rel_dev_" + name] = rel_dev(e.mean, g.mean);
+    row["z_" + name] = z_json(e.mean, g.mean, std::hypot(g.stderr_, e.stderr_));
+    row["rel_dev_" + name] = rel_dev_json(e.mean, g.mean);
   }
 }
 

@@ -422,7 +422,7 @@ Json& add_row(Table& t, const G2Result& r, const Microsurface& s) {
   // standard error is the right one (the model is exact for this surface's facets).
   for (const auto& [name, value] : forms)
     row[std::string("z_") + (std::string(name).rfind("smith_", 0) == 0 ? name + 6 : name)] =
-        z_score(g2.mean, value, g2.stderr_);
+        z_json(g2.mean, value, g2.stderr_);
   if (s.nominal) {
     const models::Ndf& ndf = *s.nominal;
     const models::G2Forms fn = models::g2_forms_from_lambda(ndf.Lambda(r.o), ndf.Lambda(r.i), dphi);
@@ -445,7 +445,7 @@ Json& add_row(Table& t, const G2Result& r, const Microsurface& s) {
     row[std::string(names[k]) + "_from_g1"] = fv[k];
     row[std::string(names[k]) + "_from_g1_diff"] = fd[k];
     row[std::string(names[k]) + "_from_g1_diff_stderr"] = fs[k];
-    row[std::string("z_") + names[k] + "_from_g1"] = z_score(fd[k], 0.0, fs[k]);
+    row[std::string("z_") + names[k] + "_from_g1"] = z_json(fd[k], 0.0, fs[k]);
   }
   row["area_samples"] = r.samples;
   row["replicates"] = r.replicates;

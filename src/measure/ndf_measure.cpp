@@ -132,7 +132,7 @@ Table ndf_table(const NdfResult& r, const Microsurface& s) {
         sum += r.bins.bin_average(r.bins.index(it, ip), [&](const Vec3& m) { return s.nominal->D(m); });
       const double model = sum / r.bins.n_phi();
       row["d_nominal"] = model;
-      row["z"] = z_score(r.ring_d[it], model, r.ring_d_stderr[it]);
+      row["z"] = z_json(r.ring_d[it], model, r.ring_d_stderr[it]);
     } else {
       row["d_nominal"] = nullptr;
     }

@@ -21,8 +21,8 @@ const char* error_kind_name(ErrorKind kind) {
 }
 
 Json ensemble_p_value(const Json& z, std::size_t surfaces) {
-  // No p-value without a finite z (a zero error: the comparison has no error bar).
-  if (!z.is_number() || !std::isfinite(z.get<double>()) || surfaces < 2) return nullptr;
+  // No p-value without a z (a zero error: the comparison has no error bar).
+  if (!z.is_number() || surfaces < 2) return nullptr;
   return student_t_two_sided_p(z.get<double>(), static_cast<double>(surfaces - 1));
 }
 
@@ -110,8 +110,14 @@ Json merge_bins(const std::vector<const Json*>& rows, const TableSpec& spec, std
 
 }  // namespace
 
-Json z_json(double measured, double model, double stderr_) { return z_score(measured, model, stderr_); }
-Json rel_dev_json(double measured, double model) { return rel_dev(measured, model); }
+Json z_json(double measured, double model, double stderr_) {
+  const double z = z_score(measured, model, stderr_);
+  return std::isfinite(z) ? Json(z) : Json(nullptr);
+}
+Json rel_dev_json(double measured, double model) {
+  const double r = rel_dev(measured, model);
+  return std::isfinite(r) ? Json(r) : Json(nullptr);
+}
 
 void compare(Json& row, const Comparison& c, std::size_t surfaces) {
   const bool zero = c.kind == ModelKind::Zero;
@@ -124,8 +130,8 @@ void compare(Json& row, const Comparison& c, std::size_t surfaces) {
     return;
   }
   const double x = row[c.measured].get<double>(), model = zero ? 0.0 : row[c.model].get<double>();
-  row[c.z] = z_score(x, model, row[error].get<double>());
-  if (!c.rel_dev.empty()) row[c.rel_dev] = rel_dev(x, model);
+  row[c.z] = z_json(x, model, row[error].get<double>());
+  if (!c.rel_dev.empty()) row[c.rel_dev] = rel_dev_json(x, model);
   if (!c.p.empty())
     row[c.p] = c.kind == ModelKind::Nominal ? ensemble_p_value(row[c.z], surfaces) : Json(nullptr);
 }

@@ -262,7 +262,7 @@ Table vndf_table(double family_alpha) {
       const double w = (std::cos(rad(b["theta_m_range_deg"][0].get<double>())) -
                         std::cos(rad(b["theta_m_range_deg"][1].get<double>()))) *
                        rad(b["phi_m_range_deg"][1].get<double>() - b["phi_m_range_deg"][0].get<double>());
-      if (model * w >= 0.002 && se > 0) {
+      if (model * w >= 0.002 && se > 0 && b["z"].is_number()) {
         max_abs_z = std::max(max_abs_z, std::abs(b["z"].get<double>()));
         ++tested;
       }
@@ -353,8 +353,8 @@ Json& add_row(Table& t, const VndfResult& r, const Microsurface& s, const VndfOp
       jb["dv_model"] = dm;
       // z under the model's own binomial variance (defined also where no ray landed).
       const double se = std::sqrt(model[b] * (1 - model[b]) / r.hits) / w;
-      jb["z"] = z_score(d.mean, dm, se);
-      jb["rel_dev"] = rel_dev(d.mean, dm);
+      jb["z"] = z_json(d.mean, dm, se);
+      jb["rel_dev"] = rel_dev_json(d.mean, dm);
     } else {
       jb["dv_model"] = nullptr;
       jb["z"] = nullptr;

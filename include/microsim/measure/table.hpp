@@ -9,7 +9,8 @@
 //    (the model is exact for those facets: what is left is ray noise); a comparison with a
 //    nominal model uses the between-surface error, and its p-value is Student t with K - 1
 //    degrees of freedom;
-//  - z = (measured - model) / stderr (z_score in stats.hpp), rel_dev = (measured - model) / |model|.
+//  - z = (measured - model) / stderr (z_score in stats.hpp), rel_dev = (measured - model) / |model|;
+//    where the error is exactly 0 and the values differ, z is null (no error bar to compare with).
 // Writers (JSON records, CSV, EXR) read the rows; the rows hold plain named fields so that the
 // records keep their field names and order.
 #pragma once
@@ -97,7 +98,8 @@ void compare(Json& row, const Comparison& c, std::size_t surfaces);
 // (null when z is not a number or K < 2).
 Json ensemble_p_value(const Json& z, std::size_t surfaces);
 
-// z and rel_dev as JSON values (z_score and rel_dev of stats.hpp; infinite or undefined -> null).
+// z and rel_dev as JSON values (z_score and rel_dev of stats.hpp); an infinite value (a zero
+// error, or a zero model) is null, in memory as in the written record.
 Json z_json(double measured, double model, double stderr_);
 Json rel_dev_json(double measured, double model);
 
