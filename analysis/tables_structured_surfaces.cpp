@@ -202,7 +202,8 @@ void vcavity_vs_heightfield() {
   for (std::size_t i = 0; i < views.size(); ++i) {
     G1Result hr = measure_g1(th, views[i], opts(2e6), &table);
     for (auto [name, r, s] : {std::tuple{"V-cavity ensemble", &ens[i], &vc}, {"Beckmann heightfield", &hr, &hf}}) {
-      Json row = g1_row_json(*r, *s);
+      Table one = g1_table();
+      const Json& row = add_row(one, *r, *s);
       const double dof = std::max(1, row["bins_dof"].get<int>());
       std::printf("| %.0f | %s | %.5f | %.1e | %.5f | %.5f | %.5f | %.5f | %.2f | %.2f |\n", thetas[i], name,
                   row["g1"].get<double>(), row["g1_stderr"].get<double>(), row["smith_numeric"].get<double>(),
@@ -370,7 +371,8 @@ void gaussian_ggx() {
     int dof = 0;
     for (int k = 0; k < K; ++k) {
       G1Result r = measure_g1(*tracers[k], v, opts(5e5, 7), &tables[k]);
-      Json row = g1_row_json(r, tiles[k]);
+      Table one = g1_table();
+      const Json& row = add_row(one, r, tiles[k]);
       const double x = row["g1"].get<double>();
       g += x;
       g2 += x * x;

@@ -68,6 +68,10 @@ std::string fmt(double x, int precision) {
   return os.str();
 }
 
+std::string fmt(const Json& x, int precision) {
+  return x.is_number() ? fmt(x.get<double>(), precision) : std::string("-");
+}
+
 Json run_header(const std::string& command, const GlobalOptions& g) {
   Json j = {{"command", command},
             {"microsim_version", "0.1.0"},

@@ -65,6 +65,8 @@ void write_record(const std::string& path, const Json& j);
 // The same, or the record handed over when embedded.
 void write_record(const GlobalOptions& g, const std::string& path, const Json& j);
 std::string fmt(double x, int precision = 4);
+// A record's number, or "-" where it is null (e.g. a z without an error bar).
+std::string fmt(const Json& x, int precision = 4);
 // Fields every JSON record starts with: command, version, threads (and ranks under MPI).
 Json run_header(const std::string& command, const GlobalOptions& g);
 // "a:b:step" (inclusive), "a,b,c" or "a", in degrees.

@@ -19,40 +19,12 @@ namespace microsim::cli {
 
 namespace {
 
-// Ensemble rows (DESIGN.md "Two kinds of error bar"): every field is the mean over surfaces;
-// g1_stderr etc. are the between-surface standard errors, the ray-count ones are kept as
-// *_stderr_rays. Bins are matched by their normal ranges.
-Json g1_ensemble_row(const std::vector<const Json*>& rows) {
-  Json e = ensemble_row(rows,
-                        {{"theta_deg", Field::Copy},
-                         {"phi_deg", Field::Copy},
-                         {"surfaces", Field::Count},
-                         {"replicates", Field::Copy},
-                         {"g1", Field::Measured},
-                         {"g1_raycast", Field::Measured},
-                         {"visible_area_ratio", Field::Measured},
-                         {"smith_numeric", Field::MeanStderr},
-                         {"smith_nominal", Field::Copy}});
-  if (e["smith_nominal"].is_number()) {
-    double model = e["smith_nominal"].get<double>(), se = e["g1_stderr"].get<double>();
-    e["z_nominal"] = se > 0 ? (e["g1"].get<double>() - model) / se : 0.0;
-    e["rel_dev_nominal"] = (e["g1"].get<double>() - model) / model;
-  } else {
-    e["z_nominal"] = nullptr;
-    e["rel_dev_nominal"] = nullptr;
-  }
-  e["p_nominal"] = ensemble_p_value(e["z_nominal"], rows.size());
-  double se_num = e["g1_stderr"].get<double>();
-  e["z_numeric"] = se_num > 0 ? (e["g1"].get<double>() - e["smith_numeric"].get<double>()) / se_num : 0.0;
-  Json bins = ensemble_row(rows, {}, {{"theta_m_range_deg", Field::Key},
-                                      {"phi_m_range_deg", Field::Key},
-                                      {"m", Field::Normal},
-                                      {"area_fraction", Field::Mean},
-                                      {"g1", Field::MeanStderr},
-                                      {"g1_raycast", Field::MeanStderr}})["bins"];
-  e["bins"] = bins;
-  return e;
-}
+const char* const kVcavityDefinition =
+    "001 Sec. 6.1 made explicit: each groove of the ensemble (normals m, m' drawn from "
+    "(n.m) D(m)) is traced on its own as an infinite periodic V-groove; ray casting uses the "
+    "same number of rays per groove (equal macro areas), area sampling draws points over the "
+    "whole ensemble by front-facing projected area; counts are pooled per normal bin. "
+    "vcavity_numeric is 001 eq. 24 on the same normals";
 
 void print_g1_table(const Json& rows, bool ensemble) {
   std::cout << std::setw(7) << "theta" << std::setw(6) << "phi" << std::setw(10) << "g1"
@@ -67,7 +39,7 @@ void print_g1_table(const Json& rows, bool ensemble) {
               << fmt(row["g1_stderr"].get<double>(), 5) << std::setw(10)
               << fmt(row["g1_raycast"].get<double>()) << std::setw(10)
               << fmt(row["smith_numeric"].get<double>()) << std::setw(8)
-              << fmt(row["z_numeric"].get<double>(), 2);
+              << fmt(row["z_numeric"], 2);
     if (!row["smith_nominal"].is_null())
       std::cout << std::setw(10) << fmt(row["smith_nominal"].get<double>()) << std::setw(9)
                 << fmt(100 * row["rel_dev_nominal"].get<double>(), 2) << "%";
@@ -99,18 +71,7 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   if (o.rays <= 0) throw UsageError("--rays must be a positive integer (got " + std::to_string(o.rays) + ")");
   std::vector<std::string> files = {o.surface};
   files.insert(files.end(), o.extra_surfaces.begin(), o.extra_surfaces.end());
-  // Check every file before the long run starts.
-  std::vector<Microsurface> first;
-  first.push_back(input_surface(g, files[0]));
-  const bool periodic = !first[0].macro().finite_object();  // every ray from above meets it
-  for (std::size_t k = 1; k < files.size(); ++k) input_surface(g, files[k]);
-  if (below && first[0].kind() == Microsurface::Kind::Heightfield)
-    throw UsageError("--theta must be in [0, 90) degrees for a heightfield (theta in (90, 180], the "
-                     "undersurface, is measured on meshes only)");
-  if (below && is_vcavity(first[0]))
-    throw UsageError("--theta must be in [0, 90) degrees for a vcavity ensemble");
   auto t0 = std::chrono::steady_clock::now();
-
   G1Options go;
   go.split = g.split;  // shards and MPI ranks (scaleout.hpp)
   go.rays = static_cast<std::uint64_t>(o.rays);
@@ -118,7 +79,7 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   go.replicates = o.replicates;
   Json j = run_header("measure g1", g);
   j["file"] = files.size() == 1 ? Json(files[0]) : Json(files);
-  j["surface"] = first[0].description;
+  j["surface"] = nullptr;  // the first surface's description (filled below, kept in this place)
   j["parameters"] = {{"theta", o.theta}, {"phi", o.phi}, {"rays", o.rays}, {"seed", o.seed},
                      {"replicates", go.replicates},
                      {"normal_bins", {{"theta", go.normal_theta_bins}, {"phi", go.normal_phi_bins}}}};
@@ -142,47 +103,52 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
                        "macrosurface, the two approximations of 000 'Inherent Assumptions'"},
       {"eq_2b", "the visible_area_ratio at theta = 0 is 000 eq. 2b, int (n.m) G1(n,m) D(m) dm; "
                 "1 for a valid periodic microsurface"},
+      {"z_numeric", "(g1 - smith_numeric) / the ray-count error (g1_stderr; ensembles: "
+                    "g1_stderr_rays), since the model comes from each surface's own facets; "
+                    "z_nominal and p_nominal (ensembles) use the between-surface error and "
+                    "Student t with K - 1 degrees of freedom; a zero error gives a null z"},
       {"stderr", files.size() == 1
                      ? "ray-count standard error of this one surface: the rays are split into `replicates` "
                        "independent randomized replicates (each a stratified pass with its own random "
                        "stream) and the error is that of the replicate means, sqrt(var / replicates)"
                      : "between-surface standard error (sd over surfaces / sqrt(K)); the ray-count "
                        "one is *_stderr_rays; per_surface holds each surface's own rows"}};
-  if (is_vcavity(first[0]))
-    j["definitions"]["vcavity"] =
-        "001 Sec. 6.1 made explicit: each groove of the ensemble (normals m, m' drawn from "
-        "(n.m) D(m)) is traced on its own as an infinite periodic V-groove; ray casting uses the "
-        "same number of rays per groove (equal macro areas), area sampling draws points over the "
-        "whole ensemble by front-facing projected area; counts are pooled per normal bin. "
-        "vcavity_numeric is 001 eq. 24 on the same normals";
   Progress progress("measure g1", g.quiet);
   const std::size_t total = files.size() * thetas.size() * phis.size();
   std::size_t done = 0;
   go.progress = [&](double f) { progress.update((done + f) / total); };
-  std::vector<Json> per_surface;
   TraceCounters counters;
   double build_seconds = 0;
-  for (std::size_t k = 0; k < files.size(); ++k) {
-    Microsurface s = k == 0 ? std::move(first[0]) : input_surface(g, files[k]);
-    Json rows = Json::array();
-    if (is_vcavity(s)) {
-      // 001 Sec. 6.1 made explicit: every groove traced on its own (measure/vcavity_measure.hpp).
+  bool periodic = true;  // every ray from above meets the surface (not a finite object)
+  std::vector<Table> per_surface = measure_over_surfaces(g, files, [&](const Microsurface& s, std::size_t k) {
+    if (k == 0) {
+      if (below && s.kind() == Microsurface::Kind::Heightfield)
+        throw UsageError("--theta must be in [0, 90) degrees for a heightfield (theta in (90, 180], the "
+                         "undersurface, is measured on meshes only)");
+      if (below && is_vcavity(s))
+        throw UsageError("--theta must be in [0, 90) degrees for a vcavity ensemble");
+      j["surface"] = s.description;
+      periodic = !s.macro().finite_object();
+      if (is_vcavity(s)) j["definitions"]["vcavity"] = kVcavityDefinition;
+    }
+    Table rows = g1_table();
+    const auto add = [&](const G1Result& r, double t, double p) -> Json& {
+      counters += r.counters;
+      Json& row = add_row(rows, r, s);
+      row["theta_deg"] = t;  // exactly as requested (no round trip through radians)
+      row["phi_deg"] = p;
+      ++done;
+      return row;
+    };
+    if (is_vcavity(s)) {  // 001 Sec. 6.1 made explicit: every groove traced on its own
       std::vector<Vec3> views;
       for (double p : phis)
         for (double t : thetas) views.push_back(direction_from_angles(rad(t), rad(p)));
       std::vector<G1Result> res = measure_vcavity_g1(s, views, go);
       std::size_t i = 0;
       for (double p : phis)
-        for (double t : thetas) {
-          counters += res[i].counters;
-          Json row = g1_row_json(res[i++], s);
-          row["theta_deg"] = t;
-          row["phi_deg"] = p;
-          rows.push_back(row);
-          ++done;
-        }
-      per_surface.push_back(rows);
-      continue;
+        for (double t : thetas) add(res[i++], t, p);
+      return rows;
     }
     Tracer tracer(s);
     build_seconds += tracer.build_seconds();
@@ -197,50 +163,21 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
     for (double p : phis)
       for (double t : thetas) {
         const Vec3 v = direction_from_angles(rad(t), rad(p));
-        G1Result r = measure_g1(tracer, v, go, &table, under.get());
-        counters += r.counters;
-        Json row = g1_row_json(r, s);
-        row["theta_deg"] = t;  // exactly as requested (no round trip through radians)
-        row["phi_deg"] = p;
-        if (t > 90) {
-          // 000 "Inherent Assumptions": the undersurface approximated by the surface's own
-          // statistics with v reversed, or with v reflected across the macrosurface.
-          row["undersurface"] = true;
-          G1Result rev = measure_g1(tracer, -v, go, &table);
-          G1Result ref = measure_g1(tracer, mirror_z(v), go, &table);
+        const G1Result r = measure_g1(tracer, v, go, &table, under.get());
+        Json& row = add(r, t, p);
+        if (t > 90) {  // the undersurface beside its two approximations (000 "Inherent Assumptions")
+          const G1Result rev = measure_g1(tracer, -v, go, &table);
+          const G1Result ref = measure_g1(tracer, mirror_z(v), go, &table);
           counters += rev.counters;
           counters += ref.counters;
-          const Estimate g = r.g1_area_sampling();
-          for (auto [name, e] : {std::pair<std::string, Estimate>{"reverse_v", rev.g1_area_sampling()},
-                                 std::pair<std::string, Estimate>{"reflect_v", ref.g1_area_sampling()}}) {
-            const double se = std::hypot(g.stderr_, e.stderr_);
-            row["g1_" + name] = e.mean;
-            row["g1_" + name + "_stderr"] = e.stderr_;
-            row["z_" + name] = se > 0 ? (e.mean - g.mean) / se : 0.0;
-            row["rel_dev_" + name] = g.mean > 0 ? (e.mean - g.mean) / g.mean : 0.0;
-          }
+          add_undersurface_approximations(row, r, rev, ref);
         }
-        rows.push_back(row);
-        ++done;
       }
-    per_surface.push_back(rows);
-  }
+    return rows;
+  });
   progress.finish();
   j["build_seconds"] = build_seconds;
-  if (files.size() == 1) {
-    j["rows"] = per_surface[0];
-  } else {
-    Json rows = Json::array();
-    for (std::size_t d = 0; d < per_surface[0].size(); ++d) {
-      std::vector<const Json*> same;
-      for (const auto& ps : per_surface) same.push_back(&ps[d]);
-      rows.push_back(g1_ensemble_row(same));
-    }
-    j["rows"] = rows;
-    Json ps = Json::array();
-    for (std::size_t k = 0; k < files.size(); ++k) ps.push_back({{"file", files[k]}, {"rows", per_surface[k]}});
-    j["per_surface"] = ps;
-  }
+  put_rows(j, files, per_surface);
   double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   j["wall_seconds"] = wall;
   j["total_rays"] = counters.rays;

@@ -26,60 +26,6 @@ struct G2CliOptions {
 const char* kForms[] = {"separable", "height_correlated", "direction_correlated",
                         "height_direction_correlated"};
 
-// Ensemble row: means over surfaces with between-surface standard errors. Models from each
-// surface's own facets are compared with the ray-count error (the difference g2 - model is
-// per surface, its spread is the ray noise); nominal models with the between-surface error.
-Json g2_ensemble_row(const std::vector<const Json*>& rows) {
-  FieldSpec spec = {{"theta_o_deg", Field::Copy}, {"phi_o_deg", Field::Copy},
-                    {"theta_i_deg", Field::Copy}, {"phi_i_deg", Field::Copy},
-                    {"delta_phi_deg", Field::Copy}, {"surfaces", Field::Count},
-                    {"replicates", Field::Copy},
-                    {"g2", Field::Measured},        {"g1_o", Field::Measured},
-                    {"g1_i", Field::Measured},      {"half_bin_theta_m_range_deg", Field::Copy},
-                    {"half_bin_phi_m_range_deg", Field::Copy}, {"g2_half", Field::Measured},
-                    {"lambda_o_numeric", Field::MeanStderr},
-                    {"lambda_i_numeric", Field::MeanStderr}};
-  for (const char* f : kForms) spec.emplace_back(std::string("smith_") + f, Field::MeanStderr);
-  spec.emplace_back("vcavity", Field::MeanStderr);
-  for (const char* f : kForms) spec.emplace_back(std::string("smith_") + f + "_nominal", Field::Copy);
-  for (const char* f : kForms) {
-    spec.emplace_back(std::string(f) + "_from_g1", Field::MeanStderr);
-    spec.emplace_back(std::string(f) + "_from_g1_diff", Field::Measured);
-  }
-  Json e = ensemble_row(rows, spec,
-                        {{"theta_m_range_deg", Field::Key},
-                         {"phi_m_range_deg", Field::Key},
-                         {"m", Field::Normal},
-                         {"area_fraction", Field::Mean},
-                         {"front_fraction", Field::Mean},
-                         {"g2", Field::MeanStderr},
-                         {"g1_o", Field::MeanStderr},
-                         {"g1_i", Field::MeanStderr},
-                         {"vcavity", Field::Mean}});
-  Json bins = e["bins"];
-  e.erase("bins");
-  const double g2 = e["g2"].get<double>();
-  const double se_rays = e["g2_stderr_rays"].get<double>(), se = e["g2_stderr"].get<double>();
-  for (const char* f : kForms) {
-    const double model = e[std::string("smith_") + f].get<double>();
-    e[std::string("z_") + f] = se_rays > 0 ? (g2 - model) / se_rays : 0.0;
-  }
-  e["z_vcavity"] = se_rays > 0 ? (g2 - e["vcavity"].get<double>()) / se_rays : 0.0;
-  for (const char* f : kForms) {
-    const Json& model = e[std::string("smith_") + f + "_nominal"];
-    e[std::string("z_") + f + "_nominal"] =
-        model.is_number() && se > 0 ? Json((g2 - model.get<double>()) / se) : Json(nullptr);
-    e[std::string("p_") + f + "_nominal"] = ensemble_p_value(e[std::string("z_") + f + "_nominal"], rows.size());
-  }
-  for (const char* f : kForms) {
-    const double d = e[std::string(f) + "_from_g1_diff"].get<double>();
-    const double sd = e[std::string(f) + "_from_g1_diff_stderr_rays"].get<double>();
-    e[std::string("z_") + f + "_from_g1"] = sd > 0 ? d / sd : 0.0;
-  }
-  e["bins"] = bins;
-  return e;
-}
-
 void print_g2_table(const Json& rows, bool ensemble) {
   std::cout << std::setw(6) << "th_o" << std::setw(6) << "ph_o" << std::setw(6) << "th_i"
             << std::setw(6) << "ph_i" << std::setw(9) << "g2" << std::setw(9) << "stderr"
@@ -101,7 +47,7 @@ void print_g2_table(const Json& rows, bool ensemble) {
       std::cout << std::setw(9) << fmt(row[std::string("smith_") + f].get<double>());
     std::cout << std::setw(9) << fmt(row["vcavity"].get<double>()) << " |";
     for (const char* f : kForms)
-      std::cout << std::setw(8) << fmt(row[std::string("z_") + f + "_from_g1"].get<double>(), 1);
+      std::cout << std::setw(8) << fmt(row[std::string("z_") + f + "_from_g1"], 1);
     std::cout << "\n";
   }
 }
@@ -168,12 +114,12 @@ int run_measure_g2(const G2CliOptions& o, const GlobalOptions& g) {
   go.progress = [&](double f) { progress.update((done + f) / total); };
   TraceCounters counters;
   double build_seconds = 0;
-  std::vector<Json> per_surface = measure_over_surfaces(g, o.files, [&](const Microsurface& s, std::size_t k) {
+  std::vector<Table> per_surface = measure_over_surfaces(g, o.files, [&](const Microsurface& s, std::size_t k) {
     if (k == 0) j["surface"] = s.description;
     Tracer tracer(s);
     build_seconds += tracer.build_seconds();
     const FacetTable table = build_facet_table(s, g2_normal_binning(go));
-    Json rows = Json::array();
+    Table rows = g2_table();
     for (double p_o : po)
       for (double t_o : to)
         for (double p_i : pi)
@@ -181,19 +127,18 @@ int run_measure_g2(const G2CliOptions& o, const GlobalOptions& g) {
             G2Result r = measure_g2(tracer, direction_from_angles(rad(t_o), rad(p_o)),
                                     direction_from_angles(rad(t_i), rad(p_i)), go, &table);
             counters += r.counters;
-            Json row = g2_row_json(r, s);
+            Json& row = add_row(rows, r, s);
             row["theta_o_deg"] = t_o;  // exactly as requested
             row["phi_o_deg"] = p_o;
             row["theta_i_deg"] = t_i;
             row["phi_i_deg"] = p_i;
-            rows.push_back(row);
             ++done;
           }
     return rows;
   });
   progress.finish();
   j["build_seconds"] = build_seconds;
-  put_rows(j, o.files, per_surface, g2_ensemble_row);
+  put_rows(j, o.files, per_surface);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   j["wall_seconds"] = wall;
   j["total_rays"] = counters.rays;

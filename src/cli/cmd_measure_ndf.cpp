@@ -32,7 +32,14 @@ int run_measure_ndf(const MeasureOptions& o, const GlobalOptions& g) {
   if (extension_of(o.output) == "exr") {
     write_exr(o.output, ndf_to_exr(r, s));
   } else {
-    Json j = ndf_to_json(r, s);
+    Json j;
+    j["command"] = "measure ndf";
+    j["surface"] = s.description;
+    j["checks"] = surface_checks_json(r.sums, s);
+    j["binning"] = {{"theta_bins", r.bins.n_theta()}, {"phi_bins", r.bins.n_phi()},
+                    {"theta_range_deg", {0, 180}}, {"stderr_blocks", r.blocks * r.blocks},
+                    {"rows", "one per theta ring, D averaged over phi"}};
+    j["rows"] = ndf_table(r, s).rows;
     j.update(run_header("measure ndf", g));
     j["file"] = o.surface;
     j["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -46,7 +53,7 @@ int run_measure_ndf(const MeasureOptions& o, const GlobalOptions& g) {
               << c["eq_1c_error"].get<double>() << "\n"
               << std::setw(12) << "theta_deg" << std::setw(14) << "D" << std::setw(12) << "stderr"
               << std::setw(14) << "nominal" << std::setw(9) << "z" << "\n";
-    Json rows = ndf_to_json(r, s)["rows"];
+    const Json rows = ndf_table(r, s).rows;
     for (const auto& row : rows) {
       if (row["d"].get<double>() == 0 && (row["d_nominal"].is_null() || row["d_nominal"].get<double>() < 1e-6))
         continue;
@@ -56,7 +63,7 @@ int run_measure_ndf(const MeasureOptions& o, const GlobalOptions& g) {
                 << fmt(row["d_stderr"].get<double>(), 5);
       if (!row["d_nominal"].is_null())
         std::cout << std::setw(14) << fmt(row["d_nominal"].get<double>(), 5) << std::setw(9)
-                  << fmt(row["z"].get<double>(), 2);
+                  << fmt(row["z"], 2);
       std::cout << "\n";
     }
     std::cout << "wrote " << o.output << "\n";

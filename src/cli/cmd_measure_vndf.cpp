@@ -26,63 +26,6 @@ struct VndfCliOptions {
   int theta_bins = 18, phi_bins = 16;
 };
 
-// Ensemble row: per-bin D_v averaged over surfaces with the between-surface standard error,
-// and the per-bin z against the nominal model with that error (Sidak threshold over the bins
-// holding at least 0.2% of the visible normals; Student t with K - 1 degrees of freedom, since
-// the error is the spread of K surfaces).
-Json vndf_ensemble_row(const std::vector<const Json*>& rows, double family_alpha) {
-  Json e = ensemble_row(rows,
-                        {{"theta_deg", Field::Copy},
-                         {"phi_deg", Field::Copy},
-                         {"surfaces", Field::Count},
-                         {"rays", Field::Mean},
-                         {"visible_area_ratio", Field::MeanStderr},
-                         {"tv_distance", Field::MeanStderr},
-                         {"chi2_smith_numeric", Field::Mean},
-                         {"sampler_samples", Field::Copy},
-                         {"sampler_chi2", Field::Copy},
-                         {"sampler_dof", Field::Copy},
-                         {"sampler_p_value", Field::Copy},
-                         {"sampler_max_abs_z", Field::Copy},
-                         {"sampler_pass", Field::Copy}},
-                        {{"theta_m_range_deg", Field::Key},
-                         {"phi_m_range_deg", Field::Key},
-                         {"dv", Field::MeanStderr},
-                         {"dv_smith_numeric", Field::MeanStderr},
-                         {"dv_model", Field::Copy}});
-  Json bins = e["bins"];
-  e.erase("bins");
-  double max_abs_z = 0;
-  int tested = 0;
-  for (auto& b : bins) {
-    if (!b["dv_model"].is_number()) {
-      b["z"] = nullptr;
-      b["rel_dev"] = nullptr;
-      continue;
-    }
-    const double dv = b["dv"].get<double>(), se = b["dv_stderr"].get<double>();
-    const double model = b["dv_model"].get<double>();
-    const double w = (std::cos(rad(b["theta_m_range_deg"][0].get<double>())) -
-                      std::cos(rad(b["theta_m_range_deg"][1].get<double>()))) *
-                     rad(b["phi_m_range_deg"][1].get<double>() - b["phi_m_range_deg"][0].get<double>());
-    const double z = se > 0 ? (dv - model) / se : 0.0;
-    b["z"] = z;
-    b["rel_dev"] = model > 0 ? (dv - model) / model : 0.0;
-    if (model * w >= 0.002 && se > 0) {
-      max_abs_z = std::max(max_abs_z, std::abs(z));
-      ++tested;
-    }
-  }
-  if (!bins.empty() && bins[0]["dv_model"].is_number()) {
-    e["bins_tested"] = tested;
-    e["max_abs_z"] = max_abs_z;
-    e["sidak_z"] = sidak_t(family_alpha, std::max(1, tested), static_cast<double>(rows.size() - 1));
-    e["pass"] = max_abs_z < e["sidak_z"].get<double>();
-  }
-  e["bins"] = bins;
-  return e;
-}
-
 void print_vndf_table(const Json& rows, bool ensemble) {
   std::cout << std::setw(7) << "theta" << std::setw(6) << "phi" << std::setw(11) << "chi2/dof"
             << std::setw(10) << "p" << std::setw(9) << "max|z|" << std::setw(8) << "sidak"
@@ -168,12 +111,12 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
   vo.progress = [&](double f) { progress.update((done + f) / total); };
   TraceCounters counters;
   std::uint64_t lost = 0;
-  std::vector<Json> per_surface = measure_over_surfaces(g, o.files, [&](const Microsurface& s, std::size_t k) {
+  std::vector<Table> per_surface = measure_over_surfaces(g, o.files, [&](const Microsurface& s, std::size_t k) {
     if (k == 0) j["surface"] = s.description;
     Tracer tracer(s);
     const DirectionBinning bins = vndf_binning(vo);
     const FacetTable table = build_facet_table(s, bins);
-    Json rows = Json::array();
+    Table rows = vndf_table(vo.family_alpha);
     for (double p : phis)
       for (double t : thetas) {
         const Vec3 v = direction_from_angles(rad(t), rad(p));
@@ -185,18 +128,15 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
         if (s.nominal && vo.sampler_samples > 0 && k == 0)
           sampler = test_vndf_sampler(*s.nominal, v, vo.sampler_samples, bins, vo.seed,
                                       vo.family_alpha);
-        Json row = vndf_row_json(r, s, vo, sampler);
+        Json& row = add_row(rows, r, s, vo, sampler);
         row["theta_deg"] = t;
         row["phi_deg"] = p;
-        rows.push_back(row);
         ++done;
       }
     return rows;
   });
   progress.finish();
-  put_rows(j, o.files, per_surface, [&](const std::vector<const Json*>& same) {
-    return vndf_ensemble_row(same, vo.family_alpha);
-  });
+  put_rows(j, o.files, per_surface);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   j["wall_seconds"] = wall;
   j["total_rays"] = counters.rays;

@@ -1,6 +1,7 @@
 #include "microsim/measure/g1_measure.hpp"
 
 #include "microsim/measure/sampling.hpp"
+#include "microsim/measure/stats.hpp"
 #include "microsim/surface/undersurface.hpp"
 
 #include <tbb/blocked_range.h>
@@ -282,8 +283,26 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   return r;
 }
 
-Json g1_row_json(const G1Result& r, const Microsurface& s) {
-  Json row;
+Table g1_table() {
+  Table t;
+  t.error = ErrorKind::Replicates;
+  t.spec.columns = {{"theta_deg", Merge::Copy},          {"phi_deg", Merge::Copy},
+                    {"surfaces", Merge::Count},          {"replicates", Merge::Copy},
+                    {"g1", Merge::Measured},             {"g1_raycast", Merge::Measured},
+                    {"visible_area_ratio", Merge::Measured}, {"smith_numeric", Merge::Spread},
+                    {"smith_nominal", Merge::Copy}};
+  t.spec.comparisons = {
+      {"g1", "smith_nominal", ModelKind::Nominal, "z_nominal", "rel_dev_nominal", "p_nominal"},
+      {"g1", "smith_numeric", ModelKind::Facets, "z_numeric", "", ""}};
+  t.spec.bin_columns = {{"theta_m_range_deg", Merge::Key}, {"phi_m_range_deg", Merge::Key},
+                        {"m", Merge::Direction},           {"area_fraction", Merge::Mean},
+                        {"g1", Merge::Spread},             {"g1_raycast", Merge::Spread}};
+  return t;
+}
+
+Json& add_row(Table& t, const G1Result& r, const Microsurface& s) {
+  t.rows.push_back(Json::object());
+  Json& row = t.rows.back();
   row["theta_deg"] = deg(r.theta);
   row["phi_deg"] = deg(r.phi);
   Estimate g = r.g1_area_sampling(), gr = r.g1_raycast(), var = r.visible_area_ratio();
@@ -307,7 +326,7 @@ Json g1_row_json(const G1Result& r, const Microsurface& s) {
   row["lambda_numeric"] = r.lambda_numeric;
   double smith_numeric = 1.0 / (1.0 + r.lambda_numeric);
   row["smith_numeric"] = smith_numeric;
-  row["z_numeric"] = g.stderr_ > 0 ? (g.mean - smith_numeric) / g.stderr_ : 0.0;
+  row["z_numeric"] = z_json(g.mean, smith_numeric, g.stderr_);
   if (s.nominal) {
     // Undersurface rows: the nominal model with v reversed (000 "Inherent Assumptions").
     double model = s.nominal->G1(r.undersurface ? Vec3(-r.v) : r.v);
@@ -359,10 +378,9 @@ Json g1_row_json(const G1Result& r, const Microsurface& s) {
       jb["g1_stderr"] = eb.stderr_;
       jb["g1_raycast"] = ea.mean;
       jb["g1_raycast_stderr"] = ea.stderr_;
-      double se = std::hypot(eb.stderr_, ea.stderr_);
-      double z = se > 0 ? (eb.mean - ea.mean) / se : 0.0;
-      jb["z_estimators"] = z;
-      max_abs_z = std::max(max_abs_z, std::abs(z));
+      const double z = z_score(eb.mean, ea.mean, std::hypot(eb.stderr_, ea.stderr_));
+      jb["z_estimators"] = z_json(eb.mean, ea.mean, std::hypot(eb.stderr_, ea.stderr_));
+      if (std::isfinite(z)) max_abs_z = std::max(max_abs_z, std::abs(z));
       const double smith = 1.0 / (1.0 + r.lambda_numeric);     // 000 eq. 3Xc: W1, no m dependence
       const double vcav = nb.vcavity_weighted / nb.front_projected;  // 001 eq. (24), bin average
       jb["smith_numeric"] = smith;
@@ -371,9 +389,9 @@ Json g1_row_json(const G1Result& r, const Microsurface& s) {
       mad_smith += w * std::abs(eb.mean - smith);
       mad_vcav += w * std::abs(eb.mean - vcav);
       mad_noise += w * eb.stderr_ * std::sqrt(2 / kPi);
-      // A bin whose samples are all visible (or none) has a zero binomial error: use the
-      // one-sample resolution 1/n instead, so that chi^2 stays finite and honest.
-      const double sb = std::max(eb.stderr_, 1.0 / static_cast<double>(nb.samples));
+      // A bin whose samples are all visible (or none) has a zero error: use the resolution of
+      // its n samples instead (stats.hpp proportion_floor), so that chi^2 stays finite and honest.
+      const double sb = std::max(eb.stderr_, proportion_floor(nb.samples));
       chi2_smith += std::pow((eb.mean - smith) / sb, 2);
       chi2_vcav += std::pow((eb.mean - vcav) / sb, 2);
       ++dof;
@@ -392,6 +410,19 @@ Json g1_row_json(const G1Result& r, const Microsurface& s) {
   row["max_abs_z_estimators"] = max_abs_z;
   row["bins"] = bins;
   return row;
+}
+
+void add_undersurface_approximations(Json& row, const G1Result& under, const G1Result& reverse_v,
+                                     const G1Result& reflect_v) {
+  row["undersurface"] = true;
+  const Estimate g = under.g1_area_sampling();
+  for (auto [name, e] : {std::pair<std::string, Estimate>{"reverse_v", reverse_v.g1_area_sampling()},
+                         std::pair<std::string, Estimate>{"reflect_v", reflect_v.g1_area_sampling()}}) {
+    row["g1_" + name] = e.mean;
+    row["g1_" + name + "_stderr"] = e.stderr_;
+    row["z_" + name] = z_json(e.mean, g.mean, std::hypot(g.stderr_, e.stderr_));
+    row["rel_dev_" + name] = rel_dev_json(e.mean, g.mean);
+  }
 }
 
 }  // namespace microsim

@@ -11,6 +11,7 @@
 
 #include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
+#include "microsim/measure/stats.hpp"
 
 namespace microsim {
 
@@ -326,8 +327,58 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
   return r;
 }
 
-Json g2_row_json(const G2Result& r, const Microsurface& s) {
-  Json row;
+namespace {
+const char* const kForms[] = {"separable", "height_correlated", "direction_correlated",
+                              "height_direction_correlated"};
+}  // namespace
+
+// Ensemble rows: means over surfaces with between-surface errors. Models from each surface's own
+// facets are compared with the ray-count error (the difference g2 - model is per surface, its
+// spread is the ray noise); nominal models with the between-surface error.
+Table g2_table() {
+  Table t;
+  t.error = ErrorKind::Replicates;
+  auto& c = t.spec.columns;
+  c = {{"theta_o_deg", Merge::Copy}, {"phi_o_deg", Merge::Copy},
+       {"theta_i_deg", Merge::Copy}, {"phi_i_deg", Merge::Copy},
+       {"delta_phi_deg", Merge::Copy}, {"surfaces", Merge::Count},
+       {"replicates", Merge::Copy},
+       {"g2", Merge::Measured},        {"g1_o", Merge::Measured},
+       {"g1_i", Merge::Measured},      {"half_bin_theta_m_range_deg", Merge::Copy},
+       {"half_bin_phi_m_range_deg", Merge::Copy}, {"g2_half", Merge::Measured},
+       {"lambda_o_numeric", Merge::Spread},
+       {"lambda_i_numeric", Merge::Spread}};
+  for (const char* f : kForms) c.push_back({std::string("smith_") + f, Merge::Spread});
+  c.push_back({"vcavity", Merge::Spread});
+  for (const char* f : kForms) c.push_back({std::string("smith_") + f + "_nominal", Merge::Copy});
+  for (const char* f : kForms) {
+    c.push_back({std::string(f) + "_from_g1", Merge::Spread});
+    c.push_back({std::string(f) + "_from_g1_diff", Merge::Measured});
+  }
+  auto& z = t.spec.comparisons;
+  for (const char* f : kForms)
+    z.push_back({"g2", std::string("smith_") + f, ModelKind::Facets, std::string("z_") + f, "", ""});
+  z.push_back({"g2", "vcavity", ModelKind::Facets, "z_vcavity", "", ""});
+  for (const char* f : kForms)
+    z.push_back({"g2", std::string("smith_") + f + "_nominal", ModelKind::Nominal,
+                 std::string("z_") + f + "_nominal", "", std::string("p_") + f + "_nominal"});
+  for (const char* f : kForms)
+    z.push_back({std::string(f) + "_from_g1_diff", "", ModelKind::Zero, std::string("z_") + f + "_from_g1", "", ""});
+  t.spec.bin_columns = {{"theta_m_range_deg", Merge::Key},
+                        {"phi_m_range_deg", Merge::Key},
+                        {"m", Merge::Direction},
+                        {"area_fraction", Merge::Mean},
+                        {"front_fraction", Merge::Mean},
+                        {"g2", Merge::Spread},
+                        {"g1_o", Merge::Spread},
+                        {"g1_i", Merge::Spread},
+                        {"vcavity", Merge::Mean}};
+  return t;
+}
+
+Json& add_row(Table& t, const G2Result& r, const Microsurface& s) {
+  t.rows.push_back(Json::object());
+  Json& row = t.rows.back();
   row["theta_o_deg"] = deg(theta_of(r.o));
   row["phi_o_deg"] = deg(phi_of(r.o));
   row["theta_i_deg"] = deg(theta_of(r.i));
@@ -371,7 +422,7 @@ Json g2_row_json(const G2Result& r, const Microsurface& s) {
   // standard error is the right one (the model is exact for this surface's facets).
   for (const auto& [name, value] : forms)
     row[std::string("z_") + (std::string(name).rfind("smith_", 0) == 0 ? name + 6 : name)] =
-        g2.stderr_ > 0 ? (g2.mean - value) / g2.stderr_ : 0.0;
+        z_json(g2.mean, value, g2.stderr_);
   if (s.nominal) {
     const models::Ndf& ndf = *s.nominal;
     const models::G2Forms fn = models::g2_forms_from_lambda(ndf.Lambda(r.o), ndf.Lambda(r.i), dphi);
@@ -389,13 +440,12 @@ Json g2_row_json(const G2Result& r, const Microsurface& s) {
   // difference to g2 with its standard error (delta method) and z-score.
   const G2Result::FormsFromG1 fg = r.forms_from_g1();
   const auto fv = as_array(fg.value), fd = as_array(fg.diff), fs = as_array(fg.diff_stderr);
-  const char* names[] = {"separable", "height_correlated", "direction_correlated",
-                         "height_direction_correlated"};
+  const char* const* names = kForms;
   for (int k = 0; k < 4; ++k) {
     row[std::string(names[k]) + "_from_g1"] = fv[k];
     row[std::string(names[k]) + "_from_g1_diff"] = fd[k];
     row[std::string(names[k]) + "_from_g1_diff_stderr"] = fs[k];
-    row[std::string("z_") + names[k] + "_from_g1"] = fs[k] > 0 ? fd[k] / fs[k] : 0.0;
+    row[std::string("z_") + names[k] + "_from_g1"] = z_json(fd[k], 0.0, fs[k]);
   }
   row["area_samples"] = r.samples;
   row["replicates"] = r.replicates;

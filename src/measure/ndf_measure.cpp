@@ -1,4 +1,5 @@
 #include "microsim/measure/ndf_measure.hpp"
+#include "microsim/measure/stats.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
@@ -116,15 +117,9 @@ Json surface_checks_json(const FacetSums& f, const Microsurface& s) {
   return j;
 }
 
-Json ndf_to_json(const NdfResult& r, const Microsurface& s) {
-  Json j;
-  j["command"] = "measure ndf";
-  j["surface"] = s.description;
-  j["checks"] = surface_checks_json(r.sums, s);
-  j["binning"] = {{"theta_bins", r.bins.n_theta()}, {"phi_bins", r.bins.n_phi()},
-                  {"theta_range_deg", {0, 180}}, {"stderr_blocks", r.blocks * r.blocks},
-                  {"rows", "one per theta ring, D averaged over phi"}};
-  Json rows = Json::array();
+Table ndf_table(const NdfResult& r, const Microsurface& s) {
+  Table t;
+  t.error = ErrorKind::Blocks;
   for (int it = 0; it < r.bins.n_theta(); ++it) {
     Json row;
     row["theta_lo_deg"] = deg(r.bins.theta_lo(it));
@@ -135,16 +130,15 @@ Json ndf_to_json(const NdfResult& r, const Microsurface& s) {
       double sum = 0;
       for (int ip = 0; ip < r.bins.n_phi(); ++ip)
         sum += r.bins.bin_average(r.bins.index(it, ip), [&](const Vec3& m) { return s.nominal->D(m); });
-      double model = sum / r.bins.n_phi();
+      const double model = sum / r.bins.n_phi();
       row["d_nominal"] = model;
-      row["z"] = r.ring_d_stderr[it] > 0 ? (r.ring_d[it] - model) / r.ring_d_stderr[it] : 0.0;
+      row["z"] = z_json(r.ring_d[it], model, r.ring_d_stderr[it]);
     } else {
       row["d_nominal"] = nullptr;
     }
-    rows.push_back(row);
+    t.rows.push_back(row);
   }
-  j["rows"] = rows;
-  return j;
+  return t;
 }
 
 ExrTable ndf_to_exr(const NdfResult& r, const Microsurface& s) {

@@ -225,9 +225,62 @@ SamplerTest test_vndf_sampler(const models::Ndf& ndf, const Vec3& v_in, std::uin
   return t;
 }
 
-Json vndf_row_json(const VndfResult& r, const Microsurface& s, const VndfOptions& o,
-                   const std::optional<SamplerTest>& sampler) {
-  Json row;
+// Ensemble rows: per-bin D_v averaged over surfaces with the between-surface standard error,
+// and the per-bin z against the nominal model with that error (Sidak threshold over the bins
+// holding at least 0.2% of the visible normals; Student t with K - 1 degrees of freedom, since
+// the error is the spread of K surfaces).
+Table vndf_table(double family_alpha) {
+  Table t;
+  t.error = ErrorKind::Binomial;  // i.i.d. origins: multinomial bin counts
+  t.spec.columns = {{"theta_deg", Merge::Copy},
+                    {"phi_deg", Merge::Copy},
+                    {"surfaces", Merge::Count},
+                    {"rays", Merge::Mean},
+                    {"visible_area_ratio", Merge::Spread},
+                    {"tv_distance", Merge::Spread},
+                    {"chi2_smith_numeric", Merge::Mean},
+                    {"sampler_samples", Merge::Copy},
+                    {"sampler_chi2", Merge::Copy},
+                    {"sampler_dof", Merge::Copy},
+                    {"sampler_p_value", Merge::Copy},
+                    {"sampler_max_abs_z", Merge::Copy},
+                    {"sampler_pass", Merge::Copy}};
+  t.spec.bin_columns = {{"theta_m_range_deg", Merge::Key},
+                        {"phi_m_range_deg", Merge::Key},
+                        {"dv", Merge::Spread},
+                        {"dv_smith_numeric", Merge::Spread},
+                        {"dv_model", Merge::Copy}};
+  t.spec.bin_comparisons = {{"dv", "dv_model", ModelKind::Nominal, "z", "rel_dev", ""}};
+  t.spec.verdict = [family_alpha](Json& e, std::size_t surfaces) {
+    const Json& bins = e["bins"];
+    double max_abs_z = 0;
+    int tested = 0;
+    for (const auto& b : bins) {
+      if (!b["dv_model"].is_number()) continue;
+      const double se = b["dv_stderr"].get<double>(), model = b["dv_model"].get<double>();
+      // The bin's share of the visible normals under the model: D_v times its solid angle.
+      const double w = (std::cos(rad(b["theta_m_range_deg"][0].get<double>())) -
+                        std::cos(rad(b["theta_m_range_deg"][1].get<double>()))) *
+                       rad(b["phi_m_range_deg"][1].get<double>() - b["phi_m_range_deg"][0].get<double>());
+      if (model * w >= 0.002 && se > 0 && b["z"].is_number()) {
+        max_abs_z = std::max(max_abs_z, std::abs(b["z"].get<double>()));
+        ++tested;
+      }
+    }
+    if (!bins.empty() && bins[0]["dv_model"].is_number()) {
+      e["bins_tested"] = tested;
+      e["max_abs_z"] = max_abs_z;
+      e["sidak_z"] = sidak_t(family_alpha, std::max(1, tested), static_cast<double>(surfaces - 1));
+      e["pass"] = max_abs_z < e["sidak_z"].get<double>();
+    }
+  };
+  return t;
+}
+
+Json& add_row(Table& t, const VndfResult& r, const Microsurface& s, const VndfOptions& o,
+              const std::optional<SamplerTest>& sampler) {
+  t.rows.push_back(Json::object());
+  Json& row = t.rows.back();
   row["theta_deg"] = deg(theta_of(r.v));
   row["phi_deg"] = deg(phi_of(r.v));
   row["rays"] = r.rays;
@@ -300,8 +353,8 @@ Json vndf_row_json(const VndfResult& r, const Microsurface& s, const VndfOptions
       jb["dv_model"] = dm;
       // z under the model's own binomial variance (defined also where no ray landed).
       const double se = std::sqrt(model[b] * (1 - model[b]) / r.hits) / w;
-      jb["z"] = se > 0 ? (d.mean - dm) / se : 0.0;
-      jb["rel_dev"] = dm > 0 ? (d.mean - dm) / dm : 0.0;
+      jb["z"] = z_json(d.mean, dm, se);
+      jb["rel_dev"] = rel_dev_json(d.mean, dm);
     } else {
       jb["dv_model"] = nullptr;
       jb["z"] = nullptr;

@@ -16,6 +16,7 @@
 #include "microsim/measure/binning.hpp"
 #include "microsim/measure/facet_table.hpp"
 #include "microsim/measure/replicates.hpp"
+#include "microsim/measure/table.hpp"
 #include "microsim/trace/tracer.hpp"
 
 namespace microsim {
@@ -112,12 +113,21 @@ std::vector<double> sum_over_facets(std::size_t num_facets, std::size_t width, B
 G1Result measure_g1(const Tracer& tracer, const Vec3& v, const G1Options& options,
                     const FacetTable* table = nullptr, const Tracer* under = nullptr);
 
-// One JSON row. Per normal bin: g1 (area sampling) and g1_raycast with standard errors, and the
+// The table of G1 over view directions (measure/table.hpp): no rows yet, the columns an ensemble
+// keeps and how they merge, and the comparisons with the models.
+Table g1_table();
+// Appends the row of one direction and returns it. Per normal bin: g1 (area sampling) and g1_raycast with standard errors, and the
 // two models evaluated on the bin's own facets: smith_numeric = chi+(v.m)/(1 + Lambda_facets(v))
 // and vcavity_numeric = sum A_f (v.m_f)+ G1_vcavity(v, m_f) / sum A_f (v.m_f)+ (001 eq. 24).
 // Row summaries over the bins with samples, weighted by front-facing projected area w_b:
 // bins_mad_* = sum_b w_b |g1_b - model_b| (noise floor bins_mad_noise = sum_b w_b se_b sqrt(2/pi))
 // and bins_chi2_* = sum_b ((g1_b - model_b) / se_b)^2 over bins_dof bins.
-Json g1_row_json(const G1Result& r, const Microsurface& s);
+Json& add_row(Table& t, const G1Result& r, const Microsurface& s);
+
+// 000 "Inherent Assumptions": the undersurface (a row of `under`, v.n < 0) approximated by the
+// surface's own G1 with v reversed or reflected across the macrosurface; adds g1_reverse_v,
+// g1_reflect_v with errors, and their z and rel_dev against the explicit measurement.
+void add_undersurface_approximations(Json& row, const G1Result& under, const G1Result& reverse_v,
+                                     const G1Result& reflect_v);
 
 }  // namespace microsim

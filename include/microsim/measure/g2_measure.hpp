@@ -29,6 +29,7 @@
 
 #include "microsim/measure/binning.hpp"
 #include "microsim/measure/g1_measure.hpp"
+#include "microsim/measure/table.hpp"
 #include "microsim/models/g2_forms.hpp"
 #include "microsim/trace/tracer.hpp"
 
@@ -102,7 +103,9 @@ DirectionBinning g2_normal_binning(const G2Options& options);
 G2Result measure_g2(const Tracer& tracer, const Vec3& o, const Vec3& i, const G2Options& options,
                     const FacetTable* table = nullptr);
 
-// JSON row: directions, g2 and g1_o, g1_i with standard errors, the models and the bins.
-Json g2_row_json(const G2Result& r, const Microsurface& s);
+// The table of G2 over direction pairs (measure/table.hpp), and the row of one pair appended to
+// it: directions, g2 and g1_o, g1_i with standard errors, the models and the bins.
+Table g2_table();
+Json& add_row(Table& t, const G2Result& r, const Microsurface& s);
 
 }  // namespace microsim

@@ -5,6 +5,7 @@
 
 #include "microsim/io/output.hpp"
 #include "microsim/measure/binning.hpp"
+#include "microsim/measure/table.hpp"
 #include "microsim/surface/microsurface.hpp"
 
 namespace microsim {
@@ -30,7 +31,8 @@ struct NdfResult {
 // the error bar that matters against a nominal model.
 NdfResult measure_ndf(const Microsurface& s, const NdfOptions& options);
 
-Json ndf_to_json(const NdfResult& r, const Microsurface& s);
+// One row per theta ring (D averaged over phi) with its block error, beside the nominal model.
+Table ndf_table(const NdfResult& r, const Microsurface& s);
 ExrTable ndf_to_exr(const NdfResult& r, const Microsurface& s);
 
 // Summary of the 000 eq. 1b/1c identities and of the slope statistics ("fitted alpha").

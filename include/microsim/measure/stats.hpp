@@ -1,12 +1,73 @@
-// Small statistics shared by the estimators and their tests: two-sided z thresholds with a
-// Sidak correction over many bins, the chi-square upper tail for goodness-of-fit tests, and
-// Student's t (CDF, quantile, Sidak threshold) for means over K surfaces (K - 1 dof).
+// Small statistics shared by the estimators, the checks and their tests: the mean over K
+// surfaces with its between-surface error, z-scores, the error floor of a proportion, two-sided
+// z thresholds with a Sidak correction over many bins, the chi-square upper tail for
+// goodness-of-fit tests, and Student's t (CDF, quantile, Sidak threshold) for means over K
+// surfaces (K - 1 dof).
 #pragma once
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <vector>
 
 namespace microsim {
+
+// Mean of K values and its standard error sd / sqrt(K), sd from the two-pass sum of squares
+// about the mean (no cancellation); 0 for K < 2. The one place where an ensemble's mean and
+// between-surface error are computed (measure tables and validate checks).
+struct SampleMean {
+  double mean = 0, stderr_ = 0;
+  std::size_t n = 0;
+};
+inline SampleMean sample_mean(const std::vector<double>& x) {
+  SampleMean m;
+  m.n = x.size();
+  if (x.empty()) return m;
+  const double k = static_cast<double>(x.size());
+  double sum = 0;
+  for (double v : x) sum += v;
+  m.mean = sum / k;
+  double ss = 0;
+  for (double v : x) ss += (v - m.mean) * (v - m.mean);
+  m.stderr_ = x.size() > 1 ? std::sqrt(ss / (k - 1) / k) : 0.0;
+  return m;
+}
+
+// Ray-count error of the mean of K independent estimates with errors se_k: sqrt(sum se_k^2) / K
+// (K = se.size() unless given: estimates without an error count in K but add nothing).
+inline double mean_of_errors(const std::vector<double>& se, std::size_t k = 0) {
+  if (k == 0) k = se.size();
+  double s2 = 0;
+  for (double e : se) s2 += e * e;
+  return k == 0 ? 0.0 : std::sqrt(s2) / static_cast<double>(k);
+}
+
+// z-score (measured - model) / stderr. A zero error gives 0 when measured equals the model (to
+// 1e-12 relative) and an infinite z of the difference's sign otherwise (written as null in JSON).
+inline double z_score(double measured, double model, double stderr_) {
+  const double diff = measured - model;
+  if (stderr_ > 0) return diff / stderr_;
+  if (std::abs(diff) <= 1e-12 * std::max(1.0, std::abs(model))) return 0.0;
+  return std::copysign(std::numeric_limits<double>::infinity(), diff);
+}
+
+// Relative deviation (measured - model) / |model| (0 when both are 0, infinite for model 0).
+inline double rel_dev(double measured, double model) {
+  if (model != 0) return (measured - model) / std::abs(model);
+  return measured == 0 ? 0.0 : std::copysign(std::numeric_limits<double>::infinity(), measured);
+}
+
+// Error floor of a proportion measured from n samples: a proportion at 0 or 1 has no spread but
+// is known only to the resolution of n samples, taken as the binomial error of the estimate
+// (k + 1/2) / (n + 1) at k = n: sqrt(p (1 - p) / n) with p = (n + 1/2) / (n + 1), about
+// 0.71 / n. Used wherever an error enters a z or a chi-square (measure and validate alike), so
+// that a proportion at 0 or 1 compared with a model is not an infinite z.
+inline double proportion_floor(std::uint64_t n) {
+  if (n == 0) return 0.0;
+  const double nd = static_cast<double>(n);
+  const double p = (nd + 0.5) / (nd + 1.0);
+  return std::sqrt(p * (1 - p) / nd);
+}
 
 // Two-sided z threshold with a Sidak correction: family-wise false-alarm rate `alpha` over
 // `k` independent comparisons, i.e. Phi^-1(1 - a/2) with a = 1 - (1 - alpha)^(1/k).

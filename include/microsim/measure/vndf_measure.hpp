@@ -21,6 +21,7 @@
 
 #include "microsim/measure/binning.hpp"
 #include "microsim/measure/g1_measure.hpp"
+#include "microsim/measure/table.hpp"
 #include "microsim/models/ndf.hpp"
 #include "microsim/trace/tracer.hpp"
 
@@ -97,9 +98,12 @@ SamplerTest test_vndf_sampler(const models::Ndf& ndf, const Vec3& v, std::uint64
                               const DirectionBinning& bins, std::uint64_t seed,
                               double family_alpha = 0.0027);
 
-// JSON row: direction, tests against the nominal and Smith-numeric VNDF, the sampler's test
-// (when run), and the bins.
-Json vndf_row_json(const VndfResult& r, const Microsurface& s, const VndfOptions& options,
-                   const std::optional<SamplerTest>& sampler);
+// The table of the VNDF over view directions (measure/table.hpp; an ensemble's verdict is the
+// Sidak-corrected Student t test of its bins at family_alpha), and the row of one direction
+// appended to it: direction, tests against the nominal and Smith-numeric VNDF, the sampler's
+// test (when run), and the bins.
+Table vndf_table(double family_alpha);
+Json& add_row(Table& t, const VndfResult& r, const Microsurface& s, const VndfOptions& options,
+              const std::optional<SamplerTest>& sampler);
 
 }  // namespace microsim

@@ -1,0 +1,169 @@
+#include "microsim/measure/table.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "microsim/measure/stats.hpp"
+
+namespace microsim {
+
+const char* error_kind_name(ErrorKind kind) {
+  switch (kind) {
+    case ErrorKind::None: return "none";
+    case ErrorKind::Replicates: return "replicates";
+    case ErrorKind::Binomial: return "binomial";
+    case ErrorKind::Jackknife: return "jackknife";
+    case ErrorKind::Surfaces: return "surfaces";
+    case ErrorKind::Blocks: return "blocks";
+    case ErrorKind::Rounding: return "rounding";
+  }
+  return "none";
+}
+
+Json ensemble_p_value(const Json& z, std::size_t surfaces) {
+  // No p-value without a z (a zero error: the comparison has no error bar).
+  if (!z.is_number() || surfaces < 2) return nullptr;
+  return student_t_two_sided_p(z.get<double>(), static_cast<double>(surfaces - 1));
+}
+
+namespace {
+
+bool has_number(const Json& row, const std::string& key) {
+  auto it = row.find(key);
+  return it != row.end() && it->is_number();
+}
+
+// Values of a numeric field over the rows that have it.
+std::vector<double> values(const std::vector<const Json*>& rows, const std::string& key) {
+  std::vector<double> x;
+  for (const Json* r : rows)
+    if (has_number(*r, key)) x.push_back((*r)[key].get<double>());
+  return x;
+}
+
+void merge_columns(Json& out, const std::vector<const Json*>& rows, const std::vector<Column>& columns) {
+  for (const auto& [key, how] : columns) {
+    switch (how) {
+      case Merge::Copy:
+      case Merge::Key:
+        out[key] = rows[0]->contains(key) ? (*rows[0])[key] : Json(nullptr);
+        break;
+      case Merge::Count:
+        out[key] = rows.size();
+        out["t_dof"] = rows.size() - 1;
+        break;
+      case Merge::Measured:
+      case Merge::Spread:
+      case Merge::Mean: {
+        const std::vector<double> x = values(rows, key);
+        if (x.empty()) {  // no surface has a value (e.g. an empty bin): null, not a made-up 0
+          out[key] = nullptr;
+          if (how != Merge::Mean) out[key + "_stderr"] = nullptr;
+          if (how == Merge::Measured) out[key + "_stderr_rays"] = nullptr;
+          break;
+        }
+        const SampleMean m = sample_mean(x);
+        out[key] = m.mean;
+        if (how == Merge::Mean) break;
+        out[key + "_stderr"] = m.stderr_;
+        if (how == Merge::Spread) break;
+        std::vector<double> se;
+        for (const Json* r : rows)
+          if (has_number(*r, key + "_stderr")) se.push_back((*r)[key + "_stderr"].get<double>());
+        // sqrt(sum se_k^2) / K over all K rows (a row without an error adds nothing).
+        out[key + "_stderr_rays"] = mean_of_errors(se, rows.size());
+        break;
+      }
+      case Merge::Direction: {
+        Vec3 m = Vec3::Zero();
+        for (const Json* r : rows) {
+          const Json& a = (*r)[key];
+          m += Vec3(a[0].get<double>(), a[1].get<double>(), a[2].get<double>());
+        }
+        if (m.norm() > 0) m.normalize();
+        out[key] = {m.x(), m.y(), m.z()};
+        break;
+      }
+    }
+  }
+}
+
+Json merge_bins(const std::vector<const Json*>& rows, const TableSpec& spec, std::size_t surfaces) {
+  Json bins = Json::array();
+  for (const auto& b0 : (*rows[0])["bins"]) {
+    std::vector<const Json*> same;
+    for (const Json* r : rows)
+      for (const auto& b : (*r)["bins"]) {
+        bool match = true;
+        for (const auto& [key, how] : spec.bin_columns)
+          if (how == Merge::Key && b[key] != b0[key]) match = false;
+        if (match) same.push_back(&b);
+      }
+    Json eb;
+    merge_columns(eb, same, spec.bin_columns);
+    eb["surfaces"] = same.size();
+    for (const Comparison& c : spec.bin_comparisons) compare(eb, c, surfaces);
+    bins.push_back(eb);
+  }
+  return bins;
+}
+
+}  // namespace
+
+Json z_json(double measured, double model, double stderr_) {
+  const double z = z_score(measured, model, stderr_);
+  return std::isfinite(z) ? Json(z) : Json(nullptr);
+}
+Json rel_dev_json(double measured, double model) {
+  const double r = rel_dev(measured, model);
+  return std::isfinite(r) ? Json(r) : Json(nullptr);
+}
+
+void compare(Json& row, const Comparison& c, std::size_t surfaces) {
+  const bool zero = c.kind == ModelKind::Zero;
+  const bool defined = has_number(row, c.measured) && (zero || has_number(row, c.model));
+  const std::string error = c.measured + (c.kind == ModelKind::Nominal ? "_stderr" : "_stderr_rays");
+  if (!defined || !has_number(row, error)) {
+    row[c.z] = nullptr;
+    if (!c.rel_dev.empty()) row[c.rel_dev] = nullptr;
+    if (!c.p.empty()) row[c.p] = nullptr;
+    return;
+  }
+  const double x = row[c.measured].get<double>(), model = zero ? 0.0 : row[c.model].get<double>();
+  row[c.z] = z_json(x, model, row[error].get<double>());
+  if (!c.rel_dev.empty()) row[c.rel_dev] = rel_dev_json(x, model);
+  if (!c.p.empty())
+    row[c.p] = c.kind == ModelKind::Nominal ? ensemble_p_value(row[c.z], surfaces) : Json(nullptr);
+}
+
+Table merge(const std::vector<const Table*>& parts) {
+  if (parts.empty()) throw std::invalid_argument("merge: no tables");
+  const Table& first = *parts[0];
+  for (const Table* t : parts)
+    if (t->rows.size() != first.rows.size())
+      throw std::invalid_argument("merge: the tables hold different numbers of rows");
+  Table out;
+  out.error = ErrorKind::Surfaces;
+  out.surfaces = parts.size();
+  out.spec = first.spec;
+  for (std::size_t d = 0; d < first.rows.size(); ++d) {
+    std::vector<const Json*> same;
+    for (const Table* t : parts) same.push_back(&t->rows[d]);
+    Json e = Json::object();
+    merge_columns(e, same, first.spec.columns);
+    for (const Comparison& c : first.spec.comparisons) compare(e, c, parts.size());
+    if (!first.spec.bin_columns.empty()) e["bins"] = merge_bins(same, first.spec, parts.size());
+    if (first.spec.verdict) {
+      first.spec.verdict(e, parts.size());
+      if (e.contains("bins")) {  // the sub-table stays the last field
+        Json bins = std::move(e["bins"]);
+        e.erase("bins");
+        e["bins"] = std::move(bins);
+      }
+    }
+    out.rows.push_back(std::move(e));
+  }
+  return out;
+}
+
+}  // namespace microsim

@@ -1,0 +1,186 @@
+// Check of G2 (hotspot identity, Smith forms, V-cavity).
+#include "checks_common.hpp"
+
+namespace microsim::validation {
+
+// ---------------------------------------------------------------------------------------------
+// G2 (000 eq. 16, 001 eq. 20-23): the hotspot G2(v,m,v) = G1(v,m) as an identity against an
+// independent `measure g1` run, per normal bin and on average; the four Smith forms with Lambda
+// from the facets and the V-cavity as approximate models (ray-count error), the four forms of
+// the nominal NDF over ensembles (between-surface error). The symmetry G2(o,m,i) = G2(i,m,o)
+// holds sample for sample by construction of measure_g2 (the points depend on the unordered
+// pair), so it is a deterministic unit test (tests/test_g2.cpp), not a z-row here.
+struct G2Pair {
+  double theta_o, phi_o, theta_i, phi_i;
+};
+const std::vector<G2Pair>& g2_pairs() {
+  static const std::vector<G2Pair> pairs = {{30, 0, 60, 180}, {60, 0, 45, 90}};
+  return pairs;
+}
+const std::vector<double>& g2_hotspot_theta() {
+  static const std::vector<double> t = {30, 60, 80};
+  return t;
+}
+
+double g2_work(const SurfaceSet& set) {
+  const double n = static_cast<double>(share_of_rays(set.options, 4));
+  double w = 0;
+  // Per pair one G2 run (two occlusion rays per point); per hotspot angle one G2 run and one
+  // G1 run (both estimators).
+  for (const auto& s : set.surfaces)
+    w += 0.1 * static_cast<double>(s.num_facets()) +
+         2.0 * n * static_cast<double>(g2_pairs().size() + 2 * g2_hotspot_theta().size());
+  return w;
+}
+
+void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
+  const Options& o = set.options;
+  G2Options go;
+  go.rays = share_of_rays(o, 4);
+  go.seed = o.seed;
+  go.split = o.split;
+  const DirectionBinning binning = g2_normal_binning(go);
+  const std::size_t K = set.surfaces.size();
+  Json per_surface = Json::array();
+  auto measure = [&](const Tracer& tracer, const Vec3& a, const Vec3& b, std::uint64_t seed,
+                     const FacetTable& table) {
+    G2Options g = go;
+    g.seed = seed;
+    const double unit = 2.0 * static_cast<double>(g.rays);
+    g.progress = [&](double f) { progress.update(f * unit); };
+    G2Result r = measure_g2(tracer, a, b, g, &table);
+    progress.completed += unit;
+    progress.update();
+    return r;
+  };
+  // The averaged G2 of each surface per pair, for the nominal forms over the ensemble.
+  std::vector<std::vector<Estimate>> g2_by_pair(g2_pairs().size());
+  for (std::size_t k = 0; k < K; ++k) {
+    const Microsurface& s = set.surfaces[k];
+    const std::string label = surface_label(set, k);
+    Tracer tracer(s);
+    const FacetTable table = build_facet_table(s, binning);
+    progress.completed += 0.1 * static_cast<double>(s.num_facets());
+    Json rows = Json::array();
+    for (std::size_t ip = 0; ip < g2_pairs().size(); ++ip) {
+      const G2Pair& p = g2_pairs()[ip];
+      const Vec3 vo = direction_from_angles(rad(p.theta_o), rad(p.phi_o));
+      const Vec3 vi = direction_from_angles(rad(p.theta_i), rad(p.phi_i));
+      const G2Result a = measure(tracer, vo, vi, o.seed, table);
+      const std::string dir = "o " + angle(p.theta_o) + "/" + angle(p.phi_o) + " i " +
+                              angle(p.theta_i) + "/" + angle(p.phi_i);
+      const std::string where = (label.empty() ? "" : label + ", ") + dir;
+      const Json ang = {{"theta_o_deg", p.theta_o}, {"phi_o_deg", p.phi_o},
+                        {"theta_i_deg", p.theta_i}, {"phi_i_deg", p.phi_i}};
+      const Estimate ga = floored(a.g2(), a.samples);
+      g2_by_pair[ip].push_back(ga);
+      // Approximate models of the averaged G2: Smith forms with Lambda from the facets and the
+      // V-cavity averaged over the same facets (the surface's own statistics: ray-count error).
+      auto model_row = [&](const std::string& name, double value, const std::string& ref) {
+        Row r = make_row(set, "", "g2", name, Kind::Model, ref);
+        push_measured(out, std::move(r), where, ga.mean,
+                      ga.stderr_, value, "rays",
+                      set.name + "/g2_" + name, ang);
+      };
+      const models::G2Forms fn = a.smith_numeric();
+      model_row("separable_numeric", fn.separable, "001 eq. (20), Lambda from the facets");
+      model_row("height_correlated_numeric", fn.height_correlated, "001 eq. (21), Lambda from the facets");
+      model_row("direction_correlated_numeric", fn.direction_correlated, "001 eq. (22), Lambda from the facets");
+      model_row("height_direction_correlated_numeric", fn.height_direction_correlated,
+                "001 eq. (23), Lambda from the facets");
+      model_row("vcavity", a.vcavity, "001 eq. (24)-(25), averaged over the facets facing both");
+      Table g2_rows = g2_table();
+      rows.push_back(add_row(g2_rows, a, s));
+    }
+    Json hotspot = Json::array();
+    // Hotspot (000 eq. 16: G2(v,m,v) = G1(v,m)): G2 at o = i against `measure g1` run
+    // independently (another seed: independent points and rays), estimator (b) with the same
+    // weights A_f max(0, v.m_f), per normal bin and on average. Beside it, Smith's
+    // direction-correlated form (001 eq. 22), which is exactly G1 at o = i.
+    for (double t : g2_hotspot_theta()) {
+      const Vec3 v = direction_from_angles(rad(t), 0.0);
+      const G2Result h = measure(tracer, v, v, o.seed, table);
+      G1Options g1o;
+      g1o.rays = go.rays;
+      g1o.seed = o.seed + 0x9e3779b9ULL;
+      g1o.split = o.split;
+      g1o.normal_theta_bins = go.normal_theta_bins;
+      g1o.normal_phi_bins = go.normal_phi_bins;
+      const double unit = 2.0 * static_cast<double>(g1o.rays);
+      g1o.progress = [&](double f) { progress.update(f * unit); };
+      const G1Result g = measure_g1(tracer, v, g1o, &table);
+      progress.completed += unit;
+      progress.update();
+      const std::string where = (label.empty() ? "" : label + ", ") + "theta " + angle(t);
+      const Json ang = {{"theta_deg", t}};
+      const Estimate g2 = floored(h.g2(), h.samples), g1 = floored(g.g1_area_sampling(), g.sample_rays);
+      Row r = make_row(set, "", "g2_hotspot", "g1_independent", Kind::Identity,
+                       "000 eq. 16: G2(v,m,v) = G1(v,m); G1 by an independent measure g1 run");
+      push_measured(out, std::move(r), where, g2.mean, std::hypot(g2.stderr_, g1.stderr_), g1.mean,
+                    "rays", set.name + "/g2_hotspot", ang);
+      Row dc = make_row(set, "", "g2_hotspot", "direction_correlated_numeric", Kind::Model,
+                        "001 eq. (22) at o = i: 1/(1 + Lambda), Lambda from the facets");
+      push_measured(out, std::move(dc), where, g2.mean, g2.stderr_,
+                    h.smith_numeric().direction_correlated, "rays",
+                    set.name + "/g2_hotspot_direction_correlated", ang);
+      Json hot = {{"theta_deg", t}, {"g2", g2.mean}, {"g2_stderr", g2.stderr_},
+                  {"g1_independent", g1.mean}, {"g1_independent_stderr", g1.stderr_},
+                  {"direction_correlated_numeric", h.smith_numeric().direction_correlated},
+                  {"bins", Json::array()}};
+      for (int b = 0; b < binning.size(); ++b) {
+        const G2NormalBin& hb = h.bins[b];
+        const G1NormalBin& gb = g.bins[b];
+        if (hb.samples < o.min_bin_count || gb.samples < o.min_bin_count) continue;
+        const int it = b / binning.n_phi(), iph = b % binning.n_phi();
+        const double tlo = deg(binning.theta_lo(it)), thi = deg(binning.theta_hi(it));
+        const double plo = deg(binning.phi_lo(iph)), phi_hi = deg(binning.phi_hi(iph));
+        const Estimate e2 = floored(h.bin_g2(b), hb.samples);
+        const Estimate e1 = floored(g.bin_g1_area_sampling(b), gb.samples);
+        Json bx = ang;
+        bx["theta_m_range_deg"] = {tlo, thi};
+        bx["phi_m_range_deg"] = {plo, phi_hi};
+        Row rb = make_row(set, "", "g2_hotspot_bin", "g1_bin_independent", Kind::Identity,
+                          "000 eq. 16: G2(v,m,v) = G1(v,m) per normal bin");
+        push_measured(out, std::move(rb),
+                      where + ", m in [" + angle(tlo) + "," + angle(thi) + "]x[" + angle(plo) + "," +
+                          angle(phi_hi) + "]",
+                      e2.mean, std::hypot(e2.stderr_, e1.stderr_), e1.mean, "rays",
+                      set.name + "/g2_hotspot_bin/theta " + angle(t), bx);
+        hot["bins"].push_back({{"theta_m_range_deg", {tlo, thi}}, {"phi_m_range_deg", {plo, phi_hi}},
+                               {"g2", e2.mean}, {"g2_stderr", e2.stderr_},
+                               {"g1_independent", e1.mean}, {"g1_independent_stderr", e1.stderr_}});
+      }
+      hotspot.push_back(hot);
+    }
+    per_surface.push_back({{"label", set.labels[k]}, {"rows", rows}, {"hotspot", hotspot}});
+  }
+  // The four Smith forms of the nominal NDF (001 eq. 20-23 with its Lambda): a statistic of
+  // the generated surfaces, compared over the ensemble.
+  const Microsurface& s0 = set.surfaces[0];
+  if (s0.nominal)
+    for (std::size_t ip = 0; ip < g2_pairs().size(); ++ip) {
+      const G2Pair& p = g2_pairs()[ip];
+      const Vec3 vo = direction_from_angles(rad(p.theta_o), rad(p.phi_o));
+      const Vec3 vi = direction_from_angles(rad(p.theta_i), rad(p.phi_i));
+      const double phi = std::acos(std::clamp(
+          Vec2(vo.x(), vo.y()).normalized().dot(Vec2(vi.x(), vi.y()).normalized()), -1.0, 1.0));
+      const models::G2Forms fm =
+          models::g2_forms_from_lambda(s0.nominal->Lambda(vo), s0.nominal->Lambda(vi), phi);
+      const std::string dir = "o " + angle(p.theta_o) + "/" + angle(p.phi_o) + " i " +
+                              angle(p.theta_i) + "/" + angle(p.phi_i);
+      const Json ang = {{"theta_o_deg", p.theta_o}, {"phi_o_deg", p.phi_o},
+                        {"theta_i_deg", p.theta_i}, {"phi_i_deg", p.phi_i}};
+      auto nominal_row = [&](const std::string& name, double value, const std::string& ref) {
+        Row r = make_row(set, "", "g2", name, Kind::Model, ref);
+        push_nominal(out, std::move(r), dir, g2_by_pair[ip], value, set.name + "/g2_" + name, ang);
+      };
+      nominal_row("separable_nominal", fm.separable, "001 eq. (20), nominal NDF");
+      nominal_row("height_correlated_nominal", fm.height_correlated, "001 eq. (21), nominal NDF");
+      nominal_row("direction_correlated_nominal", fm.direction_correlated, "001 eq. (22), nominal NDF");
+      nominal_row("height_direction_correlated_nominal", fm.height_direction_correlated,
+                  "001 eq. (23), nominal NDF");
+    }
+  out.measurements = per_surface;
+}
+
+}  // namespace microsim::validation

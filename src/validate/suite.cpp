@@ -1,0 +1,163 @@
+// Suites of validation entries (JSON files).
+#include "checks_common.hpp"
+
+namespace microsim::validation {
+
+// ---------------------------------------------------------------------------------------------
+// Suites.
+
+namespace {
+[[noreturn]] void suite_error(const std::string& file, const std::string& what) {
+  throw UsageError("--suite " + file + ": " + what);
+}
+
+// A positive integer (JSON integer, or a number with an integral value such as 1e6).
+std::uint64_t get_count(const Json& j, const char* key, const std::string& file, const std::string& where) {
+  const Json& x = j[key];
+  if (!x.is_number() || !(x.get<double>() >= 1) || x.get<double>() != std::floor(x.get<double>()) ||
+      x.get<double>() > 9e18)
+    suite_error(file, where + ": " + key + " must be a positive integer");
+  return x.is_number_unsigned() ? x.get<std::uint64_t>() : static_cast<std::uint64_t>(x.get<double>());
+}
+
+void read_options(const Json& j, Options& o, const std::string& file, const std::string& where) {
+  try {
+    if (j.contains("theta_deg")) o.theta_deg = j["theta_deg"].get<std::vector<double>>();
+    if (j.contains("phi_deg")) o.phi_deg = j["phi_deg"].get<std::vector<double>>();
+    if (j.contains("rays")) o.rays = get_count(j, "rays", file, where);
+    if (j.contains("seed")) o.seed = j["seed"].is_number_unsigned() ? j["seed"].get<std::uint64_t>()
+                                                                    : get_count(j, "seed", file, where);
+    if (j.contains("checks")) o.checks = j["checks"].get<std::vector<std::string>>();
+    if (j.contains("ndf_theta_bins")) o.ndf_theta_bins = static_cast<int>(get_count(j, "ndf_theta_bins", file, where));
+    if (j.contains("ndf_phi_bins")) o.ndf_phi_bins = static_cast<int>(get_count(j, "ndf_phi_bins", file, where));
+    if (j.contains("min_ring_mass")) o.min_ring_mass = j["min_ring_mass"].get<double>();
+    if (j.contains("min_bin_count")) o.min_bin_count = get_count(j, "min_bin_count", file, where);
+  } catch (const Json::exception& e) {
+    suite_error(file, where + ": " + e.what());
+  }
+  for (double t : o.theta_deg)
+    if (!(t >= 0 && t < 90)) suite_error(file, where + ": theta_deg must be in [0, 90) degrees");
+  if (o.theta_deg.empty() || o.phi_deg.empty()) suite_error(file, where + ": empty theta_deg or phi_deg");
+  if (o.ndf_theta_bins > 3600 || o.ndf_phi_bins > 7200)
+    suite_error(file, where + ": ndf_theta_bins in [1, 3600], ndf_phi_bins in [1, 7200]");
+  if (!(o.min_ring_mass >= 0)) suite_error(file, where + ": min_ring_mass must be >= 0");
+}
+
+bool is_option_key(const std::string& k) {
+  static const char* keys[] = {"theta_deg", "phi_deg", "rays", "seed", "checks", "ndf_theta_bins",
+                               "ndf_phi_bins", "min_ring_mass", "min_bin_count"};
+  return std::find(std::begin(keys), std::end(keys), k) != std::end(keys);
+}
+}  // namespace
+
+Suite load_suite(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::ifstream in(path);
+  if (!in) throw UsageError("--suite " + path + ": cannot read the file");
+  Json j;
+  try {
+    j = Json::parse(in, nullptr, true, /*ignore_comments=*/true);
+  } catch (const Json::exception& e) {
+    suite_error(path, std::string("not valid JSON (") + e.what() + ")");
+  }
+  if (!j.is_object()) suite_error(path, "expected a JSON object");
+  Suite s;
+  s.file = path;
+  s.name = j.value("name", fs::path(path).stem().string());
+  s.description = j.value("description", "");
+  for (auto it = j.begin(); it != j.end(); ++it)
+    if (it.key() != "name" && it.key() != "description" && it.key() != "significance" &&
+        it.key() != "defaults" && it.key() != "entries")
+      suite_error(path, "unknown field '" + it.key() + "'");
+  if (j.contains("significance")) {
+    if (!j["significance"].is_number()) suite_error(path, "significance must be a number");
+    s.significance = j["significance"].get<double>();
+    if (!(s.significance > 0 && s.significance < 1)) suite_error(path, "significance must be in (0, 1)");
+  }
+  Options defaults;
+  if (j.contains("defaults")) {
+    if (!j["defaults"].is_object()) suite_error(path, "defaults must be an object");
+    for (auto it = j["defaults"].begin(); it != j["defaults"].end(); ++it)
+      if (!is_option_key(it.key())) suite_error(path, "defaults: unknown field '" + it.key() + "'");
+    read_options(j["defaults"], defaults, path, "defaults");
+  }
+  if (!j.contains("entries") || !j["entries"].is_array() || j["entries"].empty())
+    suite_error(path, "needs a non-empty 'entries' array");
+  // Presets are looked up beside the suite file, then in its parent folder (surfaces/).
+  const fs::path dir = fs::path(path).parent_path();
+  for (const Json& e : j["entries"]) {
+    SuiteEntry entry;
+    if (!e.is_object() || !e.contains("name") || !e["name"].is_string())
+      suite_error(path, "every entry needs a string 'name'");
+    entry.name = e["name"].get<std::string>();
+    const std::string where = "entry " + entry.name;
+    for (auto it = e.begin(); it != e.end(); ++it)
+      if (it.key() != "name" && it.key() != "generate" && it.key() != "preset" &&
+          it.key() != "args" && it.key() != "seeds" && it.key() != "format" &&
+          !is_option_key(it.key()))
+        suite_error(path, where + ": unknown field '" + it.key() + "'");
+    if (!e.contains("generate") || !e["generate"].is_string())
+      suite_error(path, where + ": needs 'generate' (a generator kind, as in microsim generate KIND)");
+    entry.generate = e["generate"].get<std::string>();
+    if (e.contains("preset")) {
+      if (!e["preset"].is_string()) suite_error(path, where + ": preset must be a string");
+      fs::path p = e["preset"].get<std::string>();
+      if (p.is_relative()) {
+        fs::path a = dir / p, b = dir.parent_path() / p;
+        p = fs::exists(a) ? a : b;
+      }
+      if (!fs::exists(p)) suite_error(path, where + ": preset " + e["preset"].get<std::string>() + " not found");
+      entry.preset = fs::absolute(p).lexically_normal().string();
+    }
+    if (e.contains("args")) {
+      if (!e["args"].is_object()) suite_error(path, where + ": args must be an object");
+      for (auto it = e["args"].begin(); it != e["args"].end(); ++it) {
+        std::string value = it.value().is_string() ? it.value().get<std::string>() : it.value().dump();
+        if (it.value().is_boolean()) value = it.value().get<bool>() ? "true" : "false";
+        entry.args.emplace_back(it.key(), value);
+      }
+    }
+    if (e.contains("seeds")) {
+      try {
+        entry.seeds = e["seeds"].get<std::vector<std::uint64_t>>();
+      } catch (const Json::exception&) {
+        suite_error(path, where + ": seeds must be an array of non-negative integers");
+      }
+    }
+    if (e.contains("format")) {
+      entry.format = e["format"].is_string() ? e["format"].get<std::string>() : "";
+      if (entry.format != "exr" && entry.format != "ply" && entry.format != "obj" && entry.format != "off")
+        suite_error(path, where + ": format must be exr, ply, obj or off");
+    }
+    entry.options = defaults;
+    read_options(e, entry.options, path, where);
+    s.entries.push_back(entry);
+  }
+  return s;
+}
+
+std::string find_suite(const std::string& name, const std::vector<std::string>& dirs) {
+  namespace fs = std::filesystem;
+  if (fs::is_regular_file(name)) return name;
+  for (const std::string& d : dirs) {
+    fs::path p = fs::path(d) / (name + ".json");
+    if (fs::is_regular_file(p)) return p.string();
+  }
+  std::string known;
+  for (const std::string& d : dirs)
+    for (const std::string& n : list_suites(d)) known += (known.empty() ? "" : ", ") + n;
+  throw UsageError("--suite " + name + ": no such suite (known: " + (known.empty() ? "none" : known) + ")");
+}
+
+std::vector<std::string> list_suites(const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> names;
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return names;
+  for (const auto& f : fs::directory_iterator(dir, ec))
+    if (f.path().extension() == ".json") names.push_back(f.path().stem().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+}  // namespace microsim::validation
