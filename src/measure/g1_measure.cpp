@@ -25,29 +25,44 @@ struct Tally {
 
 constexpr std::uint64_t kChunk = 1 << 14;
 
-// Runs `body(rep, j, tally)` for every replicate and ray in parallel chunks and merges the
-// chunk tallies per replicate in chunk order (integer counts: identical for any thread count).
+// Runs `body(rep, j, tally)` for every replicate rep in `share` and ray j < n in parallel chunks.
+// A chunk is one range of ray indices [j0, j1) taken in every replicate in turn: rays j of all
+// replicates start in the same stratum (or draw from the same stretch of the facet CDF), so a
+// chunk's rays meet one small part of the tile and its BVH stays in cache (one replicate at a
+// time would sweep a quarter of the tile per chunk). Each ray keeps its own random stream and
+// the tallies are integer counts, so they are identical for any chunking and thread count.
 template <class Body>
 std::vector<Tally> run_replicates(int R, std::uint64_t n, int nbins, TraceCounters& counters,
                                   std::atomic<std::uint64_t>& done, UnitRange share, Body&& body) {
-  const std::uint64_t nc = chunks_per_replicate(n, kChunk);
-  std::vector<Tally> parts = run_replicate_chunks<Tally>(
-      R, n, kChunk, [&] { return Tally(nbins); },
-      [&](int rep, std::uint64_t j, Tally& t) {
-        body(rep, j, t);
-        if ((j + 1) % kChunk == 0 || j + 1 == n) done += (j % kChunk) + 1;
-      },
-      share);
+  const std::uint64_t first = std::min<std::uint64_t>(share.first, R);
+  const std::uint64_t end = std::min<std::uint64_t>(share.end, R);
+  const std::uint64_t active = end > first ? end - first : 0;
+  const std::uint64_t span = std::max<std::uint64_t>(1, kChunk / std::max<std::uint64_t>(1, active));
+  const std::uint64_t nc = active ? (n + span - 1) / span : 0;
   std::vector<Tally> reps(R, Tally(nbins));
-  for (std::size_t c = 0; c < parts.size(); ++c) {
-    Tally& total = reps[c / nc];
-    for (int b = 0; b < nbins; ++b) {
-      total.hits[b] += parts[c].hits[b];
-      total.samples[b] += parts[c].samples[b];
-      total.visible[b] += parts[c].visible[b];
+  if (nc == 0) return reps;
+  // parts[c * active + q]: chunk c, replicate first + q.
+  std::vector<Tally> parts(nc * active);
+  tbb::parallel_for(std::uint64_t(0), nc, [&](std::uint64_t c) {
+    const std::uint64_t j0 = c * span, j1 = std::min(n, j0 + span);
+    for (std::uint64_t q = 0; q < active; ++q) {
+      Tally& t = parts[c * active + q];
+      t = Tally(nbins);
+      for (std::uint64_t j = j0; j < j1; ++j) body(static_cast<int>(first + q), j, t);
     }
-    counters += parts[c].counters;
-  }
+    done += active * (j1 - j0);
+  });
+  for (std::uint64_t c = 0; c < nc; ++c)
+    for (std::uint64_t q = 0; q < active; ++q) {
+      const Tally& p = parts[c * active + q];
+      Tally& total = reps[first + q];
+      for (int b = 0; b < nbins; ++b) {
+        total.hits[b] += p.hits[b];
+        total.samples[b] += p.samples[b];
+        total.visible[b] += p.visible[b];
+      }
+      counters += p.counters;
+    }
   return reps;
 }
 
@@ -210,8 +225,10 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   (DESIGN.md, 001 App. A)
   r.lambda_numeric = sums[width - 1] / (v.dot(s.macro().normal) * s.macro().area);
   // Estimator (b) draws facets by front-facing projected area A_f max(0, v.m_f).
-  const auto weight = [&](std::size_t k) { return std::max(0.0, 0.5 * ft.cross(k).dot(v)); };
-  const BlockFacetSampler sampler(nf, weight);
+  const auto weights = [&](std::size_t k0, std::size_t k1, double* w) {
+    ft.for_each_cross(k0, k1, [&](std::size_t k, const Vec3& c) { w[k - k0] = std::max(0.0, 0.5 * c.dot(v)); });
+  };
+  const BlockFacetSampler sampler(nf, BlockFacetSampler::Blocks{}, weights);
   r.front_projected = sampler.total();
   if (!(r.front_projected > 0)) throw RuntimeFailure("no facet faces the direction");
   r.facet_seconds =
@@ -234,6 +251,7 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
     if (o.progress) o.progress(static_cast<double>(done.load()) / total_work);
   };
 
+  const bool heightfield = s.kind() == Microsurface::Kind::Heightfield;
   // (a) ray casting along -v: per replicate a stratified, Morton-ordered pass over the window.
   auto t_raycast = std::chrono::steady_clock::now();
   const std::uint64_t key = static_cast<std::uint64_t>(r.theta * 1e6) * 7919 +
@@ -247,7 +265,10 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
         // Hits on back faces (counted in counters) are left out of the visible area: a ray
         // that meets a facet from behind crossed the surface through a rounding gap.
         // A measured region: hits outside it (facet index >= num_facets()) are misses.
-        if (h.hit && !h.backface && h.facet < nf) ++t.hits[r.binning.bin_of(h.normal)];
+        // A heightfield's bin is the table's (the same normal from the same heights, binned
+        // once); a mesh's table holds float normals, so its hits are binned from the exact one.
+        if (h.hit && !h.backface && h.facet < nf)
+          ++t.hits[heightfield ? ft.bin(h.facet) : r.binning.bin_of(h.normal)];
       });
   report();
   r.raycast_seconds =
@@ -259,7 +280,7 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
       run_replicates(R, n_rep, nbins, counters, done, reps, [&](int rep, std::uint64_t j, Tally& t) {
         CounterRng rng(o.seed, ReplicatePlan::stream(0xB000 + key, rep), j);
         double u = (static_cast<double>(j) + rng.uniform()) / n_rep * total;
-        const std::size_t k = sampler.draw(u, weight);
+        const std::size_t k = sampler.draw(u, BlockFacetSampler::Blocks{}, weights);
         const int b = ft.bin(k);
         if (ft.buried(k)) {  // pressed against a twin: never visible
           ++t.samples[b];
