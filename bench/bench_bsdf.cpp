@@ -2,9 +2,10 @@
 // bare rtcIntersect1 loop over the very same Embree queries, and the Smith random-walk model's
 // walks per second.
 //   microsim_bench_bsdf [resolution] [paths] [repeat]    (default 1024, 1000000, 3)
-// The bare loop replays the queries that the walks of the first paths of replicate 0 made
+// The bare loop replays the queries that the walks of the first 200000 paths made
 // (logged by the tracer, in order); the ratio compares rays per second of the walk (Embree
-// queries made per path x paths per second) with the replay's. Best of `repeat`, interleaved.
+// queries made per path x paths per second) with the replay's. Rates per processor second (user
+// + system of all threads: robust on a shared machine), best of `repeat`, interleaved.
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -22,8 +23,10 @@ using namespace microsim::bench;
 
 namespace {
 
-// The Embree queries of the walks of paths [0, m) of replicate 0, as measure_bsdf starts them.
-std::vector<RTCRay> log_walk_queries(const Tracer& tracer, const BsdfOptions& o, std::uint64_t m) {
+// The Embree queries of the walks of the first m paths (replicates in order), as measure_bsdf
+// starts them; *paths_walked: how many.
+std::vector<RTCRay> log_walk_queries(const Tracer& tracer, const BsdfOptions& o, std::uint64_t m,
+                                     std::uint64_t* paths_walked) {
   const Vec3 wi = direction_from_angles(o.theta_i, o.phi_i);
   const RayWindow window = make_ray_window(tracer, wi);
   const ReplicatePlan plan(o.rays, o.replicates);
@@ -35,12 +38,15 @@ std::vector<RTCRay> log_walk_queries(const Tracer& tracer, const BsdfOptions& o,
   Tracer::log_rays_on_this_thread(&log);
   TraceCounters counters;
   std::uint64_t events = 0;
-  for (std::uint64_t i = 0; i < std::min(m, plan.per_replicate()); ++i) {
-    CounterRng rng(o.seed, ReplicatePlan::stream(stream, 0), i);
-    const Vec2 ab = plan.strata.point(i, rng);
-    walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2, -wi, o.material,
-                   rng, o.max_events, false, counters, events);
-  }
+  std::uint64_t walked = 0;
+  for (int q = 0; q < plan.replicates && walked < m; ++q)
+    for (std::uint64_t i = 0; i < plan.per_replicate() && walked < m; ++i, ++walked) {
+      CounterRng rng(o.seed, ReplicatePlan::stream(stream, q), i);
+      const Vec2 ab = plan.strata.point(i, rng);
+      walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2, -wi,
+                     o.material, rng, o.max_events, false, counters, events);
+    }
+  *paths_walked = walked;
   Tracer::log_rays_on_this_thread(nullptr);
   return log;
 }
@@ -73,18 +79,21 @@ int main(int argc, char** argv) {
       o.theta_i = rad(theta);
       o.rays = paths;
       o.models = false;
-      const std::vector<RTCRay> log = log_walk_queries(tracer, o, std::min<std::uint64_t>(paths, 100000));
-      const double queries_per_path = double(log.size()) / std::min<std::uint64_t>(paths, 100000);
-      double best = 0, best_bare = 0, segs_per_path = 0;
+      std::uint64_t walked = 0;
+      const std::vector<RTCRay> log = log_walk_queries(tracer, o, std::min<std::uint64_t>(paths, 200000), &walked);
+      const double queries_per_path = double(log.size()) / walked;
+      double best = 0, segs_per_path = 0;
+      Rate bare;
       for (int k = 0; k < repeat; ++k) {
+        const double c0 = cpu_seconds();
         const BsdfResult r = measure_bsdf(tracer, o);
-        best = std::max(best, r.measured.paths / (r.seconds - r.model_seconds));
+        best = std::max(best, r.measured.paths / (cpu_seconds() - c0));
         segs_per_path = double(r.measured.counters.rays) / r.measured.paths;
-        best_bare = std::max(best_bare, replay_rays_per_second(tracer, log));
+        bare.best_of(replay_rays_per_second(tracer, log));
       }
       std::printf("%-11s %6.0f %10.3g %10.3f %12.2f %12.3f %12.2f %7.2f\n", c.name, theta, best,
-                  segs_per_path, best * segs_per_path / 1e6, queries_per_path, best_bare / 1e6,
-                  best * queries_per_path / best_bare);
+                  segs_per_path, best * segs_per_path / 1e6, queries_per_path, bare.cpu / 1e6,
+                  best * queries_per_path / bare.cpu);
       std::fflush(stdout);
     }
   // The Smith random-walk model alone (the measured part reduced to a token 1000 paths).
@@ -96,8 +105,11 @@ int main(int argc, char** argv) {
       o.theta_i = rad(theta);
       o.rays = 1000;
       o.model_walks = paths;
+      // Processor time of the model part: the whole call less the (token) walks' share.
+      const double c0 = cpu_seconds();
       const BsdfResult r = measure_bsdf(tracer, o);
-      if (r.smith_walk) best = std::max(best, r.smith_walk->paths / r.model_seconds);
+      const double cpu = (cpu_seconds() - c0) * r.model_seconds / r.seconds;
+      if (r.smith_walk) best = std::max(best, r.smith_walk->paths / cpu);
     }
     std::printf("smith-walk  %6.0f %10.3g walks/s (mirror)\n", theta, best);
     std::fflush(stdout);

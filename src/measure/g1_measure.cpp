@@ -3,6 +3,7 @@
 #include "microsim/measure/sampling.hpp"
 #include "microsim/surface/undersurface.hpp"
 
+#include <sys/resource.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -20,6 +21,7 @@ namespace {
 struct Tally {
   std::vector<std::uint64_t> hits, samples, visible;
   TraceCounters counters;
+  std::size_t draw_hint = 0;  // area sampling: block of the previous draw (a search start)
   explicit Tally(int nbins = 0) : hits(nbins), samples(nbins), visible(nbins) {}
 };
 
@@ -64,6 +66,13 @@ std::vector<Tally> run_replicates(int R, std::uint64_t n, int nbins, TraceCounte
       counters += p.counters;
     }
   return reps;
+}
+
+double process_cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
 
 double per_replicate(std::uint64_t total, int R) { return static_cast<double>(total) / R; }
@@ -254,6 +263,7 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   const bool heightfield = s.kind() == Microsurface::Kind::Heightfield;
   // (a) ray casting along -v: per replicate a stratified, Morton-ordered pass over the window.
   auto t_raycast = std::chrono::steady_clock::now();
+  const double cpu_raycast = process_cpu_seconds();
   const std::uint64_t key = static_cast<std::uint64_t>(r.theta * 1e6) * 7919 +
                             static_cast<std::uint64_t>(r.phi * 1e6);
   std::vector<Tally> ray_reps =
@@ -273,14 +283,16 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   report();
   r.raycast_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_raycast).count();
+  r.raycast_cpu_seconds = process_cpu_seconds() - cpu_raycast;
   // (b) area sampling, per replicate strata along the CDF (facet order is spatially coherent).
   auto t_sample = std::chrono::steady_clock::now();
+  const double cpu_sample = process_cpu_seconds();
   const double total = r.front_projected;
   std::vector<Tally> sample_reps =
       run_replicates(R, n_rep, nbins, counters, done, reps, [&](int rep, std::uint64_t j, Tally& t) {
         CounterRng rng(o.seed, ReplicatePlan::stream(0xB000 + key, rep), j);
         double u = (static_cast<double>(j) + rng.uniform()) / n_rep * total;
-        const std::size_t k = sampler.draw(u, BlockFacetSampler::Blocks{}, weights);
+        const std::size_t k = sampler.draw(u, BlockFacetSampler::Blocks{}, weights, &t.draw_hint);
         const int b = ft.bin(k);
         if (ft.buried(k)) {  // pressed against a twin: never visible
           ++t.samples[b];
@@ -294,6 +306,7 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
         if (!tracer.occluded(p, v, &plane, t.counters)) ++t.visible[b];
       });
   report();
+  r.sample_cpu_seconds = process_cpu_seconds() - cpu_sample;
   if (o.split) exchange_g1(*o.split, reps, ray_reps, sample_reps, counters, nbins);
   set_g1_counts(r, ray_reps, sample_reps);
   r.counters = counters;

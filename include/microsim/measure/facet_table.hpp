@@ -172,9 +172,14 @@ class BlockFacetSampler {
       for (std::size_t k = k0; k < k1; ++k) w[k - k0] = weight(k);
     });
   }
+  // `hint` (optional): the block of an earlier draw, updated. Draws with increasing u (a
+  // stratified pass) then search forward from it instead of over the whole table; the block
+  // found is the same.
   template <class BlockWeights>
-  std::size_t draw(double u, Blocks, const BlockWeights& block_weights) const {
-    std::size_t b = std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin();
+  std::size_t draw(double u, Blocks, const BlockWeights& block_weights,
+                   std::size_t* hint = nullptr) const {
+    std::size_t b = hint ? upper_block(u, *hint) : upper_block(u, 0);
+    if (hint) *hint = b;
     b = std::min(b, cdf_.size() - 1);
     while (b > 0 && cdf_[b] == cdf_[b - 1]) --b;  // never an empty block
     const double local = u - (b > 0 ? cdf_[b - 1] : 0.0);
@@ -193,6 +198,21 @@ class BlockFacetSampler {
     return last;
   }
   double bytes() const { return 8.0 * cdf_.size(); }
+
+ private:
+  // The first block b with cdf_[b] > u (std::upper_bound), searched by doubling steps from
+  // `from` when every block before it is <= u, else over the whole table.
+  std::size_t upper_block(double u, std::size_t from) const {
+    if (from >= cdf_.size() || (from > 0 && cdf_[from - 1] > u))
+      return std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin();
+    std::size_t lo = from, step = 1;  // every block before lo is <= u
+    while (lo + step < cdf_.size() && cdf_[lo + step - 1] <= u) {
+      lo += step;
+      step *= 2;
+    }
+    const std::size_t hi = std::min(cdf_.size(), lo + step);
+    return std::upper_bound(cdf_.begin() + lo, cdf_.begin() + hi, u) - cdf_.begin();
+  }
 
  private:
   std::size_t n_;
