@@ -1,13 +1,20 @@
-// Shared by the benchmarks: timing, peak memory, and the bare Embree loop that the estimators'
-// ray rates are compared with.
+// Shared by the benchmarks: timing, peak memory, and the bare Embree loops that the estimators'
+// ray rates are compared with (the very same rays, nothing else done per ray).
 #pragma once
 #include <embree3/rtcore.h>
 #include <sys/resource.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <string>
 #include <vector>
 
+#include "microsim/measure/g1_measure.hpp"
+#include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
 #include "microsim/trace/tracer.hpp"
 
@@ -23,38 +30,96 @@ inline double peak_rss_mib() {
   return u.ru_maxrss / 1024.0;
 }
 
-// The estimators' primary rays (stratified, Morton-ordered origins on the top of the tile,
-// direction -v), each traced by one plain rtcIntersect1: no wrap-around, no filter, no binning.
-inline double bare_loop_rays_per_second(const Tracer& tracer, const Vec3& v, std::uint64_t n,
-                                        std::uint64_t stream) {
-  const Macrosurface& m = tracer.surface().macro();
-  const Strata strata(n);
-  const std::uint64_t total = strata.total(), chunk = 16384;
-  std::vector<unsigned> hits(total / chunk + 1);
+// Processor time of the process so far (user + system, all threads), seconds.
+inline double cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+// A rate both per wall second and per processor second (the robust one on a shared machine).
+struct Rate {
+  double wall = 0, cpu = 0;
+  void best_of(const Rate& o) {
+    wall = std::max(wall, o.wall);
+    cpu = std::max(cpu, o.cpu);
+  }
+};
+
+// Resident memory now (VmRSS), MiB: peaks of single stages are read as differences of it.
+inline double rss_mib() {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("VmRSS:", 0) == 0) return std::atof(line.c_str() + 6) / 1024.0;
+  return 0;
+}
+
+// Estimator (a)'s primary rays exactly as measure_g1 casts them (same seed, replicate streams,
+// stratified Morton-ordered origins on the ray window, chunks of the same ray indices in every
+// replicate), each traced by one plain rtcIntersect1 from the window to infinity: no
+// wrap-around, no facet lookup, no binning. Rays per second.
+inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, const G1Options& o) {
+  const Vec3 v = v_in.normalized();
+  const RayWindow w = make_ray_window(tracer, v);
+  const ReplicatePlan plan(o.rays, o.replicates);
+  const int R = plan.replicates;
+  const std::uint64_t n = plan.per_replicate(), span = std::max<std::uint64_t>(1, (1u << 14) / R);
+  const std::uint64_t key = direction_stream_key(v), nc = (n + span - 1) / span;
+  std::vector<unsigned> hits(nc);
   const auto t0 = std::chrono::steady_clock::now();
-  tbb::parallel_for(std::uint64_t(0), (total + chunk - 1) / chunk, [&](std::uint64_t c) {
+  const double c0 = cpu_seconds();
+  tbb::parallel_for(std::uint64_t(0), nc, [&](std::uint64_t c) {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     unsigned count = 0;
-    for (std::uint64_t i = c * chunk; i < std::min(total, (c + 1) * chunk); ++i) {
-      CounterRng rng(1, stream, i);
-      const Vec2 ab = strata.point(i, rng);
-      RTCRayHit rh{};
-      rh.ray.org_x = float(-0.5 * m.size_x + ab.x() * m.size_x);
-      rh.ray.org_y = float(-0.5 * m.size_y + ab.y() * m.size_y);
-      rh.ray.org_z = float(tracer.z_top());
-      rh.ray.dir_x = float(-v.x());
-      rh.ray.dir_y = float(-v.y());
-      rh.ray.dir_z = float(-v.z());
-      rh.ray.tfar = 1e30f;
-      rh.ray.mask = ~0u;
+    for (int rep = 0; rep < R; ++rep)
+      for (std::uint64_t j = c * span; j < std::min(n, (c + 1) * span); ++j) {
+        CounterRng rng(o.seed, ReplicatePlan::stream(0xA000 + key, rep), j);
+        const Vec2 ab = plan.strata.point(j, rng);
+        const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
+        RTCRayHit rh{};
+        rh.ray.org_x = float(org.x());
+        rh.ray.org_y = float(org.y());
+        rh.ray.org_z = float(org.z());
+        rh.ray.dir_x = float(-v.x());
+        rh.ray.dir_y = float(-v.y());
+        rh.ray.dir_z = float(-v.z());
+        rh.ray.tfar = 1e30f;
+        rh.ray.mask = ~0u;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(tracer.scene(), &ctx, &rh);
+        count += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+      }
+    hits[c] = count;  // kept so the loop cannot be optimised away
+  });
+  const double wall = seconds_since(t0), cpu = cpu_seconds() - c0;
+  return {static_cast<double>(plan.total()) / wall, static_cast<double>(plan.total()) / cpu};
+}
+
+// The logged Embree queries of a run (Tracer::log_rays_on_this_thread) traced again by plain
+// rtcIntersect1 calls, in their order, in parallel chunks. Rays per second.
+inline Rate replay_rays_per_second(const Tracer& tracer, const std::vector<RTCRay>& rays) {
+  const std::size_t chunk = 8192, nc = (rays.size() + chunk - 1) / chunk;
+  std::vector<unsigned> hits(nc);
+  const auto t0 = std::chrono::steady_clock::now();
+  const double c0 = cpu_seconds();
+  tbb::parallel_for(std::size_t(0), nc, [&](std::size_t c) {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    unsigned count = 0;
+    for (std::size_t i = c * chunk; i < std::min(rays.size(), (c + 1) * chunk); ++i) {
+      RTCRayHit rh;
+      rh.ray = rays[i];
       rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
       rtcIntersect1(tracer.scene(), &ctx, &rh);
       count += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
     }
-    hits[c] = count;  // kept so the loop cannot be optimised away
+    hits[c] = count;
   });
-  return total / seconds_since(t0);
+  const double wall = seconds_since(t0), cpu = cpu_seconds() - c0;
+  return {static_cast<double>(rays.size()) / wall, static_cast<double>(rays.size()) / cpu};
 }
 
 }  // namespace microsim::bench

@@ -138,3 +138,39 @@ TEST(BlockFacetSampler, G1IsIdenticalForAnyThreadCount) {
   EXPECT_EQ(a.front_projected, b.front_projected);
   EXPECT_EQ(a.lambda_numeric, b.lambda_numeric);
 }
+
+TEST(BlockFacetSampler, SearchFromThePreviousDrawAndBlockWeightsAreExact) {
+  // The block-wise cross products equal cross(k) bit for bit (also across rows and in a
+  // sample region), and draws that search forward from the previous draw's block return the
+  // very facets of the full search, for increasing u (a stratified pass) and for u jumping back.
+  Microsurface s = beckmann_tile(48, 6);
+  for (int region = 0; region < 2; ++region) {
+    if (region) s.set_sample_region(3, 40, 5, 33, true);
+    const FacetTable t = build_facet_table(s, DirectionBinning(18, 8, kPi));
+    std::size_t unequal = 0;
+    t.for_each_cross(5, t.size(), [&](std::size_t k, const Vec3& c) { unequal += c != t.cross(k); });
+    EXPECT_EQ(unequal, 0u) << region;
+  }
+  const FacetTable t = build_facet_table(s, DirectionBinning(18, 8, kPi));
+  const Vec3 v = direction_from_angles(rad(70), rad(30));
+  const auto weight = [&](std::size_t k) { return std::max(0.0, 0.5 * t.cross(k).dot(v)); };
+  const auto blocks = [&](std::size_t k0, std::size_t k1, double* w) {
+    t.for_each_cross(k0, k1, [&](std::size_t k, const Vec3& c) { w[k - k0] = std::max(0.0, 0.5 * c.dot(v)); });
+  };
+  const BlockFacetSampler sampler(t.size(), weight);
+  const BlockFacetSampler by_blocks(t.size(), BlockFacetSampler::Blocks{}, blocks);
+  EXPECT_EQ(sampler.total(), by_blocks.total());
+  std::size_t hint = 0, differ = 0, moved = 0;
+  const std::size_t n = 20000;
+  for (std::size_t j = 0; j < n; ++j) {
+    CounterRng rng(4, 2, j);
+    // increasing strata, with every 500th draw jumping back to the start of the table
+    const double u = (j % 500 == 499 ? rng.uniform() * 0.01 : (j + rng.uniform()) / n) * sampler.total();
+    const std::size_t k = by_blocks.draw(u, BlockFacetSampler::Blocks{}, blocks, &hint);
+    differ += k != sampler.draw(u, weight);
+    // power: a draw at a slightly larger u moves to another facet now and then
+    moved += k != sampler.draw(std::min(u + 5.0 * sampler.total() / n, 0.999 * sampler.total()), weight);
+  }
+  EXPECT_EQ(differ, 0u);
+  EXPECT_GT(moved, n / 4);
+}

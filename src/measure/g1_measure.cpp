@@ -4,6 +4,7 @@
 #include "microsim/measure/stats.hpp"
 #include "microsim/surface/undersurface.hpp"
 
+#include <sys/resource.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -21,35 +22,58 @@ namespace {
 struct Tally {
   std::vector<std::uint64_t> hits, samples, visible;
   TraceCounters counters;
+  std::size_t draw_hint = 0;  // area sampling: block of the previous draw (a search start)
   explicit Tally(int nbins = 0) : hits(nbins), samples(nbins), visible(nbins) {}
 };
 
 constexpr std::uint64_t kChunk = 1 << 14;
 
-// Runs `body(rep, j, tally)` for every replicate and ray in parallel chunks and merges the
-// chunk tallies per replicate in chunk order (integer counts: identical for any thread count).
+// Runs `body(rep, j, tally)` for every replicate rep in `share` and ray j < n in parallel chunks.
+// A chunk is one range of ray indices [j0, j1) taken in every replicate in turn: rays j of all
+// replicates start in the same stratum (or draw from the same stretch of the facet CDF), so a
+// chunk's rays meet one small part of the tile and its BVH stays in cache (one replicate at a
+// time would sweep a quarter of the tile per chunk). Each ray keeps its own random stream and
+// the tallies are integer counts, so they are identical for any chunking and thread count.
 template <class Body>
 std::vector<Tally> run_replicates(int R, std::uint64_t n, int nbins, TraceCounters& counters,
                                   std::atomic<std::uint64_t>& done, UnitRange share, Body&& body) {
-  const std::uint64_t nc = chunks_per_replicate(n, kChunk);
-  std::vector<Tally> parts = run_replicate_chunks<Tally>(
-      R, n, kChunk, [&] { return Tally(nbins); },
-      [&](int rep, std::uint64_t j, Tally& t) {
-        body(rep, j, t);
-        if ((j + 1) % kChunk == 0 || j + 1 == n) done += (j % kChunk) + 1;
-      },
-      share);
+  const std::uint64_t first = std::min<std::uint64_t>(share.first, R);
+  const std::uint64_t end = std::min<std::uint64_t>(share.end, R);
+  const std::uint64_t active = end > first ? end - first : 0;
+  const std::uint64_t span = std::max<std::uint64_t>(1, kChunk / std::max<std::uint64_t>(1, active));
+  const std::uint64_t nc = active ? (n + span - 1) / span : 0;
   std::vector<Tally> reps(R, Tally(nbins));
-  for (std::size_t c = 0; c < parts.size(); ++c) {
-    Tally& total = reps[c / nc];
-    for (int b = 0; b < nbins; ++b) {
-      total.hits[b] += parts[c].hits[b];
-      total.samples[b] += parts[c].samples[b];
-      total.visible[b] += parts[c].visible[b];
+  if (nc == 0) return reps;
+  // parts[c * active + q]: chunk c, replicate first + q.
+  std::vector<Tally> parts(nc * active);
+  tbb::parallel_for(std::uint64_t(0), nc, [&](std::uint64_t c) {
+    const std::uint64_t j0 = c * span, j1 = std::min(n, j0 + span);
+    for (std::uint64_t q = 0; q < active; ++q) {
+      Tally& t = parts[c * active + q];
+      t = Tally(nbins);
+      for (std::uint64_t j = j0; j < j1; ++j) body(static_cast<int>(first + q), j, t);
     }
-    counters += parts[c].counters;
-  }
+    done += active * (j1 - j0);
+  });
+  for (std::uint64_t c = 0; c < nc; ++c)
+    for (std::uint64_t q = 0; q < active; ++q) {
+      const Tally& p = parts[c * active + q];
+      Tally& total = reps[first + q];
+      for (int b = 0; b < nbins; ++b) {
+        total.hits[b] += p.hits[b];
+        total.samples[b] += p.samples[b];
+        total.visible[b] += p.visible[b];
+      }
+      counters += p.counters;
+    }
   return reps;
+}
+
+double process_cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
 
 double per_replicate(std::uint64_t total, int R) { return static_cast<double>(total) / R; }
@@ -211,8 +235,10 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   (DESIGN.md, 001 App. A)
   r.lambda_numeric = sums[width - 1] / (v.dot(s.macro().normal) * s.macro().area);
   // Estimator (b) draws facets by front-facing projected area A_f max(0, v.m_f).
-  const auto weight = [&](std::size_t k) { return std::max(0.0, 0.5 * ft.cross(k).dot(v)); };
-  const BlockFacetSampler sampler(nf, weight);
+  const auto weights = [&](std::size_t k0, std::size_t k1, double* w) {
+    ft.for_each_cross(k0, k1, [&](std::size_t k, const Vec3& c) { w[k - k0] = std::max(0.0, 0.5 * c.dot(v)); });
+  };
+  const BlockFacetSampler sampler(nf, BlockFacetSampler::Blocks{}, weights);
   r.front_projected = sampler.total();
   if (!(r.front_projected > 0)) throw RuntimeFailure("no facet faces the direction");
   r.facet_seconds =
@@ -235,8 +261,10 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
     if (o.progress) o.progress(static_cast<double>(done.load()) / total_work);
   };
 
+  const bool heightfield = s.kind() == Microsurface::Kind::Heightfield;
   // (a) ray casting along -v: per replicate a stratified, Morton-ordered pass over the window.
   auto t_raycast = std::chrono::steady_clock::now();
+  const double cpu_raycast = process_cpu_seconds();
   const std::uint64_t key = static_cast<std::uint64_t>(r.theta * 1e6) * 7919 +
                             static_cast<std::uint64_t>(r.phi * 1e6);
   std::vector<Tally> ray_reps =
@@ -248,19 +276,24 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
         // Hits on back faces (counted in counters) are left out of the visible area: a ray
         // that meets a facet from behind crossed the surface through a rounding gap.
         // A measured region: hits outside it (facet index >= num_facets()) are misses.
-        if (h.hit && !h.backface && h.facet < nf) ++t.hits[r.binning.bin_of(h.normal)];
+        // A heightfield's bin is the table's (the same normal from the same heights, binned
+        // once); a mesh's table holds float normals, so its hits are binned from the exact one.
+        if (h.hit && !h.backface && h.facet < nf)
+          ++t.hits[heightfield ? ft.bin(h.facet) : r.binning.bin_of(h.normal)];
       });
   report();
   r.raycast_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_raycast).count();
+  r.raycast_cpu_seconds = process_cpu_seconds() - cpu_raycast;
   // (b) area sampling, per replicate strata along the CDF (facet order is spatially coherent).
   auto t_sample = std::chrono::steady_clock::now();
+  const double cpu_sample = process_cpu_seconds();
   const double total = r.front_projected;
   std::vector<Tally> sample_reps =
       run_replicates(R, n_rep, nbins, counters, done, reps, [&](int rep, std::uint64_t j, Tally& t) {
         CounterRng rng(o.seed, ReplicatePlan::stream(0xB000 + key, rep), j);
         double u = (static_cast<double>(j) + rng.uniform()) / n_rep * total;
-        const std::size_t k = sampler.draw(u, weight);
+        const std::size_t k = sampler.draw(u, BlockFacetSampler::Blocks{}, weights, &t.draw_hint);
         const int b = ft.bin(k);
         if (ft.buried(k)) {  // pressed against a twin: never visible
           ++t.samples[b];
@@ -274,6 +307,7 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
         if (!tracer.occluded(p, v, &plane, t.counters)) ++t.visible[b];
       });
   report();
+  r.sample_cpu_seconds = process_cpu_seconds() - cpu_sample;
   if (o.split) exchange_g1(*o.split, reps, ray_reps, sample_reps, counters, nbins);
   set_g1_counts(r, ray_reps, sample_reps);
   r.counters = counters;

@@ -46,6 +46,8 @@ void reject_source_plane(const RTCFilterFunctionNArguments* args) {
   }
 }
 
+thread_local std::vector<RTCRay>* ray_log = nullptr;
+
 void throw_on_embree_error(RTCDevice device, const char* what) {
   RTCError e = rtcGetDeviceError(device);
   if (e != RTC_ERROR_NONE)
@@ -57,7 +59,9 @@ void throw_on_embree_error(RTCDevice device, const char* what) {
 
 Tracer::Tracer(const Microsurface& surface) : surface_(surface) {
   auto t0 = std::chrono::steady_clock::now();
-  device_ = rtcNewDevice(nullptr);
+  // Huge pages (transparent, by madvise) for the BVH and vertices: on large tiles every ray
+  // touches leaves no earlier ray touched, and 4 KiB pages then cost a TLB miss per node.
+  device_ = rtcNewDevice("hugepages=1");
   if (!device_) throw RuntimeFailure("cannot create an Embree device");
   scene_ = rtcNewScene(device_);
   // ROBUST: without it a few rays per million slip through shared edges (DESIGN.md).
@@ -88,6 +92,7 @@ Tracer::Tracer(const Microsurface& surface) : surface_(surface) {
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
         geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
         static_cast<std::size_t>(grid_width_) * grid_height_));
+    grid_vertices_ = v;
     for (int j = 0; j < grid_height_; ++j)
       for (int i = 0; i < grid_width_; ++i) {
         Vec3 p = surface.grid_point(i - pad_, j - pad_);
@@ -209,7 +214,19 @@ std::size_t Tracer::facet_of_hit(unsigned prim_id, float u, float v, const Vec3&
     i = std::min(std::max(i, 0L), cx - 1);
     j = std::min(std::max(j, 0L), cy - 1);
   }
-  Vec3 c = cell_cross(i, j, half);
+  // The cell's corner heights from Embree's own vertices when it is inside the grid (the same
+  // floats as the heights, and in cache: the traversal just read them); else from the heights.
+  Vec3 c;
+  const long gi = i + pad_, gj = j + pad_;
+  if (gi >= 0 && gj >= 0 && gi + 1 < grid_width_ && gj + 1 < grid_height_) {
+    const float* row0 = grid_vertices_ + 3 * (static_cast<std::size_t>(gj) * grid_width_ + gi);
+    const float* row1 = row0 + 3 * static_cast<std::size_t>(grid_width_);
+    const double h00 = row0[2], h10 = row0[5], h01 = row1[2], h11 = row1[5];
+    c = half == 0 ? Vec3(-(h10 - h00) * dy, -(h01 - h00) * dx, dx * dy)
+                  : Vec3(-(h11 - h01) * dy, -(h11 - h10) * dx, dx * dy);
+  } else {
+    c = cell_cross(i, j, half);
+  }
   if (alignment(c) > 1 - 2e-6) {
     if (normal) *normal = c.normalized();
     return index(i, j, half);
@@ -333,6 +350,7 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
     rh.ray.flags = 0;
     rh.ray.time = 0;
     rh.ray.id = 0;
+    if (ray_log) ray_log->push_back(rh.ray);
     if (kOcclusion) {
       rtcOccluded1(scene_, &ctx.context, &rh.ray);
       if (rh.ray.tfar < 0) return true;  // Embree marks occlusion with tfar = -inf
@@ -394,6 +412,8 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
   ++c.unresolved;
   return false;
 }
+
+void Tracer::log_rays_on_this_thread(std::vector<RTCRay>* log) { ray_log = log; }
 
 TraceHit Tracer::first_hit(const Vec3& org, const Vec3& dir, const SourcePlane* source,
                            TraceCounters& counters, RaySide side) const {

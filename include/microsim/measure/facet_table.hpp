@@ -42,6 +42,26 @@ class FacetTable {
     if (heights_) return heightfield_cross(k);
     return (2.0 * static_cast<double>(area_[k])) * normal_[k].cast<double>();
   }
+  // f(k, cross(k)) for k in [k0, k1) in order: the same values as cross(k), with the cell of
+  // a heightfield facet found by one division for the run instead of one per facet.
+  template <class F>
+  void for_each_cross(std::size_t k0, std::size_t k1, F&& f) const {
+    if (!heights_) {
+      for (std::size_t k = k0; k < k1; ++k) f(k, cross(k));
+      return;
+    }
+    const bool region = k0 < region_facets_;
+    const std::size_t width = region ? region_w_ : nx_, base_i = region ? region_i0_ : 0;
+    const std::size_t cell = (region ? k0 : k0 - region_facets_) / 2;
+    std::size_t i0 = base_i + cell % width, j0 = (region ? region_j0_ : 0) + cell / width;
+    for (std::size_t k = k0; k < k1; ++k) {
+      f(k, cell_cross(i0, j0, k % 2));
+      if (k % 2 == 1 && ++i0 == base_i + width) {
+        i0 = base_i;
+        ++j0;
+      }
+    }
+  }
   Vec3 normal(std::size_t k) const {
     Vec3 m;
     double a;
@@ -82,10 +102,13 @@ class FacetTable {
       i0 = cell % nx_;
       j0 = cell / nx_;
     }
+    return cell_cross(i0, j0, k % 2);
+  }
+  Vec3 cell_cross(std::size_t i0, std::size_t j0, std::size_t half) const {
     const std::size_t i1 = i0 + 1 == nx_ ? 0 : i0 + 1, j1 = j0 + 1 == ny_ ? 0 : j0 + 1;
     const double h00 = heights_[j0 * nx_ + i0], h10 = heights_[j0 * nx_ + i1];
     const double h01 = heights_[j1 * nx_ + i0], h11 = heights_[j1 * nx_ + i1];
-    if (k % 2 == 0) return Vec3(-(h10 - h00) * dy_, -(h01 - h00) * dx_, dx_ * dy_);
+    if (half == 0) return Vec3(-(h10 - h00) * dy_, -(h01 - h00) * dx_, dx_ * dy_);
     return Vec3(-(h11 - h01) * dy_, -(h11 - h10) * dx_, dx_ * dy_);
   }
 
@@ -116,13 +139,24 @@ class BlockFacetSampler {
   static constexpr std::size_t kBlock = 16;
 
   template <class Weight>
-  BlockFacetSampler(std::size_t n, const Weight& weight) : n_(n), cdf_((n + kBlock - 1) / kBlock) {
+  BlockFacetSampler(std::size_t n, const Weight& weight)
+      : BlockFacetSampler(n, Blocks{}, [&](std::size_t k0, std::size_t k1, double* w) {
+          for (std::size_t k = k0; k < k1; ++k) w[k - k0] = weight(k);
+        }) {}
+  // The same with the weights of a block computed at once: block_weights(k0, k1, w) sets
+  // w[k - k0] = w_k for k in [k0, k1) (at most kBlock facets).
+  struct Blocks {};
+  template <class BlockWeights>
+  BlockFacetSampler(std::size_t n, Blocks, const BlockWeights& block_weights)
+      : n_(n), cdf_((n + kBlock - 1) / kBlock) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cdf_.size(), 4096),
                       [&](const tbb::blocked_range<std::size_t>& r) {
+                        double w[kBlock];
                         for (std::size_t b = r.begin(); b != r.end(); ++b) {
+                          const std::size_t k0 = b * kBlock, k1 = std::min(n_, k0 + kBlock);
+                          block_weights(k0, k1, w);
                           double s = 0;
-                          for (std::size_t k = b * kBlock, e = std::min(n_, k + kBlock); k < e; ++k)
-                            s += weight(k);
+                          for (std::size_t k = k0; k < k1; ++k) s += w[k - k0];
                           cdf_[b] = s;
                         }
                       });
@@ -134,14 +168,28 @@ class BlockFacetSampler {
   // never a facet of zero weight.
   template <class Weight>
   std::size_t draw(double u, const Weight& weight) const {
-    std::size_t b = std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin();
+    return draw(u, Blocks{}, [&](std::size_t k0, std::size_t k1, double* w) {
+      for (std::size_t k = k0; k < k1; ++k) w[k - k0] = weight(k);
+    });
+  }
+  // `hint` (optional): the block of an earlier draw, updated. Draws with increasing u (a
+  // stratified pass) then search forward from it instead of over the whole table; the block
+  // found is the same.
+  template <class BlockWeights>
+  std::size_t draw(double u, Blocks, const BlockWeights& block_weights,
+                   std::size_t* hint = nullptr) const {
+    std::size_t b = hint ? upper_block(u, *hint) : upper_block(u, 0);
+    if (hint) *hint = b;
     b = std::min(b, cdf_.size() - 1);
     while (b > 0 && cdf_[b] == cdf_[b - 1]) --b;  // never an empty block
     const double local = u - (b > 0 ? cdf_[b - 1] : 0.0);
     std::size_t last = b * kBlock;  // last facet of positive weight seen (rounding fallback)
     double s = 0;
-    for (std::size_t k = b * kBlock, e = std::min(n_, k + kBlock); k < e; ++k) {
-      const double w = weight(k);
+    const std::size_t k0 = b * kBlock, k1 = std::min(n_, k0 + kBlock);
+    double ws[kBlock];
+    block_weights(k0, k1, ws);
+    for (std::size_t k = k0; k < k1; ++k) {
+      const double w = ws[k - k0];
       if (w <= 0) continue;
       s += w;
       last = k;
@@ -150,6 +198,21 @@ class BlockFacetSampler {
     return last;
   }
   double bytes() const { return 8.0 * cdf_.size(); }
+
+ private:
+  // The first block b with cdf_[b] > u (std::upper_bound), searched by doubling steps from
+  // `from` when every block before it is <= u, else over the whole table.
+  std::size_t upper_block(double u, std::size_t from) const {
+    if (from >= cdf_.size() || (from > 0 && cdf_[from - 1] > u))
+      return std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin();
+    std::size_t lo = from, step = 1;  // every block before lo is <= u
+    while (lo + step < cdf_.size() && cdf_[lo + step - 1] <= u) {
+      lo += step;
+      step *= 2;
+    }
+    const std::size_t hi = std::min(cdf_.size(), lo + step);
+    return std::upper_bound(cdf_.begin() + lo, cdf_.begin() + hi, u) - cdf_.begin();
+  }
 
  private:
   std::size_t n_;

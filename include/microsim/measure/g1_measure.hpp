@@ -72,6 +72,9 @@ struct G1Result {
   double facet_seconds = 0;  // of which the exact facet sums,
   double raycast_seconds = 0;  // estimator (a),
   double sample_seconds = 0;   // estimator (b)
+  // Processor time (user + system, all threads of the process) of (a) and (b): the rate on a
+  // shared machine, where wall time depends on the other processes.
+  double raycast_cpu_seconds = 0, sample_cpu_seconds = 0;
 
   // Derived quantities with standard errors (of the replicate means, measure/replicates.hpp).
   Estimate g1_area_sampling() const;  // (b), averaged over front-facing projected area

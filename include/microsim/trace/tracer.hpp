@@ -3,6 +3,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include <embree3/rtcore.h>
 
@@ -90,6 +91,11 @@ class Tracer {
   RTCScene scene() const { return scene_; }
   double build_seconds() const { return build_seconds_; }
 
+  // Benchmarks: while a log is set on a thread, every Embree query that thread's traces make
+  // is appended to it (ray as passed, before the query), so that a bare loop can replay the
+  // very same queries. Null (the default) logs nothing.
+  static void log_rays_on_this_thread(std::vector<RTCRay>* log);
+
   // Which of the surface's facets a raw Embree hit refers to, and (optionally) its exact unit
   // normal.
   std::size_t facet_of_hit(unsigned prim_id, float u, float v, const Vec3& ng,
@@ -107,6 +113,7 @@ class Tracer {
   int pad_ = 1;            // heightfield: cells of periodic copy around the tile
   int grid_width_ = 0;     // heightfield: vertices per grid row in Embree
   int grid_height_ = 0;
+  const float* grid_vertices_ = nullptr;  // heightfield: Embree's vertex buffer (x, y, z)
   bool window_ = false;    // non-periodic heightfield: traced without wrap, footprint below
   double foot_x0_ = 0, foot_x1_ = 0, foot_y0_ = 0, foot_y1_ = 0;
   std::vector<std::uint32_t> mesh_prim_to_facet_;  // periodic meshes: copies map back
