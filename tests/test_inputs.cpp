@@ -650,8 +650,18 @@ TEST_F(Inputs, InterruptsLeaveNothingBehind) {
     ASSERT_GT(pid, 0);
     std::this_thread::sleep_for(std::chrono::milliseconds(ms));
     kill(pid, SIGINT);
+    // An interrupted run must end promptly: a cleanup that deadlocks (e.g. allocating inside a
+    // signal handler while the interrupted thread holds the allocator's lock) fails here.
     int status = 0;
-    waitpid(pid, &status, 0);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+    while (waitpid(pid, &status, WNOHANG) == 0) {
+      if (std::chrono::steady_clock::now() > deadline) {
+        kill(pid, SIGKILL);
+        waitpid(pid, &status, 0);
+        FAIL() << "still running 120 s after SIGINT";
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
     if (WIFSIGNALED(status)) {
       ++interrupted;
       EXPECT_EQ(WTERMSIG(status), SIGINT);

@@ -12,8 +12,8 @@ using namespace microsim;
 using namespace microsim::cli;
 
 int main(int argc, char** argv) {
+  install_interrupt_cleanup();  // first: threads started later (MPI, TBB) inherit its signal mask
   mpi_ranks() = mpi_start(argc, argv);
-  install_interrupt_cleanup();
   const int status = run_cli(std::vector<std::string>(argv + 1, argv + argc));
   wait_if_interrupted();
   mpi_finish(mpi_ranks());

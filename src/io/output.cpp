@@ -10,6 +10,7 @@
 #include <OpenEXR/ImfDoubleAttribute.h>
 #include <OpenEXR/ImfIntAttribute.h>
 #include <dirent.h>
+#include <pthread.h>
 #include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -20,6 +21,7 @@
 #include <filesystem>
 #include <cstdio>
 #include <cstdlib>
+#include <thread>
 #include <fstream>
 #include <iomanip>
 
@@ -46,8 +48,8 @@ constexpr std::size_t kPathMax = 4096;
 char g_paths[kSlots][kPathMax];
 std::atomic<bool> g_used[kSlots];
 
-// Removes a file, or a folder with its contents (unlink/rmdir; readdir in the handler is the one
-// call that is not listed async-signal-safe, acceptable as the process is ending).
+// Removes a file, or a folder with its contents. Runs on the signal thread (below), not in a
+// signal handler, so opendir/readdir may allocate even while another thread holds a malloc lock.
 void remove_path_raw(const char* path, int depth) {
   if (unlink(path) == 0 || depth > 8) return;
   if (DIR* d = opendir(path)) {
@@ -68,12 +70,32 @@ void remove_path_raw(const char* path, int depth) {
 
 std::atomic<bool> g_interrupting{false};
 
-void on_interrupt(int sig) {
+sigset_t interrupt_signals() {
+  sigset_t set;
+  sigemptyset(&set);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&set, sig);
+  return set;
+}
+
+// The signal thread: the interrupt signals are blocked in every other thread, so they arrive
+// here (sigwait) as ordinary events. A cleanup inside an asynchronous handler could deadlock:
+// opendir allocates, and the interrupted thread may hold the allocator's lock.
+void wait_for_interrupt() {
+  const sigset_t set = interrupt_signals();
+  int sig = 0;
+  while (sigwait(&set, &sig) != 0) {
+  }
   g_interrupting.store(true);
   for (int k = 0; k < kSlots; ++k)
     if (g_used[k].load()) remove_path_raw(g_paths[k], 0);
+  // End the process by the same signal, with its default action (the exit status says so).
   signal(sig, SIG_DFL);
+  sigset_t one;
+  sigemptyset(&one);
+  sigaddset(&one, sig);
+  pthread_sigmask(SIG_UNBLOCK, &one, nullptr);
   raise(sig);
+  for (;;) pause();
 }
 
 std::vector<OutputTransaction*>& transactions() {
@@ -108,10 +130,11 @@ void wait_if_interrupted() {
 }
 
 void install_interrupt_cleanup() {
-  struct sigaction sa {};
-  sa.sa_handler = on_interrupt;
-  sigemptyset(&sa.sa_mask);
-  for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaction(sig, &sa, nullptr);
+  // Blocked here, before any other thread exists, so every thread started later inherits the
+  // mask and only the signal thread receives them.
+  const sigset_t set = interrupt_signals();
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  std::thread(wait_for_interrupt).detach();
 }
 
 TemporaryFolder::TemporaryFolder(const std::string& prefix) {
@@ -148,11 +171,21 @@ void OutputTransaction::commit() {
     struct stat st;
     if (stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) failed = path;
   }
+  // While the set is being renamed an interrupt removes the files already in place too: the
+  // outputs appear together or not at all.
+  const bool renaming = failed.empty();
+  if (renaming)
+    for (const auto& [tmp, path] : files) register_temporary(path);
+  std::size_t renamed = 0;
   for (const auto& [tmp, path] : files) {
     if (failed.empty() && std::rename(tmp.c_str(), path.c_str()) != 0) failed = path;
-    if (!failed.empty()) std::remove(tmp.c_str());
+    if (failed.empty()) ++renamed; else std::remove(tmp.c_str());
     unregister_temporary(tmp);
   }
+  if (!failed.empty())  // the files renamed before the failure go too
+    for (std::size_t k = 0; k < renamed; ++k) std::remove(files[k].second.c_str());
+  if (renaming)
+    for (const auto& [tmp, path] : files) unregister_temporary(path);
   if (!failed.empty()) throw RuntimeFailure("cannot write " + failed);
 }
 

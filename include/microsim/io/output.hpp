@@ -39,14 +39,15 @@ class OutputTransaction {
 };
 
 // Temporary files and folders removed if the process is interrupted: install_interrupt_cleanup()
-// makes SIGINT, SIGTERM and SIGHUP remove every registered path (a folder with its contents),
-// then end the process by the same signal.
+// (called first in main, before any other thread starts) blocks SIGINT, SIGTERM and SIGHUP and
+// starts a thread that, on one of them, removes every registered path (a folder with its
+// contents), then ends the process by the same signal.
 void register_temporary(const std::string& path);
 void unregister_temporary(const std::string& path);
 void install_interrupt_cleanup();
-// The handler runs on whichever thread took the signal while the others go on: one of them can
-// meet the files the handler is removing, fail and reach exit before the handler re-raises. Exit
-// paths call this first: during an interrupt it waits for the handler to end the process.
+// The cleanup runs while the other threads go on: one of them can meet the files being removed,
+// fail and reach exit before the signal is re-raised. Exit paths call this first: during an
+// interrupt it waits for the signal thread to end the process.
 void wait_if_interrupted();
 // A temporary folder (mkdtemp under TMPDIR, registered), removed with its contents when destroyed.
 class TemporaryFolder {
