@@ -449,7 +449,8 @@ struct BelowHorizonCase {
 class VisibleNormalsBelowTheHorizon : public ::testing::TestWithParam<BelowHorizonCase> {};
 
 TEST_P(VisibleNormalsBelowTheHorizon, FollowTheirDensity) {
-  const auto [kind, tdeg] = GetParam();
+  const mm::Distribution kind = GetParam().kind;  // named variables, not structured bindings:
+  const double tdeg = GetParam().theta_deg;       // C++17 lambdas may not capture those
   auto make = [&](double s) { return kind == mm::Distribution::Beckmann ? Ndf::beckmann(0.5 * s, 0.8 * s) : Ndf::ggx(0.5 * s, 0.8 * s); };
   const Ndf ndf = make(1.0);
   const Vec3 u = dir(rad(tdeg), 0.7);
