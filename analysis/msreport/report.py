@@ -465,7 +465,7 @@ def section_convergence(ctx):
     captions = {"cells": "Difference from the finest grid (32 cells per l; paired: the same tiles on every grid) "
                          "against cells per correlation length; grey band: 1%. Beckmann at 32 l per tile, the GGX "
                          "heightfield at 64 (its preset's tile).",
-                "tile": "Difference from the largest tile that ran (256 l per tile for alpha = 1, 128 for 0.5) "
+                "tile": "Difference from the largest tile (256 l per tile) "
                         "against correlation lengths per tile (independent tiles per level); grey band: 1%.",
                 "lobe80": "In-plane lobe of a mirror at theta_i = 80 deg per grid level (order 1, and all orders dotted)."}
     for f in figs:
