@@ -19,6 +19,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <numeric>
+#include <algorithm>
 #include <string>
 
 #include "microsim/measure/bsdf_measure.hpp"
@@ -41,7 +43,7 @@ struct Args {
   double alpha = 1.0;
   int cells_per_l = 8, lengths_per_tile = 32, surfaces = 8;
   std::uint64_t rays_bsdf = 2000000, rays_g = 1000000, smith_walks = 0, seed0 = 1;
-  bool nested = true;  // gaussian: common random numbers across grids (0: generate_gaussian)
+  bool nested = true;  // common random numbers across grids (0: generate_gaussian[_ggx])
 };
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -58,16 +60,14 @@ Json albedos(const BsdfResult& r, int side) {
   return a;
 }
 
-// The Beckmann tile of generate_gaussian (same spectrum exp(-k^2 l^2 / 4) of the Gaussian
-// autocorrelation exp(-r^2/l^2), same scaling: expected finite-difference slope variance
-// alpha^2/2 per axis), drawn with common random numbers across grids: the complex white noise
-// of each spatial frequency is keyed by the frequency, not by the pixel, so tiles of the same
-// seed at 2, 4, ... 32 cells per l sample the same continuous surface (the spectrum is
-// negligible beyond the coarsest grid's Nyquist frequency: exp(-pi^2) at 2 cells per l). The
-// difference between two grids is then measured on the same surfaces (paired), and its error
-// is far below the tile-to-tile spread. h = Re(IFFT(H W)) is a stationary Gaussian field with
-// the spectrum S = |H|^2 (its covariance is the even part of that of H W).
-Microsurface nested_beckmann_tile(int n, double ell, double alpha, std::uint64_t seed) {
+// A Gaussian field drawn with common random numbers across grids: the complex white noise of
+// each spatial frequency is keyed by the frequency (and the stream), not by the pixel, so fields
+// of the same seed at 2, 4, ... 32 cells per l sample the same continuous field (the spectrum
+// exp(-k^2 l^2 / 4) of the autocorrelation exp(-r^2/l^2) is negligible beyond the coarsest
+// grid's Nyquist frequency: exp(-pi^2) at 2 cells per l). h = Re(IFFT(H W)) is a stationary
+// Gaussian field with the spectrum S = |H|^2 (its covariance is the even part of that of H W).
+// Scaled like generate_gaussian: expected finite-difference slope variance alpha^2/2 per axis.
+std::vector<double> nested_field(int n, double ell, double alpha, std::uint64_t seed, std::uint64_t stream) {
   using C = std::complex<double>;
   const double size = 1.0, dx = size / n;
   std::vector<C> a(static_cast<std::size_t>(n) * n);
@@ -80,7 +80,7 @@ Microsurface nested_beckmann_tile(int n, double ell, double alpha, std::uint64_t
       const double sk = std::exp(-(kx * kx + ky * ky) * ell * ell / 4.0);
       const std::uint64_t key = (static_cast<std::uint64_t>(fi + (1 << 20)) << 21) |
                                 static_cast<std::uint64_t>(fj + (1 << 20));
-      CounterRng rng(seed, 0xC0417E, key);
+      CounterRng rng(seed, stream, key);
       const double u1 = 1.0 - rng.uniform(), u2 = rng.uniform();
       const double r = std::sqrt(-2.0 * std::log(u1));
       a[static_cast<std::size_t>(j) * n + i] = std::sqrt(sk) * C(r * std::cos(2 * kPi * u2), r * std::sin(2 * kPi * u2));
@@ -106,8 +106,16 @@ Microsurface nested_beckmann_tile(int n, double ell, double alpha, std::uint64_t
   // the real part); scaled to alpha^2 dx^2 / 2.
   var_dx /= static_cast<double>(n) * n * n * n;
   const double scale = std::sqrt(0.5 * alpha * alpha * dx * dx / var_dx);
-  std::vector<float> h(a.size());
-  for (std::size_t k = 0; k < a.size(); ++k) h[k] = static_cast<float>(scale * a[k].real());
+  std::vector<double> h(a.size());
+  for (std::size_t k = 0; k < a.size(); ++k) h[k] = scale * a[k].real();
+  return h;
+}
+
+// The Beckmann tile of generate_gaussian (same spectrum and scaling), on common random numbers.
+Microsurface nested_beckmann_tile(int n, double ell, double alpha, std::uint64_t seed) {
+  const double size = 1.0, dx = size / n;
+  const std::vector<double> f = nested_field(n, ell, alpha, seed, 0xC0417E);
+  std::vector<float> h(f.begin(), f.end());
   Microsurface s = Microsurface::heightfield(n, n, size, size, std::move(h));
   s.nominal = models::Ndf::beckmann(alpha, alpha);
   s.description = {{"kind", "gaussian"}, {"synthesis", "frequency-keyed noise (common across grids)"},
@@ -115,6 +123,52 @@ Microsurface nested_beckmann_tile(int n, double ell, double alpha, std::uint64_t
                    {"alpha_x", alpha}, {"alpha_y", alpha}, {"seed", seed}, {"nominal_ndf", "beckmann"}};
   add_discretization(s.description, dx, size, ell, ell);
   return s;
+}
+
+// The GGX heightfield of generate_gaussian_ggx (a Beckmann field g of length l whose local
+// roughness alpha / sqrt(E) varies over `big`, E taking exactly the Exp(1) quantiles over the
+// tile by the ranks of a smooth field z), with g and z on common random numbers: on every grid
+// E(x) is the empirical quantile of the same continuous z, so the grids are paired here too.
+Microsurface nested_ggx_tile(int n, double ell, double big, double alpha, double tail, std::uint64_t seed) {
+  const double size = 1.0, dx = size / n;
+  const std::vector<double> g = nested_field(n, ell, alpha, seed, 0xC0417E);
+  const std::vector<double> z = nested_field(n, big, 1.0, seed, 0xC0418E);
+  const std::size_t count = g.size();
+  std::vector<std::uint32_t> order(count);
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) {
+    return z[p] < z[q] || (z[p] == z[q] && p < q);
+  });
+  const double e_min = -std::log1p(-tail);
+  std::vector<float> h(count);
+  for (std::size_t r = 0; r < count; ++r) {
+    const double u = (static_cast<double>(r) + 0.5) / static_cast<double>(count);
+    const double e = std::max(e_min, -std::log1p(-u));
+    h[order[r]] = static_cast<float>(g[order[r]] / std::sqrt(e));
+  }
+  Microsurface s = Microsurface::heightfield(n, n, size, size, std::move(h));
+  s.nominal = models::Ndf::ggx(alpha, alpha);
+  s.description = {{"kind", "gaussian-ggx"}, {"synthesis", "frequency-keyed noise (common across grids)"},
+                   {"resolution", n}, {"size", size}, {"correlation_length", ell},
+                   {"roughness_correlation_length", big}, {"alpha_x", alpha}, {"alpha_y", alpha},
+                   {"tail_fraction", tail}, {"seed", seed}, {"nominal_ndf", "ggx"}};
+  add_discretization(s.description, dx, size, ell, ell);
+  return s;
+}
+
+// Median of tan(theta_m) over the projected area (every facet of a heightfield projects to
+// dx^2 / 2): the NDF's alpha without its second moment, which GGX does not have. GGX:
+// P(tan theta_m < t) = t^2 / (alpha^2 + t^2), median alpha; Beckmann: 1 - exp(-t^2 / alpha^2),
+// median alpha sqrt(ln 2).
+double median_tan_theta_m(const Microsurface& s) {
+  std::vector<float> t(s.num_facets());
+  tbb::parallel_for(std::size_t{0}, t.size(), [&](std::size_t k) {
+    const Vec3 m = s.facet(k).normal();
+    t[k] = static_cast<float>(std::hypot(m.x(), m.y()) / m.z());
+  });
+  auto mid = t.begin() + static_cast<long>(t.size() / 2);
+  std::nth_element(t.begin(), mid, t.end());
+  return *mid;
 }
 
 Microsurface make_tile(const Args& a, std::uint64_t seed, Json& desc) {
@@ -133,6 +187,13 @@ Microsurface make_tile(const Args& a, std::uint64_t seed, Json& desc) {
     p.alpha_x = p.alpha_y = a.alpha;
     p.seed = seed;
     Microsurface s = generate_gaussian(p);
+    desc = s.description;
+    return s;
+  }
+  if (a.kind == "gaussian-ggx" && a.nested) {
+    // The preset's roughness length (16 l, surfaces/gaussian-ggx.toml) where the tile holds it
+    // at least four times, else a quarter tile; the preset's tail fraction.
+    Microsurface s = nested_ggx_tile(n, ell, std::min(16 * ell, 0.25), a.alpha, 0.001, seed);
     desc = s.description;
     return s;
   }
@@ -171,6 +232,7 @@ Json measure_tile(const Args& a, std::uint64_t seed, int K) {
   t["alpha_fit_x"] = std::sqrt(2 * nd.sums.slope_var_x);
   t["alpha_fit_y"] = std::sqrt(2 * nd.sums.slope_var_y);
   t["alpha_fit"] = std::sqrt(nd.sums.slope_var_x + nd.sums.slope_var_y);
+  t["median_tan_theta_m"] = median_tan_theta_m(s);
   Json rings = Json::array();
   for (int i = 0; i < 18; ++i) rings.push_back(nd.ring_d[i]);
   t["d_ring"] = rings;
@@ -311,7 +373,7 @@ int main(int argc, char** argv) {
     j["correlation_lengths_per_tile"] = a.lengths_per_tile;
     j["resolution"] = a.cells_per_l * a.lengths_per_tile;
     j["surfaces"] = a.surfaces;
-    j["nested"] = a.kind == "gaussian" && a.nested;
+    j["nested"] = a.nested;
     j["rays_bsdf_per_level"] = a.rays_bsdf;
     j["rays_g_per_level"] = a.rays_g;
     const models::Ndf nominal = a.kind == "gaussian" ? models::Ndf::beckmann(a.alpha, a.alpha)

@@ -89,7 +89,13 @@ def quantities(level):
         m, s, k = ensemble([v[0] for v in vals], [v[1] for v in vals])
         rows.append((name, albedo, m, s, k, by_seed))
 
-    add("fitted alpha", [t["alpha_fit"] for t in tiles])
+    ggx = level.get("kind") == "gaussian-ggx"
+    # GGX has no slope variance: its rms-slope alpha is set by the generator's tail cap.
+    add("rms-slope alpha (tail-capped)" if ggx else "fitted alpha", [t["alpha_fit"] for t in tiles])
+    if "median_tan_theta_m" in tiles[0]:
+        # Median of tan theta_m over the projected area: alpha (GGX), alpha sqrt(ln 2) (Beckmann).
+        norm = 1.0 if ggx else math.sqrt(math.log(2))
+        add("fitted alpha (median tan theta_m)", [t["median_tan_theta_m"] / norm for t in tiles])
     for ring in (0, 6, 9, 12, 13, 14):
         lo = 5 * ring
         add(f"D / nominal, theta_m {lo}-{lo + 5} deg",
@@ -227,7 +233,7 @@ def figures(levels, kind, alpha, cells_keys, tiles_keys, img, tag, paired=False)
         return []
     os.makedirs(img, exist_ok=True)
     written = []
-    picks = ["fitted alpha", "G1(80 deg) averaged", "G2(70, 70 deg), opposite azimuths",
+    picks = ["fitted alpha", "fitted alpha (median tan theta_m)", "G1(80 deg) averaged", "G2(70, 70 deg), opposite azimuths",
              "mirror 60 deg order 1", "mirror 60 deg order 2", "mirror 60 deg order 3",
              "mirror 80 deg order 1", "dielectric 1.5, 60 deg transmitted order 2",
              "lobe 80 deg order 1, theta_o 75-90 (mean f)"]

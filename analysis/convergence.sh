@@ -14,6 +14,7 @@
 #   RAYS_BSDF [2000000]     paths per BSDF configuration and level (split over the tiles)
 #   RAYS_G [1000000]        rays per G1/G2/VNDF direction and level
 #   SMITH_WALKS [4000000]   Smith random walks per incidence (once per surface kind)
+#   SURFACES [16, 8, 4, 3 tiles at L/l <= 16, 32, 64, more]  tiles per level
 #   NICE [10]               niceness of the runs
 #   SWEEP [both]            cells, tiles or both; NO_TABLE=1: runs only
 # The cost of every level (CPU seconds, peak resident memory) is read from /usr/bin/time -v.
@@ -40,6 +41,7 @@ niceness="${NICE:-10}"
 # across grids (convergence.cpp): its differences between levels are paired, tile by tile.
 surfaces_for() {
   local t="$1"
+  if [ -n "${SURFACES:-}" ]; then echo "$SURFACES"; return; fi
   if [ "$t" -le 16 ]; then echo 16; elif [ "$t" -le 32 ]; then echo 8; elif [ "$t" -le 64 ]; then echo 4; else echo 3; fi
 }
 

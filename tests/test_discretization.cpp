@@ -12,6 +12,7 @@
 #include "microsim/surface/discretization.hpp"
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/surface/generators.hpp"
+#include "microsim/surface/surface_io.hpp"
 #include "microsim/validate/validate.hpp"
 
 using namespace microsim;
@@ -212,4 +213,42 @@ TEST(Discretization, PresetsMatchTheConvergedLevelsTheyClaim) {
     }
   }
   EXPECT_GT(preset_level("beckmann-1.0-fine.toml").first, preset_level("beckmann-1.0-converged.toml").first);
+}
+
+TEST(Discretization, DefaultSuiteRunsEveryCheckOnConvergedTiles) {
+  // The report's suite: each Gaussian entry, generated as `validate --suite` does, is at or above
+  // the converged level of every check it runs (its rows describe the continuous surface and it
+  // gets no info row). 4-cell tiles, as the suite had before, are not.
+  namespace mv = microsim::validation;
+  const std::string dir = std::string(MICROSIM_SOURCE_DIR) + "/surfaces/suites";
+  const mv::Suite suite = mv::load_suite(mv::find_suite("default", {dir}));
+  int gaussian = 0;
+  for (const mv::SuiteEntry& e : suite.entries) {
+    if (e.generate != "gaussian" && e.generate != "gaussian-ggx") continue;
+    ++gaussian;
+    std::string cmd = "-q generate " + e.generate;
+    if (!e.preset.empty()) cmd += " --config " + e.preset;
+    for (const auto& [key, value] : e.args) cmd += " --" + key + " " + value;
+    if (!e.seeds.empty()) cmd += " --seed " + std::to_string(e.seeds.front());
+    const std::string f = microsim::testing::temp_path("disc", e.name + ".exr");
+    const auto r = microsim::testing::run_microsim(cmd + " -o " + f);
+    ASSERT_EQ(r.code, 0) << cmd << "\n" << r.err;
+    const auto d = discretization_of(load_surface(f).description);
+    ASSERT_TRUE(d) << e.name;
+    std::vector<std::string> checks = e.options.checks;
+    if (checks.empty())
+      for (const auto& l : converged_levels()) checks.push_back(l.quantity);
+    for (const std::string& c : checks) {
+      const auto l = converged_level(c);
+      if (!l) continue;
+      EXPECT_GE(d->cells_per_correlation_length, l->cells_per_correlation_length) << e.name << " " << c;
+      EXPECT_GE(d->correlation_lengths_per_tile, l->correlation_lengths_per_tile) << e.name << " " << c;
+    }
+  }
+  EXPECT_GE(gaussian, 4);
+  // Power: the suite's former tile (512^2, l = 4 cells) is below the G1 and D levels.
+  const auto old = discretization_of(Json{{"kind", "gaussian"}, {"resolution", 512}, {"size", 1.0},
+                                          {"correlation_length", 0.0078125}});
+  ASSERT_TRUE(old);
+  EXPECT_LT(old->cells_per_correlation_length, converged_level("g1")->cells_per_correlation_length);
 }

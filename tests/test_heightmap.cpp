@@ -12,6 +12,7 @@
 #include "microsim/io/output.hpp"
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/measure/ndf_measure.hpp"
+#include "microsim/surface/discretization.hpp"
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/surface/heightmap_import.hpp"
 #include "microsim/surface/metrology.hpp"
@@ -544,4 +545,76 @@ TEST(HeightmapCli, BadInputIsRefusedWithOneLine) {
   write_text(flat, "0 1 2\n1 2 3\n2 3 4\n");
   expect_refused("generate heightmap --input " + flat + " --pixel-size 1 --detrend plane -o " + tmp("bad3.exr"),
                  tmp("bad3.exr"), "nothing left");
+}
+
+// ---- discretization: the map states its grid in the terms of the convergence study ----
+
+namespace {
+// A periodic Gaussian tile of `cells` cells per l (128^2, unit size), written as a plain EXR.
+std::string gaussian_map(int cells, std::uint64_t seed, const std::string& name) {
+  GaussianParams p;
+  p.resolution = 128;
+  p.size = 1.0;
+  p.correlation_length = cells / 128.0;
+  p.alpha_x = p.alpha_y = 0.5;
+  p.seed = seed;
+  Microsurface s = generate_gaussian(p);
+  ExrTable z;
+  z.width = s.nx();
+  z.height = s.ny();
+  z.channel_names = {"Z"};
+  z.channels = {s.heights()};
+  write_exr(tmp(name), z);
+  return tmp(name);
+}
+}  // namespace
+
+TEST(HeightmapImport, StatesCellsPerCorrelationLengthAndLengthsPerTile) {
+  auto import = [](const std::string& file, bool periodic) {
+    HeightmapImportParams p;
+    p.input = file;
+    p.pixel_size_x = 1.0 / 128;
+    p.periodic = periodic;
+    p.detrend = periodic ? Detrend::None : Detrend::Mean;
+    p.guard_correlation_lengths = 4;  // a window's guard band: 4 l on each side
+    return import_heightmap(p);
+  };
+  for (int cells : {4, 8}) {
+    const std::string file = gaussian_map(cells, 11, "disc" + std::to_string(cells) + ".exr");
+    Microsurface s = import(file, true);
+    const auto d = discretization_of(s.description);
+    ASSERT_TRUE(d) << s.description.dump();
+    // The generator's l, recovered from the ACF of one tile (~10% spread between tiles), and
+    // exactly metrology's cells per Gaussian length.
+    EXPECT_NEAR(d->cells_per_correlation_length, cells, 0.15 * cells);
+    EXPECT_DOUBLE_EQ(d->cells_per_correlation_length, measure_metrology(grid_view(s)).cells_per_gaussian_length);
+    // The tile of 128 / cells lengths, counted in the slowest direction's length (>= l).
+    EXPECT_LE(d->correlation_lengths_per_tile, 1.1 * 128 / cells);
+    EXPECT_GE(d->correlation_lengths_per_tile, 0.7 * 128 / cells);
+    // The same map as a window counts its interior inside the guard band, not the patch.
+    Microsurface w = import(file, false);
+    const auto dw = discretization_of(w.description);
+    ASSERT_TRUE(dw) << w.description.dump();
+    const Json& in = w.description["guard_band"]["interior"];
+    const double interior = in["x1"].get<double>() - in["x0"].get<double>();
+    EXPECT_NEAR(interior, 1.0 - 8.0 * cells / 128, 0.1) << cells;
+    EXPECT_NEAR(dw->correlation_lengths_per_tile / d->correlation_lengths_per_tile, interior, 0.1 * interior) << cells;
+  }
+}
+
+TEST(HeightmapCli, ValidateFlagsACoarseMeasuredMap) {
+  // 4 cells per l: coarser than the converged level of the G1 check (8 cells per l).
+  const std::string in = gaussian_map(4, 12, "coarse.exr"), s = tmp("coarse_map.exr"), v = tmp("coarse_val.json");
+  ASSERT_EQ(run_microsim("generate heightmap --input " + in + " --pixel-size 0.0078125 --periodic -o " + s).code, 0);
+  Result r = run_microsim("validate " + s + " --checks g1 --theta 60 --rays 2000 -o " + v);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Json j = Json::parse(microsim::testing::slurp(v));
+  int flagged = 0;
+  for (const Json& row : j["rows"])
+    if (row.value("model_name", "") == "converged_level" && row.value("quantity", "") == "cells_per_correlation_length")
+      ++flagged;
+  EXPECT_EQ(flagged, 1) << r.out;
+  const Json& desc = j["entries"][0]["surfaces"][0]["description"];
+  EXPECT_TRUE(desc.contains("cells_per_correlation_length"));
+  EXPECT_TRUE(desc.contains("correlation_lengths_per_tile"));
 }

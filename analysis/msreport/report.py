@@ -452,7 +452,8 @@ def section_convergence(ctx):
                 "What a triangulated Gaussian heightfield measures depends on the cells per correlation length "
                 "(l / dx) and on the correlation lengths per tile (L / l). The study (analysis/convergence.sh, "
                 "a long run not repeated here) measures every reported quantity on ensembles of tiles at "
-                "2 ... 32 cells per l and 16 ... 256 l per tile; shown: its recorded table and figures.")
+                "2 ... 32 cells per l and 16 ... 256 l per tile, for Beckmann alpha = 0.2, 0.5, 1 and the GGX "
+                "heightfield (alpha = 0.5); shown: its recorded table and figures.")
     root = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
     table = os.path.join(root, "analysis", "convergence_output.md")
     img = os.path.join(root, "docs", "img")
@@ -461,9 +462,10 @@ def section_convergence(ctx):
     if not os.path.isfile(table) or not figs:
         return s.skip("no recorded study (analysis/convergence_output.md, docs/img/convergence_*.png)")
     import shutil
-    captions = {"cells": "Difference from the finest grid that ran (32 cells per l; 16 for alpha = 0.2; paired: "
-                         "the same tiles on every grid) against cells per correlation length; grey band: 1%.",
-                "tile": "Difference from the largest tile that ran (256 l per tile for alpha = 1, 128 for 0.5) "
+    captions = {"cells": "Difference from the finest grid (32 cells per l; paired: the same tiles on every grid) "
+                         "against cells per correlation length; grey band: 1%. Beckmann at 32 l per tile, the GGX "
+                         "heightfield at 64 (its preset's tile).",
+                "tile": "Difference from the largest tile (256 l per tile) "
                         "against correlation lengths per tile (independent tiles per level); grey band: 1%.",
                 "lobe80": "In-plane lobe of a mirror at theta_i = 80 deg per grid level (order 1, and all orders dotted)."}
     for f in figs:

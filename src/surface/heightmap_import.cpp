@@ -11,6 +11,7 @@
 
 #include "microsim/io/oiio_module.hpp"
 #include "microsim/io/output.hpp"
+#include "microsim/surface/discretization.hpp"
 #include "microsim/surface/metrology.hpp"
 
 namespace microsim {
@@ -336,6 +337,26 @@ void record_guard_band(Microsurface& s, const HeightmapImportParams& p) {
   }
   s.description["guard_band"] = region.description["guard_band"];
 }
+
+// How finely the map resolves the surface, in the terms of the discretization study (README
+// "Converged surfaces"): the Gaussian correlation length l = (ACF decay length to 0.2) /
+// sqrt(ln 5), as metrology reports it; cells per the shortest l (of the coarser pixel side) and
+// the measured extent (the tile, or a window's interior) per the longest. A map whose ACF does
+// not decay states nothing.
+void record_discretization(Microsurface& s, bool periodic) {
+  HeightGridView v = grid_view(s);
+  v.periodic = periodic;
+  const AcfStats a = acf_stats(v);
+  if (!a.decayed || !(a.sal > 0) || !(a.longest > 0)) return;
+  const double k = std::sqrt(std::log(1.0 / a.threshold));
+  double extent = std::min(s.macro().size_x, s.macro().size_y);
+  const Json& d = s.description;
+  if (d.contains("guard_band") && d["guard_band"].contains("interior")) {
+    const Json& in = d["guard_band"]["interior"];
+    extent = std::min(in["x1"].get<double>() - in["x0"].get<double>(), in["y1"].get<double>() - in["y0"].get<double>());
+  }
+  add_discretization(s.description, std::max(s.dx(), s.dy()), extent, a.sal / k, a.longest / k);
+}
 }  // namespace
 
 Microsurface import_heightmap(const HeightmapImportParams& p) {
@@ -455,6 +476,7 @@ Microsurface import_heightmap(const HeightmapImportParams& p) {
   }
   s.description = d;
   if (!p.periodic) record_guard_band(s, p);
+  record_discretization(s, p.periodic);
   return s;
 }
 
