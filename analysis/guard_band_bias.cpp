@@ -19,18 +19,12 @@
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/surface/guard_band.hpp"
 #include "microsim/trace/tracer.hpp"
+#include "arg_lists.hpp"
 
 using namespace microsim;
+using microsim::analysis::parse_list;
 
 namespace {
-
-std::vector<double> parse_list(const char* s) {
-  std::vector<double> v;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) v.push_back(std::atof(item.c_str()));
-  return v;
-}
 
 struct Value {
   std::string name;

@@ -43,8 +43,10 @@
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/trace/tracer.hpp"
 #include "../tests/reference_heightfield_tracer.hpp"
+#include "arg_lists.hpp"
 
 using namespace microsim;
+using microsim::analysis::parse_list;
 
 namespace {
 
@@ -57,14 +59,6 @@ struct Args {
   int show_paths = 3;  // order >= 4 paths printed hit by hit, per angle
   long long replay = -1;  // only this path index (per seed), both tracers' hits printed
 };
-
-std::vector<double> parse_list(const char* s) {
-  std::vector<double> v;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) v.push_back(std::atof(item.c_str()));
-  return v;
-}
 
 // ---------------------------------------------------------------------------------------------
 // Geometry helpers for the diagnostics.

@@ -12,6 +12,7 @@
 #include <cmath>
 
 #include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/bsdf_record.hpp"
 #include "microsim/measure/groove_models.hpp"
 #include "microsim/models/vgroove_multiple.hpp"
 #include "microsim/surface/generators.hpp"
@@ -497,4 +498,61 @@ TEST(BsdfMeasure, VCavityInPlaneLobesEqualTheClosedFormOverItsGrooves) {
   EXPECT_LT(untested_mass, 1e-3);
   EXPECT_GT(rejected_wrong, 5);  // power: the lobe of a 2 degree different incidence
   EXPECT_GT(rejected_rough, 3);  // power: alpha 0.55 instead of 0.5
+}
+
+TEST(BsdfRecord, AlbedoTablesMergeOverSurfacesByTheTableRule) {
+  // Two independent Gaussian tiles: the merged albedo is the mean with the between-surface
+  // error, its ray-count error sqrt(se1^2 + se2^2) / 2, and the nominal models' z use the
+  // between-surface error combined with the Smith walk's own (table.hpp, Comparison::model_error).
+  std::vector<Table> tables;
+  std::vector<BsdfResult> results;
+  for (std::uint64_t seed : {5u, 6u}) {
+    GaussianParams gp;
+    gp.alpha_x = gp.alpha_y = 0.5;
+    gp.resolution = 32;
+    gp.seed = seed;
+    const Microsurface s = generate_gaussian(gp);
+    Tracer tracer(s);
+    BsdfOptions o = options(mm::Material::dielectric(1.5), 40.0, 0.0, 4000, 8);
+    o.model_walks = 4000;
+    results.push_back(measure_bsdf(tracer, o));
+    tables.push_back(bsdf_albedo_table(results.back()));
+  }
+  const Table merged = merge({&tables[0], &tables[1]});
+  ASSERT_EQ(merged.rows.size(), 10u);  // reflected and transmitted x orders 1, 2, 3, 4+, total
+  EXPECT_EQ(merged.error, ErrorKind::Surfaces);
+  for (std::size_t i = 0; i < merged.rows.size(); ++i) {
+    const Json& row = merged.rows[i];
+    const int side = static_cast<int>(i / 5), slot = static_cast<int>(i % 5);
+    const Estimate a = results[0].albedo(side, slot), b = results[1].albedo(side, slot);
+    EXPECT_EQ(row["side"], tables[0].rows[i]["side"]);
+    EXPECT_EQ(row["order"], order_key(slot, 4));
+    EXPECT_DOUBLE_EQ(row["albedo"].get<double>(), 0.5 * (a.mean + b.mean));
+    EXPECT_NEAR(row["albedo_stderr"].get<double>(), 0.5 * std::abs(a.mean - b.mean), 1e-15);
+    EXPECT_NEAR(row["albedo_stderr_rays"].get<double>(), 0.5 * std::hypot(a.stderr_, b.stderr_), 1e-15);
+    // The Smith walk's model is the same on both surfaces (same nominal NDF, seed and stream).
+    const Estimate m = results[0].model_albedo(side, slot);
+    EXPECT_EQ(m.mean, results[1].model_albedo(side, slot).mean);
+    const double se = std::hypot(row["albedo_stderr"].get<double>(), m.stderr_);
+    if (se > 0) EXPECT_NEAR(row["z_smith_multiple"].get<double>(), (row["albedo"].get<double>() - m.mean) / se, 1e-12);
+    EXPECT_TRUE(row["p_smith_multiple"].is_null() == !row["z_smith_multiple"].is_number());
+    // A wrong model (the walk's value 30% higher) moves z by 0.3 m / se: the rule sees it.
+    if (se > 0 && m.mean > 0.05) {
+      Json wrong = row;
+      wrong["smith_multiple"] = 1.3 * m.mean;
+      compare(wrong, merged.spec.comparisons[0], 2);
+      EXPECT_NEAR(row["z_smith_multiple"].get<double>() - wrong["z_smith_multiple"].get<double>(), 0.3 * m.mean / se, 1e-9);
+    }
+  }
+  // One surface's record: the nominal models' z are null, their ray-count z kept as *_rays.
+  GaussianParams gp;
+  gp.alpha_x = gp.alpha_y = 0.5;
+  gp.resolution = 32;
+  gp.seed = 5;
+  const Json j = bsdf_summary_json(results[0], generate_gaussian(gp));
+  const Json& r1 = j["rows"][0];
+  EXPECT_TRUE(r1["z_smith_single"].is_null());
+  EXPECT_NEAR(r1["z_smith_single_rays"].get<double>(),
+              (r1["albedo"].get<double>() - r1["smith_single"].get<double>()) / r1["albedo_stderr"].get<double>(), 1e-12);
+  EXPECT_TRUE(j["rows"][4]["z_smooth_interface"].is_number());  // exact model: a verdict
 }

@@ -8,10 +8,7 @@
 #include "commands.hpp"
 #include "ensemble.hpp"
 #include "microsim/io/output.hpp"
-#include "microsim/measure/g1_measure.hpp"
-#include "microsim/measure/vcavity_measure.hpp"
-#include "microsim/surface/generators.hpp"
-#include "microsim/surface/undersurface.hpp"
+#include "microsim/measure/g1_views.hpp"
 #include "microsim/surface/surface_io.hpp"
 #include "microsim/trace/tracer.hpp"
 
@@ -61,13 +58,10 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   require_extension(o.output, {"json", "csv"});
   std::vector<double> thetas = parse_angle_list(o.theta, "--theta");
   std::vector<double> phis = parse_angle_list(o.phi, "--phi");
-  bool below = false;  // views below the horizon: the undersurface (meshes only)
-  for (double t : thetas) {
+  for (double t : thetas)
     if (!(t >= 0 && t <= 180) || t == 90)
       throw UsageError("--theta must be in [0, 90) degrees, or (90, 180] for the undersurface of a "
                        "mesh (got " + fmt(t, 2) + ")");
-    below = below || t > 90;
-  }
   if (o.rays <= 0) throw UsageError("--rays must be a positive integer (got " + std::to_string(o.rays) + ")");
   std::vector<std::string> files = {o.surface};
   files.insert(files.end(), o.extra_surfaces.begin(), o.extra_surfaces.end());
@@ -115,65 +109,29 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
                        "one is *_stderr_rays; per_surface holds each surface's own rows"}};
   Progress progress("measure g1", g.quiet);
   const std::size_t total = files.size() * thetas.size() * phis.size();
-  std::size_t done = 0;
-  go.progress = [&](double f) { progress.update((done + f) / total); };
   TraceCounters counters;
   double build_seconds = 0;
   bool periodic = true;  // every ray from above meets the surface (not a finite object)
+  std::vector<Vec3> views;
+  for (double p : phis)
+    for (double t : thetas) views.push_back(direction_from_angles(rad(t), rad(p)));
   std::vector<Table> per_surface = measure_over_surfaces(g, files, [&](const Microsurface& s, std::size_t k) {
+    const double before = static_cast<double>(k * views.size());
+    G1Views m = measure_g1_views(s, views, go, [&](double done) { progress.update((before + done) / total); });
     if (k == 0) {
-      if (below && s.kind() == Microsurface::Kind::Heightfield)
-        throw UsageError("--theta must be in [0, 90) degrees for a heightfield (theta in (90, 180], the "
-                         "undersurface, is measured on meshes only)");
-      if (below && is_vcavity(s))
-        throw UsageError("--theta must be in [0, 90) degrees for a vcavity ensemble");
       j["surface"] = s.description;
       periodic = !s.macro().finite_object();
-      if (is_vcavity(s)) j["definitions"]["vcavity"] = kVcavityDefinition;
+      if (m.vcavity) j["definitions"]["vcavity"] = kVcavityDefinition;
     }
-    Table rows = g1_table();
-    const auto add = [&](const G1Result& r, double t, double p) -> Json& {
-      counters += r.counters;
-      Json& row = add_row(rows, r, s);
-      row["theta_deg"] = t;  // exactly as requested (no round trip through radians)
-      row["phi_deg"] = p;
-      ++done;
-      return row;
-    };
-    if (is_vcavity(s)) {  // 001 Sec. 6.1 made explicit: every groove traced on its own
-      std::vector<Vec3> views;
-      for (double p : phis)
-        for (double t : thetas) views.push_back(direction_from_angles(rad(t), rad(p)));
-      std::vector<G1Result> res = measure_vcavity_g1(s, views, go);
-      std::size_t i = 0;
-      for (double p : phis)
-        for (double t : thetas) add(res[i++], t, p);
-      return rows;
-    }
-    Tracer tracer(s);
-    build_seconds += tracer.build_seconds();
-    const FacetTable table = build_facet_table(s, g1_normal_binning(go));
-    std::unique_ptr<Microsurface> under_surface;
-    std::unique_ptr<Tracer> under;
-    if (below) {
-      under_surface = std::make_unique<Microsurface>(undersurface(s));
-      under = std::make_unique<Tracer>(*under_surface);
-      build_seconds += under->build_seconds();
-    }
+    counters += m.counters;
+    build_seconds += m.build_seconds;
+    std::size_t i = 0;
     for (double p : phis)
       for (double t : thetas) {
-        const Vec3 v = direction_from_angles(rad(t), rad(p));
-        const G1Result r = measure_g1(tracer, v, go, &table, under.get());
-        Json& row = add(r, t, p);
-        if (t > 90) {  // the undersurface beside its two approximations (000 "Inherent Assumptions")
-          const G1Result rev = measure_g1(tracer, -v, go, &table);
-          const G1Result ref = measure_g1(tracer, mirror_z(v), go, &table);
-          counters += rev.counters;
-          counters += ref.counters;
-          add_undersurface_approximations(row, r, rev, ref);
-        }
+        m.table.rows[i]["theta_deg"] = t;  // exactly as requested (no round trip through radians)
+        m.table.rows[i++]["phi_deg"] = p;
       }
-    return rows;
+    return std::move(m.table);
   });
   progress.finish();
   j["build_seconds"] = build_seconds;

@@ -49,43 +49,4 @@ double interpolate_f(const BsdfResult& r, int side, int slot, const Vec3& wo) {
          fy * ((1 - fx) * pixel(i, j + 1) + fx * pixel(i + 1, j + 1));
 }
 
-Json bsdf_incidences_json(const BsdfTable& t, const Microsurface& s) {
-  Json out = Json::array();
-  for (std::size_t p = 0; p < t.phi_i.size(); ++p)
-    for (std::size_t q = 0; q < t.theta_i.size(); ++q) {
-      Json j = {{"theta_i_deg", deg(t.theta_i[q])}, {"phi_i_deg", deg(t.phi_i[p])}};
-      const Json summary = bsdf_summary_json(t.at(static_cast<int>(p), static_cast<int>(q)), s);
-      for (auto it = summary.begin(); it != summary.end(); ++it) j[it.key()] = it.value();
-      out.push_back(j);
-    }
-  return out;
-}
-
-ExrTable bsdf_table_exr(const BsdfTable& t, const Json& attributes) {
-  if (t.results.size() == 1) return bsdf_exr_table(t.results[0], attributes);
-  ExrTable out;
-  Json incidences = Json::array();
-  for (std::size_t k = 0; k < t.results.size(); ++k) {
-    const BsdfResult& r = t.results[k];
-    ExrTable one = bsdf_exr_table(r, Json::object());
-    if (k == 0) {
-      out = one;
-      out.channel_names.clear();
-      out.channels.clear();
-    }
-    for (std::size_t c = 0; c < one.channels.size(); ++c) {
-      out.channel_names.push_back("incidence_" + std::to_string(k) + "." + one.channel_names[c]);
-      out.channels.push_back(std::move(one.channels[c]));
-    }
-    incidences.push_back({deg(r.options.theta_i), deg(r.options.phi_i)});
-  }
-  for (auto it = attributes.begin(); it != attributes.end(); ++it) out.attributes[it.key()] = it.value();
-  out.attributes["incidences"] = incidences.dump();
-  out.attributes["incidence_layout"] =
-      "channel incidence_<k>.<side>.f_<order>[_stderr] holds incidence k = p * n_theta + t for "
-      "theta_i_deg[t], phi_i_deg[p] of the parameters; `incidences` lists [theta_i_deg, "
-      "phi_i_deg] per k; each incidence's table follows `parameterization` and `value`";
-  return out;
-}
-
 }  // namespace microsim

@@ -130,10 +130,18 @@ void compare(Json& row, const Comparison& c, std::size_t surfaces) {
     return;
   }
   const double x = row[c.measured].get<double>(), model = zero ? 0.0 : row[c.model].get<double>();
-  row[c.z] = z_json(x, model, row[error].get<double>());
+  double se = row[error].get<double>();
+  if (!c.model_error.empty()) se = std::hypot(se, has_number(row, c.model_error) ? row[c.model_error].get<double>() : 0.0);
+  row[c.z] = z_json(x, model, se);
   if (!c.rel_dev.empty()) row[c.rel_dev] = rel_dev_json(x, model);
   if (!c.p.empty())
     row[c.p] = c.kind == ModelKind::Nominal ? ensemble_p_value(row[c.z], surfaces) : Json(nullptr);
+}
+
+void one_surface_nominal_z(Json& row, const std::string& z) {
+  if (!row.contains(z)) return;
+  row[z + "_rays"] = row[z];
+  row[z] = nullptr;
 }
 
 Table merge(const std::vector<const Table*>& parts) {

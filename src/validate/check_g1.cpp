@@ -54,133 +54,114 @@ double g1_work(const SurfaceSet& set) {
 
 void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
   const Options& o = set.options;
-  G1Options go;
-  go.rays = o.rays;
-  go.seed = o.seed;
-  go.split = o.split;
+  G1Options go = check_options<G1Options>(o, o.rays);
   const DirectionBinning binning = g1_normal_binning(go);
-  const std::size_t K = set.surfaces.size();
   const bool periodic = set.surfaces[0].macro().periodic;
-  Json per_surface = Json::array();
   // Averaged G1 per direction and surface, for the ensemble comparison with the nominal Smith.
   std::map<std::pair<double, double>, std::vector<Estimate>> g1_by_direction;
-  for (std::size_t k = 0; k < K; ++k) {
-    const Microsurface& s = set.surfaces[k];
-    const std::string label = surface_label(set, k);
-    Tracer tracer(s);
-    const FacetTable table = build_facet_table(s, binning);
-    progress.completed += 0.1 * static_cast<double>(s.num_facets());
-    Json rows = Json::array();
-    for (double p : o.phi_deg)
-      for (double t : o.theta_deg) {
-        const Vec3 v = direction_from_angles(rad(t), rad(p));
-        const double unit = 2.0 * static_cast<double>(o.rays);
-        go.progress = [&](double f) { progress.update(f * unit); };
-        G1Result r = measure_g1(tracer, v, go, &table);
-        progress.completed += unit;
-        const std::vector<double> vcav = vcavity_bin_model(table, r.v, binning.size());
-        progress.completed += 0.4 * static_cast<double>(s.num_facets());
-        progress.update();
-        const std::string dir = "theta " + angle(t) + " phi " + angle(p);
-        const std::string where = (label.empty() ? "" : label + ", ") + dir;
-        const Json ang = {{"theta_deg", t}, {"phi_deg", p}};
-        const double smith_numeric = 1.0 / (1.0 + r.lambda_numeric);
+  const Json per_surface = for_each_surface(set, binning, progress, [&](SurfacePass& pass) {
+    const Microsurface& s = pass.surface;
+    const std::string& label = pass.label;
+    for_each_view(o, [&](double t, double p, const Vec3& v) {
+      const G1Result r = measure_with_progress(progress, 2.0 * static_cast<double>(o.rays), go,
+                                               [&](const G1Options& opt) { return measure_g1(pass.tracer, v, opt, &pass.table); });
+      const std::vector<double> vcav = vcavity_bin_model(pass.table, r.v, binning.size());
+      progress.completed += 0.4 * static_cast<double>(s.num_facets());
+      progress.update();
+      const std::string dir = "theta " + angle(t) + " phi " + angle(p);
+      const std::string where = (label.empty() ? "" : label + ", ") + dir;
+      const Json ang = {{"theta_deg", t}, {"phi_deg", p}};
+      const double smith_numeric = 1.0 / (1.0 + r.lambda_numeric);
 
-        // Visible area ratio: exactly 1 on a periodic tile (every ray from above hits once).
-        const double ratio_scale = r.window_area_perp / (v.z() * r.macro_area);
-        const Estimate ratio = floored(r.visible_area_ratio(), r.raycast_rays, ratio_scale);
-        Row var = make_row(set, "", "visible_area_ratio", periodic ? "one" : "",
-                           periodic ? Kind::Identity : Kind::Info,
-                           "DESIGN.md visible area ratio; 000 Inherent Assumptions");
-        var.condition += " " + where;
-        var.measured = ratio.mean;
-        var.stderr_ = ratio.stderr_;
-        if (periodic) var.model = 1.0;
-        var.error = "rays";
-        var.group = set.name + "/visible_area_ratio/" + dir;
-        var.extra = ang;
-        out.rows.push_back(var);
+      // Visible area ratio: exactly 1 on a periodic tile (every ray from above hits once).
+      const double ratio_scale = r.window_area_perp / (v.z() * r.macro_area);
+      const Estimate ratio = floored(r.visible_area_ratio(), r.raycast_rays, ratio_scale);
+      Row var = make_row(set, "", "visible_area_ratio", periodic ? "one" : "",
+                         periodic ? Kind::Identity : Kind::Info,
+                         "DESIGN.md visible area ratio; 000 Inherent Assumptions");
+      var.condition += " " + where;
+      var.measured = ratio.mean;
+      var.stderr_ = ratio.stderr_;
+      if (periodic) var.model = 1.0;
+      var.error = "rays";
+      var.group = set.name + "/visible_area_ratio/" + dir;
+      var.extra = ang;
+      out.rows.push_back(var);
 
-        // Averaged G1: estimator (b) against estimator (a) -- the same quantity. On a periodic
-        // tile every ray hits once, so (a) is (v.n) A / sum_f A_f (v.m_f)+ = 1/(1+Lambda)
-        // exactly and this row repeats `g1 vs smith_numeric` (the hits are tested by the
-        // visible area ratio): an info row there, so that no comparison is counted twice.
-        const Estimate gb = floored(r.g1_area_sampling(), r.sample_rays);
-        const double scale_a = r.window_area_perp / r.front_projected;
-        const Estimate ga = floored(r.g1_raycast(), r.raycast_rays, scale_a);
-        Row est = make_row(set, "", "g1", "g1_raycast", periodic ? Kind::Info : Kind::Identity,
-                           periodic ? "DESIGN.md G1 estimators (a) = (b); on a periodic tile (a) "
-                                      "is 1/(1+Lambda) identically (tested by g1 vs smith_numeric)"
-                                    : "DESIGN.md G1 estimators (a) = (b)");
-        push_measured(out, std::move(est), where, gb.mean, std::hypot(gb.stderr_, ga.stderr_),
-                      ga.mean, "rays", set.name + "/g1_raycast/" + dir, ang);
+      // Averaged G1: estimator (b) against estimator (a) -- the same quantity. On a periodic
+      // tile every ray hits once, so (a) is (v.n) A / sum_f A_f (v.m_f)+ = 1/(1+Lambda)
+      // exactly and this row repeats `g1 vs smith_numeric` (the hits are tested by the
+      // visible area ratio): an info row there, so that no comparison is counted twice.
+      const Estimate gb = floored(r.g1_area_sampling(), r.sample_rays);
+      const double scale_a = r.window_area_perp / r.front_projected;
+      const Estimate ga = floored(r.g1_raycast(), r.raycast_rays, scale_a);
+      Row est = make_row(set, "", "g1", "g1_raycast", periodic ? Kind::Info : Kind::Identity,
+                         periodic ? "DESIGN.md G1 estimators (a) = (b); on a periodic tile (a) "
+                                    "is 1/(1+Lambda) identically (tested by g1 vs smith_numeric)"
+                                  : "DESIGN.md G1 estimators (a) = (b)");
+      push_measured(out, std::move(est), where, gb.mean, std::hypot(gb.stderr_, ga.stderr_),
+                    ga.mean, "rays", set.name + "/g1_raycast/" + dir, ang);
 
-        // Averaged G1 against 1/(1 + Lambda) from the facets: on a periodic tile the visible
-        // projected area is (v.n) A (000 eq. 2a-2b), so the projected-area average
-        // G1 = (v.n) A / sum_f A_f (v.m_f)+ = 1/(1+Lambda) exactly (000 eq. 3Xc-3Xd): an
-        // identity, not a test of Smith. On a finite object it is a model (the object is not
-        // infinitesimally thick, 000 "Inherent Assumptions").
-        Row sn = make_row(set, "", "g1", "smith_numeric", periodic ? Kind::Identity : Kind::Model,
-                          "000 eq. 3Xc-3Xd (exact for the projected-area average on a periodic tile)");
-        push_measured(out, std::move(sn), where, gb.mean,
-                      gb.stderr_, smith_numeric, "rays",
-                      set.name + "/smith_numeric/" + dir, ang);
+      // Averaged G1 against 1/(1 + Lambda) from the facets: on a periodic tile the visible
+      // projected area is (v.n) A (000 eq. 2a-2b), so the projected-area average
+      // G1 = (v.n) A / sum_f A_f (v.m_f)+ = 1/(1+Lambda) exactly (000 eq. 3Xc-3Xd): an
+      // identity, not a test of Smith. On a finite object it is a model (the object is not
+      // infinitesimally thick, 000 "Inherent Assumptions").
+      Row sn = make_row(set, "", "g1", "smith_numeric", periodic ? Kind::Identity : Kind::Model,
+                        "000 eq. 3Xc-3Xd (exact for the projected-area average on a periodic tile)");
+      push_measured(out, std::move(sn), where, gb.mean,
+                    gb.stderr_, smith_numeric, "rays",
+                    set.name + "/smith_numeric/" + dir, ang);
 
-        // Per normal bin G1(v, m).
-        for (int b = 0; b < binning.size(); ++b) {
-          const G1NormalBin& nb = r.bins[b];
-          if (nb.front_projected <= 0 || nb.samples < o.min_bin_count ||
-              nb.raycast_hits < o.min_bin_count)
-            continue;
-          const int it = b / binning.n_phi(), ip = b % binning.n_phi();
-          const double tlo = deg(binning.theta_lo(it)), thi = deg(binning.theta_hi(it));
-          const double plo = deg(binning.phi_lo(ip)), phi_hi = deg(binning.phi_hi(ip));
-          const std::string bin_where = where + ", m in [" + angle(tlo) + "," + angle(thi) + "]x[" +
-                                        angle(plo) + "," + angle(phi_hi) + "]";
-          Json bx = ang;
-          bx["theta_m_range_deg"] = {tlo, thi};
-          bx["phi_m_range_deg"] = {plo, phi_hi};
-          bx["m"] = {nb.mean_normal.x(), nb.mean_normal.y(), nb.mean_normal.z()};
-          const Estimate eb = floored(r.bin_g1_area_sampling(b), nb.samples);
-          const double sa = r.window_area_perp / nb.front_projected;
-          const Estimate ha = floored(r.bin_g1_raycast(b), r.raycast_rays, sa);
-          Row a = make_row(set, "", "g1_bin", "g1_bin_raycast", Kind::Identity,
-                           "DESIGN.md G1(v,m) estimators (a) = (b)");
-          push_measured(out, std::move(a), bin_where, eb.mean,
-                        std::hypot(eb.stderr_, ha.stderr_), ha.mean, "rays",
-                        set.name + "/g1_bin_raycast/" + dir, bx);
-          // Smith: G1(v, m) = chi+(v.m) G1(v), independent of m (001 eq. 9-10).
-          Row sm = make_row(set, "", "g1_bin", "smith_numeric", Kind::Model,
-                            "001 eq. (9)-(10): Smith G1(v,m) = chi+(v.m) G1(v)");
-          push_measured(out, std::move(sm), bin_where, eb.mean,
-                        eb.stderr_, smith_numeric, "rays",
-                        set.name + "/g1_bin_smith/" + dir, bx);
-          Row vc = make_row(set, "", "g1_bin", "vcavity", Kind::Model,
-                            "001 eq. (24), averaged over the bin's facets");
-          push_measured(out, std::move(vc), bin_where, eb.mean,
-                        eb.stderr_, vcav[b], "rays",
-                        set.name + "/g1_bin_vcavity/" + dir, bx);
-        }
-
-        Table g1_rows = g1_table();
-        Json& row = add_row(g1_rows, r, s);
-        row["theta_deg"] = t;
-        row["phi_deg"] = p;
-        // Models per bin beside the measured G1(v, m), in the order add_row lists the bins.
-        std::size_t jb = 0;
-        for (int b = 0; b < binning.size() && jb < row["bins"].size(); ++b) {
-          if (r.bins[b].area <= 0) continue;
-          row["bins"][jb]["smith_numeric"] = r.bins[b].front_projected > 0 ? smith_numeric : 0.0;
-          row["bins"][jb]["vcavity"] = vcav[b];
-          row["bins"][jb]["samples"] = r.bins[b].samples;
-          row["bins"][jb]["raycast_hits"] = r.bins[b].raycast_hits;
-          ++jb;
-        }
-        rows.push_back(row);
-        g1_by_direction[{t, p}].push_back(gb);
+      // Per normal bin G1(v, m).
+      for (int b = 0; b < binning.size(); ++b) {
+        const G1NormalBin& nb = r.bins[b];
+        if (nb.front_projected <= 0 || nb.samples < o.min_bin_count ||
+            nb.raycast_hits < o.min_bin_count)
+          continue;
+        const NormalBinRange bin = normal_bin_range(binning, b);
+        const std::string bin_where = where + ", " + bin.text();
+        Json bx = bin.with(ang);
+        bx["m"] = {nb.mean_normal.x(), nb.mean_normal.y(), nb.mean_normal.z()};
+        const Estimate eb = floored(r.bin_g1_area_sampling(b), nb.samples);
+        const double sa = r.window_area_perp / nb.front_projected;
+        const Estimate ha = floored(r.bin_g1_raycast(b), r.raycast_rays, sa);
+        Row a = make_row(set, "", "g1_bin", "g1_bin_raycast", Kind::Identity,
+                         "DESIGN.md G1(v,m) estimators (a) = (b)");
+        push_measured(out, std::move(a), bin_where, eb.mean,
+                      std::hypot(eb.stderr_, ha.stderr_), ha.mean, "rays",
+                      set.name + "/g1_bin_raycast/" + dir, bx);
+        // Smith: G1(v, m) = chi+(v.m) G1(v), independent of m (001 eq. 9-10).
+        Row sm = make_row(set, "", "g1_bin", "smith_numeric", Kind::Model,
+                          "001 eq. (9)-(10): Smith G1(v,m) = chi+(v.m) G1(v)");
+        push_measured(out, std::move(sm), bin_where, eb.mean,
+                      eb.stderr_, smith_numeric, "rays",
+                      set.name + "/g1_bin_smith/" + dir, bx);
+        Row vc = make_row(set, "", "g1_bin", "vcavity", Kind::Model,
+                          "001 eq. (24), averaged over the bin's facets");
+        push_measured(out, std::move(vc), bin_where, eb.mean,
+                      eb.stderr_, vcav[b], "rays",
+                      set.name + "/g1_bin_vcavity/" + dir, bx);
       }
-    per_surface.push_back({{"label", set.labels[k]}, {"rows", rows}});
-  }
+
+      Table g1_rows = g1_table();
+      Json& row = add_row(g1_rows, r, s);
+      row["theta_deg"] = t;
+      row["phi_deg"] = p;
+      // Models per bin beside the measured G1(v, m), in the order add_row lists the bins.
+      std::size_t jb = 0;
+      for (int b = 0; b < binning.size() && jb < row["bins"].size(); ++b) {
+        if (r.bins[b].area <= 0) continue;
+        row["bins"][jb]["smith_numeric"] = r.bins[b].front_projected > 0 ? smith_numeric : 0.0;
+        row["bins"][jb]["vcavity"] = vcav[b];
+        row["bins"][jb]["samples"] = r.bins[b].samples;
+        row["bins"][jb]["raycast_hits"] = r.bins[b].raycast_hits;
+        ++jb;
+      }
+      pass.rows().push_back(row);
+      g1_by_direction[{t, p}].push_back(gb);
+    });
+  });
   // Averaged G1 against the Smith G1 of the nominal NDF (001 eq. 11 with alpha_o): a
   // statistic of the generated surfaces, so it needs the between-surface error. One surface
   // gives the relative deviation only.

@@ -35,38 +35,26 @@ double g2_work(const SurfaceSet& set) {
 
 void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
   const Options& o = set.options;
-  G2Options go;
-  go.rays = share_of_rays(o, 4);
-  go.seed = o.seed;
-  go.split = o.split;
+  G2Options go = check_options<G2Options>(o, share_of_rays(o, 4));
   const DirectionBinning binning = g2_normal_binning(go);
-  const std::size_t K = set.surfaces.size();
-  Json per_surface = Json::array();
-  auto measure = [&](const Tracer& tracer, const Vec3& a, const Vec3& b, std::uint64_t seed,
-                     const FacetTable& table) {
-    G2Options g = go;
-    g.seed = seed;
-    const double unit = 2.0 * static_cast<double>(g.rays);
-    g.progress = [&](double f) { progress.update(f * unit); };
-    G2Result r = measure_g2(tracer, a, b, g, &table);
-    progress.completed += unit;
+  auto measure = [&](const Tracer& tracer, const Vec3& a, const Vec3& b, const FacetTable& table) {
+    G2Result r = measure_with_progress(progress, 2.0 * static_cast<double>(go.rays), go,
+                                       [&](const G2Options& g) { return measure_g2(tracer, a, b, g, &table); });
     progress.update();
     return r;
   };
   // The averaged G2 of each surface per pair, for the nominal forms over the ensemble.
   std::vector<std::vector<Estimate>> g2_by_pair(g2_pairs().size());
-  for (std::size_t k = 0; k < K; ++k) {
-    const Microsurface& s = set.surfaces[k];
-    const std::string label = surface_label(set, k);
-    Tracer tracer(s);
-    const FacetTable table = build_facet_table(s, binning);
-    progress.completed += 0.1 * static_cast<double>(s.num_facets());
-    Json rows = Json::array();
+  const Json per_surface = for_each_surface(set, binning, progress, [&](SurfacePass& pass) {
+    const Microsurface& s = pass.surface;
+    const std::string& label = pass.label;
+    const Tracer& tracer = pass.tracer;
+    const FacetTable& table = pass.table;
     for (std::size_t ip = 0; ip < g2_pairs().size(); ++ip) {
       const G2Pair& p = g2_pairs()[ip];
       const Vec3 vo = direction_from_angles(rad(p.theta_o), rad(p.phi_o));
       const Vec3 vi = direction_from_angles(rad(p.theta_i), rad(p.phi_i));
-      const G2Result a = measure(tracer, vo, vi, o.seed, table);
+      const G2Result a = measure(tracer, vo, vi, table);
       const std::string dir = "o " + angle(p.theta_o) + "/" + angle(p.phi_o) + " i " +
                               angle(p.theta_i) + "/" + angle(p.phi_i);
       const std::string where = (label.empty() ? "" : label + ", ") + dir;
@@ -90,7 +78,7 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
                 "001 eq. (23), Lambda from the facets");
       model_row("vcavity", a.vcavity, "001 eq. (24)-(25), averaged over the facets facing both");
       Table g2_rows = g2_table();
-      rows.push_back(add_row(g2_rows, a, s));
+      pass.rows().push_back(add_row(g2_rows, a, s));
     }
     Json hotspot = Json::array();
     // Hotspot (000 eq. 16: G2(v,m,v) = G1(v,m)): G2 at o = i against `measure g1` run
@@ -99,17 +87,15 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
     // direction-correlated form (001 eq. 22), which is exactly G1 at o = i.
     for (double t : g2_hotspot_theta()) {
       const Vec3 v = direction_from_angles(rad(t), 0.0);
-      const G2Result h = measure(tracer, v, v, o.seed, table);
+      const G2Result h = measure(tracer, v, v, table);
       G1Options g1o;
       g1o.rays = go.rays;
       g1o.seed = o.seed + 0x9e3779b9ULL;
       g1o.split = o.split;
       g1o.normal_theta_bins = go.normal_theta_bins;
       g1o.normal_phi_bins = go.normal_phi_bins;
-      const double unit = 2.0 * static_cast<double>(g1o.rays);
-      g1o.progress = [&](double f) { progress.update(f * unit); };
-      const G1Result g = measure_g1(tracer, v, g1o, &table);
-      progress.completed += unit;
+      const G1Result g = measure_with_progress(progress, 2.0 * static_cast<double>(g1o.rays), g1o,
+                                               [&](const G1Options& opt) { return measure_g1(tracer, v, opt, &table); });
       progress.update();
       const std::string where = (label.empty() ? "" : label + ", ") + "theta " + angle(t);
       const Json ang = {{"theta_deg", t}};
@@ -131,29 +117,22 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         const G2NormalBin& hb = h.bins[b];
         const G1NormalBin& gb = g.bins[b];
         if (hb.samples < o.min_bin_count || gb.samples < o.min_bin_count) continue;
-        const int it = b / binning.n_phi(), iph = b % binning.n_phi();
-        const double tlo = deg(binning.theta_lo(it)), thi = deg(binning.theta_hi(it));
-        const double plo = deg(binning.phi_lo(iph)), phi_hi = deg(binning.phi_hi(iph));
+        const NormalBinRange bin = normal_bin_range(binning, b);
         const Estimate e2 = floored(h.bin_g2(b), hb.samples);
         const Estimate e1 = floored(g.bin_g1_area_sampling(b), gb.samples);
-        Json bx = ang;
-        bx["theta_m_range_deg"] = {tlo, thi};
-        bx["phi_m_range_deg"] = {plo, phi_hi};
+        const Json bx = bin.with(ang);
         Row rb = make_row(set, "", "g2_hotspot_bin", "g1_bin_independent", Kind::Identity,
                           "000 eq. 16: G2(v,m,v) = G1(v,m) per normal bin");
-        push_measured(out, std::move(rb),
-                      where + ", m in [" + angle(tlo) + "," + angle(thi) + "]x[" + angle(plo) + "," +
-                          angle(phi_hi) + "]",
-                      e2.mean, std::hypot(e2.stderr_, e1.stderr_), e1.mean, "rays",
+        push_measured(out, std::move(rb), where + ", " + bin.text(), e2.mean, std::hypot(e2.stderr_, e1.stderr_), e1.mean, "rays",
                       set.name + "/g2_hotspot_bin/theta " + angle(t), bx);
-        hot["bins"].push_back({{"theta_m_range_deg", {tlo, thi}}, {"phi_m_range_deg", {plo, phi_hi}},
-                               {"g2", e2.mean}, {"g2_stderr", e2.stderr_},
+        hot["bins"].push_back({{"theta_m_range_deg", {bin.theta_lo, bin.theta_hi}},
+                               {"phi_m_range_deg", {bin.phi_lo, bin.phi_hi}}, {"g2", e2.mean}, {"g2_stderr", e2.stderr_},
                                {"g1_independent", e1.mean}, {"g1_independent_stderr", e1.stderr_}});
       }
       hotspot.push_back(hot);
     }
-    per_surface.push_back({{"label", set.labels[k]}, {"rows", rows}, {"hotspot", hotspot}});
-  }
+    pass.entry["hotspot"] = hotspot;
+  });
   // The four Smith forms of the nominal NDF (001 eq. 20-23 with its Lambda): a statistic of
   // the generated surfaces, compared over the ensemble.
   const Microsurface& s0 = set.surfaces[0];

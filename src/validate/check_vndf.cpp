@@ -24,76 +24,63 @@ double vndf_work(const SurfaceSet& set) {
 
 void check_vndf(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
   const Options& o = set.options;
-  VndfOptions vo;
-  vo.rays = share_of_rays(o, 4);
-  vo.seed = o.seed;
-  vo.split = o.split;
+  VndfOptions vo = check_options<VndfOptions>(o, share_of_rays(o, 4));
   const DirectionBinning binning = vndf_binning(vo);
-  Json per_surface = Json::array();
   // Per direction and bin, the density of each surface (ensemble rows below).
   std::map<std::pair<double, double>, std::vector<std::vector<Estimate>>> dv_by_direction;
-  for (std::size_t k = 0; k < set.surfaces.size(); ++k) {
-    const Microsurface& s = set.surfaces[k];
-    const std::string label = surface_label(set, k);
-    Tracer tracer(s);
-    const FacetTable table = build_facet_table(s, binning);
-    progress.completed += 0.1 * static_cast<double>(s.num_facets());
-    Json rows = Json::array();
-    for (double p : o.phi_deg)
-      for (double t : o.theta_deg) {
-        const Vec3 v = direction_from_angles(rad(t), rad(p));
-        const double unit = static_cast<double>(vo.rays);
-        vo.progress = [&](double f) { progress.update(f * unit); };
-        const VndfResult r = measure_vndf(tracer, v, vo, &table);
-        progress.completed += unit;
-        const std::string where = (label.empty() ? "" : label + ", ") + "theta " + angle(t) + " phi " + angle(p);
-        const Json ang = {{"theta_deg", t}, {"phi_deg", p}};
-        std::optional<SamplerTest> sampler;
-        if (s.nominal) {
-          const std::vector<double> model =
-              bin_integrals(r.binning, [&](const Vec3& m) { return s.nominal->D_visible(r.v, m); });
-          const GofResult g = histogram_gof(r.bin_hits, r.hits, model, vo.family_alpha);
-          Row m = make_row(set, "", "vndf_chi2_per_dof", "nominal", Kind::Info,
-                           "001 eq. (13): D_v of the nominal NDF, bin integrals");
-          m.condition += " " + where;
-          set_chi2(m, g.chi2, g.dof);
-          m.error = "rays";
-          m.group = set.name + "/vndf_nominal";
-          m.extra = ang;
-          m.extra["chi2"] = g.chi2;
-          m.extra["dof"] = g.dof;
-          m.extra["p_value"] = g.p_value;
-          m.error = "rays (one surface: surface-to-surface variation not included)";
-          out.rows.push_back(m);
-          auto& dv = dv_by_direction[{t, p}];
-          dv.resize(static_cast<std::size_t>(binning.size()));
-          for (int b = 0; b < binning.size(); ++b) dv[b].push_back(floored(r.dv(b), r.hits, 1.0 / binning.solid_angle(b)));
-          // The sampler only depends on the nominal NDF: tested once per direction.
-          if (k == 0) {
-            sampler = test_vndf_sampler(*s.nominal, v, vo.rays, binning, o.seed ^ 0x5a5a5a5aULL);
-            Row sr = make_row(set, "", "vndf_sampler_chi2_per_dof", "sampler_model", Kind::Identity,
-                              "models/ndf.hpp VNDF sampler vs its own D_v (001 eq. 13)");
-            sr.condition = set.name + " nominal sampler, theta " + angle(t) + " phi " + angle(p);
-            set_chi2(sr, sampler->gof.chi2, sampler->gof.dof);
-            sr.error = "samples";
-            sr.group = set.name + "/vndf_sampler";
-            sr.extra = ang;
-            sr.extra["chi2"] = sampler->gof.chi2;
-            sr.extra["dof"] = sampler->gof.dof;
-            sr.extra["p_value"] = sampler->gof.p_value;
-            out.rows.push_back(sr);
-          }
+  const Json per_surface = for_each_surface(set, binning, progress, [&](SurfacePass& pass) {
+    const Microsurface& s = pass.surface;
+    for_each_view(o, [&](double t, double p, const Vec3& v) {
+      const double unit = static_cast<double>(vo.rays);
+      const VndfResult r = measure_with_progress(
+          progress, unit, vo, [&](const VndfOptions& opt) { return measure_vndf(pass.tracer, v, opt, &pass.table); });
+      const std::string where = (pass.label.empty() ? "" : pass.label + ", ") + "theta " + angle(t) + " phi " + angle(p);
+      const Json ang = {{"theta_deg", t}, {"phi_deg", p}};
+      std::optional<SamplerTest> sampler;
+      if (s.nominal) {
+        const std::vector<double> model =
+            bin_integrals(r.binning, [&](const Vec3& m) { return s.nominal->D_visible(r.v, m); });
+        const GofResult g = histogram_gof(r.bin_hits, r.hits, model, vo.family_alpha);
+        Row m = make_row(set, "", "vndf_chi2_per_dof", "nominal", Kind::Info,
+                         "001 eq. (13): D_v of the nominal NDF, bin integrals");
+        m.condition += " " + where;
+        set_chi2(m, g.chi2, g.dof);
+        m.error = "rays";
+        m.group = set.name + "/vndf_nominal";
+        m.extra = ang;
+        m.extra["chi2"] = g.chi2;
+        m.extra["dof"] = g.dof;
+        m.extra["p_value"] = g.p_value;
+        m.error = "rays (one surface: surface-to-surface variation not included)";
+        out.rows.push_back(m);
+        auto& dv = dv_by_direction[{t, p}];
+        dv.resize(static_cast<std::size_t>(binning.size()));
+        for (int b = 0; b < binning.size(); ++b) dv[b].push_back(floored(r.dv(b), r.hits, 1.0 / binning.solid_angle(b)));
+        // The sampler only depends on the nominal NDF: tested once per direction.
+        if (pass.k == 0) {
+          sampler = test_vndf_sampler(*s.nominal, v, vo.rays, binning, o.seed ^ 0x5a5a5a5aULL);
+          Row sr = make_row(set, "", "vndf_sampler_chi2_per_dof", "sampler_model", Kind::Identity,
+                            "models/ndf.hpp VNDF sampler vs its own D_v (001 eq. 13)");
+          sr.condition = set.name + " nominal sampler, theta " + angle(t) + " phi " + angle(p);
+          set_chi2(sr, sampler->gof.chi2, sampler->gof.dof);
+          sr.error = "samples";
+          sr.group = set.name + "/vndf_sampler";
+          sr.extra = ang;
+          sr.extra["chi2"] = sampler->gof.chi2;
+          sr.extra["dof"] = sampler->gof.dof;
+          sr.extra["p_value"] = sampler->gof.p_value;
+          out.rows.push_back(sr);
         }
-        progress.completed += unit;
-        progress.update();
-        Table vndf_rows = vndf_table(vo.family_alpha);
-        Json& row = add_row(vndf_rows, r, s, vo, sampler);
-        row["theta_deg"] = t;
-        row["phi_deg"] = p;
-        rows.push_back(row);
       }
-    per_surface.push_back({{"label", set.labels[k]}, {"rows", rows}});
-  }
+      progress.completed += unit;
+      progress.update();
+      Table vndf_rows = vndf_table(vo.family_alpha);
+      Json& row = add_row(vndf_rows, r, s, vo, sampler);
+      row["theta_deg"] = t;
+      row["phi_deg"] = p;
+      pass.rows().push_back(row);
+    });
+  });
   if (set.surfaces.size() > 1 && set.surfaces[0].nominal)
     for (double p : o.phi_deg)
       for (double t : o.theta_deg) {
@@ -103,18 +90,12 @@ void check_vndf(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         const std::string dir = "theta " + angle(t) + " phi " + angle(p);
         for (int b = 0; b < binning.size(); ++b) {
           if (model[b] < kVndfMinBinMass) continue;
-          const int it = b / binning.n_phi(), iph = b % binning.n_phi();
-          const double tlo = deg(binning.theta_lo(it)), thi = deg(binning.theta_hi(it));
-          const double plo = deg(binning.phi_lo(iph)), phi_hi = deg(binning.phi_hi(iph));
+          const NormalBinRange bin = normal_bin_range(binning, b);
           Row r = make_row(set, "", "vndf_bin", "nominal", Kind::Model,
                            "001 eq. (13): D_v of the nominal NDF, bin average");
-          push_nominal(out, std::move(r),
-                       dir + ", m in [" + angle(tlo) + "," + angle(thi) + "]x[" + angle(plo) + "," +
-                           angle(phi_hi) + "]",
-                       dv_by_direction[{t, p}][b], model[b] / binning.solid_angle(b),
-                       set.name + "/vndf_nominal_bins/" + dir,
-                       {{"theta_deg", t}, {"phi_deg", p}, {"theta_m_range_deg", {tlo, thi}},
-                        {"phi_m_range_deg", {plo, phi_hi}}});
+          push_nominal(out, std::move(r), dir + ", " + bin.text(), dv_by_direction[{t, p}][b],
+                       model[b] / binning.solid_angle(b), set.name + "/vndf_nominal_bins/" + dir,
+                       bin.with({{"theta_deg", t}, {"phi_deg", p}}));
         }
       }
   out.measurements = per_surface;

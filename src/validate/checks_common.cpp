@@ -98,6 +98,41 @@ std::string surface_label(const SurfaceSet& set, std::size_t k) {
   return set.surfaces.size() > 1 || !set.labels[k].empty() ? set.labels[k] : "";
 }
 
+Json for_each_surface(const SurfaceSet& set, const DirectionBinning& binning, Progress& progress,
+                      const std::function<void(SurfacePass&)>& body) {
+  Json entries = Json::array();
+  for (std::size_t k = 0; k < set.surfaces.size(); ++k) {
+    const Microsurface& s = set.surfaces[k];
+    Tracer tracer(s);
+    const FacetTable table = build_facet_table(s, binning);
+    progress.completed += 0.1 * static_cast<double>(s.num_facets());
+    Json entry = {{"label", set.labels[k]}, {"rows", Json::array()}};
+    SurfacePass pass{k, s, surface_label(set, k), tracer, table, entry};
+    body(pass);
+    entries.push_back(std::move(entry));
+  }
+  return entries;
+}
+
+void for_each_view(const Options& o, const std::function<void(double, double, const Vec3&)>& body) {
+  for (double p : o.phi_deg)
+    for (double t : o.theta_deg) body(t, p, direction_from_angles(rad(t), rad(p)));
+}
+
+NormalBinRange normal_bin_range(const DirectionBinning& binning, int b) {
+  const int it = b / binning.n_phi(), ip = b % binning.n_phi();
+  return {deg(binning.theta_lo(it)), deg(binning.theta_hi(it)), deg(binning.phi_lo(ip)),
+          deg(binning.phi_hi(ip))};
+}
+std::string NormalBinRange::text() const {
+  return "m in [" + angle(theta_lo) + "," + angle(theta_hi) + "]x[" + angle(phi_lo) + "," + angle(phi_hi) + "]";
+}
+Json NormalBinRange::with(Json extra) const {
+  extra["theta_m_range_deg"] = {theta_lo, theta_hi};
+  extra["phi_m_range_deg"] = {phi_lo, phi_hi};
+  return extra;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Shared by the G2, VNDF and BSDF checks: ray counts derived from --rays (kept modest so that
 // every check together stays within a few times the cost of the G1 check).

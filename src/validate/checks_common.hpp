@@ -50,6 +50,49 @@ void push_measured(CheckOutput& out, Row r, const std::string& where, double mea
                    double stderr_, double model, const char* error, const std::string& group,
                    const Json& extra);
 std::string surface_label(const SurfaceSet& set, std::size_t k);
+// A check's measurement options (G1Options, G2Options, VndfOptions): `rays`, and the seed and
+// the tally split of the validate options.
+template <class MeasureOptions>
+MeasureOptions check_options(const Options& o, std::uint64_t rays) {
+  MeasureOptions m;
+  m.rays = rays;
+  m.seed = o.seed;
+  m.split = o.split;
+  return m;
+}
+// One surface of the G1, G2 and VNDF checks: its tracer and facet table, built once, and the
+// entry of measurements[check] that its rows go into ({"label", "rows"}, more fields allowed).
+struct SurfacePass {
+  std::size_t k;
+  const Microsurface& surface;
+  std::string label;  // surface_label
+  const Tracer& tracer;
+  const FacetTable& table;
+  Json& entry;
+  Json& rows() { return entry["rows"]; }
+};
+// Runs `body` on every surface of the set in order (the facet pass counted as 0.1 work units per
+// facet, as the checks' work estimates count it); returns the entries, one per surface.
+Json for_each_surface(const SurfaceSet& set, const DirectionBinning& binning, Progress& progress,
+                      const std::function<void(SurfacePass&)>& body);
+// Every view direction of the options, phi outer and theta inner (the order of the records).
+void for_each_view(const Options& o, const std::function<void(double theta_deg, double phi_deg, const Vec3& v)>& body);
+// Runs one measurement worth `unit` work units with its progress callback set (the options'
+// `progress` member), then counts it done.
+template <class Opts, class Measure>
+auto measure_with_progress(Progress& progress, double unit, Opts& options, Measure&& measure) {
+  options.progress = [&progress, unit](double f) { progress.update(f * unit); };
+  auto r = measure(options);
+  progress.completed += unit;
+  return r;
+}
+// A normal bin's ranges in degrees, as the rows print and record them.
+struct NormalBinRange {
+  double theta_lo, theta_hi, phi_lo, phi_hi;
+  std::string text() const;  // "m in [a,b]x[c,d]"
+  Json with(Json extra) const;  // extra + theta_m_range_deg, phi_m_range_deg
+};
+NormalBinRange normal_bin_range(const DirectionBinning& binning, int b);
 // Ray counts of the G2, VNDF and BSDF checks, derived from --rays.
 std::uint64_t share_of_rays(const Options& o, std::uint64_t divisor);
 // An info row when the set's surfaces are coarser than the converged level for `check`.

@@ -173,11 +173,6 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& options);
 // Key of slot k: "order_1", ..., "order_<K>plus", "total".
 std::string order_key(int k, int orders);
 
-// The JSON summary fields (albedo, reflected_stderr, transmitted_stderr, in_plane,
-// models beside them), without the run header.
-Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s);
-// The EXR table: per side and slot f and its standard error on the hemisphere map, every
-// parameter in the header (`attributes` are added to it).
-ExrTable bsdf_exr_table(const BsdfResult& r, const Json& attributes);
+// The record's tables and writers: measure/bsdf_record.hpp.
 
 }  // namespace microsim

@@ -39,12 +39,4 @@ BsdfTable measure_bsdf_table(const Tracer& tracer, const BsdfTableOptions& optio
 // reconstruction; its error is the pixel size, not the Monte Carlo error.
 double interpolate_f(const BsdfResult& r, int side, int slot, const Vec3& wo);
 
-// JSON of every incidence: {theta_i_deg, phi_i_deg, and the fields of bsdf_summary_json}.
-Json bsdf_incidences_json(const BsdfTable& t, const Microsurface& s);
-
-// EXR of every incidence: channels "incidence_<k>.<side>.f_<order>" (and _stderr), k = p *
-// n_theta + t; the header lists the incidences (`incidences`: [[theta_deg, phi_deg], ...]) and
-// the layout. A single incidence keeps the single-incidence channel names.
-ExrTable bsdf_table_exr(const BsdfTable& t, const Json& attributes);
-
 }  // namespace microsim

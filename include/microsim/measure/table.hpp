@@ -65,6 +65,9 @@ struct Comparison {
   std::string model;  // column name; empty for ModelKind::Zero
   ModelKind kind = ModelKind::Nominal;
   std::string z, rel_dev, p;
+  // The model's own standard error column (a Monte Carlo model), combined in quadrature with
+  // the measured error; empty: an exact model.
+  std::string model_error = {};
 };
 
 // How a table of one surface merges into an ensemble's.
@@ -93,6 +96,11 @@ Table merge(const std::vector<const Table*>& parts);
 // One comparison of the rule above, written into `row`; K is the number of surfaces (Student t
 // p-value with K - 1 degrees of freedom; none for K < 2).
 void compare(Json& row, const Comparison& c, std::size_t surfaces);
+
+// A comparison with a nominal model made on one surface: without the between-surface error it
+// is no verdict on the model, so the z named `z` becomes null and its value (in units of the
+// ray-count error) is kept as `z`_rays, at the end of the row. Rows without `z` are unchanged.
+void one_surface_nominal_z(Json& row, const std::string& z);
 
 // Two-sided Student t p-value of a z computed with the between-surface error of K surfaces
 // (null when z is not a number or K < 2).

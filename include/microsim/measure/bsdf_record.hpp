@@ -1,0 +1,91 @@
+// The record of a BSDF measurement (measure/bsdf_measure.hpp, measure/bsdf_table.hpp).
+//
+// A request states a measurement as the command line and the Python module give it (material
+// by name, angles in degrees, the output format); it is checked here, so that every caller gets
+// the same limits and messages. Each incidence's result becomes two Tables (measure/table.hpp):
+// the albedo per side and scattering order with the models beside it, and the in-plane lobe per
+// bin; the JSON record, the EXR file and the renderer tables' descriptions only format them.
+//
+// Comparisons follow the rule of table.hpp: z = (measured - model) / error, null where there is
+// no error bar and the values differ. The models of the nominal NDF (smith_single,
+// smith_multiple, vcavity_single) are statistics of the generated surfaces; compared with one
+// surface, the ray-count error misses the surface-to-surface variation (DESIGN.md "Two kinds of
+// error bar"), so z_<model> is null and the distance in units of the ray-count error is kept as
+// z_<model>_rays. smooth_interface is exact (000 eq. 7d, 10b): its z is a verdict.
+#pragma once
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "microsim/io/output.hpp"
+#include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/bsdf_table.hpp"
+#include "microsim/measure/table.hpp"
+
+namespace microsim {
+
+struct BsdfRequest {
+  std::string material;         // mirror, conductor or dielectric
+  std::optional<double> eta, k;  // as given (conductor: both; dielectric: eta)
+  std::vector<double> theta_i_deg, phi_i_deg;  // check_bsdf_request sorts them, without repeats
+  int orders = 4;
+  long long rays = 1000000;
+  std::uint64_t seed = 1;
+  int replicates = 32;
+  bool models = true;
+  int resolution = 64;        // hemisphere map R; also the in-plane bins
+  int table_resolution = 64;  // .bsdf tables
+  std::string format = "json";  // json, exr, bsdf (RGL tensor file) or binary (MERL)
+  int threads = 0;              // for the memory estimate (0: all processors)
+};
+
+// The material the request names; UsageError for a wrong name or missing / misplaced indices.
+models::Material bsdf_material(const BsdfRequest& request);
+// Checks the counts, angles, output format against the angles and the memory the tallies need;
+// sorts the angle lists. UsageError with the command line's option names.
+void check_bsdf_request(BsdfRequest& request);
+// The checks that need the surface: the renderer tables need a periodic tile, and an anisotropic
+// surface needs azimuths over the full circle (`name`: the surface file, for messages).
+void check_bsdf_surface(const BsdfRequest& request, const Microsurface& s, const std::string& name);
+// The table's options for a checked request (`split`: shards and MPI ranks, or nullptr).
+BsdfTableOptions bsdf_table_options(const BsdfRequest& request, const Microsurface& s,
+                                    TallySplit* split = nullptr);
+
+
+// Albedo rows of one incidence: side (reflected, transmitted for a dielectric) x slot, with
+// albedo, albedo_stderr and beside them smith_multiple (its own Monte Carlo error combined in
+// z_smith_multiple), smith_single and vcavity_single (order 1) and smooth_interface (total).
+// Merged over surfaces (table.hpp merge), albedo becomes the mean with the between-surface
+// error and the nominal models' z use it, with Student t p-values.
+Table bsdf_albedo_table(const BsdfResult& r);
+// In-plane rows: side x bin, theta_o_deg (signed, positive on the specular side), f per slot
+// with errors, and the models averaged over the bin.
+Table bsdf_in_plane_table(const BsdfResult& r);
+
+// The JSON summary fields of one incidence (albedo, reflected_stderr, transmitted_stderr,
+// albedo_models, rows, in_plane, V-groove models where the surface has them, bookkeeping),
+// without the run header.
+Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s);
+// Every incidence: {theta_i_deg, phi_i_deg, and the fields of bsdf_summary_json}, phi_i outer.
+Json bsdf_incidences_json(const BsdfTable& t, const Microsurface& s);
+// The record of `measure bsdf` after its run header: file, surface, parameters, definitions,
+// with one incidence its fields at the top level, and incidences.
+void put_bsdf_record(Json& record, const BsdfRequest& request, const BsdfTable& t,
+                     const Microsurface& s, const std::string& file);
+
+// The EXR table of one incidence: per side and slot f and its standard error on the hemisphere
+// map, every parameter in the header (`attributes` are added to it).
+ExrTable bsdf_exr_table(const BsdfResult& r, const Json& attributes);
+// EXR of every incidence: channels "incidence_<k>.<side>.f_<order>" (and _stderr), k = p *
+// n_theta + t; the header lists the incidences (`incidences`: [[theta_deg, phi_deg], ...]) and
+// the layout. A single incidence keeps the single-incidence channel names.
+ExrTable bsdf_table_exr(const BsdfTable& t, const Json& attributes);
+// The header attributes of `measure bsdf`'s EXR (record: as put_bsdf_record wrote it).
+Json bsdf_exr_attributes(const Json& record, const std::string& json_path);
+
+// Writes the table in the request's format to `path` (exr, bsdf, binary; json: nothing) and
+// adds the record's "table" field for the renderer tables.
+void write_bsdf_tables(const std::string& path, const BsdfRequest& request, const BsdfTable& t,
+                       const Microsurface& s, Json& record, const std::string& json_path);
+
+}  // namespace microsim

@@ -1,0 +1,587 @@
+#include "microsim/measure/bsdf_record.hpp"
+
+#include <tbb/task_arena.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+
+#include "microsim/io/merl.hpp"
+#include "microsim/io/rgl_bsdf.hpp"
+#include "microsim/measure/groove_models.hpp"
+
+namespace microsim {
+
+namespace {
+
+const char* const kSideName[2] = {"reflected", "transmitted"};
+
+std::string fixed(double x, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, x);
+  return buf;
+}
+
+// Sorted, without repeats (a table's axes must increase).
+std::vector<double> sorted_unique(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end(), [](double a, double b) { return std::abs(a - b) < 1e-9; }), v.end());
+  return v;
+}
+
+// Comparisons of one surface's row: the table's rule (compare in table.hpp) without p-values.
+void compare_one(Json& row, Comparison c) {
+  c.p.clear();
+  compare(row, c, 1);
+}
+
+// The albedo rows' comparisons and the in-plane rows', in the order they stand in a row.
+Comparison smith_multiple_albedo() {
+  return {"albedo", "smith_multiple", ModelKind::Nominal, "z_smith_multiple", "rel_dev_smith_multiple",
+          "p_smith_multiple", "smith_multiple_stderr"};
+}
+Comparison smith_single_albedo() {
+  return {"albedo", "smith_single", ModelKind::Nominal, "z_smith_single", "rel_dev_smith_single", "p_smith_single"};
+}
+Comparison vcavity_single_albedo() {
+  return {"albedo", "vcavity_single", ModelKind::Nominal, "z_vcavity_single", "", "p_vcavity_single"};
+}
+Comparison smooth_interface_albedo() {
+  return {"albedo", "smooth_interface", ModelKind::Nominal, "z_smooth_interface", "", "p_smooth_interface"};
+}
+
+// Fresnel reflectance (and transmittance) of a flat interface at cos theta_i = ci (000 eq. 7d, 10b).
+Json smooth_interface_json(const models::Material& mat, double ci) {
+  using namespace microsim::models;
+  if (mat.kind == MaterialKind::Mirror) return {{"reflected", 1.0}, {"transmitted", 0.0}};
+  if (mat.kind == MaterialKind::Conductor) {
+    const auto F = fresnel_conductor(ci, mat.eta, mat.k);
+    return {{"reflected", F.unpolarized()}, {"transmitted", 0.0}, {"rs", F.Rs}, {"rp", F.Rp}};
+  }
+  const auto F = fresnel_dielectric(ci, mat.eta);
+  return {{"reflected", F.unpolarized()}, {"transmitted", 1.0 - F.unpolarized()}, {"rs", F.Rs}, {"rp", F.Rp}};
+}
+
+// The models of the nominal NDF, compared with one surface (bsdf_record.hpp).
+const char* const kNominalZ[3] = {"z_smith_single", "z_smith_multiple", "z_vcavity_single"};
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Request
+
+models::Material bsdf_material(const BsdfRequest& o) {
+  const auto f4 = [](double x) { return fixed(x, 4); };
+  if (o.material == "mirror") {
+    if (o.eta || o.k) throw UsageError("--eta and --k apply to --material conductor or dielectric, not mirror");
+    return models::Material::mirror();
+  }
+  if (o.material == "conductor") {
+    if (!o.eta || !o.k) throw UsageError("--material conductor needs --eta E and --k K (complex index eta + ik)");
+    if (!(std::isfinite(*o.eta) && *o.eta > 0 && *o.eta <= 100))
+      throw UsageError("--eta must be in (0, 100] (got " + f4(*o.eta) + ")");
+    if (!(std::isfinite(*o.k) && *o.k >= 0 && *o.k <= 100))
+      throw UsageError("--k must be in [0, 100] (got " + f4(*o.k) + ")");
+    return models::Material::conductor(*o.eta, *o.k);
+  }
+  if (o.material == "dielectric") {
+    if (!o.eta) throw UsageError("--material dielectric needs --eta E (index below / index above)");
+    if (o.k) throw UsageError("--k applies to --material conductor only");
+    if (!(std::isfinite(*o.eta) && *o.eta >= 0.01 && *o.eta <= 100))
+      throw UsageError("--eta must be in [0.01, 100] (got " + f4(*o.eta) + ")");
+    return models::Material::dielectric(*o.eta);
+  }
+  throw UsageError("--material must be mirror, conductor or dielectric (got '" + o.material + "')");
+}
+
+void check_bsdf_request(BsdfRequest& o) {
+  const std::string& ext = o.format;
+  if (ext != "exr" && ext != "json" && ext != "bsdf" && ext != "binary")
+    throw UsageError("the output must be .exr, .json, .bsdf or .binary (got ." + ext + ")");
+  bsdf_material(o);
+  o.theta_i_deg = sorted_unique(o.theta_i_deg);
+  o.phi_i_deg = sorted_unique(o.phi_i_deg);
+  if (o.theta_i_deg.empty() || o.phi_i_deg.empty()) throw UsageError("--theta-i and --phi-i need at least one angle");
+  for (double t : o.theta_i_deg)
+    if (!(t >= 0 && t < 90))
+      throw UsageError("--theta-i must be in [0, 90) degrees (got " + fixed(t, 2) + ")");
+  const std::vector<double>& phis = o.phi_i_deg;
+  for (double p : phis)
+    if (!std::isfinite(p) || std::abs(p) > 3600)
+      throw UsageError("--phi-i must be finite angles in degrees, |phi| <= 3600");
+  if (o.orders < 1 || o.orders > 16)
+    throw UsageError("--orders must be in [1, 16] (got " + std::to_string(o.orders) + ")");
+  if (o.rays <= 0 || o.rays > 1000000000000LL)
+    throw UsageError("--rays must be in [1, 1e12] (got " + std::to_string(o.rays) + ")");
+  if (o.resolution < 1 || o.resolution > 1024)
+    throw UsageError("--resolution must be in [1, 1024] (got " + std::to_string(o.resolution) + ")");
+  if (o.table_resolution < 2 || o.table_resolution > 512)
+    throw UsageError("--table-resolution must be in [2, 512] (got " + std::to_string(o.table_resolution) + ")");
+  const std::size_t n_inc = o.theta_i_deg.size() * phis.size();
+  if (n_inc > 100000) throw UsageError("--theta-i x --phi-i: more than 100000 incidences");
+  if (ext == "binary" && phis.size() > 1)
+    throw UsageError("-o .binary: MERL tables are isotropic; give one --phi-i (got " +
+                     std::to_string(phis.size()) + " azimuths)");
+  if (ext == "bsdf" && phis.size() > 1 && (std::abs(phis.front() + 180) > 1e-9 || std::abs(phis.back() - 180) > 1e-9))
+    throw UsageError("--phi-i: an anisotropic .bsdf needs azimuths over the full circle from -180 to 180 "
+                     "(e.g. --phi-i -180:180:30), or one azimuth for an isotropic table");
+  // Tallies: f and f^2 per side, slot and pixel, one per worker plus the merge tree, and the
+  // finished results of every incidence.
+  const double tally = 2.0 * (o.orders + 1) * (static_cast<double>(o.resolution) * o.resolution + o.resolution) * 2 * 8;
+  const int threads = o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency();
+  const double need = tally * (3.0 * threads + 4.0 + 2.0 * n_inc);
+  const double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
+  if (need > 0.5 * have)
+    throw UsageError("--resolution " + std::to_string(o.resolution) + " with --orders " +
+                     std::to_string(o.orders) + " and " + std::to_string(n_inc) + " incidences needs about " +
+                     fixed(need / (1 << 30), 1) + " GiB of tallies, more than half of this machine's memory");
+}
+
+void check_bsdf_surface(const BsdfRequest& o, const Microsurface& s, const std::string& name) {
+  const std::string& ext = o.format;
+  if (s.macro().finite_object() && (ext == "bsdf" || ext == "binary"))
+    throw UsageError(name + ": -o ." + ext + " tables need a periodic tile (this surface is a finite object)");
+  const bool anisotropic_surface = s.nominal && std::abs(s.nominal->alpha_x - s.nominal->alpha_y) > 1e-12;
+  if (ext == "binary" && anisotropic_surface)
+    throw UsageError(name + ": -o .binary needs an isotropic surface (MERL tables are isotropic; nominal "
+                     "alpha_x != alpha_y); write a .bsdf with --phi-i -180:180:STEP instead");
+  if (ext == "bsdf" && anisotropic_surface && o.phi_i_deg.size() == 1)
+    throw UsageError(name + ": an anisotropic surface (alpha_x != alpha_y) needs --phi-i over the full "
+                     "circle for a .bsdf (e.g. --phi-i -180:180:30)");
+}
+
+BsdfTableOptions bsdf_table_options(const BsdfRequest& o, const Microsurface& s, TallySplit* split) {
+  BsdfTableOptions to;
+  to.base.material = bsdf_material(o);
+  to.base.orders = o.orders;
+  to.base.rays = static_cast<std::uint64_t>(o.rays);
+  to.base.split = split;
+  to.base.seed = o.seed;
+  to.base.resolution = o.resolution;
+  to.base.replicates = o.replicates;
+  to.base.models = o.models;
+  to.base.model_walks = s.nominal && o.models ? to.base.rays : 0;
+  for (double t : o.theta_i_deg) to.theta_i.push_back(rad(t));
+  for (double p : o.phi_i_deg) to.phi_i.push_back(rad(p));
+  return to;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tables of one incidence
+
+namespace {
+// The albedo's single-scattering models of the nominal NDF and the flat interface's, computed
+// once for the table and the record.
+struct AlbedoModels {
+  std::optional<models::SingleScatteringAlbedo> smith, vcavity;
+  Json smooth;
+};
+AlbedoModels albedo_models(const BsdfResult& r) {
+  using namespace microsim::models;
+  AlbedoModels a;
+  if (r.nominal) {
+    a.smith = single_scattering_albedo(MicrofacetBsdf{*r.nominal, r.options.material, Masking::SmithHeightCorrelated}, r.wi);
+    a.vcavity = single_scattering_albedo(MicrofacetBsdf{*r.nominal, r.options.material, Masking::VCavity}, r.wi);
+  }
+  a.smooth = smooth_interface_json(r.options.material, std::cos(r.options.theta_i));
+  return a;
+}
+
+Table albedo_table(const BsdfResult& r, const AlbedoModels& models) {
+  const int K = r.options.orders;
+  const bool transmits = r.options.material.transmits();
+  Table t;
+  t.error = ErrorKind::Replicates;
+  t.spec.columns = {{"side", Merge::Key},           {"order", Merge::Key},
+                    {"albedo", Merge::Measured},    {"smith_multiple", Merge::Copy},
+                    {"smith_multiple_stderr", Merge::Copy}, {"smith_single", Merge::Copy},
+                    {"vcavity_single", Merge::Copy}, {"smooth_interface", Merge::Copy}};
+  t.spec.comparisons = {smith_multiple_albedo(), smith_single_albedo(), vcavity_single_albedo(),
+                        smooth_interface_albedo()};
+  for (int sd = 0; sd < (transmits ? 2 : 1); ++sd)
+    for (int k = 0; k <= K; ++k) {
+      Json row;
+      row["side"] = kSideName[sd];
+      row["order"] = order_key(k, K);
+      const Estimate e = r.albedo(sd, k);
+      row["albedo"] = e.mean;
+      row["albedo_stderr"] = e.stderr_;
+      if (r.smith_walk) {
+        const Estimate m = r.model_albedo(sd, k);
+        row["smith_multiple"] = m.mean;
+        row["smith_multiple_stderr"] = m.stderr_;
+        compare_one(row, smith_multiple_albedo());
+      }
+      if (models.smith && k == 0) {
+        row["smith_single"] = sd == 0 ? models.smith->reflected : models.smith->transmitted;
+        compare_one(row, smith_single_albedo());
+        row["vcavity_single"] = sd == 0 ? models.vcavity->reflected : models.vcavity->transmitted;
+        compare_one(row, vcavity_single_albedo());
+      }
+      if (k == K) {
+        row["smooth_interface"] = models.smooth[kSideName[sd]];
+        compare_one(row, smooth_interface_albedo());
+      }
+      t.rows.push_back(row);
+    }
+  return t;
+}
+}  // namespace
+
+Table bsdf_albedo_table(const BsdfResult& r) { return albedo_table(r, albedo_models(r)); }
+
+Table bsdf_in_plane_table(const BsdfResult& r) {
+  using namespace microsim::models;
+  const int K = r.options.orders;
+  const bool transmits = r.options.material.transmits();
+  const std::string f1 = "f_" + order_key(0, K), f_total = "f_" + order_key(K, K);
+  const Comparison smith_single{f1, "smith_single", ModelKind::Nominal, "z_smith_single", "", "p_smith_single"};
+  const Comparison vcavity_single{f1, "vcavity_single", ModelKind::Nominal, "z_vcavity_single", "", "p_vcavity_single"};
+  const Comparison smith_multiple{f_total, "smith_multiple", ModelKind::Nominal, "z_smith_multiple", "",
+                                  "p_smith_multiple", "smith_multiple_stderr"};
+  Table t;
+  t.error = ErrorKind::Replicates;
+  t.spec.columns = {{"side", Merge::Key}, {"theta_o_deg", Merge::Key}, {"theta_o_range_deg", Merge::Copy}};
+  for (int k = 0; k <= K; ++k) t.spec.columns.push_back({"f_" + order_key(k, K), Merge::Measured});
+  for (const char* m : {"smith_single", "vcavity_single", "smith_multiple", "smith_multiple_stderr"})
+    t.spec.columns.push_back({m, Merge::Copy});
+  t.spec.comparisons = {smith_single, vcavity_single, smith_multiple};
+  for (int sd = 0; sd < (transmits ? 2 : 1); ++sd) {
+    const bool above = sd == 0;
+    for (int b = 0; b < r.plane.size(); ++b) {
+      Json row;
+      row["side"] = kSideName[sd];
+      row["theta_o_deg"] = deg(r.plane.psi_center(b));
+      row["theta_o_range_deg"] = {deg(r.plane.psi_lo(b)), deg(r.plane.psi_hi(b))};
+      for (int k = 0; k <= K; ++k) {
+        const Estimate e = r.f_plane(sd, k, b);
+        const std::string key = "f_" + order_key(k, K);
+        row[key] = e.mean;
+        row[key + "_stderr"] = e.stderr_;
+      }
+      if (r.nominal) {
+        const MicrofacetBsdf hcb{*r.nominal, r.options.material, Masking::SmithHeightCorrelated};
+        const MicrofacetBsdf vcb{*r.nominal, r.options.material, Masking::VCavity};
+        const Vec3 wi = r.wi;
+        row["smith_single"] = r.plane.cos_weighted_average(b, above, [&](const Vec3& o) { return hcb.eval(o, wi); });
+        row["vcavity_single"] = r.plane.cos_weighted_average(b, above, [&](const Vec3& o) { return vcb.eval(o, wi); });
+        compare_one(row, smith_single);
+        compare_one(row, vcavity_single);
+      } else {
+        row["smith_single"] = nullptr;
+        row["vcavity_single"] = nullptr;
+      }
+      if (r.smith_walk) {
+        const Estimate m = r.model_f_plane(sd, K, b), m1 = r.model_f_plane(sd, 0, b);
+        row["smith_multiple"] = m.mean;
+        row["smith_multiple_stderr"] = m.stderr_;
+        row["smith_multiple_order_1"] = m1.mean;
+        row["smith_multiple_order_1_stderr"] = m1.stderr_;
+        for (int k = 1; k < K; ++k) {  // the walk's lobe of every further order, beside the closed forms'
+          const Estimate mk = r.model_f_plane(sd, k, b);
+          row["smith_multiple_" + order_key(k, K)] = mk.mean;
+          row["smith_multiple_" + order_key(k, K) + "_stderr"] = mk.stderr_;
+        }
+        compare_one(row, smith_multiple);
+      } else {
+        row["smith_multiple"] = nullptr;
+      }
+      t.rows.push_back(row);
+    }
+  }
+  return t;
+}
+
+// ---------------------------------------------------------------------------------------------
+// JSON record
+
+Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
+  const int K = r.options.orders;
+  Json j;
+  // --- albedos: {reflected: {order: value}, transmitted: ...}, then the errors per side
+  const auto albedos = [K](Json& out, const std::function<Estimate(int, int)>& estimate) {
+    Json se[2] = {Json::object(), Json::object()};
+    for (int sd = 0; sd < 2; ++sd) {
+      Json a = Json::object();
+      for (int k = 0; k <= K; ++k) {
+        const Estimate e = estimate(sd, k);
+        a[order_key(k, K)] = e.mean;
+        se[sd][order_key(k, K)] = e.stderr_;
+      }
+      out[kSideName[sd]] = a;
+    }
+    out["reflected_stderr"] = se[0];
+    out["transmitted_stderr"] = se[1];
+  };
+  Json measured = Json::object();
+  albedos(measured, [&](int sd, int k) { return r.albedo(sd, k); });
+  j["albedo"] = {{"reflected", measured["reflected"]}, {"transmitted", measured["transmitted"]}};
+  j["reflected_stderr"] = measured["reflected_stderr"];
+  j["transmitted_stderr"] = measured["transmitted_stderr"];
+  {
+    // R + T per path is the path's weight when it leaves: its own standard error.
+    const auto& m = r.measured;
+    const double sum = m.albedo[m.a_index(0, K)] + m.albedo[m.a_index(1, K)];
+    const Estimate RT = m.estimate(sum, m.both2);
+    j["reflected_plus_transmitted"] = RT.mean;
+    j["reflected_plus_transmitted_stderr"] = RT.stderr_;
+  }
+
+  // --- models of the albedo
+  Json models = Json::object();
+  const AlbedoModels am = albedo_models(r);
+  models["smooth_interface"] = am.smooth;
+  if (am.smith) {
+    models["smith_single"] = {{"reflected", am.smith->reflected}, {"transmitted", am.smith->transmitted}};
+    models["vcavity_single"] = {{"reflected", am.vcavity->reflected}, {"transmitted", am.vcavity->transmitted}};
+  } else {
+    models["smith_single"] = nullptr;
+    models["vcavity_single"] = nullptr;
+  }
+  if (r.smith_walk) {
+    Json mw = Json::object();
+    albedos(mw, [&](int sd, int k) { return r.model_albedo(sd, k); });
+    mw["walks"] = r.smith_walk->paths;
+    mw["unterminated"] = r.smith_walk->unterminated;
+    models["smith_multiple"] = mw;
+  } else {
+    models["smith_multiple"] = nullptr;
+  }
+  j["albedo_models"] = models;
+
+  // --- the tables: measured beside the models per side and order, and the in-plane lobe
+  j["rows"] = albedo_table(r, am).rows;
+  j["in_plane"] = bsdf_in_plane_table(r).rows;
+  if (r.options.models) add_groove_models(j, r, s);  // closed-form V-groove / V-cavity models beside rows and lobes
+  add_macro_normalization(j, r, s);
+  for (const char* table : {"rows", "in_plane"})
+    for (Json& row : j[table])
+      for (const char* z : kNominalZ) one_surface_nominal_z(row, z);
+
+  // --- bookkeeping
+  const auto& m = r.measured;
+  j["paths"] = m.paths;
+  j["replicates"] = m.replicates;
+  j["lost_paths"] = m.lost;
+  j["unterminated_paths"] = m.unterminated;
+  j["scattering_events"] = m.events;
+  j["mean_events_per_path"] = m.paths ? static_cast<double>(m.events) / m.paths : 0.0;
+  j["traced_rays"] = m.counters.rays;
+  j["tracer"] = {{"lost_below", m.counters.lost_below},
+                 {"unresolved", m.counters.unresolved},
+                 {"wrong_side_hits", m.counters.backface_hits},
+                 {"border_crossings", m.counters.border_crossings}};
+  j["seconds"] = r.seconds;
+  j["model_seconds"] = r.model_seconds;
+  j["rays_per_second"] = (r.seconds - r.model_seconds) > 0 ? m.counters.rays / (r.seconds - r.model_seconds) : 0.0;
+  return j;
+}
+
+Json bsdf_incidences_json(const BsdfTable& t, const Microsurface& s) {
+  Json out = Json::array();
+  for (std::size_t p = 0; p < t.phi_i.size(); ++p)
+    for (std::size_t q = 0; q < t.theta_i.size(); ++q) {
+      Json j = {{"theta_i_deg", deg(t.theta_i[q])}, {"phi_i_deg", deg(t.phi_i[p])}};
+      const Json summary = bsdf_summary_json(t.at(static_cast<int>(p), static_cast<int>(q)), s);
+      for (auto it = summary.begin(); it != summary.end(); ++it) j[it.key()] = it.value();
+      out.push_back(j);
+    }
+  return out;
+}
+
+void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Microsurface& s,
+                     const std::string& file) {
+  const BsdfResult& r = t.results.at(0);
+  const bool single = t.results.size() == 1;
+  Json parameters = {{"material", o.material},
+                     {"eta", o.eta ? Json(*o.eta) : Json(nullptr)},
+                     {"k", o.k ? Json(*o.k) : Json(nullptr)},
+                     {"theta_i_deg", single ? Json(o.theta_i_deg[0]) : Json(o.theta_i_deg)},
+                     {"phi_i_deg", single ? Json(o.phi_i_deg[0]) : Json(o.phi_i_deg)},
+                     {"orders", o.orders},
+                     {"rays", r.measured.paths},
+                     {"rays_requested", o.rays},
+                     {"seed", o.seed},
+                     {"replicates", r.options.replicates},
+                     {"resolution", o.resolution},
+                     {"in_plane_bins", r.plane.size()},
+                     {"in_plane_band_half_width_deg", deg(r.plane.half_width())},
+                     {"max_events", r.options.max_events},
+                     {"smith_multiple_walks", r.options.model_walks},
+                     {"models", o.models}};
+  if (o.format == "bsdf") parameters["table_resolution"] = o.table_resolution;
+  j["file"] = file;
+  j["surface"] = s.description;
+  j["parameters"] = parameters;
+  j["definitions"] = {
+      {"albedo", "fraction of the incident power leaving on each side after exactly n scattering "
+                 "events (order_Kplus: K or more; total: all); a conductor's paths carry the "
+                 "product of their Fresnel factors, a dielectric chooses reflection with "
+                 "probability F (unpolarized light); *_stderr: standard error of the mean of "
+                 "`replicates` independent stratified replicates of the rays (the Smith walk's: "
+                 "over its independent walks)"},
+      {"in_plane", "f = p / int_B |cos theta_o| d omega (exact), p the fraction of power leaving "
+                   "through bin B: a band |beta| <= half width around the plane of incidence, "
+                   "theta_o_deg signed, positive on the specular side (azimuth phi_i + 180); "
+                   "transmitted rows measure theta_o from -n; the radiance BSDF of 000 eq. 4a"},
+      {"smith_single", "single-scattering BRDF/BTDF of the nominal NDF, 000 eq. 21d / 001 eq. 18 "
+                       "with Fresnel and the height-correlated Smith G2 (001 eq. 21; "
+                       "transmission B(1+Lo, 1+Li)), averaged over the bin"},
+      {"vcavity_single", "the same with the V-cavity G2 (001 sec. 6)"},
+      {"smith_multiple", "all orders of the Smith random-walk model of the nominal NDF (Monte "
+                         "Carlo, smith_multiple_walks walks, same bins)"},
+      {"smooth_interface", "Fresnel reflectance of a flat interface at theta_i (000 eq. 7d, 10b)"},
+      {"z_smith_single", "null: smith_single, smith_multiple and vcavity_single are models of the "
+                         "nominal NDF, a statistic of the generated surfaces; one surface's ray-count "
+                         "error misses the surface-to-surface variation, so its z is no verdict on "
+                         "the model (microsim validate compares them over an ensemble of surfaces). "
+                         "The same holds for z_smith_multiple and z_vcavity_single"},
+      {"z_smith_single_rays", "(albedo - model) / stderr with this surface's ray-count error "
+                              "(and the walks' error for z_smith_multiple_rays): the distance in "
+                              "units of this run's noise, not a test of the model"},
+      {"incidences", "one object per incidence (theta_i_deg, phi_i_deg and the single-incidence "
+                     "fields), phi_i outer, theta_i inner; with one incidence the same fields "
+                     "also stand at the top level"}};
+  const Json incidences = bsdf_incidences_json(t, s);
+  if (single)
+    for (auto it = incidences[0].begin(); it != incidences[0].end(); ++it)
+      if (it.key() != "theta_i_deg" && it.key() != "phi_i_deg") j[it.key()] = it.value();
+  j["incidences"] = incidences;
+}
+
+Json bsdf_exr_attributes(const Json& j, const std::string& json_path) {
+  Json attrs = {{"microsim_command", "measure bsdf"},
+                {"microsim_version", "0.1.0"},
+                {"file", j["file"]},
+                {"surface", j["surface"].dump()},
+                {"parameters", j["parameters"].dump()},
+                {"summary_json", json_path}};
+  if (j["incidences"].size() == 1) {
+    attrs["albedo"] = j["albedo"].dump();
+    attrs["reflected_stderr"] = j["reflected_stderr"].dump();
+    attrs["transmitted_stderr"] = j["transmitted_stderr"].dump();
+  }
+  return attrs;
+}
+
+namespace {
+std::string rgl_description(const BsdfRequest& o, const Microsurface& s, const BsdfTable& t) {
+  const auto f4 = [](double x) { return fixed(x, 4); };
+  std::string d = "microsim measured BSDF of an explicit microsurface (" + s.description.dump() +
+                  "), material " + o.material;
+  if (o.eta) d += " eta " + f4(*o.eta);
+  if (o.k) d += " k " + f4(*o.k);
+  d += "; reflection, all scattering orders; " + std::to_string(t.results[0].measured.paths) +
+       " random walks per incidence, seed " + std::to_string(o.seed);
+  if (o.material == "dielectric") d += "; the reflected part only (transmission is not in this table)";
+  return d;
+}
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+void write_bsdf_tables(const std::string& path, const BsdfRequest& o, const BsdfTable& t,
+                       const Microsurface& s, Json& j, const std::string& json_path) {
+  const auto tb = std::chrono::steady_clock::now();
+  if (o.format == "exr") {
+    write_exr(path, bsdf_table_exr(t, bsdf_exr_attributes(j, json_path)));
+  } else if (o.format == "bsdf") {
+    RglOptions ro;
+    ro.resolution = o.table_resolution;
+    ro.description = rgl_description(o, s, t);
+    const RglTable rgl = build_rgl_table(t, s, ro);
+    write_rgl_bsdf(path, rgl);
+    j["table"] = {{"format", "RGL tensor file (Dupuy and Jakob 2018)"},
+                  {"isotropic", rgl.isotropic},
+                  {"resolution", rgl.resolution},
+                  {"ndf_shape", {rgl.ndf_phi, rgl.ndf_theta}},
+                  {"sigma_shape", {rgl.sigma_phi, rgl.sigma_theta}},
+                  {"description", rgl.description},
+                  {"seconds", seconds_since(tb)}};
+  } else if (o.format == "binary") {
+    write_merl(path, t);
+    j["table"] = {{"format", "MERL isotropic BRDF (90 x 90 x 180 doubles per channel)"},
+                  {"filling", "measured f (reflected, all orders) at cell centres, bilinear on the "
+                              "hemisphere maps, linear in theta_i between measured incidences, held "
+                              "constant outside them; 0 below the horizon"},
+                  {"seconds", seconds_since(tb)}};
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// EXR
+
+ExrTable bsdf_exr_table(const BsdfResult& r, const Json& attributes) {
+  const int R = r.map.resolution(), K = r.options.orders;
+  ExrTable t;
+  t.width = R;
+  t.height = R;
+  const char* side_name[2] = {"reflected", "transmitted"};
+  const int sides = r.options.material.transmits() ? 2 : 1;
+  for (int sd = 0; sd < sides; ++sd)
+    for (int k = 0; k <= K; ++k) {
+      std::vector<float> f(static_cast<std::size_t>(R) * R), se(f.size());
+      for (int px = 0; px < R * R; ++px) {
+        const Estimate e = r.f_pixel(sd, k, px);
+        // EXR rows run top to bottom: row y holds square row j = R - 1 - y (b increases upward).
+        const int i = px % R, jrow = px / R;
+        const std::size_t out = static_cast<std::size_t>(R - 1 - jrow) * R + i;
+        f[out] = static_cast<float>(e.mean);
+        se[out] = static_cast<float>(e.stderr_);
+      }
+      const std::string base = std::string(side_name[sd]) + ".f_" + order_key(k, K);
+      t.channel_names.push_back(base);
+      t.channels.push_back(std::move(f));
+      t.channel_names.push_back(base + "_stderr");
+      t.channels.push_back(std::move(se));
+    }
+  t.attributes = attributes;
+  t.attributes["parameterization"] =
+      "equal-area hemisphere map: pixel (x, y) covers square coordinates a in [-1 + 2x/R, -1 + 2(x+1)/R], "
+      "b in [1 - 2(y+1)/R, 1 - 2y/R] (y = 0 is the top row, b = +1); (a, b) -> unit disk by the "
+      "Shirley-Chiu concentric map (r = max(|a|,|b|), phi = pi/4 b/a if |a| >= |b| else pi/2 - pi/4 "
+      "a/b), disk -> hemisphere by Lambert's equal-area map: |cos theta_o| = 1 - r^2, direction "
+      "(r sqrt(2 - r^2) cos phi, r sqrt(2 - r^2) sin phi, +-(1 - r^2)); phi = 0 is +x of the tile. "
+      "Every pixel subtends 2 pi / R^2 sr. Channels reflected.* are the upper hemisphere, "
+      "transmitted.* the lower one (z -> -z).";
+  t.attributes["value"] =
+      "f = p / int_pixel |cos theta_o| d omega (exact pixel integral): p = fraction of the incident "
+      "power leaving through the pixel after the channel's scattering orders; the radiance BSDF of "
+      "000 eq. 4a; *_stderr its standard error";
+  return t;
+}
+
+
+ExrTable bsdf_table_exr(const BsdfTable& t, const Json& attributes) {
+  if (t.results.size() == 1) return bsdf_exr_table(t.results[0], attributes);
+  ExrTable out;
+  Json incidences = Json::array();
+  for (std::size_t k = 0; k < t.results.size(); ++k) {
+    const BsdfResult& r = t.results[k];
+    ExrTable one = bsdf_exr_table(r, Json::object());
+    if (k == 0) {
+      out = one;
+      out.channel_names.clear();
+      out.channels.clear();
+    }
+    for (std::size_t c = 0; c < one.channels.size(); ++c) {
+      out.channel_names.push_back("incidence_" + std::to_string(k) + "." + one.channel_names[c]);
+      out.channels.push_back(std::move(one.channels[c]));
+    }
+    incidences.push_back({deg(r.options.theta_i), deg(r.options.phi_i)});
+  }
+  for (auto it = attributes.begin(); it != attributes.end(); ++it) out.attributes[it.key()] = it.value();
+  out.attributes["incidences"] = incidences.dump();
+  out.attributes["incidence_layout"] =
+      "channel incidence_<k>.<side>.f_<order>[_stderr] holds incidence k = p * n_theta + t for "
+      "theta_i_deg[t], phi_i_deg[p] of the parameters; `incidences` lists [theta_i_deg, "
+      "phi_i_deg] per k; each incidence's table follows `parameterization` and `value`";
+  return out;
+}
+
+
+}  // namespace microsim
