@@ -86,5 +86,6 @@ int main(int argc, char** argv) {
               "tile", "peak_MiB", "B/facet");
   for (const auto& [res, peak] : peaks)
     std::printf("%6d^2 %10.0f %8.1f\n", res, peak, peak * 1048576.0 / (2.0 * res * res));
+  std::fflush(stdout);  // the libraries' exit handlers may end the process without flushing
   return 0;
 }
