@@ -1,11 +1,15 @@
 // Benchmark (not a test): rays/s of the G1 measurement against a bare rtcIntersect1 loop over
 // the same scene and the very same rays, scene build time and memory, for several tile
 // resolutions (Beckmann alpha = 0.5, 4 cells per correlation length).
-//   microsim_bench [--rays N] [--repeat K] [resolution...]    (default 1024 2048 4096 8192)
+//   microsim_bench [--rays N] [--repeat K] [--large] [resolution...]
+// (default 1024 2048 4096 8192; --large adds 16384, about 9 GB and several processor minutes).
+// Tiles run in increasing size, so the process's peak resident memory after a tile is that
+// tile's peak (B/facet: peak bytes per facet, generation and tracing in this process).
 // Each direction runs K times (default 3), the estimator and the bare loop interleaved in the
 // same process; the best of each is reported (on a shared machine the slower runs are the ones
 // that lost the CPU), and the ratio is that of the best rates.
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -25,12 +29,17 @@ int main(int argc, char** argv) {
   std::vector<int> resolutions;
   std::uint64_t rays = 2000000;
   int repeat = 3;
+  bool large = false;
   for (int k = 1; k < argc; ++k) {
     if (!std::strcmp(argv[k], "--rays") && k + 1 < argc) rays = std::strtoull(argv[++k], nullptr, 10);
     else if (!std::strcmp(argv[k], "--repeat") && k + 1 < argc) repeat = std::atoi(argv[++k]);
+    else if (!std::strcmp(argv[k], "--large")) large = true;
     else resolutions.push_back(std::atoi(argv[k]));
   }
   if (resolutions.empty()) resolutions = {1024, 2048, 4096, 8192};
+  if (large) resolutions.push_back(16384);
+  std::sort(resolutions.begin(), resolutions.end());
+  std::vector<std::pair<int, double>> peaks;  // tile, peak MiB
   std::printf("Gaussian tiles, alpha 0.5; %llu rays per estimator and direction, best of %d\n",
               static_cast<unsigned long long>(rays), repeat);
   std::printf("Rates per processor second (user + system of all threads; wall rates in the last "
@@ -71,6 +80,12 @@ int main(int argc, char** argv) {
                   bare.wall / 1e6);
       std::fflush(stdout);
     }
+    peaks.emplace_back(res, peak_rss_mib());
   }
+  std::printf("\nPeak resident memory per tile (generation, scene build, facet table, G1)\n%-8s %10s %8s\n",
+              "tile", "peak_MiB", "B/facet");
+  for (const auto& [res, peak] : peaks)
+    std::printf("%6d^2 %10.0f %8.1f\n", res, peak, peak * 1048576.0 / (2.0 * res * res));
+  std::fflush(stdout);  // the libraries' exit handlers may end the process without flushing
   return 0;
 }

@@ -679,3 +679,78 @@ TEST_F(Inputs, InterruptsLeaveNothingBehind) {
   }
   EXPECT_GE(interrupted, 4);
 }
+
+namespace {
+// A copy of the 16^2 heightfield `from` whose header declares n x n pixels (data and display
+// windows patched; the line offset table padded with zeros, i.e. no pixel data): what a tile
+// of that size looks like to everything that reads the header before the pixels.
+std::string declared_tile(const std::string& from, int n, const std::string& name) {
+  std::ifstream f(from, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  for (const char* attr : {"dataWindow", "displayWindow"}) {
+    const std::string key = std::string(attr) + '\0' + "box2i" + '\0';
+    const auto at = bytes.find(key);
+    if (at == std::string::npos) return "";
+    const std::int32_t box[4] = {0, 0, n - 1, n - 1};
+    bytes.replace(at + key.size() + 4, 16, reinterpret_cast<const char*>(box), 16);
+  }
+  bytes += std::string(8 * static_cast<std::size_t>(n), '\0');
+  const std::string path = tmp(name);
+  write_file(path, bytes);
+  return path;
+}
+
+// ulimit -v in KiB (the address-space limit microsim reads as the memory it may use).
+std::string limit_gib(int gib) {
+  return "ulimit -v " + std::to_string(static_cast<long long>(gib) << 20) + "; timeout 60";
+}
+}  // namespace
+
+// A tile that cannot fit is refused before anything is allocated: exit 2, one line naming the
+// option or the file and the estimate, no output, at once. 16384^2 is estimated at about 5 GiB
+// to generate and 10 GiB to trace (40 bytes per cell); the address-space limits below make both
+// too large on any machine. Power checks: a size that fits under the same limit is not refused.
+TEST_F(Inputs, TilesLargerThanTheMemoryAreRefusedBeforeAllocating) {
+  if (kAddressSanitizer) GTEST_SKIP() << "no address-space limit under AddressSanitizer";
+  const std::string out = tmp("big-tile.exr");
+  auto t0 = std::chrono::steady_clock::now();
+  Result r = run_microsim("generate gaussian --resolution 16384 -o " + out, limit_gib(4));
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("--resolution 16384 needs about"), std::string::npos) << r.err;
+  EXPECT_FALSE(exists(out));
+  EXPECT_LT(seconds, 20.0);  // refused, not synthesized (a 16384^2 synthesis takes minutes)
+  r = run_microsim("generate gaussian --resolution 256 -o " + out, limit_gib(4));
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(exists(out));
+
+  const std::string huge = declared_tile(surface_, 16384, "declared16384.exr");
+  const std::string small = declared_tile(surface_, 256, "declared256.exr");
+  ASSERT_FALSE(huge.empty());
+  ASSERT_FALSE(small.empty());
+  const std::string json = tmp("big-tile.json");
+  for (const std::string& cmd : {"measure g1 {F} --theta 60 --rays 1000 -o " + json,
+                                 "measure ndf {F} -o " + json,
+                                 "measure bsdf {F} --material mirror --theta-i 30 --rays 1000 -o " + json,
+                                 "info {F} --json " + json}) {
+    const auto with = [&](const std::string& file) {
+      std::string a = cmd;
+      a.replace(a.find("{F}"), 3, file);
+      return a;
+    };
+    SCOPED_TRACE(cmd);
+    t0 = std::chrono::steady_clock::now();
+    r = run_microsim(with(huge), limit_gib(8));
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_EQ(lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find(huge + " (16384 x 16384 heightfield) needs about"), std::string::npos) << r.err;
+    EXPECT_FALSE(exists(json));
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 20.0);
+    // 256^2 fits: not refused for memory (it then fails on its missing pixels).
+    r = run_microsim(with(small), limit_gib(8));
+    EXPECT_EQ(r.err.find("needs about"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("declared256.exr"), std::string::npos) << r.err;
+    fs::remove(json);
+  }
+}

@@ -28,6 +28,7 @@
 #include "microsim/common.hpp"
 #include "microsim/io/checks.hpp"
 #include "microsim/io/exr_header.hpp"
+#include "microsim/io/exr_pixels.hpp"
 
 namespace microsim {
 
@@ -259,6 +260,15 @@ void write_csv_rows(const std::string& path, const Json& j) {
 }
 
 void write_exr(const std::string& path, const ExrTable& t) {
+  std::vector<const float*> pixels;
+  for (const auto& c : t.channels) pixels.push_back(c.data());
+  write_exr_pixels(path, t, pixels);
+}
+
+void write_exr_pixels(const std::string& path, const ExrTable& t, const std::vector<const float*>& pixels) {
+  if (pixels.size() != t.channel_names.size())
+    throw RuntimeFailure("write_exr: " + std::to_string(t.channel_names.size()) + " channel names for " +
+                         std::to_string(pixels.size()) + " channels");
   write_atomically(path, [&](const std::string& tmp) {
     Imf::Header header(t.width, t.height);
     header.compression() = Imf::ZIP_COMPRESSION;
@@ -271,11 +281,11 @@ void write_exr(const std::string& path, const ExrTable& t) {
         header.insert(it.key(), Imf::StringAttribute(it->dump()));
     }
     Imf::FrameBuffer fb;
-    for (std::size_t c = 0; c < t.channels.size(); ++c) {
+    for (std::size_t c = 0; c < pixels.size(); ++c) {
       header.channels().insert(t.channel_names[c], Imf::Channel(Imf::FLOAT));
       fb.insert(t.channel_names[c],
-                Imf::Slice(Imf::FLOAT, (char*)t.channels[c].data(), sizeof(float),
-                           sizeof(float) * t.width));
+                Imf::Slice(Imf::FLOAT, const_cast<char*>(reinterpret_cast<const char*>(pixels[c])),
+                           sizeof(float), sizeof(float) * static_cast<std::size_t>(t.width)));
     }
     Imf::OutputFile file(tmp.c_str(), header);
     file.setFrameBuffer(fb);

@@ -5,6 +5,7 @@
 
 #include <unsupported/Eigen/FFT>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <unistd.h>
 
@@ -16,10 +17,19 @@
 namespace microsim {
 
 double gaussian_memory_estimate(int resolution) {
-  double n2 = static_cast<double>(resolution + 3) * (resolution + 3);
-  // complex<double> work array, float heights and the float row buffer written to EXR (the
-  // tracing costs are checked when a tile is loaded for a measurement).
-  return n2 * (16.0 + 4.0 + 4.0 + 4.0);
+  const double n2 = static_cast<double>(resolution) * resolution;
+  // At the peak, the complex<double> work array of the synthesis (16 bytes per cell) and the
+  // float heights copied out of it (4); the EXR is then written from the heights themselves.
+  // Plus the process and the FFTs' row buffers (the tracing costs are checked when a tile is
+  // loaded for a measurement).
+  return n2 * (16.0 + 4.0) + 64.0 * (1 << 20);
+}
+
+double gaussian_ggx_memory_estimate(int resolution) {
+  const double n2 = static_cast<double>(resolution) * resolution;
+  // Two fields in double (8 + 8), the second one's complex work array while it is made (16),
+  // then the rank order (4) and the float heights (4).
+  return n2 * (8.0 + 8.0 + 16.0) + 64.0 * (1 << 20);
 }
 
 double default_correlation_length(int resolution, double size) {
@@ -68,16 +78,21 @@ void fft2d(std::vector<Complex>& a, int n, bool inverse) {
 
 // One periodic Gaussian field on an n x n grid (tile side `size`), spectrum of the Gaussian
 // autocorrelation exp(-(x^2/lx^2 + y^2/ly^2)), scaled so that the expected finite-difference
-// slope variance along x is alpha_x^2 / 2; returns it with that of y.
-struct GaussianField {
-  std::vector<double> h;
+// slope variance along x is alpha_x^2 / 2. The synthesis leaves the unscaled field in the real
+// parts of `a`; the field is scale * a[k].real(), which the callers copy out in the precision
+// they keep (the complex work array is the peak of the generator: 16 bytes per cell).
+struct GaussianSpectrum {
+  std::vector<Complex> a;
+  double scale = 1;
   double var_dy_scaled = 0;  // expected finite-difference slope variance along y after scaling
 };
-GaussianField gaussian_field(int n, double size, double ell_x, double ell_y, double alpha_x,
-                             std::uint64_t seed, std::uint64_t stream) {
+GaussianSpectrum gaussian_spectrum(int n, double size, double ell_x, double ell_y, double alpha_x,
+                                   std::uint64_t seed, std::uint64_t stream) {
   const double dx = size / n;
   // White noise from the counter-based generator (Box-Muller), deterministic for any threads.
-  std::vector<Complex> a(static_cast<std::size_t>(n) * n);
+  GaussianSpectrum f;
+  std::vector<Complex>& a = f.a;
+  a.resize(static_cast<std::size_t>(n) * n);
   tbb::parallel_for(0, n, [&](int j) {
     for (int i = 0; i < n; ++i) {
       CounterRng rng(seed, stream, static_cast<std::uint64_t>(j) * n + i);
@@ -110,11 +125,23 @@ GaussianField gaussian_field(int n, double size, double ell_x, double ell_y, dou
   fft2d(a, n, true);
 
   // Expected slope variance along x is var_dx / dx^2; scale to alpha_x^2 / 2.
-  const double scale = std::sqrt(0.5 * alpha_x * alpha_x * dx * dx / var_dx);
+  f.scale = std::sqrt(0.5 * alpha_x * alpha_x * dx * dx / var_dx);
+  f.var_dy_scaled = var_dy * f.scale * f.scale / (dx * dx);
+  return f;
+}
+
+// The field in double (gaussian-ggx combines two fields before rounding to float).
+struct GaussianField {
+  std::vector<double> h;
+  double var_dy_scaled = 0;
+};
+GaussianField gaussian_field(int n, double size, double ell_x, double ell_y, double alpha_x,
+                             std::uint64_t seed, std::uint64_t stream) {
+  GaussianSpectrum sp = gaussian_spectrum(n, size, ell_x, ell_y, alpha_x, seed, stream);
   GaussianField f;
-  f.h.resize(a.size());
-  for (std::size_t k = 0; k < a.size(); ++k) f.h[k] = scale * a[k].real();
-  f.var_dy_scaled = var_dy * scale * scale / (dx * dx);
+  f.h.resize(sp.a.size());
+  for (std::size_t k = 0; k < sp.a.size(); ++k) f.h[k] = sp.scale * sp.a[k].real();
+  f.var_dy_scaled = sp.var_dy_scaled;
   return f;
 }
 
@@ -161,9 +188,23 @@ Microsurface generate_gaussian(const GaussianParams& p) {
   const double ell = p.correlation_length > 0 ? p.correlation_length : default_correlation_length(n, p.size);
   // Anisotropy by the spectrum's shape (exact on the grid); the x scale fixes the amplitude.
   const auto [ell_x, ell_y] = anisotropic_lengths(n, p.size, ell, p.alpha_x, p.alpha_y);
-  GaussianField f = gaussian_field(n, p.size, ell_x, ell_y, p.alpha_x, p.seed, 0x6A05);
-  std::vector<float> h(f.h.size());
-  for (std::size_t k = 0; k < h.size(); ++k) h[k] = static_cast<float>(f.h[k]);
+  // The float heights straight from the work array (the same rounding of the same double
+  // scale * a.real() as through a double copy, without that copy's 8 bytes per cell); the work
+  // array is released before the surface is returned (and written).
+  std::vector<float> h;
+  double var_dy_scaled = 0;
+  {
+    GaussianSpectrum sp = gaussian_spectrum(n, p.size, ell_x, ell_y, p.alpha_x, p.seed, 0x6A05);
+    h.resize(sp.a.size());
+    const double scale = sp.scale;
+    const Complex* a = sp.a.data();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, h.size(), 1 << 16),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t k = r.begin(); k != r.end(); ++k)
+                          h[k] = static_cast<float>(scale * a[k].real());
+                      });
+    var_dy_scaled = sp.var_dy_scaled;
+  }
   Microsurface s = Microsurface::heightfield(n, n, p.size, p.size, std::move(h));
   s.nominal = models::Ndf::beckmann(p.alpha_x, p.alpha_y);
   s.description = {{"kind", "gaussian"},
@@ -176,7 +217,7 @@ Microsurface generate_gaussian(const GaussianParams& p) {
                    {"alpha_y", p.alpha_y},
                    {"seed", p.seed},
                    {"nominal_ndf", "beckmann"},
-                   {"expected_slope_var_y", f.var_dy_scaled}};
+                   {"expected_slope_var_y", var_dy_scaled}};
   add_discretization(s.description, dx, p.size, std::min(ell_x, ell_y), std::max(ell_x, ell_y));
   return s;
 }
@@ -190,6 +231,7 @@ Microsurface generate_gaussian_ggx(const GaussianGgxParams& p) {
   base.alpha_y = p.alpha_y;
   base.seed = p.seed;
   validate(base);
+  require_memory(gaussian_ggx_memory_estimate(p.resolution), "--resolution " + std::to_string(p.resolution));
   const int n = p.resolution;
   const double dx = p.size / n;
   const double ell = p.correlation_length > 0 ? p.correlation_length : default_correlation_length(n, p.size);

@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 
 #include "microsim/io/checks.hpp"
+#include "microsim/io/exr_pixels.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/surface/heightmap_import.hpp"
 #include "microsim/surface/mesh_check.hpp"
@@ -88,8 +89,7 @@ void save_heightfield_exr(const Microsurface& s, const std::string& path) {
   ExrTable t;
   t.width = s.nx();
   t.height = s.ny();
-  t.channel_names = {"Z"};
-  t.channels = {s.heights()};
+  t.channel_names = {"Z"};  // written from the heights themselves (no copy of the tile)
   t.attributes = s.description;
   t.attributes["microsim_surface"] = "heightfield";
   t.attributes["microsim_description"] = s.description.dump();
@@ -104,7 +104,7 @@ void save_heightfield_exr(const Microsurface& s, const std::string& path) {
       "size_y/height (row j = y index); " +
       std::string(window ? "non-periodic measured window" : "periodic tile") +
       "; cell split along its (i+1,j)-(i,j+1) diagonal";
-  write_exr(path, t);
+  write_exr_pixels(path, t, {s.heights().data()});
 }
 
 // Largest heightfield side: Embree's grid limit, as for generate.

@@ -25,8 +25,11 @@ double default_correlation_length(int resolution, double size);
 // Validates the parameters (UsageError naming the option and its accepted range), including a
 // memory estimate made before anything is allocated.
 void validate(const GaussianParams& p);
-// Bytes needed to generate and trace a tile of this resolution (for the refusal above).
+// Peak bytes of generating a tile of this resolution and writing it (for the refusal above;
+// generate_gaussian_ggx refuses on its own, larger, estimate). A measurement checks its own
+// costs when it loads the tile.
 double gaussian_memory_estimate(int resolution);
+double gaussian_ggx_memory_estimate(int resolution);
 
 // Heights h = F^-1[ sqrt(S(k)) F[w] ], w white Gaussian noise, S the spectrum of the Gaussian
 // autocorrelation. The tile is exactly periodic. Heights are scaled so that the *expected*
