@@ -66,6 +66,8 @@ inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, cons
   const int R = plan.replicates;
   const std::uint64_t n = plan.per_replicate(), span = std::max<std::uint64_t>(1, (1u << 14) / R);
   const std::uint64_t key = direction_stream_key(v), nc = (n + span - 1) / span;
+  std::vector<std::uint64_t> streams(R);
+  for (int q = 0; q < R; ++q) streams[q] = ReplicatePlan::stream(0xA000 + key, q);
   std::vector<unsigned> hits(nc);
   const auto t0 = std::chrono::steady_clock::now();
   const double c0 = cpu_seconds();
@@ -75,7 +77,7 @@ inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, cons
     unsigned count = 0;
     for (int rep = 0; rep < R; ++rep)
       for (std::uint64_t j = c * span; j < std::min(n, (c + 1) * span); ++j) {
-        CounterRng rng(o.seed, ReplicatePlan::stream(0xA000 + key, rep), j);
+        CounterRng rng(o.seed, streams[rep], j);
         const Vec2 ab = plan.strata.point(j, rng);
         const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
         RTCRayHit rh{};

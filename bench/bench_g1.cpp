@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "microsim/measure/facet_table.hpp"
@@ -25,8 +26,10 @@ int main(int argc, char** argv) {
   std::vector<int> resolutions;
   std::uint64_t rays = 2000000;
   int repeat = 3;
+  std::string only;  // "g1" or "bare": run measure_g1 or the bare loop alone (for a profiler)
   for (int k = 1; k < argc; ++k) {
     if (!std::strcmp(argv[k], "--rays") && k + 1 < argc) rays = std::strtoull(argv[++k], nullptr, 10);
+    else if (!std::strcmp(argv[k], "--only") && k + 1 < argc) only = argv[++k];
     else if (!std::strcmp(argv[k], "--repeat") && k + 1 < argc) repeat = std::atoi(argv[++k]);
     else resolutions.push_back(std::atoi(argv[k]));
   }
@@ -55,6 +58,13 @@ int main(int argc, char** argv) {
       const Vec3 v = direction_from_angles(rad(theta_deg), 0.0);
       Rate a, b, bare;
       double facet_s = 1e30;
+      if (!only.empty()) {
+        for (int k = 0; k < repeat; ++k) {
+          if (only == "g1") measure_g1(tracer, v, o, &table);
+          else bare_g1_rays_per_second(tracer, v, o);
+        }
+        continue;
+      }
       for (int k = 0; k < repeat; ++k) {
         const G1Result r = measure_g1(tracer, v, o, &table);
         // (a): the same rays as the bare loop, plus wrap-around, exact facet lookup, binning;

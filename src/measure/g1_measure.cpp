@@ -267,19 +267,27 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   const double cpu_raycast = process_cpu_seconds();
   const std::uint64_t key = static_cast<std::uint64_t>(r.theta * 1e6) * 7919 +
                             static_cast<std::uint64_t>(r.phi * 1e6);
+  // Hits on back faces (counted in counters) are left out of the visible area: a ray that
+  // meets a facet from behind crossed the surface through a rounding gap. A measured region:
+  // hits outside it (facet index >= num_facets()) are misses. A heightfield's bin is the
+  // table's (the same normal from the same heights, binned once), its hit decoded by the lean
+  // primary-ray path (Tracer::front_facet); a mesh's table holds float normals, so its hits
+  // are binned from the exact one.
+  std::vector<std::uint64_t> streams(R);
+  for (int q = 0; q < R; ++q) streams[q] = ReplicatePlan::stream(0xA000 + key, q);
+  const DownwardRays down(tracer, v);
   std::vector<Tally> ray_reps =
       run_replicates(R, n_rep, nbins, counters, done, reps, [&](int rep, std::uint64_t j, Tally& t) {
-        CounterRng rng(o.seed, ReplicatePlan::stream(0xA000 + key, rep), j);
-        Vec2 ab = plan.strata.point(j, rng);
-        Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
-        TraceHit h = tracer.first_hit(org, -v, nullptr, t.counters);
-        // Hits on back faces (counted in counters) are left out of the visible area: a ray
-        // that meets a facet from behind crossed the surface through a rounding gap.
-        // A measured region: hits outside it (facet index >= num_facets()) are misses.
-        // A heightfield's bin is the table's (the same normal from the same heights, binned
-        // once); a mesh's table holds float normals, so its hits are binned from the exact one.
-        if (h.hit && !h.backface && h.facet < nf)
-          ++t.hits[heightfield ? ft.bin(h.facet) : r.binning.bin_of(h.normal)];
+        CounterRng rng(o.seed, streams[rep], j);
+        const Vec2 ab = plan.strata.point(j, rng);
+        const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
+        if (heightfield) {
+          const std::size_t k = tracer.front_facet(down, org, t.counters);
+          if (k < nf) ++t.hits[ft.bin(k)];
+          return;
+        }
+        const TraceHit h = tracer.first_hit(org, -v, nullptr, t.counters);
+        if (h.hit && !h.backface && h.facet < nf) ++t.hits[r.binning.bin_of(h.normal)];
       });
   report();
   r.raycast_seconds =
