@@ -193,7 +193,9 @@ bool Tracer::grid_facet_guess(float u, float v, const Vec3& ng, long& i, long& j
   // Grid hits report u, v normalised over the whole grid: the cell and its half follow.
   const double gu = static_cast<double>(u) * (grid_width_ - 1);
   const double gv = static_cast<double>(v) * (grid_height_ - 1);
-  const long ci = static_cast<long>(std::floor(gu)), cj = static_cast<long>(std::floor(gv));
+  // Truncation is the floor for u, v >= 0 (nearly always; without a call to floor()).
+  const long ci = gu >= 0 ? static_cast<long>(gu) : static_cast<long>(std::floor(gu));
+  const long cj = gv >= 0 ? static_cast<long>(gv) : static_cast<long>(std::floor(gv));
   half = (gu - ci) + (gv - cj) < 1.0 ? 0 : 1;
   i = ci - pad_;
   j = cj - pad_;
