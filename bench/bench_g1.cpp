@@ -26,7 +26,7 @@ int main(int argc, char** argv) {
   std::vector<int> resolutions;
   std::uint64_t rays = 2000000;
   int repeat = 3;
-  std::string only;  // "g1" or "bare": run measure_g1 or the bare loop alone (for a profiler)
+  std::string only;  // "g1", "bare" or "lean": run measure_g1, the bare loop or the lean path alone (for a profiler)
   for (int k = 1; k < argc; ++k) {
     if (!std::strcmp(argv[k], "--rays") && k + 1 < argc) rays = std::strtoull(argv[++k], nullptr, 10);
     else if (!std::strcmp(argv[k], "--only") && k + 1 < argc) only = argv[++k];
@@ -38,9 +38,9 @@ int main(int argc, char** argv) {
               static_cast<unsigned long long>(rays), repeat);
   std::printf("Rates per processor second (user + system of all threads; wall rates in the last "
               "columns)\n");
-  std::printf("%-13s %6s %8s %8s %10s %10s %11s %8s %10s %10s %8s %8s %8s\n", "tile", "gen_s",
-              "build_s", "facet_s", "(a)Mray/s", "(b)Mray/s", "bare_Mray/s", "(a)/bare", "rss_MiB",
-              "peak_MiB", "B/facet", "wall(a)", "wall_bare");
+  std::printf("%-13s %6s %8s %8s %10s %10s %11s %8s %11s %9s %10s %10s %8s %8s %8s\n", "tile",
+              "gen_s", "build_s", "facet_s", "(a)Mray/s", "(b)Mray/s", "bare_Mray/s", "(a)/bare",
+              "lean_Mray/s", "lean/bare", "rss_MiB", "peak_MiB", "B/facet", "wall(a)", "wall_bare");
   for (int res : resolutions) {
     GaussianParams p;
     p.resolution = res;
@@ -56,12 +56,12 @@ int main(int argc, char** argv) {
     const double nf = static_cast<double>(s.num_facets());
     for (double theta_deg : {0.0, 60.0, 85.0}) {
       const Vec3 v = direction_from_angles(rad(theta_deg), 0.0);
-      Rate a, b, bare;
+      Rate a, b, bare, lean;
       double facet_s = 1e30;
       if (!only.empty()) {
         for (int k = 0; k < repeat; ++k) {
           if (only == "g1") measure_g1(tracer, v, o, &table);
-          else bare_g1_rays_per_second(tracer, v, o);
+          else bare_g1_rays_per_second(tracer, v, o, only == "lean");
         }
         continue;
       }
@@ -73,12 +73,13 @@ int main(int argc, char** argv) {
         b.best_of({r.sample_rays / r.sample_seconds, r.sample_rays / r.sample_cpu_seconds});
         facet_s = std::min(facet_s, r.facet_seconds);
         bare.best_of(bare_g1_rays_per_second(tracer, v, o));
+        lean.best_of(bare_g1_rays_per_second(tracer, v, o, true));
       }
       const double rss = rss_mib(), peak = peak_rss_mib();
-      std::printf("%5d^2 %3.0fdeg %6.2f %8.2f %8.3f %10.2f %10.2f %11.2f %8.2f %10.0f %10.0f %8.1f %8.2f %8.2f\n",
+      std::printf("%5d^2 %3.0fdeg %6.2f %8.2f %8.3f %10.2f %10.2f %11.2f %8.2f %11.2f %9.2f %10.0f %10.0f %8.1f %8.2f %8.2f\n",
                   res, theta_deg, gen, tracer.build_seconds(), facet_s, a.cpu / 1e6, b.cpu / 1e6,
-                  bare.cpu / 1e6, a.cpu / bare.cpu, rss, peak, peak * 1048576.0 / nf, a.wall / 1e6,
-                  bare.wall / 1e6);
+                  bare.cpu / 1e6, a.cpu / bare.cpu, lean.cpu / 1e6, lean.cpu / bare.cpu, rss, peak,
+                  peak * 1048576.0 / nf, a.wall / 1e6, bare.wall / 1e6);
       std::fflush(stdout);
     }
   }

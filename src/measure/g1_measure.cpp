@@ -29,11 +29,14 @@ struct Tally {
 constexpr std::uint64_t kChunk = 1 << 14;
 
 // Runs `body(rep, j, tally)` for every replicate rep in `share` and ray j < n in parallel chunks.
-// A chunk is one range of ray indices [j0, j1) taken in every replicate in turn: rays j of all
-// replicates start in the same stratum (or draw from the same stretch of the facet CDF), so a
-// chunk's rays meet one small part of the tile and its BVH stays in cache (one replicate at a
-// time would sweep a quarter of the tile per chunk). Each ray keeps its own random stream and
-// the tallies are integer counts, so they are identical for any chunking and thread count.
+// A chunk is one range of ray indices [j0, j1), taken index by index with ray j of every
+// replicate in turn: rays j of all replicates start in the same stratum (or draw from the same
+// stretch of the facet CDF), so consecutive rays meet the same few cells. On a large tile, where
+// one replicate's consecutive rays are many cells apart, the BVH nodes and grid vertices a ray
+// fetches are then reused by the next rays instead of being fetched again replicate after
+// replicate (a chunk's part of the tile no longer fits in cache there). Each ray keeps its own
+// random stream and the tallies are integer counts per replicate, so they are identical for any
+// order, chunking and thread count.
 template <class Body>
 std::vector<Tally> run_replicates(int R, std::uint64_t n, int nbins, TraceCounters& counters,
                                   std::atomic<std::uint64_t>& done, UnitRange share, Body&& body) {
@@ -48,11 +51,10 @@ std::vector<Tally> run_replicates(int R, std::uint64_t n, int nbins, TraceCounte
   std::vector<Tally> parts(nc * active);
   tbb::parallel_for(std::uint64_t(0), nc, [&](std::uint64_t c) {
     const std::uint64_t j0 = c * span, j1 = std::min(n, j0 + span);
-    for (std::uint64_t q = 0; q < active; ++q) {
-      Tally& t = parts[c * active + q];
-      t = Tally(nbins);
-      for (std::uint64_t j = j0; j < j1; ++j) body(static_cast<int>(first + q), j, t);
-    }
+    Tally* t = &parts[c * active];
+    for (std::uint64_t q = 0; q < active; ++q) t[q] = Tally(nbins);
+    for (std::uint64_t j = j0; j < j1; ++j)
+      for (std::uint64_t q = 0; q < active; ++q) body(static_cast<int>(first + q), j, t[q]);
     done += active * (j1 - j0);
   });
   for (std::uint64_t c = 0; c < nc; ++c)
