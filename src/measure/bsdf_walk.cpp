@@ -1,5 +1,7 @@
 #include "microsim/measure/bsdf_walk.hpp"
 
+#include "microsim/trace/facet_plane.hpp"
+
 namespace microsim {
 
 WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir0,
@@ -69,7 +71,7 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
       }
     }
     dir.normalize();
-    const SourcePlane plane = SourcePlane::of(s.facet(hit.facet));
+    const SourcePlane plane = facet_plane(s, hit.facet);
     hit = tracer.first_hit(hit.point, dir, &plane, counters, side);
   }
 }
