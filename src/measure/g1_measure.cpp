@@ -3,6 +3,7 @@
 #include "microsim/measure/sampling.hpp"
 #include "microsim/measure/stats.hpp"
 #include "microsim/surface/undersurface.hpp"
+#include "microsim/trace/facet_plane.hpp"
 
 #include <sys/resource.h>
 #include <tbb/blocked_range.h>
@@ -309,7 +310,7 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
           ++t.samples[b];
           return;
         }
-        Triangle f = s.facet(k);
+        const Triangle f = facet_triangle(s, k);  // s.facet(k), without its modulos
         double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
         Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
         SourcePlane plane = SourcePlane::of(f);
