@@ -1,7 +1,10 @@
 // Benchmark (not a test): rays/s of the G1 measurement against a bare rtcIntersect1 loop over
 // the same scene and the very same rays, scene build time and memory, for several tile
 // resolutions (Beckmann alpha = 0.5, 4 cells per correlation length).
-//   microsim_bench [--rays N] [--repeat K] [resolution...]    (default 1024 2048 4096 8192)
+//   microsim_bench [--rays N] [--repeat K] [--walks P] [--only g1|bare|lean] [resolution...]
+//   (default 1024 2048 4096 8192). --walks P: after each tile's G1 rows, P-path mirror and
+//   dielectric walk rows against the replay of their own queries (bench_walks.hpp).
+//   lean_Mray/s: the primary-ray path of (a) (Tracer::front_facet) alone on the bare loop's rays.
 // Each direction runs K times (default 3), the estimator and the bare loop interleaved in the
 // same process; the best of each is reported (on a shared machine the slower runs are the ones
 // that lost the CPU), and the ratio is that of the best rates.
@@ -18,6 +21,7 @@
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/trace/tracer.hpp"
 #include "bench_common.hpp"
+#include "bench_walks.hpp"
 
 using namespace microsim;
 using namespace microsim::bench;
@@ -26,10 +30,12 @@ int main(int argc, char** argv) {
   std::vector<int> resolutions;
   std::uint64_t rays = 2000000;
   int repeat = 3;
+  std::uint64_t walks = 0;  // --walks N: also N-path walk rows on every tile (bench_walks.hpp)
   std::string only;  // "g1", "bare" or "lean": run measure_g1, the bare loop or the lean path alone (for a profiler)
   for (int k = 1; k < argc; ++k) {
     if (!std::strcmp(argv[k], "--rays") && k + 1 < argc) rays = std::strtoull(argv[++k], nullptr, 10);
     else if (!std::strcmp(argv[k], "--only") && k + 1 < argc) only = argv[++k];
+    else if (!std::strcmp(argv[k], "--walks") && k + 1 < argc) walks = std::strtoull(argv[++k], nullptr, 10);
     else if (!std::strcmp(argv[k], "--repeat") && k + 1 < argc) repeat = std::atoi(argv[++k]);
     else resolutions.push_back(std::atoi(argv[k]));
   }
@@ -81,6 +87,10 @@ int main(int argc, char** argv) {
                   bare.cpu / 1e6, a.cpu / bare.cpu, lean.cpu / 1e6, lean.cpu / bare.cpu, rss, peak,
                   peak * 1048576.0 / nf, a.wall / 1e6, bare.wall / 1e6);
       std::fflush(stdout);
+    }
+    if (walks > 0 && only.empty()) {
+      std::printf("walks on the %d^2 tile, %llu paths per row:\n", res, static_cast<unsigned long long>(walks));
+      print_walk_rows(tracer, walks, repeat, false);
     }
   }
   return 0;
