@@ -318,6 +318,8 @@ TEST(Tracer, FacetTriangleEqualsMicrosurfaceFacet) {
   for (const Microsurface& s : surfaces) {
     // With a region, every cell's facets follow the region's (named by tracer hits).
     const std::size_t end = s.num_facets() + (s.has_region() ? 2 * static_cast<std::size_t>(s.nx()) * s.ny() : 0);
+    const Tracer tracer(s);
+    const FacetPlanes planes(tracer);
     for (std::size_t k = 0; k < end; ++k) {
       const Triangle a = s.facet(k), b = facet_triangle(s, k);
       ASSERT_EQ(a.p0, b.p0) << k;
@@ -326,6 +328,18 @@ TEST(Tracer, FacetTriangleEqualsMicrosurfaceFacet) {
       const SourcePlane pa = SourcePlane::of(a), pb = facet_plane(s, k);
       ASSERT_EQ(pa.normal, pb.normal);
       ASSERT_EQ(pa.offset, pb.offset);
+      // From the tracer's grid vertices, for every facet it can report (a window traces the
+      // cells between its vertices only).
+      const std::size_t cell = k < s.num_facets() || !s.has_region() ? 0 : (k - s.num_facets()) / 2;
+      const bool traced = s.macro().periodic || k < s.num_facets() ||
+                          (static_cast<long>(cell % s.nx()) < s.nx() - 1 &&
+                           static_cast<long>(cell / s.nx()) < s.ny() - 1);
+      if (traced) {
+        const Triangle c = planes.triangle(k);
+        ASSERT_EQ(a.p0, c.p0) << k;
+        ASSERT_EQ(a.p1, c.p1) << k;
+        ASSERT_EQ(a.p2, c.p2) << k;
+      }
       // Power: the neighbouring facet's plane is another one.
       if (k + 1 < s.num_facets()) {
         differ_next += !(SourcePlane::of(s.facet(k + 1)).normal == pb.normal);

@@ -44,4 +44,50 @@ inline SourcePlane facet_plane(const Microsurface& s, std::size_t k) {
   return SourcePlane::of(facet_triangle(s, k));
 }
 
+// The same triangles and planes for the facets a tracer reports, with the corner heights read
+// from the tracer's own grid vertices (the floats its traversal has just read, in cache: the
+// surface's height array is another 4 bytes per cell that a walk's hit misses in cache).
+class FacetPlanes {
+ public:
+  explicit FacetPlanes(const Tracer& t) : s_(t.surface()) {
+    if (s_.kind() != Microsurface::Kind::Heightfield) return;
+    // The grid of Tracer: one periodic copy of cells around a periodic tile, none around a
+    // window; vertex (i + pad, j + pad) is grid_point(i, j), its z the float height.
+    pad_ = s_.macro().periodic ? 1 : 0;
+    width_ = static_cast<std::size_t>(s_.traced_cells_x()) + 1 + 2 * pad_;
+    vertices_ = static_cast<const float*>(
+        rtcGetGeometryBufferData(rtcGetGeometry(t.scene(), 0), RTC_BUFFER_TYPE_VERTEX, 0));
+  }
+  Triangle triangle(std::size_t k) const {
+    if (!vertices_) return facet_triangle(s_, k);
+    const long nx = s_.nx();
+    long i, j;
+    const std::size_t nr = s_.has_region() ? s_.num_facets() : 0;
+    if (k < nr) {
+      const std::size_t cell = k / 2, w = static_cast<std::size_t>(s_.region_i1() - s_.region_i0());
+      i = s_.region_i0() + static_cast<long>(cell % w);
+      j = s_.region_j0() + static_cast<long>(cell / w);
+    } else {
+      const std::size_t cell = (k - nr) / 2;
+      j = static_cast<long>(cell / static_cast<std::size_t>(nx));
+      i = static_cast<long>(cell - static_cast<std::size_t>(j) * nx);
+    }
+    const Macrosurface& m = s_.macro();
+    const double dx = s_.dx(), dy = s_.dy();
+    auto point = [&](long a, long b) {
+      const float* q = vertices_ + 3 * ((static_cast<std::size_t>(b + pad_)) * width_ + (a + pad_));
+      return Vec3(-0.5 * m.size_x + a * dx, -0.5 * m.size_y + b * dy, q[2]);
+    };
+    return k % 2 == 0 ? Triangle{point(i, j), point(i + 1, j), point(i, j + 1)}
+                      : Triangle{point(i + 1, j), point(i + 1, j + 1), point(i, j + 1)};
+  }
+  SourcePlane plane(std::size_t k) const { return SourcePlane::of(triangle(k)); }
+
+ private:
+  const Microsurface& s_;
+  const float* vertices_ = nullptr;
+  long pad_ = 0;
+  std::size_t width_ = 0;
+};
+
 }  // namespace microsim
