@@ -56,28 +56,39 @@ inline double rss_mib() {
 }
 
 // Estimator (a)'s primary rays exactly as measure_g1 casts them (same seed, replicate streams,
-// stratified Morton-ordered origins on the ray window, chunks of the same ray indices in every
-// replicate), each traced by one plain rtcIntersect1 from the window to infinity: no
+// stratified Morton-ordered origins on the ray window, chunks of the same ray indices, ray j of
+// every replicate in turn), each traced by one plain rtcIntersect1 from the window to infinity: no
 // wrap-around, no facet lookup, no binning. Rays per second.
-inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, const G1Options& o) {
+// With `lean`, each ray is traced by Tracer::front_facet instead (the primary-ray path of (a)
+// without its tallies): the cost of the path itself beside the bare query.
+inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
+                                    bool lean = false) {
   const Vec3 v = v_in.normalized();
   const RayWindow w = make_ray_window(tracer, v);
   const ReplicatePlan plan(o.rays, o.replicates);
   const int R = plan.replicates;
   const std::uint64_t n = plan.per_replicate(), span = std::max<std::uint64_t>(1, (1u << 14) / R);
   const std::uint64_t key = direction_stream_key(v), nc = (n + span - 1) / span;
+  std::vector<std::uint64_t> streams(R);
+  for (int q = 0; q < R; ++q) streams[q] = ReplicatePlan::stream(0xA000 + key, q);
   std::vector<unsigned> hits(nc);
+  const DownwardRays down(tracer, v);
   const auto t0 = std::chrono::steady_clock::now();
   const double c0 = cpu_seconds();
   tbb::parallel_for(std::uint64_t(0), nc, [&](std::uint64_t c) {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     unsigned count = 0;
-    for (int rep = 0; rep < R; ++rep)
-      for (std::uint64_t j = c * span; j < std::min(n, (c + 1) * span); ++j) {
-        CounterRng rng(o.seed, ReplicatePlan::stream(0xA000 + key, rep), j);
+    TraceCounters counters;
+    for (std::uint64_t j = c * span; j < std::min(n, (c + 1) * span); ++j)
+      for (int rep = 0; rep < R; ++rep) {
+        CounterRng rng(o.seed, streams[rep], j);
         const Vec2 ab = plan.strata.point(j, rng);
         const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
+        if (lean) {
+          count += tracer.front_facet(down, org, counters) != DownwardRays::kNone;
+          continue;
+        }
         RTCRayHit rh{};
         rh.ray.org_x = float(org.x());
         rh.ray.org_y = float(org.y());

@@ -1,10 +1,13 @@
 // Benchmark (not a test): rays/s of the G1 measurement against a bare rtcIntersect1 loop over
 // the same scene and the very same rays, scene build time and memory, for several tile
 // resolutions (Beckmann alpha = 0.5, 4 cells per correlation length).
-//   microsim_bench [--rays N] [--repeat K] [--large] [resolution...]
+//   microsim_bench [--rays N] [--repeat K] [--large] [--walks P] [--only g1|bare|lean] [resolution...]
 // (default 1024 2048 4096 8192; --large adds 16384, about 9 GB and several processor minutes).
 // Tiles run in increasing size, so the process's peak resident memory after a tile is that
 // tile's peak (B/facet: peak bytes per facet, generation and tracing in this process).
+//   --walks P: after each tile's G1 rows, P-path mirror and
+//   dielectric walk rows against the replay of their own queries (bench_walks.hpp).
+//   lean_Mray/s: the primary-ray path of (a) (Tracer::front_facet) alone on the bare loop's rays.
 // Each direction runs K times (default 3), the estimator and the bare loop interleaved in the
 // same process; the best of each is reported (on a shared machine the slower runs are the ones
 // that lost the CPU), and the ratio is that of the best rates.
@@ -14,6 +17,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "microsim/measure/facet_table.hpp"
@@ -21,6 +25,7 @@
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/trace/tracer.hpp"
 #include "bench_common.hpp"
+#include "bench_walks.hpp"
 
 using namespace microsim;
 using namespace microsim::bench;
@@ -30,8 +35,12 @@ int main(int argc, char** argv) {
   std::uint64_t rays = 2000000;
   int repeat = 3;
   bool large = false;
+  std::uint64_t walks = 0;  // --walks N: also N-path walk rows on every tile (bench_walks.hpp)
+  std::string only;  // "g1", "bare" or "lean": run measure_g1, the bare loop or the lean path alone (for a profiler)
   for (int k = 1; k < argc; ++k) {
     if (!std::strcmp(argv[k], "--rays") && k + 1 < argc) rays = std::strtoull(argv[++k], nullptr, 10);
+    else if (!std::strcmp(argv[k], "--only") && k + 1 < argc) only = argv[++k];
+    else if (!std::strcmp(argv[k], "--walks") && k + 1 < argc) walks = std::strtoull(argv[++k], nullptr, 10);
     else if (!std::strcmp(argv[k], "--repeat") && k + 1 < argc) repeat = std::atoi(argv[++k]);
     else if (!std::strcmp(argv[k], "--large")) large = true;
     else resolutions.push_back(std::atoi(argv[k]));
@@ -44,9 +53,9 @@ int main(int argc, char** argv) {
               static_cast<unsigned long long>(rays), repeat);
   std::printf("Rates per processor second (user + system of all threads; wall rates in the last "
               "columns)\n");
-  std::printf("%-13s %6s %8s %8s %10s %10s %11s %8s %10s %10s %8s %8s %8s\n", "tile", "gen_s",
-              "build_s", "facet_s", "(a)Mray/s", "(b)Mray/s", "bare_Mray/s", "(a)/bare", "rss_MiB",
-              "peak_MiB", "B/facet", "wall(a)", "wall_bare");
+  std::printf("%-13s %6s %8s %8s %10s %10s %11s %8s %11s %9s %10s %10s %8s %8s %8s\n", "tile",
+              "gen_s", "build_s", "facet_s", "(a)Mray/s", "(b)Mray/s", "bare_Mray/s", "(a)/bare",
+              "lean_Mray/s", "lean/bare", "rss_MiB", "peak_MiB", "B/facet", "wall(a)", "wall_bare");
   for (int res : resolutions) {
     GaussianParams p;
     p.resolution = res;
@@ -62,8 +71,15 @@ int main(int argc, char** argv) {
     const double nf = static_cast<double>(s.num_facets());
     for (double theta_deg : {0.0, 60.0, 85.0}) {
       const Vec3 v = direction_from_angles(rad(theta_deg), 0.0);
-      Rate a, b, bare;
+      Rate a, b, bare, lean;
       double facet_s = 1e30;
+      if (!only.empty()) {
+        for (int k = 0; k < repeat; ++k) {
+          if (only == "g1") measure_g1(tracer, v, o, &table);
+          else bare_g1_rays_per_second(tracer, v, o, only == "lean");
+        }
+        continue;
+      }
       for (int k = 0; k < repeat; ++k) {
         const G1Result r = measure_g1(tracer, v, o, &table);
         // (a): the same rays as the bare loop, plus wrap-around, exact facet lookup, binning;
@@ -72,15 +88,20 @@ int main(int argc, char** argv) {
         b.best_of({r.sample_rays / r.sample_seconds, r.sample_rays / r.sample_cpu_seconds});
         facet_s = std::min(facet_s, r.facet_seconds);
         bare.best_of(bare_g1_rays_per_second(tracer, v, o));
+        lean.best_of(bare_g1_rays_per_second(tracer, v, o, true));
       }
       const double rss = rss_mib(), peak = peak_rss_mib();
-      std::printf("%5d^2 %3.0fdeg %6.2f %8.2f %8.3f %10.2f %10.2f %11.2f %8.2f %10.0f %10.0f %8.1f %8.2f %8.2f\n",
+      std::printf("%5d^2 %3.0fdeg %6.2f %8.2f %8.3f %10.2f %10.2f %11.2f %8.2f %11.2f %9.2f %10.0f %10.0f %8.1f %8.2f %8.2f\n",
                   res, theta_deg, gen, tracer.build_seconds(), facet_s, a.cpu / 1e6, b.cpu / 1e6,
-                  bare.cpu / 1e6, a.cpu / bare.cpu, rss, peak, peak * 1048576.0 / nf, a.wall / 1e6,
-                  bare.wall / 1e6);
+                  bare.cpu / 1e6, a.cpu / bare.cpu, lean.cpu / 1e6, lean.cpu / bare.cpu, rss, peak,
+                  peak * 1048576.0 / nf, a.wall / 1e6, bare.wall / 1e6);
       std::fflush(stdout);
     }
     peaks.emplace_back(res, peak_rss_mib());
+    if (walks > 0 && only.empty()) {
+      std::printf("walks on the %d^2 tile, %llu paths per row:\n", res, static_cast<unsigned long long>(walks));
+      print_walk_rows(tracer, walks, repeat, false);
+    }
   }
   std::printf("\nPeak resident memory per tile (generation, scene build, facet table, G1)\n%-8s %10s %8s\n",
               "tile", "peak_MiB", "B/facet");

@@ -5,6 +5,7 @@
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/surface/generators.hpp"
 #include "microsim/surface/surface_io.hpp"
+#include "microsim/trace/facet_plane.hpp"
 #include "microsim/trace/tracer.hpp"
 #include "test_helpers.hpp"
 
@@ -232,4 +233,125 @@ TEST(Tracer, GrazingRayOverARidgeIsNeverABackFaceHit) {
   }
   EXPECT_EQ(front, n);
   EXPECT_EQ(c.backface_hits + c.lost_below + c.unresolved, 0u);
+}
+
+TEST(Tracer, FrontFacetEqualsFirstHitFacet) {
+  // The primary-ray path (Tracer::front_facet) must give, ray for ray, the facet first_hit
+  // reports when its front face is met first, and the same counters: on a rough tile (back
+  // faces at silhouettes, many wrap-arounds at grazing views), on a region of a periodic tile
+  // (facet numbering of the region), on a non-periodic window (the general path) and on rays
+  // grazing a V-groove's ridge (back-face first hits traced again).
+  struct Case {
+    Microsurface s;
+    std::vector<double> thetas;
+    bool ridge = false;
+  };
+  std::vector<Case> cases;
+  cases.push_back({beckmann_tile(64, 3, 1.0), {0.0, 45.0, 70.0, 85.0, 89.0}});
+  Microsurface region = beckmann_tile(64, 4, 0.5);
+  region.set_sample_region(8, 40, 16, 48, true);
+  cases.push_back({std::move(region), {0.0, 60.0, 85.0}});
+  Microsurface window = beckmann_tile(64, 5, 0.5);
+  window.set_sample_region(4, 60, 4, 60, false);
+  cases.push_back({std::move(window), {0.0, 60.0}});
+  VGrooveParams vp;
+  vp.facet_angle_deg = 60.0;
+  cases.push_back({generate_vgroove(vp), {70.0, 80.0, 88.0}, true});
+  std::uint64_t compared = 0, hits = 0, differ_perturbed = 0;
+  for (const Case& cs : cases) {
+    Tracer tracer(cs.s);
+    const bool vgroove = cs.ridge;
+    for (double theta : cs.thetas)
+      for (int k = 0; k < 3000; ++k) {
+        CounterRng rng(11, 7, static_cast<std::uint64_t>(k));
+        const Vec3 v = direction_from_angles(rad(theta), vgroove ? 0.0 : 2 * kPi * rng.uniform());
+        Vec3 o(rng.uniform() - 0.5, rng.uniform() - 0.5, tracer.z_top());
+        if (vgroove) {  // within +-2e-7 of the ridge (x = 0, z at the top), as in the test above
+          const Vec3 ridge(0.0, o.y(), tracer.z_top() - 1e-6 + 1e-10 * (k - 1500));
+          o = ridge + ((tracer.z_top() - ridge.z()) / v.z()) * v;
+        }
+        TraceCounters c1, c2, c3;
+        const TraceHit h = tracer.first_hit(o, -v, nullptr, c1);
+        const std::size_t expected = h.hit && !h.backface ? h.facet : DownwardRays::kNone;
+        const std::size_t got = tracer.front_facet(DownwardRays(tracer, v), o, c2);
+        ASSERT_EQ(got, expected) << "theta " << theta << " ray " << k;
+        for (auto [a, b] : {std::pair{c1.rays, c2.rays}, {c1.border_crossings, c2.border_crossings},
+                            {c1.lost_below, c2.lost_below}, {c1.backface_hits, c2.backface_hits},
+                            {c1.unresolved, c2.unresolved}, {c1.side_exits, c2.side_exits},
+                            {c1.side_entries, c2.side_entries}})
+          ASSERT_EQ(a, b) << "theta " << theta << " ray " << k;
+        // Power: the same comparison against a direction 1e-3 rad away does see differences.
+        const Vec3 vp2 = direction_from_angles(rad(theta) + 1e-3, vgroove ? 0.0 : phi_of(v));
+        differ_perturbed += tracer.front_facet(DownwardRays(tracer, vp2), o, c3) != expected;
+        ++compared;
+        hits += expected != DownwardRays::kNone;
+      }
+  }
+  EXPECT_GT(hits, compared / 2);
+  EXPECT_GT(differ_perturbed, compared / 100);
+  // Rays that a tracer without the back-face handling reported on a back face at a ridge
+  // (GrazingRayOverARidgeIsNeverABackFaceHit): {facet angle, origin, v}.
+  const double ridge_cases[][7] = {
+      {45, 2.7306282389671921e-06, 0.10699511465661271, 0.50000100000000003, 0.93969262078590832, 0, 0.34202014332566882},
+      {60, 2.6949246065055554e-05, 0.48881965725233778, 0.86602638824081424, 0.99939082701909576, 0, 0.03489949670250108},
+      {70, -1.9525588331625876e-05, -0.11841549403437363, 1.3737401394553184, -0.49969541350954766, 0.86549784450767653, 0.03489949670250108}};
+  for (const auto& k : ridge_cases) {
+    vp.facet_angle_deg = k[0];
+    const Microsurface g = generate_vgroove(vp);
+    const Tracer t(g);
+    TraceCounters c1, c2;
+    const Vec3 o(k[1], k[2], k[3]), v(k[4], k[5], k[6]);
+    const TraceHit h = t.first_hit(o, -v, nullptr, c1);
+    ASSERT_TRUE(h.hit && !h.backface);
+    EXPECT_EQ(t.front_facet(DownwardRays(t, v), o, c2), h.facet);
+    EXPECT_EQ(c1.rays, c2.rays);
+    EXPECT_EQ(c2.backface_hits, 0u);
+  }
+}
+
+TEST(Tracer, FacetTriangleEqualsMicrosurfaceFacet) {
+  // The walks' plane of the facet a ray leaves (facet_plane) must be bit for bit the one
+  // Microsurface::facet gives, on a tile, on a region of it (facets renumbered) and on a window.
+  std::vector<Microsurface> surfaces;
+  surfaces.push_back(beckmann_tile(16, 2));
+  surfaces.push_back(beckmann_tile(16, 3));
+  surfaces.back().set_sample_region(3, 11, 5, 14, true);
+  surfaces.push_back(beckmann_tile(16, 4));
+  surfaces.back().set_sample_region(2, 13, 1, 12, false);
+  int differ_next = 0, compared_next = 0, n = 0;
+  for (const Microsurface& s : surfaces) {
+    // With a region, every cell's facets follow the region's (named by tracer hits).
+    const std::size_t end = s.num_facets() + (s.has_region() ? 2 * static_cast<std::size_t>(s.nx()) * s.ny() : 0);
+    const Tracer tracer(s);
+    const FacetPlanes planes(tracer);
+    for (std::size_t k = 0; k < end; ++k) {
+      const Triangle a = s.facet(k), b = facet_triangle(s, k);
+      ASSERT_EQ(a.p0, b.p0) << k;
+      ASSERT_EQ(a.p1, b.p1) << k;
+      ASSERT_EQ(a.p2, b.p2) << k;
+      const SourcePlane pa = SourcePlane::of(a), pb = facet_plane(s, k);
+      ASSERT_EQ(pa.normal, pb.normal);
+      ASSERT_EQ(pa.offset, pb.offset);
+      // From the tracer's grid vertices, for every facet it can report (a window traces the
+      // cells between its vertices only).
+      const std::size_t cell = k < s.num_facets() || !s.has_region() ? 0 : (k - s.num_facets()) / 2;
+      const bool traced = s.macro().periodic || k < s.num_facets() ||
+                          (static_cast<long>(cell % s.nx()) < s.nx() - 1 &&
+                           static_cast<long>(cell / s.nx()) < s.ny() - 1);
+      if (traced) {
+        const Triangle c = planes.triangle(k);
+        ASSERT_EQ(a.p0, c.p0) << k;
+        ASSERT_EQ(a.p1, c.p1) << k;
+        ASSERT_EQ(a.p2, c.p2) << k;
+      }
+      // Power: the neighbouring facet's plane is another one.
+      if (k + 1 < s.num_facets()) {
+        differ_next += !(SourcePlane::of(s.facet(k + 1)).normal == pb.normal);
+        ++compared_next;
+      }
+      ++n;
+    }
+  }
+  EXPECT_GT(n, 1000);
+  EXPECT_GT(differ_next, compared_next * 9 / 10);
 }

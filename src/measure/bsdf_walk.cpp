@@ -1,5 +1,7 @@
 #include "microsim/measure/bsdf_walk.hpp"
 
+#include "microsim/trace/facet_plane.hpp"
+
 namespace microsim {
 
 WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir0,
@@ -7,6 +9,7 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
                        TraceCounters& counters, std::uint64_t& events) {
   using models::MaterialKind;
   const Microsurface& s = tracer.surface();
+  const FacetPlanes planes(tracer);
   WalkEnd e;
   Vec3 dir = dir0;
   RaySide side = RaySide::Front;
@@ -69,7 +72,7 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
       }
     }
     dir.normalize();
-    const SourcePlane plane = SourcePlane::of(s.facet(hit.facet));
+    const SourcePlane plane = planes.plane(hit.facet);
     hit = tracer.first_hit(hit.point, dir, &plane, counters, side);
   }
 }

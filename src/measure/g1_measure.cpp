@@ -3,6 +3,7 @@
 #include "microsim/measure/sampling.hpp"
 #include "microsim/measure/stats.hpp"
 #include "microsim/surface/undersurface.hpp"
+#include "microsim/trace/facet_plane.hpp"
 
 #include <sys/resource.h>
 #include <tbb/blocked_range.h>
@@ -29,11 +30,14 @@ struct Tally {
 constexpr std::uint64_t kChunk = 1 << 14;
 
 // Runs `body(rep, j, tally)` for every replicate rep in `share` and ray j < n in parallel chunks.
-// A chunk is one range of ray indices [j0, j1) taken in every replicate in turn: rays j of all
-// replicates start in the same stratum (or draw from the same stretch of the facet CDF), so a
-// chunk's rays meet one small part of the tile and its BVH stays in cache (one replicate at a
-// time would sweep a quarter of the tile per chunk). Each ray keeps its own random stream and
-// the tallies are integer counts, so they are identical for any chunking and thread count.
+// A chunk is one range of ray indices [j0, j1), taken index by index with ray j of every
+// replicate in turn: rays j of all replicates start in the same stratum (or draw from the same
+// stretch of the facet CDF), so consecutive rays meet the same few cells. On a large tile, where
+// one replicate's consecutive rays are many cells apart, the BVH nodes and grid vertices a ray
+// fetches are then reused by the next rays instead of being fetched again replicate after
+// replicate (a chunk's part of the tile no longer fits in cache there). Each ray keeps its own
+// random stream and the tallies are integer counts per replicate, so they are identical for any
+// order, chunking and thread count.
 template <class Body>
 std::vector<Tally> run_replicates(int R, std::uint64_t n, int nbins, TraceCounters& counters,
                                   std::atomic<std::uint64_t>& done, UnitRange share, Body&& body) {
@@ -48,11 +52,10 @@ std::vector<Tally> run_replicates(int R, std::uint64_t n, int nbins, TraceCounte
   std::vector<Tally> parts(nc * active);
   tbb::parallel_for(std::uint64_t(0), nc, [&](std::uint64_t c) {
     const std::uint64_t j0 = c * span, j1 = std::min(n, j0 + span);
-    for (std::uint64_t q = 0; q < active; ++q) {
-      Tally& t = parts[c * active + q];
-      t = Tally(nbins);
-      for (std::uint64_t j = j0; j < j1; ++j) body(static_cast<int>(first + q), j, t);
-    }
+    Tally* t = &parts[c * active];
+    for (std::uint64_t q = 0; q < active; ++q) t[q] = Tally(nbins);
+    for (std::uint64_t j = j0; j < j1; ++j)
+      for (std::uint64_t q = 0; q < active; ++q) body(static_cast<int>(first + q), j, t[q]);
     done += active * (j1 - j0);
   });
   for (std::uint64_t c = 0; c < nc; ++c)
@@ -267,19 +270,27 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   const double cpu_raycast = process_cpu_seconds();
   const std::uint64_t key = static_cast<std::uint64_t>(r.theta * 1e6) * 7919 +
                             static_cast<std::uint64_t>(r.phi * 1e6);
+  // Hits on back faces (counted in counters) are left out of the visible area: a ray that
+  // meets a facet from behind crossed the surface through a rounding gap. A measured region:
+  // hits outside it (facet index >= num_facets()) are misses. A heightfield's bin is the
+  // table's (the same normal from the same heights, binned once), its hit decoded by the lean
+  // primary-ray path (Tracer::front_facet); a mesh's table holds float normals, so its hits
+  // are binned from the exact one.
+  std::vector<std::uint64_t> streams(R);
+  for (int q = 0; q < R; ++q) streams[q] = ReplicatePlan::stream(0xA000 + key, q);
+  const DownwardRays down(tracer, v);
   std::vector<Tally> ray_reps =
       run_replicates(R, n_rep, nbins, counters, done, reps, [&](int rep, std::uint64_t j, Tally& t) {
-        CounterRng rng(o.seed, ReplicatePlan::stream(0xA000 + key, rep), j);
-        Vec2 ab = plan.strata.point(j, rng);
-        Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
-        TraceHit h = tracer.first_hit(org, -v, nullptr, t.counters);
-        // Hits on back faces (counted in counters) are left out of the visible area: a ray
-        // that meets a facet from behind crossed the surface through a rounding gap.
-        // A measured region: hits outside it (facet index >= num_facets()) are misses.
-        // A heightfield's bin is the table's (the same normal from the same heights, binned
-        // once); a mesh's table holds float normals, so its hits are binned from the exact one.
-        if (h.hit && !h.backface && h.facet < nf)
-          ++t.hits[heightfield ? ft.bin(h.facet) : r.binning.bin_of(h.normal)];
+        CounterRng rng(o.seed, streams[rep], j);
+        const Vec2 ab = plan.strata.point(j, rng);
+        const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
+        if (heightfield) {
+          const std::size_t k = tracer.front_facet(down, org, t.counters);
+          if (k < nf) ++t.hits[ft.bin(k)];
+          return;
+        }
+        const TraceHit h = tracer.first_hit(org, -v, nullptr, t.counters);
+        if (h.hit && !h.backface && h.facet < nf) ++t.hits[r.binning.bin_of(h.normal)];
       });
   report();
   r.raycast_seconds =
@@ -299,7 +310,7 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
           ++t.samples[b];
           return;
         }
-        Triangle f = s.facet(k);
+        const Triangle f = facet_triangle(s, k);  // s.facet(k), without its modulos
         double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
         Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
         SourcePlane plane = SourcePlane::of(f);

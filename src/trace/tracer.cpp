@@ -168,6 +168,60 @@ Tracer::~Tracer() {
   if (device_) rtcReleaseDevice(device_);
 }
 
+namespace {
+// Unnormalised normal (cross product) of facet `half` of a cell with corner heights h00, h10,
+// h01, h11: facet 0 = (v00, v10, v01), facet 1 = (v10, v11, v01); see Microsurface::facet.
+inline Vec3 cell_cross_of(double h00, double h10, double h01, double h11, int half, double dx,
+                          double dy) {
+  if (half == 0) return Vec3(-(h10 - h00) * dy, -(h01 - h00) * dx, dx * dy);
+  return Vec3(-(h11 - h01) * dy, -(h11 - h10) * dx, dx * dy);
+}
+inline long wrap_index(long i, long n) {
+  while (i < 0) i += n;
+  while (i >= n) i -= n;
+  return i;
+}
+// cos^2 of the angle between c and ng, sign kept.
+inline double alignment_of(const Vec3& c, const Vec3& ng) {
+  const double d = c.dot(ng);
+  return (d > 0 ? 1 : -1) * d * d / (c.squaredNorm() * ng.squaredNorm());
+}
+}  // namespace
+
+bool Tracer::grid_facet_guess(float u, float v, const Vec3& ng, long& i, long& j, int& half,
+                              Vec3& c) const {
+  // Grid hits report u, v normalised over the whole grid: the cell and its half follow.
+  const double gu = static_cast<double>(u) * (grid_width_ - 1);
+  const double gv = static_cast<double>(v) * (grid_height_ - 1);
+  // Truncation is the floor for u, v >= 0 (nearly always; without a call to floor()).
+  const long ci = gu >= 0 ? static_cast<long>(gu) : static_cast<long>(std::floor(gu));
+  const long cj = gv >= 0 ? static_cast<long>(gv) : static_cast<long>(std::floor(gv));
+  half = (gu - ci) + (gv - cj) < 1.0 ? 0 : 1;
+  i = ci - pad_;
+  j = cj - pad_;
+  if (window_) {
+    i = std::min(std::max(i, 0L), static_cast<long>(surface_.traced_cells_x()) - 1);
+    j = std::min(std::max(j, 0L), static_cast<long>(surface_.traced_cells_y()) - 1);
+  }
+  const double dx = surface_.dx(), dy = surface_.dy();
+  // The cell's corner heights from Embree's own vertices when it is inside the grid (the same
+  // floats as the heights, and in cache: the traversal just read them); else from the heights.
+  const long gi = i + pad_, gj = j + pad_;
+  if (gi >= 0 && gj >= 0 && gi + 1 < grid_width_ && gj + 1 < grid_height_) {
+    const float* row0 = grid_vertices_ + 3 * (static_cast<std::size_t>(gj) * grid_width_ + gi);
+    const float* row1 = row0 + 3 * static_cast<std::size_t>(grid_width_);
+    c = cell_cross_of(row0[2], row0[5], row1[2], row1[5], half, dx, dy);
+  } else {
+    const long nx = surface_.nx(), ny = surface_.ny();
+    const std::vector<float>& h = surface_.heights();
+    const long i0 = wrap_index(i, nx), j0 = wrap_index(j, ny);
+    const long i1 = wrap_index(i0 + 1, nx), j1 = wrap_index(j0 + 1, ny);
+    c = cell_cross_of(h[j0 * nx + i0], h[j0 * nx + i1], h[j1 * nx + i0], h[j1 * nx + i1], half,
+                      dx, dy);
+  }
+  return alignment_of(c, ng) > 1 - 2e-6;
+}
+
 std::size_t Tracer::facet_of_hit(unsigned prim_id, float u, float v, const Vec3& ng,
                                  Vec3* normal) const {
   if (surface_.kind() == Microsurface::Kind::Mesh) {
@@ -175,59 +229,27 @@ std::size_t Tracer::facet_of_hit(unsigned prim_id, float u, float v, const Vec3&
     if (normal) *normal = surface_.facet(k).normal();
     return k;
   }
-  // Grid hits report u, v normalised over the whole grid: the cell and its half follow. At
-  // cell borders float rounding can name a neighbour; the facet's own normal must then match
-  // Ng, else search the cells around for the facet that does.
+  // At cell borders float rounding can name a neighbour; the facet's own normal must then
+  // match Ng, else search the cells around for the facet that does.
   const long nx = surface_.nx(), ny = surface_.ny();
-  const double gu = static_cast<double>(u) * (grid_width_ - 1);
-  const double gv = static_cast<double>(v) * (grid_height_ - 1);
-  const long ci = static_cast<long>(std::floor(gu)), cj = static_cast<long>(std::floor(gv));
-  const int half = (gu - ci) + (gv - cj) < 1.0 ? 0 : 1;
-  auto wrap = [](long i, long n) {
-    while (i < 0) i += n;
-    while (i >= n) i -= n;
-    return i;
-  };
   const std::vector<float>& h = surface_.heights();
   const double dx = surface_.dx(), dy = surface_.dy();
-  // Unnormalised normal (cross product) of facet `half` of cell (i, j), from the heights.
   auto cell_cross = [&](long i, long j, int hf) {
-    long i0 = wrap(i, nx), j0 = wrap(j, ny);
-    long i1 = wrap(i0 + 1, nx), j1 = wrap(j0 + 1, ny);
-    double h00 = h[j0 * nx + i0], h10 = h[j0 * nx + i1], h01 = h[j1 * nx + i0],
-           h11 = h[j1 * nx + i1];
-    // facet 0 = (v00, v10, v01), facet 1 = (v10, v11, v01); see Microsurface::facet.
-    if (hf == 0) return Vec3(-(h10 - h00) * dy, -(h01 - h00) * dx, dx * dy);
-    return Vec3(-(h11 - h01) * dy, -(h11 - h10) * dx, dx * dy);
+    long i0 = wrap_index(i, nx), j0 = wrap_index(j, ny);
+    long i1 = wrap_index(i0 + 1, nx), j1 = wrap_index(j0 + 1, ny);
+    return cell_cross_of(h[j0 * nx + i0], h[j0 * nx + i1], h[j1 * nx + i0], h[j1 * nx + i1], hf,
+                         dx, dy);
   };
-  auto index = [&](long i, long j, int hf) { return surface_.facet_index(wrap(i, nx), wrap(j, ny), hf); };
+  auto index = [&](long i, long j, int hf) {
+    return surface_.facet_index(wrap_index(i, nx), wrap_index(j, ny), hf);
+  };
   // A window has no periodic neighbours: cells outside it are never candidates.
   const long cx = surface_.traced_cells_x(), cy = surface_.traced_cells_y();
   auto exists = [&](long i, long j) { return !window_ || (i >= 0 && i < cx && j >= 0 && j < cy); };
-  const double ng2 = ng.squaredNorm();
-  auto alignment = [&](const Vec3& c) {  // cos^2 of the angle between c and Ng (sign kept)
-    double d = c.dot(ng);
-    return (d > 0 ? 1 : -1) * d * d / (c.squaredNorm() * ng2);
-  };
-  long i = ci - pad_, j = cj - pad_;
-  if (window_) {
-    i = std::min(std::max(i, 0L), cx - 1);
-    j = std::min(std::max(j, 0L), cy - 1);
-  }
-  // The cell's corner heights from Embree's own vertices when it is inside the grid (the same
-  // floats as the heights, and in cache: the traversal just read them); else from the heights.
+  long i, j;
+  int half;
   Vec3 c;
-  const long gi = i + pad_, gj = j + pad_;
-  if (gi >= 0 && gj >= 0 && gi + 1 < grid_width_ && gj + 1 < grid_height_) {
-    const float* row0 = grid_vertices_ + 3 * (static_cast<std::size_t>(gj) * grid_width_ + gi);
-    const float* row1 = row0 + 3 * static_cast<std::size_t>(grid_width_);
-    const double h00 = row0[2], h10 = row0[5], h01 = row1[2], h11 = row1[5];
-    c = half == 0 ? Vec3(-(h10 - h00) * dy, -(h01 - h00) * dx, dx * dy)
-                  : Vec3(-(h11 - h01) * dy, -(h11 - h10) * dx, dx * dy);
-  } else {
-    c = cell_cross(i, j, half);
-  }
-  if (alignment(c) > 1 - 2e-6) {
+  if (grid_facet_guess(u, v, ng, i, j, half, c)) {
     if (normal) *normal = c.normalized();
     return index(i, j, half);
   }
@@ -238,7 +260,7 @@ std::size_t Tracer::facet_of_hit(unsigned prim_id, float u, float v, const Vec3&
       for (int hf = 0; hf < 2; ++hf) {
         if (!exists(i + di, j + dj)) continue;
         Vec3 cc = cell_cross(i + di, j + dj, hf);
-        double a = alignment(cc);
+        double a = alignment_of(cc, ng);
         if (a > best_align) {
           best_align = a;
           best = index(i + di, j + dj, hf);
@@ -411,6 +433,116 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
   }
   ++c.unresolved;
   return false;
+}
+
+DownwardRays::DownwardRays(const Tracer& tracer, const Vec3& v) {
+  if (!(v.z() > 0)) throw UsageError("DownwardRays: v must point above the macrosurface");
+  dir = -v;  // as given (a unit vector): the very direction first_hit(org, -v, ...) traces
+  for (int a = 0; a < 3; ++a) fdir[a] = static_cast<float>(dir[a]);
+  const Microsurface& s = tracer.surface();
+  lean = s.kind() == Microsurface::Kind::Heightfield && s.macro().periodic && !tracer.window_;
+  // As Tracer::trace: how far past the tile border a ray may travel in the padded copy.
+  const double dxy = std::max(std::abs(dir.x()), std::abs(dir.y()));
+  margin = dxy > 0 ? 0.5 * std::min(s.dx(), s.dy()) / dxy : 0.0;
+}
+
+// Tracer::trace<false> for a Front ray without source plane on a periodic heightfield, step for
+// step (the same float queries, so the same Embree answers), reduced to the facet met.
+std::size_t Tracer::front_facet(const DownwardRays& rays, const Vec3& org, TraceCounters& c) const {
+  const Vec3& dir = rays.dir;
+  if (!rays.lean) {
+    const TraceHit h = first_hit(org, dir, nullptr, c);
+    return h.hit && !h.backface ? h.facet : DownwardRays::kNone;
+  }
+  const Macrosurface& macro = surface_.macro();
+  const double hx = 0.5 * macro.size_x, hy = 0.5 * macro.size_y;
+  Vec3 o = org;
+  if (o.x() < -hx || o.x() > hx) o.x() -= macro.size_x * std::floor((o.x() + hx) / macro.size_x);
+  if (o.y() < -hy || o.y() > hy) o.y() -= macro.size_y * std::floor((o.y() + hy) / macro.size_y);
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  std::uint64_t crossings = 0;
+  const int max_segments = 100000;
+  for (int segment = 0; segment < max_segments; ++segment) {
+    double t_exit = std::numeric_limits<double>::infinity();
+    if (dir.x() > 0) t_exit = std::min(t_exit, (hx - o.x()) / dir.x());
+    if (dir.x() < 0) t_exit = std::min(t_exit, (-hx - o.x()) / dir.x());
+    if (dir.y() > 0) t_exit = std::min(t_exit, (hy - o.y()) / dir.y());
+    if (dir.y() < 0) t_exit = std::min(t_exit, (-hy - o.y()) / dir.y());
+    t_exit = std::max(t_exit, 0.0);
+    const double t_slab = (z_bottom_ - o.z()) / dir.z();  // dir.z < 0
+    if (t_slab < 0) break;  // below the slab already: lost
+    const double tfar = std::min(t_exit + rays.margin, t_slab);
+    RTCRayHit rh;
+    rh.ray.org_x = static_cast<float>(o.x());
+    rh.ray.org_y = static_cast<float>(o.y());
+    rh.ray.org_z = static_cast<float>(o.z());
+    rh.ray.dir_x = rays.fdir[0];
+    rh.ray.dir_y = rays.fdir[1];
+    rh.ray.dir_z = rays.fdir[2];
+    rh.ray.tnear = 0.0f;
+    rh.ray.tfar = std::isfinite(tfar) ? static_cast<float>(tfar) : std::numeric_limits<float>::infinity();
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.flags = 0;
+    rh.ray.time = 0;
+    rh.ray.id = 0;
+    if (ray_log) ray_log->push_back(rh.ray);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene_, &ctx, &rh);
+    if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
+      const Vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+      long i, j;
+      int half;
+      Vec3 cr;
+      std::size_t facet;
+      bool backface;
+      if (grid_facet_guess(rh.hit.u, rh.hit.v, ng, i, j, half, cr)) {
+        // Back face: m.dir > 0 for the unit normal m = cr / |cr|. Unless the unnormalised dot
+        // is within rounding of zero its sign is that of the normalised one (no square root).
+        const double d = cr.dot(dir);
+        const double scale = std::abs(cr.x() * dir.x()) + std::abs(cr.y() * dir.y()) +
+                             std::abs(cr.z() * dir.z());
+        backface = std::abs(d) > 1e-12 * scale ? d > 0 : cr.normalized().dot(dir) > 0;
+        const long nx = surface_.nx(), ny = surface_.ny();
+        const long wi = wrap_index(i, nx), wj = wrap_index(j, ny);
+        facet = macro.region ? surface_.facet_index(wi, wj, half)
+                             : 2 * (static_cast<std::size_t>(wj) * nx + wi) + half;
+      } else {
+        Vec3 m;
+        facet = facet_of_hit(rh.hit.primID, rh.hit.u, rh.hit.v, ng, &m);
+        backface = m.dot(dir) > 0;
+      }
+      if (backface) {
+        // Grazed a convex edge closer than float spacing: first_hit traces the segment again
+        // with wrong-side hits rejected. Rare; it is taken from the start with its own counts.
+        const TraceHit h = first_hit(org, dir, nullptr, c);
+        return h.hit && !h.backface ? h.facet : DownwardRays::kNone;
+      }
+      ++c.rays;
+      c.border_crossings += crossings;
+      return facet;
+    }
+    if (t_slab <= t_exit) break;  // left the slab downward inside the tile: lost
+    // Move to the border and re-enter through the opposite side (both at a corner).
+    o += t_exit * dir;
+    const double tol = 1e-12 * std::max(macro.size_x, macro.size_y);
+    if (dir.x() > 0 && o.x() >= hx - tol) o.x() -= macro.size_x;
+    else if (dir.x() < 0 && o.x() <= -hx + tol) o.x() += macro.size_x;
+    if (dir.y() > 0 && o.y() >= hy - tol) o.y() -= macro.size_y;
+    else if (dir.y() < 0 && o.y() <= -hy + tol) o.y() += macro.size_y;
+    ++crossings;
+    if (segment + 1 == max_segments) {
+      ++c.rays;
+      c.border_crossings += crossings;
+      ++c.unresolved;
+      return DownwardRays::kNone;
+    }
+  }
+  ++c.rays;
+  c.border_crossings += crossings;
+  ++c.lost_below;
+  return DownwardRays::kNone;
 }
 
 void Tracer::log_rays_on_this_thread(std::vector<RTCRay>* log) { ray_log = log; }

@@ -63,6 +63,23 @@ struct TraceCounters {
   }
 };
 
+class Tracer;
+
+// Parallel rays along -v (v.n > 0) that start above the surface: the primary rays of the G1
+// ray-casting estimator. Tracer::front_facet(rays, org, c) gives the same Embree queries and
+// the same answer as first_hit(org, -v, nullptr, c) reduced to "which facet, if its front face
+// was met first", with everything that depends only on v computed once here. On a periodic
+// heightfield it decodes the hit from Embree's grid (u, v) and vertex buffer alone, with no
+// TraceHit, hit point or normalized normal; anything else takes first_hit.
+struct DownwardRays {
+  static constexpr std::size_t kNone = ~static_cast<std::size_t>(0);
+  DownwardRays(const Tracer& tracer, const Vec3& v);  // v: unit, v.n > 0
+  Vec3 dir;                  // -v
+  float fdir[3] = {0, 0, 0};  // the float direction Embree sees
+  double margin = 0;         // past the tile border (Tracer::trace)
+  bool lean = false;         // the dedicated path applies (periodic heightfield)
+};
+
 class Tracer {
  public:
   explicit Tracer(const Microsurface& surface);
@@ -96,12 +113,22 @@ class Tracer {
   // very same queries. Null (the default) logs nothing.
   static void log_rays_on_this_thread(std::vector<RTCRay>* log);
 
+  // The facet whose front face the ray from org along rays.dir meets first, or
+  // DownwardRays::kNone (nothing met, or a back face first; counted as first_hit counts them).
+  std::size_t front_facet(const DownwardRays& rays, const Vec3& org, TraceCounters& c) const;
+
   // Which of the surface's facets a raw Embree hit refers to, and (optionally) its exact unit
   // normal.
   std::size_t facet_of_hit(unsigned prim_id, float u, float v, const Vec3& ng,
                            Vec3* normal = nullptr) const;
 
  private:
+  friend struct DownwardRays;
+  // Heightfields: cell (i, j) (tile indices, unwrapped), half and unnormalised normal c of the
+  // facet that grid coordinates (u, v) name; true when c is aligned with Embree's Ng (else a
+  // rounding at a cell border named a neighbour: facet_of_hit searches around).
+  bool grid_facet_guess(float u, float v, const Vec3& ng, long& i, long& j, int& half,
+                        Vec3& c) const;
   template <bool kOcclusion>
   bool trace(const Vec3& org, const Vec3& dir, const SourcePlane* source, TraceCounters& c,
              TraceHit* out, RaySide side = RaySide::Front) const;

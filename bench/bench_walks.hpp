@@ -1,0 +1,104 @@
+// Walk rows shared by the benchmarks (microsim_bench --walks, microsim_bench_bsdf): random walks
+// of the BSDF measurement (mirror and dielectric) against a bare rtcIntersect1 loop over the very
+// same Embree queries, and the Smith random-walk model's walks per second.
+// The bare loop replays the queries that the walks of the first 200000 paths made (logged by
+// the tracer, in order); the ratio compares rays per second of the walk (Embree queries made per
+// path x paths per second) with the replay's. Rates per processor second (user + system of all
+// threads: robust on a shared machine), best of `repeat`, interleaved.
+#pragma once
+#include <algorithm>
+#include <cstdio>
+#include <vector>
+
+#include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/bsdf_walk.hpp"
+#include "microsim/measure/replicates.hpp"
+#include "bench_common.hpp"
+
+namespace microsim::bench {
+
+
+// The Embree queries of the walks of the first m paths (replicates in order), as measure_bsdf
+// starts them; *paths_walked: how many.
+inline std::vector<RTCRay> log_walk_queries(const Tracer& tracer, const BsdfOptions& o, std::uint64_t m,
+                                     std::uint64_t* paths_walked) {
+  const Vec3 wi = direction_from_angles(o.theta_i, o.phi_i);
+  const RayWindow window = make_ray_window(tracer, wi);
+  const ReplicatePlan plan(o.rays, o.replicates);
+  // measure_bsdf's stream of a direction (bsdf_measure.cpp)
+  const std::uint64_t stream = 0xB5DF0000ull +
+                               static_cast<std::uint64_t>(static_cast<std::int64_t>(o.theta_i * 1e6)) * 7919 +
+                               static_cast<std::uint64_t>(static_cast<std::int64_t>(o.phi_i * 1e6));
+  std::vector<RTCRay> log;
+  Tracer::log_rays_on_this_thread(&log);
+  TraceCounters counters;
+  std::uint64_t events = 0;
+  std::uint64_t walked = 0;
+  for (int q = 0; q < plan.replicates && walked < m; ++q)
+    for (std::uint64_t i = 0; i < plan.per_replicate() && walked < m; ++i, ++walked) {
+      CounterRng rng(o.seed, ReplicatePlan::stream(stream, q), i);
+      const Vec2 ab = plan.strata.point(i, rng);
+      walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2, -wi,
+                     o.material, rng, o.max_events, false, counters, events);
+    }
+  *paths_walked = walked;
+  Tracer::log_rays_on_this_thread(nullptr);
+  return log;
+}
+
+
+// Prints the walk rows for `tracer`'s tile; `smith`: also the Smith random-walk model's rows.
+inline void print_walk_rows(const Tracer& tracer, std::uint64_t paths, int repeat, bool smith) {
+  std::printf("%-11s %6s %10s %10s %12s %12s %12s %7s\n", "material", "theta", "paths/s", "segs/path",
+              "Msegs/s", "queries/path", "bare_Mray/s", "ratio");
+  struct Case {
+    const char* name;
+    models::Material m;
+  };
+  for (const Case& c : {Case{"mirror", models::Material::mirror()},
+                        Case{"dielectric", models::Material::dielectric(1.5)}})
+    for (double theta : {0.0, 60.0, 85.0}) {
+      BsdfOptions o;
+      o.material = c.m;
+      o.theta_i = rad(theta);
+      o.rays = paths;
+      o.models = false;
+      std::uint64_t walked = 0;
+      const std::vector<RTCRay> log = log_walk_queries(tracer, o, std::min<std::uint64_t>(paths, 200000), &walked);
+      const double queries_per_path = double(log.size()) / walked;
+      double best = 0, segs_per_path = 0;
+      Rate bare;
+      for (int k = 0; k < repeat; ++k) {
+        const double c0 = cpu_seconds();
+        const BsdfResult r = measure_bsdf(tracer, o);
+        best = std::max(best, r.measured.paths / (cpu_seconds() - c0));
+        segs_per_path = double(r.measured.counters.rays) / r.measured.paths;
+        bare.best_of(replay_rays_per_second(tracer, log));
+      }
+      std::printf("%-11s %6.0f %10.3g %10.3f %12.2f %12.3f %12.2f %7.2f\n", c.name, theta, best,
+                  segs_per_path, best * segs_per_path / 1e6, queries_per_path, bare.cpu / 1e6,
+                  best * queries_per_path / bare.cpu);
+      std::fflush(stdout);
+    }
+  // The Smith random-walk model alone (the measured part reduced to a token 1000 paths).
+  if (smith)
+  for (double theta : {0.0, 60.0, 85.0}) {
+    double best = 0;
+    for (int k = 0; k < repeat; ++k) {
+      BsdfOptions o;
+      o.material = models::Material::mirror();
+      o.theta_i = rad(theta);
+      o.rays = 1000;
+      o.model_walks = paths;
+      // Processor time of the model part: the whole call less the (token) walks' share.
+      const double c0 = cpu_seconds();
+      const BsdfResult r = measure_bsdf(tracer, o);
+      const double cpu = (cpu_seconds() - c0) * r.model_seconds / r.seconds;
+      if (r.smith_walk) best = std::max(best, r.smith_walk->paths / cpu);
+    }
+    std::printf("smith-walk  %6.0f %10.3g walks/s (mirror)\n", theta, best);
+    std::fflush(stdout);
+  }
+}
+
+}  // namespace microsim::bench
