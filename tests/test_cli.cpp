@@ -139,7 +139,7 @@ TEST_F(Cli, BadInputIsOneLineExitTwoAndNoOutput) {
   expect_usage_error("generate gaussian --alpha 0 -o " + s, s, "--alpha");
   expect_usage_error("generate gaussian --alpha -0.5 -o " + s, s, "--alpha");
   expect_usage_error("generate gaussian --resolution 0 -o " + s, s, "--resolution");
-  expect_usage_error("generate gaussian --resolution 30000 -o " + s, s, "--resolution");
+  expect_usage_error("generate gaussian --resolution 50000 -o " + s, s, "--resolution");
   expect_usage_error("generate gaussian -o " + tmp("bad.xyz"), tmp("bad.xyz"), "format");
   expect_usage_error("generate sphere -o " + s, s, "sphere");
   expect_usage_error("measure g1 " + surface_ + " --theta 90 -o " + o, o, "--theta");

@@ -242,7 +242,7 @@ const std::vector<Case>& cases() {
       {"generate gaussian --resolution 0 -o {o}", 2, "--resolution", "exr"},
       {"generate gaussian --resolution 3 -o {o}", 2, "--resolution", "exr"},
       {"generate gaussian --resolution 40000 -o {o}", 2, "--resolution", "exr"},
-      {"generate gaussian --resolution 30000 -o {o}", 2, "--resolution", "exr"},
+      {"generate gaussian --resolution 50000 -o {o}", 2, "--resolution", "exr"},
       {"generate gaussian --resolution 16.5 -o {o}", 2, "--resolution", "exr"},
       {"generate gaussian --resolution 16 --size 0 -o {o}", 2, "--size", "exr"},
       {"generate gaussian --resolution 16 --size -1 -o {o}", 2, "--size", "exr"},

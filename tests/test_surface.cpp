@@ -111,9 +111,9 @@ TEST(Gaussian, RejectsBadParameters) {
   p.resolution = 0;
   EXPECT_THROW(validate(p), UsageError);
   p = GaussianParams{};
-  p.resolution = 32000;  // ~27 GiB: refused from the estimate, before allocating
+  p.resolution = 50000;  // ~47 GiB at 20 bytes per cell: refused from the estimate, before allocating
   EXPECT_THROW(validate(p), UsageError);
-  EXPECT_GT(gaussian_memory_estimate(32000), 24.0 * (1 << 30));
+  EXPECT_GT(gaussian_memory_estimate(50000), 24.0 * (1 << 30));
 }
 
 TEST(SurfaceIo, ExrRoundTripKeepsHeightsDescriptionAndNominal) {
