@@ -4,8 +4,17 @@
 #include <limits>
 
 namespace microsim {
-
 namespace {
+// The fields of an Embree ray after its origin and direction: [0, tfar] (infinite when tfar is
+// not finite), every geometry, no motion blur.
+inline void set_ray_extent(RTCRay& ray, double tfar) {
+  ray.tnear = 0.0f;
+  ray.tfar = std::isfinite(tfar) ? static_cast<float>(tfar) : std::numeric_limits<float>::infinity();
+  ray.mask = 0xFFFFFFFFu;
+  ray.flags = 0;
+  ray.time = 0;
+  ray.id = 0;
+}
 
 // Embree context extended with the plane the ray leaves (read by the filter functions).
 struct PlaneContext {
@@ -366,12 +375,7 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
     rh.ray.dir_x = static_cast<float>(dir.x());
     rh.ray.dir_y = static_cast<float>(dir.y());
     rh.ray.dir_z = static_cast<float>(dir.z());
-    rh.ray.tnear = 0.0f;
-    rh.ray.tfar = std::isfinite(tfar) ? static_cast<float>(tfar) : std::numeric_limits<float>::infinity();
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.ray.flags = 0;
-    rh.ray.time = 0;
-    rh.ray.id = 0;
+    set_ray_extent(rh.ray, tfar);
     if (ray_log) ray_log->push_back(rh.ray);
     if (kOcclusion) {
       rtcOccluded1(scene_, &ctx.context, &rh.ray);
@@ -480,12 +484,7 @@ std::size_t Tracer::front_facet(const DownwardRays& rays, const Vec3& org, Trace
     rh.ray.dir_x = rays.fdir[0];
     rh.ray.dir_y = rays.fdir[1];
     rh.ray.dir_z = rays.fdir[2];
-    rh.ray.tnear = 0.0f;
-    rh.ray.tfar = std::isfinite(tfar) ? static_cast<float>(tfar) : std::numeric_limits<float>::infinity();
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.ray.flags = 0;
-    rh.ray.time = 0;
-    rh.ray.id = 0;
+    set_ray_extent(rh.ray, tfar);
     if (ray_log) ray_log->push_back(rh.ray);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
