@@ -58,8 +58,6 @@ class Progress {
 
 // UsageError naming -o and the accepted extensions unless `path` has one of them.
 void require_extension(const std::string& path, std::initializer_list<const char*> allowed);
-// UsageError unless `path` ends in a surface format (.exr, .ply, .obj, .off).
-void require_surface_extension(const std::string& path);
 // JSON or CSV (rows only) by extension, atomically.
 void write_record(const std::string& path, const Json& j);
 // The same, or the record handed over when embedded.

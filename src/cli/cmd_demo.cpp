@@ -12,20 +12,17 @@
 namespace microsim::cli {
 
 namespace {
-int run_demo(GenerateOptions gen, MeasureOptions meas, const std::string& dir,
+int run_demo(const SurfaceRequest& surface, MeasureOptions meas, const std::string& dir,
              const GlobalOptions& g) {
   // Every option is checked before anything is written (the outputs are committed together at
   // the end by main's OutputTransaction).
   std::vector<double> thetas = parse_angle_list(meas.theta, "--theta");
   require_above_horizon(thetas, "--theta");
-  GaussianParams p = gen.gaussian;
-  if (gen.alpha_given) p.alpha_x = p.alpha_y = gen.alpha;
-  validate(p);
+  check_surface_request(surface);
   if (mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST)
     throw UsageError("--out-dir " + dir + ": cannot create the folder");
-  gen.output = dir + "/surface.exr";
-  run_generate_gaussian(gen, g);
-  meas.surface = gen.output;
+  meas.surface = dir + "/surface.exr";
+  write_generated(surface, meas.surface, g);
   meas.output = dir + "/ndf.json";
   if (!g.quiet) std::cout << "\n";
   run_measure_ndf(meas, g);
@@ -40,21 +37,17 @@ int run_demo(GenerateOptions gen, MeasureOptions meas, const std::string& dir,
 void register_demo(CLI::App& app, const GlobalOptions& g) {
   auto* demo = app.add_subcommand(
       "demo", "Generate a surface (default preset), measure D and G1, print measured vs Smith");
-  auto gen = std::make_shared<GenerateOptions>();
+  const SurfaceKind* gaussian = &surface_kind("gaussian");
+  auto gen = std::make_shared<SurfaceOptionValues>();
   auto meas = std::make_shared<MeasureOptions>();
   auto dir = std::make_shared<std::string>("microsim-demo");
   add_preset_option(*demo, "Surface preset (TOML), e.g. surfaces/beckmann-0.5.toml; command-line options win");
-  add_gaussian_options(*demo, *gen);
+  add_surface_options(*demo, *gaussian, *gen);
   demo->add_option("--theta", meas->theta, "View zenith angles (deg)")->capture_default_str();
   demo->add_option("--rays", meas->rays, "Rays per estimator and direction")->capture_default_str()
       ->check(integer_in(1, kMaxRays));
   demo->add_option("--out-dir", *dir, "Folder for the surface and the tables")->capture_default_str();
-  on_run(demo, [=, &g] {
-    gen->alpha_given = demo->count("--alpha") > 0;
-    gen->alpha_x_given = demo->count("--alpha-x") > 0;
-    gen->alpha_y_given = demo->count("--alpha-y") > 0;
-    run_demo(*gen, *meas, *dir, g);
-  });
+  on_run(demo, [=, &g] { run_demo(given_surface_options(*gaussian, *gen), *meas, *dir, g); });
 }
 
 }  // namespace microsim::cli

@@ -14,6 +14,7 @@
 #include "option_checks.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/surface/surface_io.hpp"
+#include "microsim/surface/surface_spec.hpp"
 #include "microsim/validate/validate.hpp"
 
 #ifndef MICROSIM_DATA_DIR
@@ -57,41 +58,18 @@ std::vector<std::string> split_list(const std::string& text) {
   return out;
 }
 
-// Runs `microsim generate KIND --config PRESET [--key value...] [--seed S] -o PATH` in this
-// process (the same parser and generators as the command line), then loads the surface.
+// Generates an entry's surface (one seed) with the library's surface spec, saves it at `path`
+// and loads it back: the checks measure the saved surface, as they would a file.
 Microsurface generate_entry(const validation::SuiteEntry& e, const std::string& suite_file,
-                            std::optional<std::uint64_t> seed, const std::string& path, int threads) {
-  CLI::App app;
-  app.require_subcommand(1);
-  GlobalOptions quiet;
-  quiet.threads = threads;
-  quiet.quiet = true;
-  register_generate(app, quiet);
-  CLI::App* gen = app.get_subcommand("generate");
-  bool known = false;
-  std::string kinds;
-  for (const auto* k : gen->get_subcommands({})) {
-    kinds += (kinds.empty() ? "" : ", ") + k->get_name();
-    known |= k->get_name() == e.generate;
-  }
-  if (!known)
-    throw UsageError("--suite " + suite_file + ": entry " + e.name + ": unknown surface kind '" +
-                     e.generate + "' (known: " + kinds + ")");
-  std::vector<std::string> args = {"microsim", "generate", e.generate};
-  if (!e.preset.empty()) args.insert(args.end(), {"--config", e.preset});
-  for (const auto& [key, value] : e.args) args.insert(args.end(), {"--" + key, value});
-  if (seed) args.insert(args.end(), {"--seed", std::to_string(*seed)});
-  args.insert(args.end(), {"-o", path});
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
+                            std::optional<std::uint64_t> seed, const std::string& path) {
   try {
+    const SurfaceRequest request = validation::surface_request(e, seed);
+    const Microsurface s = generate_surface(request, path);
     OutputTransaction written;  // the surface is needed now, not with the command's outputs
-    app.parse(static_cast<int>(argv.size()), argv.data());
+    save_surface(s, path);
     written.commit();
-  } catch (const CLI::ParseError& err) {
-    std::string cmd;
-    for (std::size_t k = 1; k < args.size(); ++k) cmd += (k > 1 ? " " : "") + args[k];
-    throw UsageError("--suite " + suite_file + ": entry " + e.name + ": '" + cmd + "': " + err.what());
+    for (const auto& w : surface_report(request, s, path, false).warnings)
+      std::cerr << "microsim: warning: " << w << "\n";
   } catch (const UsageError& err) {
     throw UsageError("--suite " + suite_file + ": entry " + e.name + ": " + err.what());
   }
@@ -191,7 +169,7 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
         for (const auto& seed : seeds) {
           const std::string file =
               (dir / (e.name + (seed ? "-seed" + std::to_string(*seed) : "") + "." + ext)).string();
-          set.surfaces.push_back(generate_entry(e, path, seed, file, g.threads));
+          set.surfaces.push_back(generate_entry(e, path, seed, file));
           set.labels.push_back(seed ? "seed " + std::to_string(*seed) : "");
           generated.push_back({{"entry", e.name}, {"file", file}});
         }

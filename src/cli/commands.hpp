@@ -3,21 +3,27 @@
 #include <CLI/CLI.hpp>
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
 #include "cli_common.hpp"
-#include "microsim/surface/gaussian.hpp"
+#include "microsim/surface/surface_spec.hpp"
 
 namespace microsim::cli {
 
-struct GenerateOptions {
-  std::string output;
-  GaussianParams gaussian;
-  double alpha = 0.5;  // isotropic shorthand, used when alpha_given
-  bool alpha_given = false, alpha_x_given = false, alpha_y_given = false;
+// A surface kind's options on a command (generate KIND, demo), registered from the library's
+// table (surface/surface_spec.hpp): values as text, flags as bools.
+struct SurfaceOptionValues {
+  std::map<std::string, std::string> text;
+  std::map<std::string, bool> flags;
+  std::map<std::string, CLI::Option*> options;
 };
-void add_gaussian_options(CLI::App& cmd, GenerateOptions& go);
+void add_surface_options(CLI::App& cmd, const SurfaceKind& kind, SurfaceOptionValues& v);
+// The options given (on the command line or in the preset) as a request.
+SurfaceRequest given_surface_options(const SurfaceKind& kind, const SurfaceOptionValues& v);
+// Generates the surface, saves it at `path` (or hands it over when embedded) and prints.
+void write_generated(const SurfaceRequest& r, const std::string& path, const GlobalOptions& g);
 
 struct MeasureOptions {
   std::string surface, output;
@@ -29,7 +35,6 @@ struct MeasureOptions {
   int theta_bins = 90, phi_bins = 72;
 };
 
-int run_generate_gaussian(GenerateOptions o, const GlobalOptions& g);
 int run_measure_ndf(const MeasureOptions& o, const GlobalOptions& g);
 int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g);
 

@@ -160,4 +160,13 @@ std::vector<std::string> list_suites(const std::string& dir) {
   return names;
 }
 
+SurfaceRequest surface_request(const SuiteEntry& e, std::optional<std::uint64_t> seed) {
+  SurfaceRequest r{e.generate, {}};
+  surface_kind(e.generate);  // an unknown kind first
+  if (!e.preset.empty()) read_surface_preset(r, e.preset);
+  for (const auto& [key, value] : e.args) set_surface_option(r, key, value);
+  if (seed) set_surface_option(r, "seed", std::to_string(*seed));
+  return r;
+}
+
 }  // namespace microsim::validation

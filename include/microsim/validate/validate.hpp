@@ -36,6 +36,7 @@
 #include "microsim/common.hpp"
 #include "microsim/measure/shards.hpp"
 #include "microsim/surface/microsurface.hpp"
+#include "microsim/surface/surface_spec.hpp"
 
 namespace microsim::validation {
 
@@ -184,6 +185,9 @@ struct Suite {
   double significance = 0.01;
   std::vector<SuiteEntry> entries;
 };
+// The surface of an entry: its preset, then its args (which win), then `seed` when given.
+// UsageError for an unknown kind, option or value (surface/surface_spec.hpp).
+SurfaceRequest surface_request(const SuiteEntry& e, std::optional<std::uint64_t> seed);
 // Reads a suite file; UsageError naming the file and the field for anything malformed.
 Suite load_suite(const std::string& path);
 // NAME -> path: NAME itself if it is a file, else NAME.json in each of `dirs`, in order.

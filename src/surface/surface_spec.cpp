@@ -1,0 +1,348 @@
+// The table of surface kinds and their options (surface_spec.hpp), option values checked as the
+// command line checks them, and the preset reader. The kinds' builders: surface_kinds.cpp.
+#include "microsim/surface/surface_spec.hpp"
+
+#include <sys/stat.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "microsim/common.hpp"
+#include "microsim/surface/gaussian.hpp"
+#include "microsim/surface/generators.hpp"
+#include "microsim/surface/guard_band.hpp"
+#include "microsim/surface/heightmap_import.hpp"
+#include "microsim/surface/mesh_check.hpp"
+
+namespace microsim {
+
+namespace {
+
+using Type = SurfaceOption::Type;
+using Check = SurfaceOption::Check;
+
+// A default as the command line has always shown it (a stream's default format: 0.5, 1, 0.001).
+template <class T>
+std::string shown(const T& v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+SurfaceOption number(std::string name, Range r, std::string def, std::string help, std::string sets) {
+  return {std::move(name), Type::Number, Check::Range, r, 0, 0, std::move(def), false, std::move(help), std::move(sets)};
+}
+SurfaceOption finite(std::string name, std::string def, std::string help, std::string sets) {
+  return {std::move(name), Type::Number, Check::Finite, {0, 0}, 0, 0, std::move(def), false, std::move(help), std::move(sets)};
+}
+SurfaceOption any_number(std::string name, std::string def, std::string help, std::string sets) {
+  return {std::move(name), Type::Number, Check::None, {0, 0}, 0, 0, std::move(def), false, std::move(help), std::move(sets)};
+}
+SurfaceOption integer(std::string name, long long lo, long long hi, std::string def, std::string help, std::string sets) {
+  return {std::move(name), Type::Integer, Check::Integer, {0, 0}, lo, hi, std::move(def), false, std::move(help), std::move(sets)};
+}
+SurfaceOption seed(std::string sets) {
+  return {"seed", Type::Seed, Check::Seed, {0, 0}, 0, 0, "1", false, "Random seed", std::move(sets)};
+}
+SurfaceOption text(std::string name, std::string def, std::string help, std::string sets, bool required = false) {
+  return {std::move(name), Type::Text, Check::None, {0, 0}, 0, 0, std::move(def), required, std::move(help), std::move(sets)};
+}
+SurfaceOption flag(std::string name, std::string help, std::string sets) {
+  return {std::move(name), Type::Flag, Check::None, {0, 0}, 0, 0, "", false, std::move(help), std::move(sets)};
+}
+
+const char* kStructuredOutput = "Output surface file (.ply, .obj, .off; .exr for heightfields)";
+const char* kStructuredConfig = "Read options from a TOML preset (see surfaces/); command-line options win";
+
+std::vector<SurfaceKind> make_kinds() {
+  std::vector<SurfaceKind> k;
+  const GaussianParams ga;
+  k.push_back({"gaussian", "Periodic Gaussian random heightfield with Beckmann slope statistics",
+               "Output surface file (.exr, .ply, .obj, .off)",
+               "Read options from a TOML preset (e.g. surfaces/beckmann-0.5.toml); command-line options win",
+               {integer("resolution", 4, 32760, shown(ga.resolution), "Grid cells per side", "GaussianParams::resolution"),
+                number("size", closed(1e-6, 1e6), shown(ga.size), "Tile side length", "GaussianParams::size"),
+                number("correlation-length", positive(), "",
+                       "Correlation length of the heights exp(-r^2/l^2), tile units (default: 16 cells, "
+                       "at least 16 per tile and 4 cells; converged grid)",
+                       "GaussianParams::correlation_length (default: default_correlation_length)"),
+                number("alpha", open_closed(0, 10), "", "Isotropic Beckmann roughness alpha (> 0)",
+                       "GaussianParams::alpha_x and alpha_y (not with alpha-x/alpha-y)"),
+                number("alpha-x", open_closed(0, 10), "", "Roughness along x",
+                       "GaussianParams::alpha_x (alone: alpha_y too)"),
+                number("alpha-y", open_closed(0, 10), "", "Roughness along y",
+                       "GaussianParams::alpha_y (alone: alpha_x too)"),
+                seed("GaussianParams::seed")}});
+  const FlatParams fl;
+  k.push_back({"flat", "Periodic plane z = 0: the exact reference of every estimator",
+               "Output surface file (.exr, .ply, .obj, .off)", "Read options from a TOML preset; command-line options win",
+               {integer("resolution", 1, 4096, shown(fl.resolution), "Grid cells per side", "FlatParams::resolution"),
+                number("size", closed(1e-6, 1e6), shown(fl.size), "Tile side length", "FlatParams::size")}});
+  const BoxParams bx;
+  k.push_back({"box", "A box whose flipped bottom face is the macrosurface (000 Fig. 2); finite", kStructuredOutput,
+               kStructuredConfig,
+               {number("width", positive(), shown(bx.width), "W, along x", "BoxParams::width"),
+                number("depth", positive(), shown(bx.depth), "D, along y", "BoxParams::depth"),
+                number("height", positive(), shown(bx.height), "H, along z", "BoxParams::height")}});
+  k.push_back({"tiled-boxes", "The box's macrosurface covered by N x N copies of the box scaled by 1/N (000 Fig. 6)",
+               kStructuredOutput, kStructuredConfig,
+               {integer("tiles", 1, 256, "4", "N", "BoxParams::tiles (default 4 here)"),
+                number("width", positive(), shown(bx.width), "W of the whole (macrosurface), along x", "BoxParams::width"),
+                number("depth", positive(), shown(bx.depth), "D of the whole, along y", "BoxParams::depth"),
+                number("height", positive(), shown(bx.height), "H of the unscaled box (each copy is H/N high)",
+                       "BoxParams::height")}});
+  const SquareWaveParams sq;
+  k.push_back({"square-wave",
+               "Periodic ridges along y (duty F of period P raised by H, vertical walls); --2d: blocks",
+               kStructuredOutput, kStructuredConfig,
+               {number("period", positive(), shown(sq.period), "P (the tile is P x P)", "SquareWaveParams::period"),
+                number("duty", {0, 1, true, true}, shown(sq.duty), "F, raised fraction of the period, in (0, 1)",
+                       "SquareWaveParams::duty"),
+                number("height", positive(), shown(sq.height), "H", "SquareWaveParams::height"),
+                flag("2d", "Raised F P x F P square blocks instead of ridges", "SquareWaveParams::two_d")}});
+  const VGrooveParams vg;
+  k.push_back({"vgroove", "Periodic V-grooves along y, facet normals (+-sin tm, 0, cos tm); --2d: pyramids",
+               kStructuredOutput, kStructuredConfig,
+               {number("facet-angle", {0, 90, true, true}, shown(vg.facet_angle_deg), "theta_m in degrees, in (0, 90)",
+                       "VGrooveParams::facet_angle_deg"),
+                number("period", positive(), shown(vg.period), "P (the tile is one period, P x P)", "VGrooveParams::period"),
+                flag("2d", "Square pyramids (a mesh) instead of grooves (a heightfield)", "VGrooveParams::two_d")}});
+  const VCavityParams vc;
+  k.push_back({"vcavity",
+               "The V-cavity model made explicit (001 Sec. 6.1): separate V-grooves with normals drawn from D, "
+               "each traced on its own by measure g1",
+               kStructuredOutput, kStructuredConfig,
+               {text("ndf", vc.ndf, "beckmann or ggx", "VCavityParams::ndf"),
+                number("alpha", positive(), "", "Isotropic roughness alpha",
+                       "VCavityParams::alpha_x and alpha_y (not with alpha-x/alpha-y)"),
+                number("alpha-x", positive(), shown(vc.alpha_x), "Roughness along x", "VCavityParams::alpha_x (alone: alpha_y too)"),
+                number("alpha-y", positive(), shown(vc.alpha_y), "Roughness along y", "VCavityParams::alpha_y (alone: alpha_x too)"),
+                integer("grooves", 1, 1000000, shown(vc.grooves), "Number of grooves K", "VCavityParams::grooves"),
+                seed("VCavityParams::seed")}});
+  const ParallelepipedParams pp;
+  k.push_back({"parallelepiped",
+               "A box under a linear map (000 Fig. 3); shears make walls face downward (n.m < 0)", kStructuredOutput,
+               kStructuredConfig,
+               {number("width", positive(), shown(pp.width), "W of the box before the map", "ParallelepipedParams::width"),
+                number("depth", positive(), shown(pp.depth), "D", "ParallelepipedParams::depth"),
+                number("height", positive(), shown(pp.height), "H", "ParallelepipedParams::height"),
+                integer("tiles", 1, 256, shown(pp.tiles), "N x N mapped boxes of size 1/N (neighbours share walls)",
+                        "ParallelepipedParams::tiles"),
+                finite("shear-x", shown(pp.matrix[2]), "x += shear_x z", "ParallelepipedParams::matrix[2] (l13)"),
+                finite("shear-y", shown(pp.matrix[5]), "y += shear_y z", "ParallelepipedParams::matrix[5] (l23)"),
+                text("matrix", "", "Row-major 3x3 map l11,...,l33 (third row 0,0,k with k > 0); replaces the shears",
+                     "ParallelepipedParams::matrix (not with shear-x/shear-y)")}});
+  const EllipsoidParams el;
+  k.push_back({"ellipsoid",
+               "Upper half of (ax x)^2 + (ay y)^2 + z^2 = 1: its NDF is GGX(ax, ay) (002); finite", kStructuredOutput,
+               kStructuredConfig,
+               {number("alpha", positive(), "", "Isotropic alpha",
+                       "EllipsoidParams::alpha_x and alpha_y (not with alpha-x/alpha-y)"),
+                number("alpha-x", positive(), shown(el.alpha_x), "alpha_x (semi-axis 1/alpha_x)",
+                       "EllipsoidParams::alpha_x (alone: alpha_y too)"),
+                number("alpha-y", positive(), shown(el.alpha_y), "alpha_y (semi-axis 1/alpha_y)",
+                       "EllipsoidParams::alpha_y (alone: alpha_x too)"),
+                integer("rings", 2, 4096, shown(el.rings), "Latitude steps of the tessellation", "EllipsoidParams::rings"),
+                integer("segments", 8, 16384, shown(el.segments), "Longitude steps", "EllipsoidParams::segments")}});
+  const GaussianGgxParams gg;
+  k.push_back({"gaussian-ggx",
+               "Periodic heightfield whose pooled NDF is GGX(alpha): Gaussian process with slowly varying local "
+               "roughness alpha/sqrt(E), E ~ Exp(1)",
+               kStructuredOutput, kStructuredConfig,
+               {integer("resolution", 4, 32760, shown(gg.resolution), "Grid cells per side", "GaussianGgxParams::resolution"),
+                number("size", closed(1e-6, 1e6), shown(gg.size), "Tile side length", "GaussianGgxParams::size"),
+                number("correlation-length", positive(), "",
+                       "Of the heights (default: 16 cells, at least 16 per tile and 4 cells)",
+                       "GaussianGgxParams::correlation_length"),
+                number("roughness-correlation-length", positive(), "",
+                       "Of the local roughness field (default: 16 correlation lengths)",
+                       "GaussianGgxParams::roughness_correlation_length"),
+                number("alpha", positive(), "", "Isotropic GGX alpha",
+                       "GaussianGgxParams::alpha_x and alpha_y (not with alpha-x/alpha-y)"),
+                number("alpha-x", positive(), shown(gg.alpha_x), "GGX alpha along x",
+                       "GaussianGgxParams::alpha_x (alone: alpha_y too)"),
+                number("alpha-y", positive(), shown(gg.alpha_y), "GGX alpha along y",
+                       "GaussianGgxParams::alpha_y (alone: alpha_x too)"),
+                number("tail-fraction", {0, 0.5, true, true}, shown(gg.tail_fraction),
+                       "Area fraction whose local roughness is capped at alpha/sqrt(-ln(1-q))",
+                       "GaussianGgxParams::tail_fraction"),
+                seed("GaussianGgxParams::seed")}});
+  k.push_back({"mesh",
+               "Any PLY/OBJ/OFF mesh with a declared macrosurface (validated: manifold, not degenerate, closed but "
+               "for its rim, 000 eq. 1b)",
+               kStructuredOutput, kStructuredConfig,
+               {text("input", "", "Input mesh (.ply, .obj, .off)", "MeshImportParams::input", true),
+                text("normal", "0,0,1", "Macrosurface normal x,y,z in the file's frame (rotated to +z)",
+                     "MeshImportParams::normal"),
+                number("area", positive(), "", "Macrosurface area A (default: from 000 eq. 1c, or the tile's)",
+                       "MeshImportParams::area"),
+                flag("periodic", "A periodic tile centered on the origin (else a finite object)",
+                     "MeshImportParams::periodic"),
+                number("tile-x", positive(), "", "Periodic tile size along x", "MeshImportParams::tile_x (with periodic)"),
+                number("tile-y", positive(), "", "Periodic tile size along y", "MeshImportParams::tile_y (with periodic)")}});
+  const HeightmapImportParams hm;
+  k.push_back({"heightmap",
+               "A measured heightmap (EXR/TIFF/PNG image or text/CSV grid) as a heightfield; --periodic for a tile "
+               "the estimators measure, else a window for info",
+               "Output heightfield (.exr)", "Read options from a TOML preset",
+               {text("input", "",
+                     "Heightmap: an image (one channel, or --channel) or a text grid (.txt/.csv/.asc/.xyz/.dat: a "
+                     "matrix, one row per line, or x,y,z columns)",
+                     "HeightmapImportParams::input", true),
+                text("channel", "", "Image channel holding the heights (default: the only one, else Z, else Y)",
+                     "HeightmapImportParams::channel"),
+                any_number("pixel-size", "",
+                           "Grid spacing along x, in --length-unit (required unless the file has x,y columns)",
+                           "HeightmapImportParams::pixel_size_x (> 0)"),
+                any_number("pixel-size-y", "", "Grid spacing along y (default: --pixel-size)",
+                           "HeightmapImportParams::pixel_size_y (> 0)"),
+                any_number("height-scale", shown(hm.height_scale),
+                           "Height = file value * S (integer images give raw counts)", "HeightmapImportParams::height_scale"),
+                text("length-unit", "", "Unit of the pixel sizes and of the surface: m, mm, um, nm, pm",
+                     "HeightmapImportParams::length_unit"),
+                text("height-unit", "", "Unit of the scaled file values (converted to --length-unit; default: the same)",
+                     "HeightmapImportParams::height_unit"),
+                flag("periodic", "The map is one period of a periodic surface: a tile every estimator measures",
+                     "HeightmapImportParams::periodic"),
+                flag("window", "A non-periodic patch (the default): the estimators measure its interior, inside a guard band",
+                     "HeightmapImportParams::periodic = false"),
+                any_number("guard", "",
+                           "Window guard band in correlation lengths l (Sal / sqrt(ln 5)) of the patch (default " +
+                               [] {
+                                 std::ostringstream os;
+                                 os << std::fixed;
+                                 os.precision(3);
+                                 os << kDefaultGuardCorrelationLengths;
+                                 return os.str();
+                               }() + ", from the guard-band bias table)",
+                           "HeightmapImportParams::guard_correlation_lengths (>= 0)"),
+                any_number("guard-width", "", "Window guard band in --length-unit (instead of --guard)",
+                           "HeightmapImportParams::guard_width (>= 0)"),
+                text("detrend", "mean", "Least-squares form removed: none, mean, plane (tilt) or poly2 (quadratic form)",
+                     "HeightmapImportParams::detrend"),
+                text("crop", "", "x0,y0,w,h: keep this pixel rectangle (before everything else)",
+                     "HeightmapImportParams::crop, crop_x0, crop_y0, crop_w, crop_h"),
+                any_number("nodata", "", "File value that marks a missing pixel (NaN always does)",
+                           "HeightmapImportParams::nodata, has_nodata"),
+                any_number("max-missing", shown(hm.max_missing_fraction),
+                           "Largest fraction of missing pixels filled (harmonic inpainting); more is refused",
+                           "HeightmapImportParams::max_missing_fraction (in [0, 1))")}});
+  return k;
+}
+
+// Throws the command line's message for a value the option refuses.
+void check_value(const SurfaceOption& o, const std::string& value) {
+  const std::string name = "--" + o.name;
+  try {
+    switch (o.check) {
+      case Check::Range: parse_number_in(value, o.range, ""); break;
+      case Check::Finite: parse_number_in(value, {-1e300, 1e300}, ""); break;
+      case Check::Integer: parse_integer_in(value, o.lo, o.hi, ""); break;
+      case Check::Seed: parse_seed(value, ""); break;
+      case Check::None: break;
+    }
+  } catch (const UsageError& e) {
+    throw UsageError(name + ": " + e.what());
+  }
+  if (o.type == Type::Flag && value != "true" && value != "false")
+    throw UsageError(name + ": expected true or false (got '" + value + "')");
+  if (o.type == Type::Number && o.check == Check::None) {
+    char* end = nullptr;
+    std::strtold(value.c_str(), &end);
+    if (value.empty() || end != value.c_str() + value.size())
+      throw UsageError("Could not convert: " + name + " = " + value);
+  }
+}
+
+}  // namespace
+
+const SurfaceOption* SurfaceKind::option(const std::string& name) const {
+  for (const auto& o : options)
+    if (o.name == name) return &o;
+  return nullptr;
+}
+
+std::string SurfaceKind::option_names() const {
+  std::string s;
+  for (const auto& o : options) s += (s.empty() ? "" : ", ") + o.name;
+  return s;
+}
+
+const std::vector<SurfaceKind>& surface_kinds() {
+  static const std::vector<SurfaceKind> kinds = make_kinds();
+  return kinds;
+}
+
+std::string surface_kind_names() {
+  std::string s;
+  for (const auto& k : surface_kinds()) s += (s.empty() ? "" : ", ") + k.name;
+  return s;
+}
+
+const SurfaceKind& surface_kind(const std::string& name) {
+  for (const auto& k : surface_kinds())
+    if (k.name == name) return k;
+  throw UsageError("unknown surface kind '" + name + "' (known: " + surface_kind_names() + ")");
+}
+
+void set_surface_option(SurfaceRequest& r, const std::string& name, const std::string& value) {
+  const SurfaceKind& kind = surface_kind(r.kind);
+  const SurfaceOption* o = kind.option(name);
+  if (!o)
+    throw UsageError("unknown option '" + name + "' for '" + kind.name + "' (known: " + kind.option_names() + ")");
+  check_value(*o, value);
+  r.options[name] = value;
+}
+
+void read_surface_preset(SurfaceRequest& r, const std::string& path) {
+  struct stat st;
+  if (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) throw UsageError(path + ": no such preset file");
+  if (st.st_size > (1 << 20)) throw UsageError(path + ": larger than 1 MiB, not a preset");
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  if (!f) throw UsageError(path + ": cannot be read");
+  const std::string text = ss.str();
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    const unsigned char c = text[k];
+    if ((c < 0x20 && c != '\n' && c != '\r' && c != '\t') || c == 0x7f)
+      throw UsageError(path + ": not a text TOML file (control byte at offset " + std::to_string(k) + ")");
+  }
+  const auto trim = [](std::string s) {
+    const auto b = s.find_first_not_of(" \t\r"), e = s.find_last_not_of(" \t\r");
+    return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+  };
+  std::istringstream lines(text);
+  std::string line;
+  std::set<std::string> seen;
+  for (int n = 1; std::getline(lines, line); ++n) {
+    line = trim(line);
+    if (line.empty() || line[0] == '#') continue;
+    const std::string where = path + ": line " + std::to_string(n) + ": ";
+    if (line[0] == '[') throw UsageError(where + "sections are not used in presets (keys only)");
+    const auto eq = line.find('=');
+    const std::string key = eq == std::string::npos ? "" : trim(line.substr(0, eq));
+    std::string value = eq == std::string::npos ? "" : trim(line.substr(eq + 1));
+    if (!value.empty() && (value[0] == '"' || value[0] == '\'')) {
+      const auto close = value.find(value[0], 1);
+      const std::string rest = close == std::string::npos ? "x" : trim(value.substr(close + 1));
+      if (!rest.empty() && rest[0] != '#') throw UsageError(where + "unterminated string (got '" + line + "')");
+      value = value.substr(1, close - 1);
+    } else {
+      value = trim(value.substr(0, value.find('#')));
+      if (!value.empty() && value[0] == '[') throw UsageError(where + "key '" + key + "': expected one value, not an array");
+    }
+    if (key.empty() || value.empty()) throw UsageError(where + "expected key = value (got '" + line + "')");
+    if (!seen.insert(key).second) throw UsageError(where + "key '" + key + "' is given twice");
+    try {
+      set_surface_option(r, key, value);
+    } catch (const UsageError& e) {
+      throw UsageError(where + e.what());
+    }
+  }
+}
+
+}  // namespace microsim
