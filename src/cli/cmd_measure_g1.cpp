@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "measure_options.hpp"
 #include "option_checks.hpp"
 #include "commands.hpp"
 #include "ensemble.hpp"
@@ -66,13 +67,9 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   std::vector<std::string> files = {o.surface};
   files.insert(files.end(), o.extra_surfaces.begin(), o.extra_surfaces.end());
   auto t0 = std::chrono::steady_clock::now();
-  G1Options go;
-  go.split = g.split;  // shards and MPI ranks (scaleout.hpp)
-  go.rays = static_cast<std::uint64_t>(o.rays);
-  go.seed = o.seed;
+  G1Options go = estimator_options<G1Options>(o.rays, o.seed, g);
   go.replicates = o.replicates;
-  Json j = run_header("measure g1", g);
-  j["file"] = files.size() == 1 ? Json(files[0]) : Json(files);
+  Json j = measure_record("measure g1", files, g);
   j["surface"] = nullptr;  // the first surface's description (filled below, kept in this place)
   j["parameters"] = {{"theta", o.theta}, {"phi", o.phi}, {"rays", o.rays}, {"seed", o.seed},
                      {"replicates", go.replicates},
@@ -170,10 +167,7 @@ void register_measure_g1(CLI::App& measure, const GlobalOptions& g) {
   g1->add_option("-o,--output", mo->output, "Output (.json or .csv)")->required();
   g1->add_option("--theta", mo->theta, "View zenith angles in degrees: a, a,b,c or start:stop:step")->capture_default_str();
   g1->add_option("--phi", mo->phi, "View azimuths in degrees, same syntax")->capture_default_str();
-  g1->add_option("--rays", mo->rays, "Rays per estimator and direction")->capture_default_str()
-      ->check(integer_in(1, kMaxRays));
-  g1->add_option("--seed", mo->seed, "Random seed")->capture_default_str()
-      ->check(seed_value());
+  add_rays_seed_options(*g1, mo->rays, mo->seed, "Rays per estimator and direction");
   add_replicates_option(*g1, mo->replicates);
   g1->callback([mo, files, &g] {
     mo->surface = files->front();

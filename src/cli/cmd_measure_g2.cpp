@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "measure_options.hpp"
 #include "option_checks.hpp"
 #include "ensemble.hpp"
 #include "microsim/io/output.hpp"
@@ -64,13 +65,9 @@ int run_measure_g2(const G2CliOptions& o, const GlobalOptions& g) {
     throw UsageError("--rays must be a positive integer (got " + std::to_string(o.rays) + ")");
   auto t0 = std::chrono::steady_clock::now();
 
-  G2Options go;
-  go.split = g.split;  // shards and MPI ranks (scaleout.hpp)
-  go.rays = static_cast<std::uint64_t>(o.rays);
-  go.seed = o.seed;
+  G2Options go = estimator_options<G2Options>(o.rays, o.seed, g);
   go.replicates = o.replicates;
-  Json j = run_header("measure g2", g);
-  j["file"] = o.files.size() == 1 ? Json(o.files[0]) : Json(o.files);
+  Json j = measure_record("measure g2", o.files, g);
   j["parameters"] = {{"theta_o", o.theta_o}, {"phi_o", o.phi_o},     {"theta_i", o.theta_i},
                      {"phi_i", o.phi_i},     {"rays", o.rays},       {"seed", o.seed},
                      {"replicates", go.replicates},
@@ -178,11 +175,7 @@ void register_measure_g2(CLI::App& measure, const GlobalOptions& g) {
   cmd->add_option("--theta-i", o->theta_i, "Light (incoming) zenith angles in degrees, [0, 90)")
       ->required();
   cmd->add_option("--phi-i", o->phi_i, "Light azimuths in degrees")->capture_default_str();
-  cmd->add_option("--rays", o->rays, "Area samples per direction pair (two occlusion rays each)")
-      ->capture_default_str()
-      ->check(integer_in(1, kMaxRays));
-  cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str()
-      ->check(seed_value());
+  add_rays_seed_options(*cmd, o->rays, o->seed, "Area samples per direction pair (two occlusion rays each)");
   add_replicates_option(*cmd, o->replicates);
   cmd->callback([o, &g] { run_measure_g2(*o, g); });
 }

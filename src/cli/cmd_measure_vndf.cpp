@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "measure_options.hpp"
 #include "option_checks.hpp"
 #include "ensemble.hpp"
 #include "microsim/io/output.hpp"
@@ -66,15 +67,11 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
     throw UsageError("--phi-bins must be in [1, 720] (got " + std::to_string(o.phi_bins) + ")");
   auto t0 = std::chrono::steady_clock::now();
 
-  VndfOptions vo;
-  vo.split = g.split;  // shards and MPI ranks (scaleout.hpp)
-  vo.rays = static_cast<std::uint64_t>(o.rays);
-  vo.seed = o.seed;
+  VndfOptions vo = estimator_options<VndfOptions>(o.rays, o.seed, g);
   vo.theta_bins = o.theta_bins;
   vo.phi_bins = o.phi_bins;
   vo.sampler_samples = static_cast<std::uint64_t>(o.sampler_samples);
-  Json j = run_header("measure vndf", g);
-  j["file"] = o.files.size() == 1 ? Json(o.files[0]) : Json(o.files);
+  Json j = measure_record("measure vndf", o.files, g);
   j["parameters"] = {{"theta", o.theta},
                      {"phi", o.phi},
                      {"rays", o.rays},
@@ -169,8 +166,7 @@ void register_measure_vndf(CLI::App& measure, const GlobalOptions& g) {
   cmd->add_option("--theta", o->theta, "View zenith angles in degrees, [0, 90): a, a,b,c or start:stop:step")
       ->capture_default_str();
   cmd->add_option("--phi", o->phi, "View azimuths in degrees, same syntax")->capture_default_str();
-  cmd->add_option("--rays", o->rays, "Rays per direction")->capture_default_str()
-      ->check(integer_in(1, kMaxRays));
+  add_rays_seed_options(*cmd, o->rays, o->seed, "Rays per direction");
   cmd->add_option("--sampler-samples", o->sampler_samples,
                   "Samples for the chi-square test of the nominal NDF's VNDF sampler (0: skip)")
       ->capture_default_str()
@@ -181,8 +177,6 @@ void register_measure_vndf(CLI::App& measure, const GlobalOptions& g) {
   cmd->add_option("--phi-bins", o->phi_bins, "Normal bins in phi_m over [0, 360) degrees")
       ->capture_default_str()
       ->check(integer_in(1, 720));
-  cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str()
-      ->check(seed_value());
   cmd->callback([o, &g] { run_measure_vndf(*o, g); });
 }
 
