@@ -5,7 +5,6 @@
 
 #include <filesystem>
 #include <optional>
-#include <set>
 #include <sstream>
 #include <iostream>
 #include <memory>
@@ -14,7 +13,6 @@
 #include "option_checks.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/surface/surface_io.hpp"
-#include "microsim/surface/surface_spec.hpp"
 #include "microsim/validate/validate.hpp"
 
 #ifndef MICROSIM_DATA_DIR
@@ -56,39 +54,6 @@ std::vector<std::string> split_list(const std::string& text) {
   while (std::getline(ss, item, ','))
     if (!item.empty()) out.push_back(item);
   return out;
-}
-
-// Generates an entry's surface (one seed) with the library's surface spec, saves it at `path`
-// and loads it back: the checks measure the saved surface, as they would a file.
-Microsurface generate_entry(const validation::SuiteEntry& e, const std::string& suite_file,
-                            std::optional<std::uint64_t> seed, const std::string& path) {
-  try {
-    const SurfaceRequest request = validation::surface_request(e, seed);
-    const Microsurface s = generate_surface(request, path);
-    OutputTransaction written;  // the surface is needed now, not with the command's outputs
-    save_surface(s, path);
-    written.commit();
-    for (const auto& w : surface_report(request, s, path, false).warnings)
-      std::cerr << "microsim: warning: " << w << "\n";
-  } catch (const UsageError& err) {
-    throw UsageError("--suite " + suite_file + ": entry " + e.name + ": " + err.what());
-  }
-  return load_surface(path);
-}
-
-// Entry names become file names in the surfaces folder: no path separators, no "..", no leading
-// dot, no control characters, and unique within the suite.
-void require_safe_entry_names(const validation::Suite& suite, const std::string& path) {
-  std::set<std::string> seen;
-  for (const auto& e : suite.entries) {
-    bool ok = !e.name.empty() && e.name.size() <= 100 && e.name[0] != '.' && e.name[0] != '-';
-    for (char c : e.name) ok = ok && c != '/' && c != '\\' && static_cast<unsigned char>(c) >= 0x20;
-    if (!ok)
-      throw UsageError("--suite " + path + ": entry name '" + e.name + "' must be 1-100 characters "
-                       "without '/', '\\', control characters or a leading '.' or '-'");
-    if (!seen.insert(e.name).second)
-      throw UsageError("--suite " + path + ": entry name '" + e.name + "' is used twice");
-  }
 }
 
 int run_validate(ValidateOptions o, const GlobalOptions& g) {
@@ -140,7 +105,7 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
   } else {
     const std::string path = validation::find_suite(o.suite, suite_dirs());
     validation::Suite suite = validation::load_suite(path);
-    require_safe_entry_names(suite, path);
+    validation::require_safe_entry_names(suite, path);
     if (!o.significance_given) significance = suite.significance;
     j["suite"] = {{"name", suite.name}, {"file", path}, {"description", suite.description}};
     fs::path dir;
@@ -169,7 +134,9 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
         for (const auto& seed : seeds) {
           const std::string file =
               (dir / (e.name + (seed ? "-seed" + std::to_string(*seed) : "") + "." + ext)).string();
-          set.surfaces.push_back(generate_entry(e, path, seed, file));
+          std::vector<std::string> warnings;
+          set.surfaces.push_back(validation::generate_entry(e, path, seed, file, &warnings));
+          for (const auto& w : warnings) std::cerr << "microsim: warning: " << w << "\n";
           set.labels.push_back(seed ? "seed " + std::to_string(*seed) : "");
           generated.push_back({{"entry", e.name}, {"file", file}});
         }

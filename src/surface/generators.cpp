@@ -8,12 +8,7 @@
 namespace microsim {
 
 namespace {
-
-std::string num(double x) {
-  std::ostringstream os;
-  os << x;
-  return os.str();
-}
+using detail::num;
 
 void require_positive(double x, const char* option, double max = 1e6) {
   if (!(x > 0) || !std::isfinite(x) || x > max)

@@ -7,11 +7,7 @@
 namespace microsim {
 
 namespace {
-std::string num(double x) {
-  std::ostringstream os;
-  os << x;
-  return os.str();
-}
+using detail::num;
 void require_alpha(double a, const char* option) {
   if (!(a >= 1e-3 && a <= 1e3))
     throw UsageError(std::string(option) + " must be in [0.001, 1000] (got " + num(a) + ")");

@@ -2,6 +2,8 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -9,6 +11,13 @@
 #include "microsim/common.hpp"
 
 namespace microsim::detail {
+
+// A parameter as the generators write it into descriptions (a stream's default format).
+inline std::string num(double x) {
+  std::ostringstream os;
+  os << x;
+  return os.str();
+}
 
 class MeshBuilder {
  public:

@@ -1,6 +1,11 @@
 // Suites of validation entries (JSON files).
 #include "checks_common.hpp"
 
+#include <set>
+
+#include "microsim/io/output.hpp"
+#include "microsim/surface/surface_io.hpp"
+
 namespace microsim::validation {
 
 // ---------------------------------------------------------------------------------------------
@@ -167,6 +172,34 @@ SurfaceRequest surface_request(const SuiteEntry& e, std::optional<std::uint64_t>
   for (const auto& [key, value] : e.args) set_surface_option(r, key, value);
   if (seed) set_surface_option(r, "seed", std::to_string(*seed));
   return r;
+}
+
+Microsurface generate_entry(const SuiteEntry& e, const std::string& suite_file, std::optional<std::uint64_t> seed,
+                            const std::string& path, std::vector<std::string>* warnings) {
+  try {
+    const SurfaceRequest request = surface_request(e, seed);
+    const Microsurface s = generate_surface(request, path);
+    OutputTransaction written;  // the surface is needed now, not with the command's outputs
+    save_surface(s, path);
+    written.commit();
+    if (warnings) *warnings = surface_report(request, s, path, false).warnings;
+  } catch (const UsageError& err) {
+    throw UsageError("--suite " + suite_file + ": entry " + e.name + ": " + err.what());
+  }
+  return load_surface(path);
+}
+
+void require_safe_entry_names(const Suite& suite, const std::string& path) {
+  std::set<std::string> seen;
+  for (const auto& e : suite.entries) {
+    bool ok = !e.name.empty() && e.name.size() <= 100 && e.name[0] != '.' && e.name[0] != '-';
+    for (char c : e.name) ok = ok && c != '/' && c != '\\' && static_cast<unsigned char>(c) >= 0x20;
+    if (!ok)
+      throw UsageError("--suite " + path + ": entry name '" + e.name + "' must be 1-100 characters "
+                       "without '/', '\\', control characters or a leading '.' or '-'");
+    if (!seen.insert(e.name).second)
+      throw UsageError("--suite " + path + ": entry name '" + e.name + "' is used twice");
+  }
 }
 
 }  // namespace microsim::validation

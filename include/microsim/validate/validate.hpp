@@ -188,6 +188,14 @@ struct Suite {
 // The surface of an entry: its preset, then its args (which win), then `seed` when given.
 // UsageError for an unknown kind, option or value (surface/surface_spec.hpp).
 SurfaceRequest surface_request(const SuiteEntry& e, std::optional<std::uint64_t> seed);
+// Generates an entry's surface (one seed) at `path` and loads it back (the checks measure the
+// saved surface, as they would a file); UsageError "--suite FILE: entry NAME: ..." when refused.
+// `warnings`: what `microsim generate` would warn about (e.g. a heightmap that is not periodic).
+Microsurface generate_entry(const SuiteEntry& e, const std::string& suite_file, std::optional<std::uint64_t> seed,
+                            const std::string& path, std::vector<std::string>* warnings = nullptr);
+// Entry names become file names: UsageError unless each is 1-100 characters without path
+// separators, control characters or a leading '.' or '-', and unique within the suite.
+void require_safe_entry_names(const Suite& suite, const std::string& suite_file);
 // Reads a suite file; UsageError naming the file and the field for anything malformed.
 Suite load_suite(const std::string& path);
 // NAME -> path: NAME itself if it is a file, else NAME.json in each of `dirs`, in order.
