@@ -11,11 +11,11 @@ lists them. Records are the command's JSON as dicts and lists, numeric arrays as
 bit for bit what ``-o record.json`` writes at the same seed. Errors raise :class:`UsageError`
 (a ``ValueError``) with the command line's message. Measurements release the GIL.
 """
-from ._core import RuntimeFailure, Surface, UsageError, _help, _run, load, models
+from ._core import RuntimeFailure, Surface, UsageError, _help, _run, load, models, surface_kinds
 
 __all__ = ["Surface", "UsageError", "RuntimeFailure", "ValidationFailed", "generate", "load",
            "measure_ndf", "measure_g1", "measure_g2", "measure_vndf", "measure_bsdf", "validate",
-           "help", "models"]
+           "help", "models", "surface_kinds"]
 
 
 class ValidationFailed(RuntimeFailure):
@@ -85,7 +85,8 @@ def _command(words, positional, by_name, options, default_output):
 def generate(kind, **options):
     """A new surface: ``generate("gaussian", alpha=0.5, resolution=128, seed=9)``.
 
-    ``kind`` and the options are those of ``microsim generate KIND`` (``help("generate gaussian")``);
+    ``kind`` and the options are those of ``microsim generate KIND`` (``help("generate gaussian")``,
+    ``surface_kinds()[kind]["options"]``: the library's table, keywords with ``_`` for ``-``);
     ``output="file.exr"`` also saves it."""
     # Nothing is written unless output is given; the default name only passes the extension
     # checks (a heightmap is saved as .exr, every other kind accepts a mesh file).

@@ -13,6 +13,7 @@
 #include "../../src/cli/app.hpp"
 #include "json_to_python.hpp"
 #include "microsim/surface/surface_io.hpp"
+#include "microsim/surface/surface_spec.hpp"
 
 namespace py = pybind11;
 using namespace microsim;
@@ -86,6 +87,38 @@ RunResult run(const std::vector<std::string>& args,
     out.failure = e.what();
   }
   return out;
+}
+
+// The surface spec's table: kind -> its options (keyword = the option name with '_' for '-').
+py::dict surface_kinds_table() {
+  static const char* types[] = {"int", "float", "seed", "str", "flag"};
+  py::dict kinds;
+  for (const SurfaceKind& k : surface_kinds()) {
+    py::list options;
+    for (const SurfaceOption& o : k.options) {
+      py::dict d;
+      std::string keyword = o.name;
+      for (char& c : keyword) c = c == '-' ? '_' : c;
+      d["name"] = o.name;
+      d["keyword"] = keyword;
+      d["type"] = types[static_cast<int>(o.type)];
+      d["default"] = o.default_text.empty() ? py::object(py::none()) : py::object(py::str(o.default_text));
+      if (o.check == SurfaceOption::Check::Range) d["range"] = o.range.text();
+      else if (o.check == SurfaceOption::Check::Integer)
+        d["range"] = "[" + std::to_string(o.lo) + ", " + std::to_string(o.hi) + "]";
+      else if (o.check == SurfaceOption::Check::Seed) d["range"] = "[0, 2^64-1]";
+      else d["range"] = py::none();
+      d["required"] = o.required;
+      d["help"] = o.help;
+      d["sets"] = o.sets;
+      options.append(d);
+    }
+    py::dict kind;
+    kind["help"] = k.help;
+    kind["options"] = options;
+    kinds[py::str(k.name)] = kind;
+  }
+  return kinds;
 }
 
 std::string help(const std::vector<std::string>& command) {
@@ -189,6 +222,9 @@ PYBIND11_MODULE(_core, m) {
      "(record or None, generated surfaces, failure message or None)");
 
   m.def("_help", &help, py::arg("command"), "The command line's help of a command");
+  m.def("surface_kinds", &surface_kinds_table,
+        "Every surface kind of generate(kind, **options) with its options: name, keyword, type, default, "
+        "range, required, help and the generator parameter it sets (the library's surface spec)");
 
   py::module_ models = m.def_submodule("models", "Analytic microfacet theory (include/microsim/models)");
   python::bind_models(models);

@@ -143,3 +143,29 @@ def test_output_option_writes_the_file(tile, tmp_path):
     microsim.generate("gaussian", resolution=16, seed=1, output=str(saved))
     assert microsim.load(str(saved)).heights.shape == (16, 16)
     assert "--rays" in microsim.help("measure g1")
+
+
+def test_surface_kinds_table_matches_generate(tmp_path):
+    """The table's kinds and keywords are generate's: every default given as its keyword builds
+    the surface of no options; an unknown keyword and an out-of-range value are refused."""
+    kinds = microsim.surface_kinds()
+    assert list(kinds)[:3] == ["gaussian", "flat", "box"] and "heightmap" in kinds
+    sizes = {"resolution": 32, "grooves": 16, "rings": 8, "segments": 32}
+    for name in ["flat", "box", "tiled-boxes", "square-wave", "vgroove", "vcavity", "parallelepiped",
+                 "ellipsoid", "gaussian", "gaussian-ggx"]:
+        opts = {o["keyword"]: o for o in kinds[name]["options"]}
+        small = {k: v for k, v in sizes.items() if k in opts}
+        given = {k: o["default"] for k, o in opts.items() if o["default"] is not None and o["type"] != "str"}
+        given = {k: (int(v) if opts[k]["type"] in ("int", "seed") else float(v)) for k, v in given.items()}
+        given.update(small)
+        a, b = microsim.generate(name, **given), microsim.generate(name, **small)
+        assert not differences(a.description, b.description), name
+        assert a.num_facets == b.num_facets
+    with pytest.raises(microsim.UsageError, match="--alpha"):
+        microsim.generate("gaussian", resolution=16, alpha=11)
+    with pytest.raises(microsim.UsageError, match="bogus"):
+        microsim.generate("flat", bogus=1)
+    # Power: a wrong default (the box's height as 0.5) gives another surface.
+    assert differences(microsim.generate("box", height=0.5).description, microsim.generate("box").description)
+    alpha = {o["name"]: o for o in kinds["gaussian"]["options"]}["alpha"]
+    assert alpha["range"] == "(0, 10]" and alpha["sets"].startswith("GaussianParams::alpha_x")
