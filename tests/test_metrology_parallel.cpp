@@ -49,6 +49,23 @@ HeightGridView view(const std::vector<float>& z, int n, bool periodic) {
   return g;
 }
 
+// The facet slopes as Microsurface::facet's planes give them, divided out plainly.
+std::vector<std::array<double, 2>> plain_slopes(const HeightGridView& g) {
+  std::vector<std::array<double, 2>> out;
+  const int cx = g.periodic ? g.nx : g.nx - 1, cy = g.periodic ? g.ny : g.ny - 1;
+  auto z = [&](int i, int j) { return static_cast<double>((*g.z)[static_cast<std::size_t>(j % g.ny) * g.nx + i % g.nx]); };
+  for (int j = 0; j < cy; ++j)
+    for (int i = 0; i < cx; ++i) {
+      out.push_back({(z(i + 1, j) - z(i, j)) / g.dx, (z(i, j + 1) - z(i, j)) / g.dy});
+      out.push_back({(z(i + 1, j + 1) - z(i, j + 1)) / g.dx, (z(i + 1, j + 1) - z(i + 1, j)) / g.dy});
+    }
+  return out;
+}
+
+bool same_slopes(const std::vector<std::array<double, 2>>& a, const std::vector<std::array<double, 2>>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0;
+}
+
 // The serial fits: one loop over the slope list per pass, 200 bisection steps.
 struct SerialFit {
   double mean_x = 0, mean_y = 0, vx = 0, vy = 0, sg2 = 0, ggx = 0, ax2 = 0, ay2 = 0;
@@ -122,8 +139,9 @@ TEST(MetrologyParallel, OneBlockEqualsTheSerialLoopBitForBit) {
   // 128^2 cells, 32768 facets: one block, so the sums run in the serial order.
   const int n = 128;
   const auto z = random_heights(n, 3);
-  const HeightGridView g = view(z, n, true);
-  const auto slopes = facet_slopes(g);
+  const HeightGridView g = view(z, n, true);  // cell size 1/128: slopes by multiplication
+  const auto slopes = plain_slopes(g);
+  ASSERT_TRUE(same_slopes(slopes, facet_slopes(g)));
   const SerialFit f = serial_fit(slopes);
   const SlopeStats s = slope_stats(g);
   EXPECT_TRUE(same_bits(s.mean_x, f.mean_x));
@@ -148,8 +166,9 @@ TEST(MetrologyParallel, ManyBlocksAgreeWithTheSerialLoopToRounding) {
   // signed terms is bounded by n eps times the mean of |s|, rms scale).
   const int n = 300;
   const auto z = random_heights(n, 4);
-  const HeightGridView g = view(z, n, true);
-  const auto slopes = facet_slopes(g);
+  const HeightGridView g = view(z, n, true);  // cell size 1/300: slopes by division
+  const auto slopes = plain_slopes(g);
+  ASSERT_TRUE(same_slopes(slopes, facet_slopes(g)));
   const SerialFit f = serial_fit(slopes);
   const SlopeStats s = slope_stats(g);
   const double tol = static_cast<double>(slopes.size()) * 2.3e-16;
@@ -174,7 +193,8 @@ TEST(MetrologyParallel, ResultsDoNotDependOnTheThreadCount) {
     const SlopeStats one = in_arena(1, g);
     expect_identical(one, in_arena(2, g));
     // The listed slopes in the same blocks give the same bits.
-    expect_identical(one, slope_stats(facet_slopes(g)));
+    ASSERT_TRUE(same_slopes(plain_slopes(g), facet_slopes(g)));
+    expect_identical(one, slope_stats(plain_slopes(g)));
     // The ACF (row and column transforms in parallel) too.
     std::vector<double> a1, a2;
     tbb::task_arena(1).execute([&] { a1 = autocorrelation(g); });
