@@ -266,7 +266,8 @@ int main(int argc, char** argv) {
       for (std::uint64_t p = 0; p < a.paths; ++p) {
         if (a.replay >= 0 && p != static_cast<std::uint64_t>(a.replay)) continue;
         CounterRng rng(seed, 0xA0D17ull + static_cast<std::uint64_t>(theta_deg * 1000), p);
-        const Vec3 origin(rng.uniform() - 0.5, rng.uniform() - 0.5, tracer.z_top());
+        const double ox = rng.uniform() - 0.5, oy = rng.uniform() - 0.5;  // fixed draw order
+        const Vec3 origin(ox, oy, tracer.z_top());
         // (a) the library's tracer, calls as in walk_bsdf_path, every hit kept.
         std::vector<HitRec> hits;
         Vec3 dir = -wi;

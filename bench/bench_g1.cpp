@@ -6,11 +6,13 @@
 // Tiles run in increasing size, so the process's peak resident memory after a tile is that
 // tile's peak (B/facet: peak bytes per facet, generation and tracing in this process).
 //   --walks P: after each tile's G1 rows, P-path mirror and
-//   dielectric walk rows against the replay of their own queries (bench_walks.hpp).
+//   dielectric walk rows against the replay of their own queries (bench_walks.hpp), and after
+//   the first tile's, the Smith random-walk model's walks per processor second.
 //   lean_Mray/s: the primary-ray path of (a) (Tracer::front_facet) alone on the bare loop's rays.
 // Each direction runs K times (default 3), the estimator and the bare loop interleaved in the
 // same process; the best of each is reported (on a shared machine the slower runs are the ones
 // that lost the CPU), and the ratio is that of the best rates.
+// Peak memory of each command (generate, info, measure g1/ndf/bsdf) per tile: bench/peak_memory.sh.
 
 #include <algorithm>
 #include <chrono>
@@ -100,7 +102,8 @@ int main(int argc, char** argv) {
     peaks.emplace_back(res, peak_rss_mib());
     if (walks > 0 && only.empty()) {
       std::printf("walks on the %d^2 tile, %llu paths per row:\n", res, static_cast<unsigned long long>(walks));
-      print_walk_rows(tracer, walks, repeat, false);
+      // The Smith random-walk model does not depend on the tile: its rows once, after the first.
+      print_walk_rows(tracer, walks, repeat, res == resolutions.front());
     }
   }
   std::printf("\nPeak resident memory per tile (generation, scene build, facet table, G1)\n%-8s %10s %8s\n",

@@ -161,8 +161,11 @@ std::vector<std::pair<Vec3, Vec3>> view_normal_pairs() {
   std::vector<std::pair<Vec3, Vec3>> out;
   CounterRng rng(7, 1, 0);
   while (out.size() < 200) {
-    const Vec3 v = dir(std::acos(rng.uniform()), 2 * kPi * rng.uniform());
-    const Vec3 m = dir(0.45 * kPi * rng.uniform(), 2 * kPi * rng.uniform());
+    // Draws in named variables: the order of evaluation of call arguments is unspecified.
+    const double uv_t = rng.uniform(), uv_p = rng.uniform();
+    const double um_t = rng.uniform(), um_p = rng.uniform();
+    const Vec3 v = dir(std::acos(uv_t), 2 * kPi * uv_p);
+    const Vec3 m = dir(0.45 * kPi * um_t, 2 * kPi * um_p);
     if (v.dot(m) > 0.05) out.push_back({v, m});
   }
   return out;
@@ -313,8 +316,10 @@ TEST(MicrofacetBsdf, ReciprocityWithEtaSquared) {
         const Ndf ndf = kind == mm::Distribution::Beckmann ? Ndf::beckmann(0.4, 0.7) : Ndf::ggx(0.6, 0.3);
         const MicrofacetBsdf f{ndf, Material::dielectric(eta), masking};
         for (int k = 0; k < 400; ++k) {
-          const Vec3 o = dir(std::acos(2 * rng.uniform() - 1), 2 * kPi * rng.uniform());
-          const Vec3 i = dir(std::acos(2 * rng.uniform() - 1), 2 * kPi * rng.uniform());
+          const double uo_t = rng.uniform(), uo_p = rng.uniform();
+          const double ui_t = rng.uniform(), ui_p = rng.uniform();
+          const Vec3 o = dir(std::acos(2 * uo_t - 1), 2 * kPi * uo_p);
+          const Vec3 i = dir(std::acos(2 * ui_t - 1), 2 * kPi * ui_p);
           const double a = f.eval(o, i), b = f.eval(i, o);
           const double eo = o.z() > 0 ? 1.0 : eta, ei = i.z() > 0 ? 1.0 : eta;
           if (a == 0.0) {
@@ -460,7 +465,8 @@ TEST_P(VisibleNormalsBelowTheHorizon, FollowTheirDensity) {
   };
   CounterRng check(11, 5, static_cast<std::uint64_t>(tdeg));
   for (int k = 0; k < 2000; ++k) {
-    const Vec3 m = mm::sample_visible_normal_any(ndf, u, check.uniform(), check.uniform());
+    const double u1 = check.uniform(), u2 = check.uniform();
+    const Vec3 m = mm::sample_visible_normal_any(ndf, u, u1, u2);
     ASSERT_NEAR(m.norm(), 1.0, 1e-12);
     ASSERT_GT(u.dot(m), -1e-12);
     ASSERT_GE(m.z(), 0.0);
@@ -683,7 +689,8 @@ TEST(SmithWalk, OrderTwoMatchesAnIndependentEstimator) {
     for (int k = 0; k < n; ++k) {
       CounterRng rng(23, 1, k);
       const double c1 = std::pow(1.0 - rng.uniform(), 1.0 / (1.0 + ndf.Lambda(wi)));
-      const Vec3 m1 = ndf.sample_visible_normal(wi, rng.uniform(), rng.uniform());
+      const double a1 = rng.uniform(), b1 = rng.uniform();
+      const Vec3 m1 = ndf.sample_visible_normal(wi, a1, b1);
       const Vec3 w1 = mm::reflect(wi, m1);
       const double u = rng.uniform();
       double c2, weight;
@@ -698,7 +705,8 @@ TEST(SmithWalk, OrderTwoMatchesAnIndependentEstimator) {
         c2 = c1 * std::pow(u, 2.0 / (1.0 + L));
         weight = 2.0 * u;
       }
-      const Vec3 m2 = mm::sample_visible_normal_any(ndf, -w1, rng.uniform(), rng.uniform());
+      const double a2 = rng.uniform(), b2 = rng.uniform();
+      const Vec3 m2 = mm::sample_visible_normal_any(ndf, -w1, a2, b2);
       const Vec3 w2 = mm::reflect(-w1, m2);
       const double x = w2.z() > 0 ? weight * std::pow(c2, ndf.Lambda(w2)) : 0.0;
       sum += x;

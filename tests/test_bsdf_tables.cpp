@@ -224,7 +224,8 @@ TEST(RglFile, ImportanceSamplingMatchesItsDensityAndEval) {
   for (int n = 0; n < 400; ++n) {
     Vec3 wo;
     double pdf;
-    if (!reader.sample(Vec2(U(rng), U(rng)), &wo, &pdf)) continue;
+    const double u1 = U(rng), u2 = U(rng);  // named: argument evaluation order is unspecified
+    if (!reader.sample(Vec2(u1, u2), &wo, &pdf)) continue;
     max_rel = std::max(max_rel, std::abs(reader.pdf(wo) - pdf) / pdf);
   }
   EXPECT_LT(max_rel, 1e-3);

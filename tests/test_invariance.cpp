@@ -81,7 +81,8 @@ TEST(Stretching, VisibilityIsTheSameRayForRay) {
       const RayWindow w = make_ray_window(ts, v);
       for (std::uint64_t j = 0; j < n; ++j) {
         CounterRng rng(6, 1, j);
-        const Vec3 org = w.origin0 + rng.uniform() * w.e1 + rng.uniform() * w.e2;
+        const double s1 = rng.uniform(), s2 = rng.uniform();  // named: operand order is unspecified
+        const Vec3 org = w.origin0 + s1 * w.e1 + s2 * w.e2;
         const TraceHit h1 = ts.first_hit(org, -v, nullptr, c);
         const TraceHit h2 = t2.first_hit(stretch_vector(org, sx, sy), -v2, nullptr, c);
         ++hit.n;

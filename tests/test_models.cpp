@@ -150,7 +150,8 @@ TEST(Ndf, DEqualsSlopeDistributionOverCos4) {
   for (auto kind : {Distribution::Beckmann, Distribution::GGX}) {
     const Ndf ndf = make(kind, 0.35, 0.8);
     for (int k = 0; k < 200; ++k) {
-      const Vec3 m = dir(std::acos(u(rng)), 2 * kPi * u(rng));
+      const double ut = u(rng), up = u(rng);  // named: argument evaluation order is unspecified
+      const Vec3 m = dir(std::acos(ut), 2 * kPi * up);
       const double expect = ndf.P22(-m.x() / m.z(), -m.y() / m.z()) / std::pow(m.z(), 4);
       EXPECT_NEAR(ndf.D(m), expect, 1e-12 * std::max(1.0, expect));
     }
@@ -531,8 +532,9 @@ TEST(VCavity, G2MatchesGrooveGeometry) {
   const Seg L{-1.0, 0.0, 0.0, -h}, R{0.0, -h, 1.0, 0.0};
   const Vec3 mL(std::sin(t), 0, std::cos(t));
   for (int k = 0; k < 60; ++k) {
-    const Vec3 o = dir(deg(85.0) * u(rng), 2 * kPi * u(rng));
-    const Vec3 i = dir(deg(85.0) * u(rng), 2 * kPi * u(rng));
+    const double uo_t = u(rng), uo_p = u(rng), ui_t = u(rng), ui_p = u(rng);
+    const Vec3 o = dir(deg(85.0) * uo_t, 2 * kPi * uo_p);
+    const Vec3 i = dir(deg(85.0) * ui_t, 2 * kPi * ui_p);
     const double no = std::hypot(o.x(), o.z()), ni = std::hypot(i.x(), i.z());
     const double geo = groove_visible_fraction(L, R, {{o.x() / no, o.z() / no}, {i.x() / ni, i.z() / ni}});
     EXPECT_NEAR(mm::vcavity_G2(o, i, mL), geo, 2e-4);
@@ -549,7 +551,10 @@ std::vector<Vec3> draw(const Ndf& ndf, const Vec3& v, int N, std::uint64_t seed)
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::vector<Vec3> out(N);
-  for (int k = 0; k < N; ++k) out[k] = ndf.sample_visible_normal(v, u(rng), u(rng));
+  for (int k = 0; k < N; ++k) {
+    const double u1 = u(rng), u2 = u(rng);
+    out[k] = ndf.sample_visible_normal(v, u1, u2);
+  }
   return out;
 }
 
@@ -649,9 +654,14 @@ TEST(G2, SymmetryBoundsAndOrdering) {
   for (auto kind : {Distribution::Beckmann, Distribution::GGX}) {
     const Ndf ndf = make(kind, 0.5, 0.25);
     for (int k = 0; k < 2000; ++k) {
-      const Vec3 o = dir(std::acos(u(rng)), 2 * kPi * u(rng));
-      const Vec3 i = dir(std::acos(u(rng)), 2 * kPi * u(rng));
-      const Vec3 m = (k % 2) ? Vec3((o + i).normalized()) : dir(std::acos(u(rng)), 2 * kPi * u(rng));
+      const double uo_t = u(rng), uo_p = u(rng), ui_t = u(rng), ui_p = u(rng);
+      const Vec3 o = dir(std::acos(uo_t), 2 * kPi * uo_p);
+      const Vec3 i = dir(std::acos(ui_t), 2 * kPi * ui_p);
+      Vec3 m = (o + i).normalized();
+      if (k % 2 == 0) {
+        const double um_t = u(rng), um_p = u(rng);
+        m = dir(std::acos(um_t), 2 * kPi * um_p);
+      }
       const double gs = mm::G2_separable(ndf, o, i, m), gh = mm::G2_height_correlated(ndf, o, i, m);
       const double gd = mm::G2_direction_correlated(ndf, o, i, m);
       const double ghd = mm::G2_height_direction_correlated(ndf, o, i, m);

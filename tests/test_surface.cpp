@@ -100,6 +100,18 @@ TEST(Gaussian, TileIsPeriodic) {
   EXPECT_DOUBLE_EQ(b.x() - a.x(), 1.0);
 }
 
+TEST(Gaussian, HeightWrapsAnyIndex) {
+  // height(i, j) is the periodic copy for any index, negative or several tiles away; the
+  // in-tile shortcut must give the same element as the plain double modulo.
+  const Microsurface s = generate_gaussian(small(0.5, 2, 64));
+  auto wrap = [](long i, long n) { return ((i % n) + n) % n; };
+  const long nx = s.nx(), ny = s.ny();
+  for (long j = -2 * ny - 1; j <= 2 * ny + 1; j += 7)
+    for (long i = -3 * nx - 2; i <= 3 * nx + 2; ++i)
+      ASSERT_EQ(s.height(i, j), s.heights()[static_cast<std::size_t>(wrap(j, ny) * nx + wrap(i, nx))])
+          << i << " " << j;
+}
+
 TEST(Gaussian, RejectsBadParameters) {
   GaussianParams p;
   p.alpha_x = 0;

@@ -153,7 +153,8 @@ TEST(Table, NominalComparisonIsCalibratedAndWrongErrorsFail) {
     std::vector<Table> tables(K);
     std::vector<const Table*> parts;
     for (int k = 0; k < K; ++k) {
-      const double g = 0.6 + sigma_s * normal(rng) + sigma_r * normal(rng);
+      const double zs = normal(rng), zr = normal(rng);  // named: operand order is unspecified
+      const double g = 0.6 + sigma_s * zs + sigma_r * zr;
       tables[k] = one_surface(g, sigma_r, g, {0});
       tables[k].rows[0]["nominal"] = 0.6;
       parts.push_back(&tables[k]);

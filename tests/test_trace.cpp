@@ -53,8 +53,11 @@ TEST(Tracer, EmbreeGridTriangulationMatchesSurfaceFacets) {
   TraceCounters c;
   for (int k = 0; k < 2000; ++k) {
     CounterRng rng(1, 1, k);
-    Vec3 o(rng.uniform() - 0.5, rng.uniform() - 0.5, tracer.z_top());
-    Vec3 d = -direction_from_angles(rad(60 * rng.uniform()), 2 * kPi * rng.uniform());
+    // Draws in named variables, in a fixed order: argument evaluation order is unspecified.
+    const double ox = rng.uniform() - 0.5, oy = rng.uniform() - 0.5;
+    const double ut = rng.uniform(), up = rng.uniform();
+    Vec3 o(ox, oy, tracer.z_top());
+    Vec3 d = -direction_from_angles(rad(60 * ut), 2 * kPi * up);
     TraceHit h = tracer.first_hit(o, d, nullptr, c);
     ASSERT_TRUE(h.hit);
     Triangle f = s.facet(h.facet);
@@ -113,7 +116,8 @@ TEST(Tracer, FlatPlaneAt89DegreesEveryRayHitsOnce) {
   for (int k = 0; k < n; ++k) {
     CounterRng rng(3, 3, k);
     Vec3 d = -direction_from_angles(rad(89.0), 2 * kPi * rng.uniform());
-    Vec3 o(rng.uniform() - 0.5, rng.uniform() - 0.5, 0.2);  // ~11 tiles of travel
+    const double ox = rng.uniform() - 0.5, oy = rng.uniform() - 0.5;
+    Vec3 o(ox, oy, 0.2);  // ~11 tiles of travel
     TraceHit h = tracer.first_hit(o, d, nullptr, c);
     hits += h.hit && !h.backface;
     EXPECT_NEAR(h.point.z(), 0.0, 1e-6);
@@ -178,8 +182,10 @@ TEST(Tracer, PeriodicMeshTracesLikeTheHeightfield) {
   TraceCounters c;
   for (int k = 0; k < 500; ++k) {
     CounterRng rng(5, 5, k);
-    Vec3 d = -direction_from_angles(rad(85 * rng.uniform()), 2 * kPi * rng.uniform());
-    Vec3 o(rng.uniform() - 0.5, rng.uniform() - 0.5, ts.z_top());
+    const double ut = rng.uniform(), up = rng.uniform();
+    const double ox = rng.uniform() - 0.5, oy = rng.uniform() - 0.5;
+    Vec3 d = -direction_from_angles(rad(85 * ut), 2 * kPi * up);
+    Vec3 o(ox, oy, ts.z_top());
     TraceHit a = ts.first_hit(o, d, nullptr, c), b = tm.first_hit(o, d, nullptr, c);
     ASSERT_TRUE(a.hit && b.hit);
     EXPECT_EQ(a.facet, b.facet);
@@ -265,7 +271,8 @@ TEST(Tracer, FrontFacetEqualsFirstHitFacet) {
       for (int k = 0; k < 3000; ++k) {
         CounterRng rng(11, 7, static_cast<std::uint64_t>(k));
         const Vec3 v = direction_from_angles(rad(theta), vgroove ? 0.0 : 2 * kPi * rng.uniform());
-        Vec3 o(rng.uniform() - 0.5, rng.uniform() - 0.5, tracer.z_top());
+        const double ox = rng.uniform() - 0.5, oy = rng.uniform() - 0.5;
+        Vec3 o(ox, oy, tracer.z_top());
         if (vgroove) {  // within +-2e-7 of the ridge (x = 0, z at the top), as in the test above
           const Vec3 ridge(0.0, o.y(), tracer.z_top() - 1e-6 + 1e-10 * (k - 1500));
           o = ridge + ((tracer.z_top() - ridge.z()) / v.z()) * v;

@@ -193,7 +193,8 @@ TEST(VCavityMultiple, QuadratureEqualsMonteCarloOverGrooves) {
     std::normal_distribution<double> g(0.0, 0.5 / std::sqrt(2.0));
     std::vector<double> s(K + 1, 0.0), s2(K + 1, 0.0);
     for (int i = 0; i < M; ++i) {
-      const Vec3 m = Vec3(-g(gen), -g(gen), 1.0).normalized();
+      const double sx = g(gen), sy = g(gen);  // named: argument evaluation order is unspecified
+      const Vec3 m = Vec3(-sx, -sy, 1.0).normalized();
       const mm::GrooveFrame f(m);
       const auto a = mm::vgroove_albedo(f.facet_angle, f.to_local(l), mat, K);
       for (int k = 0; k <= K; ++k) {

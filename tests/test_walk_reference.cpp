@@ -29,7 +29,8 @@ Comparison compare_walks(const Microsurface& s, const ReferenceHeightfieldTracer
     const Vec3 wi(std::sin(th), 0.0, std::cos(th));
     for (int p = 0; p < paths; ++p) {
       CounterRng rng(11, static_cast<std::uint64_t>(th_deg), static_cast<std::uint64_t>(p));
-      const Vec3 origin(rng.uniform() - 0.5, rng.uniform() - 0.5, tracer.z_top());
+      const double ox = rng.uniform() - 0.5, oy = rng.uniform() - 0.5;  // fixed draw order
+      const Vec3 origin(ox, oy, tracer.z_top());
       TraceCounters counters;
       std::uint64_t events = 0;
       const WalkEnd e = walk_bsdf_path(tracer, origin, -wi, mirror, rng, 1000, false, counters, events);

@@ -45,9 +45,8 @@ void put(std::vector<std::uint8_t>& out, T x) {  // little-endian host (x86-64, 
 }  // namespace
 
 void write_tensor_file(const std::string& path, const std::vector<TensorField>& fields) {
-  std::vector<std::uint8_t> head;
   const char magic[12] = {'t', 'e', 'n', 's', 'o', 'r', '_', 'f', 'i', 'l', 'e', '\0'};
-  head.insert(head.end(), magic, magic + 12);
+  std::vector<std::uint8_t> head(magic, magic + 12);
   put<std::uint8_t>(head, 1);
   put<std::uint8_t>(head, 0);
   put<std::uint32_t>(head, static_cast<std::uint32_t>(fields.size()));

@@ -468,9 +468,9 @@ Microsurface import_heightmap(const HeightmapImportParams& p) {
     // and without the wrap-around cells (equal for a truly periodic map, up to 1/n noise).
     HeightGridView v = grid_view(s);
     v.periodic = false;
-    const SlopeStats inner = slope_stats(facet_slopes(v), 2);
+    const SlopeStats inner = slope_stats(v, 2);
     v.periodic = true;
-    const SlopeStats all = slope_stats(facet_slopes(v), 2);
+    const SlopeStats all = slope_stats(v, 2);
     d["seam_check"] = {{"slope_rms_x_tile", all.rms_x}, {"slope_rms_y_tile", all.rms_y},
                        {"slope_rms_x_without_wrap", inner.rms_x}, {"slope_rms_y_without_wrap", inner.rms_y}};
   }

@@ -1,9 +1,7 @@
 #include "microsim/surface/mesh_check.hpp"
 #include "microsim/surface/mesh_header.hpp"
 
-#include <OpenMesh/Core/IO/MeshIO.hh>
-#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
-#include <OpenMesh/Core/System/omstream.hh>
+#include "openmesh_headers.hpp"
 
 #include <Eigen/Geometry>
 

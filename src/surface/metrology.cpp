@@ -4,6 +4,9 @@
 
 #include "microsim/surface/heightmap_import.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <complex>
 #include <limits>
 
@@ -12,23 +15,37 @@ namespace microsim {
 namespace {
 using Complex = std::complex<double>;
 
-// In-place 2D FFT of a w x h row-major array (rows, then columns).
+// In-place 2D FFT of a w x h row-major array (rows, then columns). Every 1D transform is the
+// same computation whichever thread does it, so the result does not depend on the thread count.
+// Columns are gathered four at a time (four neighbouring columns share a cache line).
 void fft2d(std::vector<Complex>& a, int w, int h, bool inverse) {
-  Eigen::FFT<double> fft;
-  std::vector<Complex> in(w), out(w);
-  for (int j = 0; j < h; ++j) {
-    std::copy(a.begin() + static_cast<std::size_t>(j) * w, a.begin() + static_cast<std::size_t>(j + 1) * w,
-              in.begin());
-    if (inverse) fft.inv(out, in); else fft.fwd(out, in);
-    std::copy(out.begin(), out.end(), a.begin() + static_cast<std::size_t>(j) * w);
-  }
-  in.resize(h);
-  out.resize(h);
-  for (int i = 0; i < w; ++i) {
-    for (int j = 0; j < h; ++j) in[j] = a[static_cast<std::size_t>(j) * w + i];
-    if (inverse) fft.inv(out, in); else fft.fwd(out, in);
-    for (int j = 0; j < h; ++j) a[static_cast<std::size_t>(j) * w + i] = out[j];
-  }
+  tbb::parallel_for(tbb::blocked_range<int>(0, h, 16), [&](const tbb::blocked_range<int>& r) {
+    Eigen::FFT<double> fft;
+    std::vector<Complex> in(w), out(w);
+    for (int j = r.begin(); j != r.end(); ++j) {
+      Complex* row = a.data() + static_cast<std::size_t>(j) * w;
+      std::copy(row, row + w, in.begin());
+      if (inverse) fft.inv(out, in); else fft.fwd(out, in);
+      std::copy(out.begin(), out.end(), row);
+    }
+  });
+  constexpr int kCols = 4;
+  tbb::parallel_for(tbb::blocked_range<int>(0, (w + kCols - 1) / kCols, 4), [&](const tbb::blocked_range<int>& r) {
+    Eigen::FFT<double> fft;
+    std::vector<std::vector<Complex>> in(kCols, std::vector<Complex>(h));
+    std::vector<Complex> out(h);
+    for (int b = r.begin(); b != r.end(); ++b) {
+      const int i0 = b * kCols, i1 = std::min(w, i0 + kCols);
+      for (int j = 0; j < h; ++j)
+        for (int i = i0; i < i1; ++i) in[i - i0][j] = a[static_cast<std::size_t>(j) * w + i];
+      for (int i = i0; i < i1; ++i) {
+        if (inverse) fft.inv(out, in[i - i0]); else fft.fwd(out, in[i - i0]);
+        in[i - i0] = out;
+      }
+      for (int j = 0; j < h; ++j)
+        for (int i = i0; i < i1; ++i) a[static_cast<std::size_t>(j) * w + i] = in[i - i0][j];
+    }
+  });
 }
 
 // Standard normal quantile by bisection on the CDF (only a few dozen calls).
@@ -41,21 +58,67 @@ double normal_quantile(double p) {
   return 0.5 * (lo + hi);
 }
 
+// Sums over a sample in blocks of kBlock values: each block summed in order from zero (in
+// parallel), the block sums then added in block order. The result does not depend on the
+// thread count, and a sample of at most kBlock values is summed exactly as one serial loop.
+constexpr std::size_t kBlock = std::size_t{1} << 16;
+
+template <class Acc, class Block>
+Acc block_sum(std::size_t n, const Acc& zero, const Block& block) {  // block(k0, k1, acc)
+  const std::size_t nb = (n + kBlock - 1) / kBlock;
+  std::vector<Acc> part(nb, zero);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t b = r.begin(); b != r.end(); ++b) block(b * kBlock, std::min(n, (b + 1) * kBlock), part[b]);
+  });
+  Acc total = zero;
+  for (const Acc& p : part) total += p;
+  return total;
+}
+
+struct Sum2 {
+  double a = 0, b = 0;
+  Sum2& operator+=(const Sum2& o) {
+    a += o.a;
+    b += o.b;
+    return *this;
+  }
+};
+struct Sum3 {
+  double a = 0, b = 0, c = 0;
+  Sum3& operator+=(const Sum3& o) {
+    a += o.a;
+    b += o.b;
+    c += o.c;
+    return *this;
+  }
+};
+struct Counts {
+  std::vector<double> v;
+  Counts& operator+=(const Counts& o) {
+    for (std::size_t k = 0; k < v.size(); ++k) v[k] += o.v[k];
+    return *this;
+  }
+};
+
 // Counts of the n values value(0), ..., value(n - 1) in bins [edges[k], edges[k+1]) against
 // equal expected counts n / bins. The values are computed when counted: large grids keep no
-// per-facet copy of them.
-template <class Value>
+// per-facet copy of them. `each(k0, k1, f)` calls f(value) for the values k0 .. k1 - 1.
+template <class Each>
 HistogramFit equal_probability_fit(const std::string& model, std::vector<double> edges, std::size_t n,
-                                   const Value& value, int fitted_parameters) {
+                                   const Each& each, int fitted_parameters) {
   HistogramFit f;
   f.model = model;
   const int bins = static_cast<int>(edges.size()) - 1;
-  f.observed.assign(bins, 0.0);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double v = value(i);
-    int k = static_cast<int>(std::upper_bound(edges.begin() + 1, edges.end() - 1, v) - (edges.begin() + 1));
-    f.observed[k] += 1;
-  }
+  // Counts are integers (exact in a double): the same for any block order.
+  const Counts c = block_sum(n, Counts{std::vector<double>(bins, 0.0)},
+                             [&](std::size_t k0, std::size_t k1, Counts& acc) {
+                               each(k0, k1, [&](double v) {
+                                 const int k = static_cast<int>(
+                                     std::upper_bound(edges.begin() + 1, edges.end() - 1, v) - (edges.begin() + 1));
+                                 acc.v[k] += 1;
+                               });
+                             });
+  f.observed = c.v;
   const double e = static_cast<double>(n) / bins;
   f.expected.assign(bins, e);
   for (int k = 0; k < bins; ++k) f.chi2 += (f.observed[k] - e) * (f.observed[k] - e) / e;
@@ -75,6 +138,180 @@ Json fit_json(const HistogramFit& f) {
   return {{"model", f.model}, {"chi2", f.chi2}, {"dof", f.dof}, {"chi2_per_dof", f.chi2_per_dof()},
           {"bin_edges", edges}, {"observed", f.observed}, {"expected", f.expected}};
 }
+
+// A sample of slopes held in memory.
+struct ListedSlopes {
+  const std::vector<std::array<double, 2>>* s;
+  std::size_t size() const { return s->size(); }
+  template <class F>
+  void each(std::size_t k0, std::size_t k1, F&& f) const {  // f(s_x, s_y) for slopes k0 .. k1 - 1
+    for (std::size_t k = k0; k < k1; ++k) f((*s)[k][0], (*s)[k][1]);
+  }
+};
+
+// x / d, as a multiplication when d is a power of two (then 1 / d is exact and both give the
+// same correctly rounded x 2^-k): a generated tile's cell size usually is one.
+struct Divide {
+  double d, inv;
+  bool by_power_of_two;
+  explicit Divide(double den) : d(den), inv(1.0 / den) {
+    int e = 0;
+    by_power_of_two = std::frexp(den, &e) == 0.5;
+  }
+  double operator()(double x) const { return by_power_of_two ? x * inv : x / d; }
+};
+
+// The facet slopes of a grid, computed from the heights whenever a pass needs them (16 bytes
+// per facet not held): facet 2 (j cx + i) + half, in the order and with the arithmetic of
+// facet_slopes. Cell by cell, row by row (one integer division per row).
+struct GridSlopes {
+  const HeightGridView* g;
+  std::size_t cx = 0, cy = 0;  // cells
+  Divide by_dx, by_dy;
+  explicit GridSlopes(const HeightGridView& grid) : g(&grid), by_dx(grid.dx), by_dy(grid.dy) {
+    const int x = g->periodic ? g->nx : g->nx - 1, y = g->periodic ? g->ny : g->ny - 1;
+    if (x > 0 && y > 0) {
+      cx = static_cast<std::size_t>(x);
+      cy = static_cast<std::size_t>(y);
+    }
+  }
+  std::size_t size() const { return 2 * cx * cy; }
+  template <class F>
+  void each(std::size_t k0, std::size_t k1, F&& f) const {  // f(s_x, s_y) for facets k0 .. k1 - 1
+    if (k0 >= k1) return;
+    const float* z = g->z->data();
+    const std::size_t nx = static_cast<std::size_t>(g->nx), ny = static_cast<std::size_t>(g->ny);
+    const std::size_t c1 = (k1 + 1) / 2;  // past the last cell touched
+    for (std::size_t c = k0 / 2; c < c1;) {
+      const std::size_t j = c / cx, end = std::min(c1, (j + 1) * cx);
+      const float* r0 = z + j * nx;
+      const float* r1 = z + (j + 1 == ny ? 0 : j + 1) * nx;
+      for (std::size_t i = c - j * cx; c < end; ++c, ++i) {
+        const std::size_t i1 = i + 1 == nx ? 0 : i + 1;
+        const double z00 = r0[i], z10 = r0[i1], z01 = r1[i], z11 = r1[i1];
+        // The planes of the two facets (v00, v10, v01) and (v10, v11, v01) of Microsurface::facet.
+        if (2 * c >= k0) f(by_dx(z10 - z00), by_dy(z01 - z00));
+        if (2 * c + 1 < k1) f(by_dx(z11 - z01), by_dy(z11 - z10));
+      }
+    }
+  }
+};
+
+// The isotropic GGX maximum-likelihood equation's left side at alpha^2 = a2 (below).
+template <class Src>
+double ggx_score(const Src& src, double mean_x, double mean_y, double a2) {
+  return block_sum(src.size(), 0.0, [&](std::size_t k0, std::size_t k1, double& sum) {
+    src.each(k0, k1, [&](double sx, double sy) {
+      const double x = sx - mean_x, y = sy - mean_y, v = x * x + y * y;
+      sum += v / (a2 + v);
+    });
+  });
+}
+
+template <class Src>
+SlopeStats slope_stats_of(const Src& src, int bins) {
+  SlopeStats st;
+  st.n = src.size();
+  if (st.n == 0) return st;
+  const double n = static_cast<double>(st.n);
+  const Divide by_n(n);  // 2 nx ny facets: a power of two on most tiles
+  const Sum3 m = block_sum(st.n, Sum3{}, [&](std::size_t k0, std::size_t k1, Sum3& a) {
+    src.each(k0, k1, [&](double sx, double sy) {
+      a.a += by_n(sx);
+      a.b += by_n(sy);
+      a.c += by_n(sx * sx + sy * sy);
+    });
+  });
+  st.mean_x = m.a;
+  st.mean_y = m.b;
+  const double sg2 = m.c;
+  const Sum2 var = block_sum(st.n, Sum2{}, [&](std::size_t k0, std::size_t k1, Sum2& a) {
+    src.each(k0, k1, [&](double sx, double sy) {
+      a.a += by_n((sx - st.mean_x) * (sx - st.mean_x));
+      a.b += by_n((sy - st.mean_y) * (sy - st.mean_y));
+    });
+  });
+  const double vx = var.a, vy = var.b;
+  st.rms_x = std::sqrt(vx);
+  st.rms_y = std::sqrt(vy);
+  st.sdq = std::sqrt(sg2);
+  // Beckmann's slope variance per axis is alpha^2 / 2 (000 eq. 1b/1c fitted alpha).
+  st.beckmann_alpha_x = std::sqrt(2.0) * st.rms_x;
+  st.beckmann_alpha_y = std::sqrt(2.0) * st.rms_y;
+  if (!(vx > 0) || !(vy > 0)) return st;  // a profile along one axis: no 2D slope model fits
+
+  // Isotropic GGX by maximum likelihood: d/d alpha log L = 0 <=> sum r^2 / (alpha^2 + r^2) = n/2,
+  // whose left side decreases with alpha (bisection on log alpha). r^2 is recomputed in every
+  // pass rather than stored: 8 bytes per facet less at the peak.
+  const std::size_t nonzero = static_cast<std::size_t>(
+      block_sum(st.n, 0.0, [&](std::size_t k0, std::size_t k1, double& c) {
+        src.each(k0, k1, [&](double sx, double sy) {
+          const double x = sx - st.mean_x, y = sy - st.mean_y;
+          c += x * x + y * y > 0;
+        });
+      }));
+  if (2 * nonzero > st.n) {
+    double lo = std::log(1e-12 + 1e-6 * st.sdq), hi = std::log(1e6 * (st.sdq + 1e-300));
+    // Once a midpoint repeats an end that an earlier pass set, that pass's answer repeats too
+    // and (lo, hi) stays as it is: the remaining passes of the 200 are skipped.
+    bool lo_set = false, hi_set = false;
+    for (int it = 0; it < 200; ++it) {
+      const double mid = 0.5 * (lo + hi), a2 = std::exp(2 * mid);
+      if ((mid == lo && lo_set) || (mid == hi && hi_set)) break;
+      if (ggx_score(src, st.mean_x, st.mean_y, a2) > 0.5 * n) {
+        lo = mid;
+        lo_set = true;
+      } else {
+        hi = mid;
+        hi_set = true;
+      }
+    }
+    st.ggx_alpha = std::exp(0.5 * (lo + hi));
+  }
+  // Anisotropic GGX: EM fixed point of the bivariate t with 2 degrees of freedom, started from
+  // the Beckmann moments; each step raises the likelihood.
+  double ax2 = vx * 2, ay2 = vy * 2;
+  for (st.ggx_iterations = 1; st.ggx_iterations <= 2000; ++st.ggx_iterations) {
+    const Sum2 e = block_sum(st.n, Sum2{}, [&](std::size_t k0, std::size_t k1, Sum2& a) {
+      src.each(k0, k1, [&](double sx, double sy) {
+        const double x = sx - st.mean_x, y = sy - st.mean_y;
+        const double w = 4.0 / (1.0 + x * x / ax2 + y * y / ay2);
+        a.a += by_n(w * x * x);
+        a.b += by_n(w * y * y);
+      });
+    });
+    const double nx2 = e.a, ny2 = e.b;
+    const bool done = std::abs(nx2 - ax2) <= 1e-12 * ax2 && std::abs(ny2 - ay2) <= 1e-12 * ay2;
+    ax2 = nx2;
+    ay2 = ny2;
+    if (done) break;
+  }
+  st.ggx_alpha_x = std::sqrt(ax2);
+  st.ggx_alpha_y = std::sqrt(ay2);
+
+  // Normalized slope radius q: Beckmann q^2 ~ Exp(1), CDF 1 - exp(-q^2); GGX CDF q^2 / (1 + q^2).
+  const auto qb = [&](std::size_t k0, std::size_t k1, const auto& f) {
+    src.each(k0, k1, [&](double sx, double sy) {
+      const double x = sx - st.mean_x, y = sy - st.mean_y;
+      f(std::sqrt(x * x / (2 * vx) + y * y / (2 * vy)));
+    });
+  };
+  const auto qg = [&](std::size_t k0, std::size_t k1, const auto& f) {
+    src.each(k0, k1, [&](double sx, double sy) {
+      const double x = sx - st.mean_x, y = sy - st.mean_y;
+      f(std::sqrt(x * x / ax2 + y * y / ay2));
+    });
+  };
+  std::vector<double> eb(bins + 1), eg(bins + 1);
+  for (int k = 0; k <= bins; ++k) {
+    const double p = static_cast<double>(k) / bins;
+    eb[k] = k == bins ? std::numeric_limits<double>::infinity() : std::sqrt(-std::log1p(-p));
+    eg[k] = k == bins ? std::numeric_limits<double>::infinity() : std::sqrt(p / (1 - p));
+  }
+  st.beckmann_fit = equal_probability_fit("beckmann", eb, st.n, qb, 2);
+  st.ggx_fit = equal_probability_fit("ggx", eg, st.n, qg, 2);
+  return st;
+}
 }  // namespace
 
 HeightGridView grid_view(const Microsurface& s) {
@@ -91,105 +328,18 @@ HeightGridView grid_view(const Microsurface& s) {
 }
 
 std::vector<std::array<double, 2>> facet_slopes(const HeightGridView& g) {
+  const GridSlopes src(g);
   std::vector<std::array<double, 2>> out;
-  const int cx = g.periodic ? g.nx : g.nx - 1, cy = g.periodic ? g.ny : g.ny - 1;
-  if (cx <= 0 || cy <= 0) return out;
-  out.reserve(2 * static_cast<std::size_t>(cx) * cy);
-  for (int j = 0; j < cy; ++j)
-    for (int i = 0; i < cx; ++i) {
-      const int i1 = (i + 1) % g.nx, j1 = (j + 1) % g.ny;
-      const double z00 = at(g, i, j), z10 = at(g, i1, j), z01 = at(g, i, j1), z11 = at(g, i1, j1);
-      // The planes of the two facets (v00, v10, v01) and (v10, v11, v01) of Microsurface::facet.
-      out.push_back({(z10 - z00) / g.dx, (z01 - z00) / g.dy});
-      out.push_back({(z11 - z01) / g.dx, (z11 - z10) / g.dy});
-    }
+  out.reserve(src.size());
+  src.each(0, src.size(), [&](double sx, double sy) { out.push_back({sx, sy}); });
   return out;
 }
 
 SlopeStats slope_stats(const std::vector<std::array<double, 2>>& slopes, int bins) {
-  SlopeStats st;
-  st.n = slopes.size();
-  if (st.n == 0) return st;
-  const double n = static_cast<double>(st.n);
-  double sg2 = 0;
-  for (const auto& s : slopes) {
-    st.mean_x += s[0] / n;
-    st.mean_y += s[1] / n;
-    sg2 += (s[0] * s[0] + s[1] * s[1]) / n;
-  }
-  double vx = 0, vy = 0;
-  for (const auto& s : slopes) {
-    vx += (s[0] - st.mean_x) * (s[0] - st.mean_x) / n;
-    vy += (s[1] - st.mean_y) * (s[1] - st.mean_y) / n;
-  }
-  st.rms_x = std::sqrt(vx);
-  st.rms_y = std::sqrt(vy);
-  st.sdq = std::sqrt(sg2);
-  // Beckmann's slope variance per axis is alpha^2 / 2 (000 eq. 1b/1c fitted alpha).
-  st.beckmann_alpha_x = std::sqrt(2.0) * st.rms_x;
-  st.beckmann_alpha_y = std::sqrt(2.0) * st.rms_y;
-  if (!(vx > 0) || !(vy > 0)) return st;  // a profile along one axis: no 2D slope model fits
-
-  // Isotropic GGX by maximum likelihood: d/d alpha log L = 0 <=> sum r^2 / (alpha^2 + r^2) = n/2,
-  // whose left side decreases with alpha (bisection on log alpha). r^2 is recomputed in every
-  // pass (the same value each time) rather than stored: 8 bytes per facet less at the peak.
-  const auto r2 = [&](std::size_t k) {
-    const double x = slopes[k][0] - st.mean_x, y = slopes[k][1] - st.mean_y;
-    return x * x + y * y;
-  };
-  std::size_t nonzero = 0;
-  for (std::size_t k = 0; k < st.n; ++k) nonzero += r2(k) > 0;
-  if (2 * nonzero > st.n) {
-    double lo = std::log(1e-12 + 1e-6 * st.sdq), hi = std::log(1e6 * (st.sdq + 1e-300));
-    for (int it = 0; it < 200; ++it) {
-      const double mid = 0.5 * (lo + hi), a2 = std::exp(2 * mid);
-      double sum = 0;
-      for (std::size_t k = 0; k < st.n; ++k) {
-        const double v = r2(k);
-        sum += v / (a2 + v);
-      }
-      if (sum > 0.5 * n) lo = mid; else hi = mid;
-    }
-    st.ggx_alpha = std::exp(0.5 * (lo + hi));
-  }
-  // Anisotropic GGX: EM fixed point of the bivariate t with 2 degrees of freedom, started from
-  // the Beckmann moments; each step raises the likelihood.
-  double ax2 = vx * 2, ay2 = vy * 2;
-  for (st.ggx_iterations = 1; st.ggx_iterations <= 2000; ++st.ggx_iterations) {
-    double nx2 = 0, ny2 = 0;
-    for (const auto& s : slopes) {
-      const double x = s[0] - st.mean_x, y = s[1] - st.mean_y;
-      const double w = 4.0 / (1.0 + x * x / ax2 + y * y / ay2);
-      nx2 += w * x * x / n;
-      ny2 += w * y * y / n;
-    }
-    const bool done = std::abs(nx2 - ax2) <= 1e-12 * ax2 && std::abs(ny2 - ay2) <= 1e-12 * ay2;
-    ax2 = nx2;
-    ay2 = ny2;
-    if (done) break;
-  }
-  st.ggx_alpha_x = std::sqrt(ax2);
-  st.ggx_alpha_y = std::sqrt(ay2);
-
-  // Normalized slope radius q: Beckmann q^2 ~ Exp(1), CDF 1 - exp(-q^2); GGX CDF q^2 / (1 + q^2).
-  const auto qb = [&](std::size_t k) {
-    const double x = slopes[k][0] - st.mean_x, y = slopes[k][1] - st.mean_y;
-    return std::sqrt(x * x / (2 * vx) + y * y / (2 * vy));
-  };
-  const auto qg = [&](std::size_t k) {
-    const double x = slopes[k][0] - st.mean_x, y = slopes[k][1] - st.mean_y;
-    return std::sqrt(x * x / ax2 + y * y / ay2);
-  };
-  std::vector<double> eb(bins + 1), eg(bins + 1);
-  for (int k = 0; k <= bins; ++k) {
-    const double p = static_cast<double>(k) / bins;
-    eb[k] = k == bins ? std::numeric_limits<double>::infinity() : std::sqrt(-std::log1p(-p));
-    eg[k] = k == bins ? std::numeric_limits<double>::infinity() : std::sqrt(p / (1 - p));
-  }
-  st.beckmann_fit = equal_probability_fit("beckmann", eb, st.n, qb, 2);
-  st.ggx_fit = equal_probability_fit("ggx", eg, st.n, qg, 2);
-  return st;
+  return slope_stats_of(ListedSlopes{&slopes}, bins);
 }
+
+SlopeStats slope_stats(const HeightGridView& g, int bins) { return slope_stats_of(GridSlopes(g), bins); }
 
 namespace {
 // Float heights (a grid) or doubles (a sample): each value is used as a double.
@@ -197,15 +347,20 @@ template <class T>
 HistogramFit height_fit(const std::vector<T>& heights, int bins) {
   const double n = static_cast<double>(heights.size());
   double mean = 0, var = 0;
-  for (double h : heights) mean += h / n;
-  for (double h : heights) var += (h - mean) * (h - mean) / n;
+  const Divide by_n(n);
+  for (double h : heights) mean += by_n(h);
+  for (double h : heights) var += by_n((h - mean) * (h - mean));
   const double sd = std::sqrt(var);
   std::vector<double> edges(bins + 1);
   edges[0] = -std::numeric_limits<double>::infinity();
   edges[bins] = std::numeric_limits<double>::infinity();
   for (int k = 1; k < bins; ++k) edges[k] = mean + sd * normal_quantile(static_cast<double>(k) / bins);
-  return equal_probability_fit("gaussian", edges, heights.size(),
-                               [&](std::size_t k) { return static_cast<double>(heights[k]); }, 2);
+  return equal_probability_fit(
+      "gaussian", edges, heights.size(),
+      [&](std::size_t k0, std::size_t k1, const auto& f) {
+        for (std::size_t k = k0; k < k1; ++k) f(static_cast<double>(heights[k]));
+      },
+      2);
 }
 }  // namespace
 
@@ -219,11 +374,13 @@ namespace {
 // -t at w - t), each lag divided by its number of overlapping pairs.
 struct AcfTable {
   int w = 0, h = 0;
-  std::vector<double> v;
+  // The values in the real parts of the transform's own array: no second table of doubles
+  // (8 bytes per cell less at the peak of `info`).
+  std::vector<Complex> v;
   double operator()(long i, long j) const {
     i = ((i % w) + w) % w;
     j = ((j % h) + h) % h;
-    return v[static_cast<std::size_t>(j) * w + i];
+    return v[static_cast<std::size_t>(j) * w + i].real();
   }
 };
 
@@ -234,25 +391,26 @@ AcfTable acf_table(const HeightGridView& g) {
   double mean = 0;
   for (float z : *g.z) mean += z;
   mean /= static_cast<double>(g.z->size());
-  std::vector<Complex> a(static_cast<std::size_t>(t.w) * t.h, 0.0);
+  std::vector<Complex>& a = t.v;
+  a.assign(static_cast<std::size_t>(t.w) * t.h, 0.0);
   for (int j = 0; j < g.ny; ++j)
     for (int i = 0; i < g.nx; ++i) a[static_cast<std::size_t>(j) * t.w + i] = at(g, i, j) - mean;
   fft2d(a, t.w, t.h, false);
   for (auto& c : a) c = std::norm(c);  // Wiener-Khinchin: ACF = F^-1 |F z|^2
   fft2d(a, t.w, t.h, true);
-  t.v.resize(a.size());
   for (int j = 0; j < t.h; ++j)
     for (int i = 0; i < t.w; ++i) {
-      double v = a[static_cast<std::size_t>(j) * t.w + i].real();
+      Complex& c = a[static_cast<std::size_t>(j) * t.w + i];
+      double v = c.real();
       if (!g.periodic) {
         const int li = i < g.nx ? i : t.w - i, lj = j < g.ny ? j : t.h - j;  // |lag|
         const double pairs = static_cast<double>(g.nx - li) * (g.ny - lj);
         v = pairs > 0 ? v / pairs : 0;
       }
-      t.v[static_cast<std::size_t>(j) * t.w + i] = v;
+      c = v;
     }
-  const double c0 = t.v[0];
-  for (auto& v : t.v) v = c0 > 0 ? v / c0 : 0;
+  const double c0 = a[0].real();
+  for (auto& c : a) c = c0 > 0 ? c.real() / c0 : 0;
   return t;
 }
 }  // namespace
@@ -319,9 +477,10 @@ Metrology measure_metrology(const HeightGridView& g) {
   Metrology m;
   m.points = g.z->size();
   const double n = static_cast<double>(m.points);
+  const Divide by_n(n);
   double lo = (*g.z)[0], hi = lo;
   for (float z : *g.z) {
-    m.mean += z / n;
+    m.mean += by_n(z);
     lo = std::min<double>(lo, z);
     hi = std::max<double>(hi, z);
   }
@@ -331,16 +490,16 @@ Metrology measure_metrology(const HeightGridView& g) {
   double m2 = 0, m3 = 0, m4 = 0;
   for (float z : *g.z) {
     const double d = z - m.mean;
-    m.sa += std::abs(d) / n;
-    m2 += d * d / n;
-    m3 += d * d * d / n;
-    m4 += d * d * d * d / n;
+    m.sa += by_n(std::abs(d));
+    m2 += by_n(d * d);
+    m3 += by_n(d * d * d);
+    m4 += by_n(d * d * d * d);
   }
   m.sq = std::sqrt(m2);
   m.skewness = m3 / (m2 * m.sq);
   m.kurtosis = m4 / (m2 * m2);
   m.height_fit = height_fit(*g.z, 20);  // the grid's own floats, no copy
-  m.slopes = slope_stats(facet_slopes(g));
+  m.slopes = slope_stats(g);  // slopes from the heights, pass by pass: no per-facet array
   m.acf = acf_stats(g);
   m.cells_per_correlation_length = m.acf.sal / std::max(g.dx, g.dy);
   m.cells_per_gaussian_length = m.cells_per_correlation_length / std::sqrt(std::log(1.0 / m.acf.threshold));

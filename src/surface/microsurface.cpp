@@ -73,8 +73,11 @@ void Microsurface::set_sample_region(int i0, int i1, int j0, int j1, bool period
 }
 
 float Microsurface::height(long i, long j) const {
-  long ii = ((i % nx_) + nx_) % nx_;
-  long jj = ((j % ny_) + ny_) % ny_;
+  // Every corner of a facet but those on the far border lies inside the tile: two comparisons
+  // then replace the two modulos per index (facet() reads three corners, the area-sampled
+  // estimators and the facet sums call it per sample or per facet).
+  const long ii = (i >= 0 && i < nx_) ? i : ((i % nx_) + nx_) % nx_;
+  const long jj = (j >= 0 && j < ny_) ? j : ((j % ny_) + ny_) % ny_;
   return heights_[static_cast<std::size_t>(jj) * nx_ + ii];
 }
 
@@ -99,8 +102,8 @@ Triangle Microsurface::facet(std::size_t k) const {
     j = rj0_ + static_cast<long>(cell / w);
   } else {
     const std::size_t cell = (k - nr) / 2;
-    i = static_cast<long>(cell % nx_);
-    j = static_cast<long>(cell / nx_);
+    j = static_cast<long>(cell / static_cast<std::size_t>(nx_));
+    i = static_cast<long>(cell - static_cast<std::size_t>(j) * nx_);
   }
   if (k % 2 == 0) return {grid_point(i, j), grid_point(i + 1, j), grid_point(i, j + 1)};
   return {grid_point(i + 1, j), grid_point(i + 1, j + 1), grid_point(i, j + 1)};

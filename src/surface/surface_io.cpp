@@ -1,9 +1,7 @@
 #include "microsim/surface/surface_io.hpp"
 #include "microsim/surface/guard_band.hpp"
 
-#include <OpenMesh/Core/IO/MeshIO.hh>
-#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
-#include <OpenMesh/Core/System/omstream.hh>
+#include "openmesh_headers.hpp"
 
 #include <fstream>
 #include <sys/stat.h>

@@ -54,7 +54,12 @@ struct SlopeStats {
 // P(s) = 1 / (pi ax ay (1 + q^2)^2),
 // q^2 = (sx/ax)^2 + (sy/ay)^2. Its maximum-likelihood (ax, ay) solve ax^2 = (4/n) sum sx^2/(1+q^2)
 // (a bivariate Student t with 2 degrees of freedom; the fixed point is its EM iteration).
+// Sums run in blocks of 65536 slopes, in parallel, the block sums added in block order: the
+// result is the same for any thread count (and, up to 65536 slopes, that of one serial loop).
 SlopeStats slope_stats(const std::vector<std::array<double, 2>>& slopes, int bins = 20);
+// The same for the facet slopes of a grid (facet_slopes(g)), computed from the heights in every
+// pass instead of held (16 bytes per facet).
+SlopeStats slope_stats(const HeightGridView& g, int bins = 20);
 
 // Heights against a Gaussian of the sample mean and Sq, in equal-probability bins.
 HistogramFit gaussian_height_fit(const std::vector<double>& heights, int bins = 20);

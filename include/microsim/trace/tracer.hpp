@@ -32,8 +32,8 @@ enum class RaySide { Front, Back };
 struct TraceHit {
   bool hit = false;
   bool exit_below = false;  // Back-side ray: left the slab downward without a hit (transmitted)
-  Vec3 point;           // periodic surfaces: the copy inside the tile
-  Vec3 normal;          // unit facet normal (exact, from the surface's own facet)
+  Vec3 point = Vec3::Zero();   // periodic surfaces: the copy inside the tile
+  Vec3 normal = Vec3::Zero();  // unit facet normal (exact, from the surface's own facet)
   std::size_t facet = 0;
   bool backface = false;  // the ray met the facet from behind (rounding at silhouettes)
 };
