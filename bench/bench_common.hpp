@@ -61,10 +61,11 @@ inline double rss_mib() {
 // every replicate in turn), each traced by one plain rtcIntersect1 from the window to infinity: no
 // wrap-around, no facet lookup, no binning. Rays per second.
 // With `lean`, each ray is traced by Tracer::front_facet instead (the primary-ray path of (a)
-// without its tallies): the cost of the path itself beside the bare query; with `ahead` (as
-// measure_g1 on a heightfield), each ray is set up and prefetched 8 rays before it is traced.
+// without its tallies): the cost of the path itself beside the bare query; with `ahead` 1 (or
+// -1 on tiles of kAheadMinCells or more, as measure_g1), each ray is set up and prefetched 8
+// rays before it is traced.
 inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
-                                    bool lean = false, bool ahead = true) {
+                                    bool lean = false, int ahead = -1) {
   const Vec3 v = v_in.normalized();
   const RayWindow w = make_ray_window(tracer, v);
   const ReplicatePlan plan(o.rays, o.replicates);
@@ -82,7 +83,8 @@ inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, cons
     rtcInitIntersectContext(&ctx);
     unsigned count = 0;
     TraceCounters counters;
-    if (lean && ahead) {  // as measure_g1 traces a heightfield: set up and prefetched ahead
+    if (lean && (ahead > 0 || (ahead < 0 && static_cast<double>(tracer.surface().nx()) *
+                                                   tracer.surface().ny() >= kAheadMinCells))) {  // as measure_g1 traces a heightfield: set up and prefetched ahead
       std::uint64_t j = c * span;
       int rep = 0;
       run_ahead<Vec3>(

@@ -8,7 +8,7 @@
 //   --walks P: after each tile's G1 rows, P-path mirror and
 //   dielectric walk rows against the replay of their own queries (bench_walks.hpp).
 //   lean_Mray/s: the primary-ray path of (a) (Tracer::front_facet, rays set up and prefetched
-//   ahead as in measure_g1) alone on the bare loop's rays. --only ahead: bare loop and lean path
+//   ahead from kAheadMinCells cells on, as in measure_g1) alone on the bare loop's rays. --only ahead: bare loop and lean path
 //   with and without the look-ahead, interleaved (rates per processor second, ratio to bare).
 // Each direction runs K times (default 3), the estimator and the bare loop interleaved in the
 // same process; the best of each is reported (on a shared machine the slower runs are the ones
@@ -79,8 +79,8 @@ int main(int argc, char** argv) {
         Rate bare1, with, without;
         for (int k = 0; k < repeat; ++k) {
           bare1.best_of(bare_g1_rays_per_second(tracer, v, o));
-          without.best_of(bare_g1_rays_per_second(tracer, v, o, true, false));
-          with.best_of(bare_g1_rays_per_second(tracer, v, o, true, true));
+          without.best_of(bare_g1_rays_per_second(tracer, v, o, true, 0));
+          with.best_of(bare_g1_rays_per_second(tracer, v, o, true, 1));
         }
         std::printf("%5d^2 %3.0fdeg bare %.2f  lean without look-ahead %.2f (%.2f)  with %.2f (%.2f)\n",
                     res, theta_deg, bare1.cpu / 1e6, without.cpu / 1e6, without.cpu / bare1.cpu,

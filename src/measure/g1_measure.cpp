@@ -327,11 +327,12 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
     const Vec2 ab = plan.strata.point(j, rng);
     return Vec3(w.origin0 + ab.x() * w.e1 + ab.y() * w.e2);
   };
-  // A heightfield's rays are set up a few rays ahead, their grid vertices and table entry
-  // prefetched (Tracer::prefetch_front): on tiles larger than the caches the memory reads of
-  // consecutive rays then overlap.
+  // A large heightfield's rays are set up a few rays ahead, their grid vertices and table
+  // entry prefetched (Tracer::prefetch_front): on tiles larger than the caches the memory reads
+  // of consecutive rays then overlap.
+  const bool ahead = static_cast<double>(s.nx()) * s.ny() >= kAheadMinCells;
   std::vector<Tally> ray_reps =
-      heightfield
+      heightfield && ahead
           ? run_replicates_ahead<Vec3>(
                 R, n_rep, nbins, counters, done, reps,
                 [&](int rep, std::uint64_t j) {
@@ -345,6 +346,11 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
                 })
           : run_replicates(R, n_rep, nbins, counters, done, reps,
                            [&](int rep, std::uint64_t j, Tally& t) {
+                             if (heightfield) {
+                               const std::size_t k = tracer.front_facet(down, origin(rep, j), t.counters);
+                               if (k < nf) ++t.hits[ft.bin(k)];
+                               return;
+                             }
                              const TraceHit h =
                                  tracer.first_hit(origin(rep, j), -v, nullptr, t.counters);
                              if (h.hit && !h.backface && h.facet < nf)
