@@ -16,6 +16,7 @@
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
+#include "microsim/trace/ray_pipeline.hpp"
 #include "microsim/trace/tracer.hpp"
 
 namespace microsim::bench {
@@ -60,9 +61,11 @@ inline double rss_mib() {
 // every replicate in turn), each traced by one plain rtcIntersect1 from the window to infinity: no
 // wrap-around, no facet lookup, no binning. Rays per second.
 // With `lean`, each ray is traced by Tracer::front_facet instead (the primary-ray path of (a)
-// without its tallies): the cost of the path itself beside the bare query.
+// without its tallies): the cost of the path itself beside the bare query; with `ahead` 1 (or
+// -1 on tiles of kAheadMinCells or more, as measure_g1), each ray is set up and prefetched 8
+// rays before it is traced.
 inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
-                                    bool lean = false) {
+                                    bool lean = false, int ahead = -1) {
   const Vec3 v = v_in.normalized();
   const RayWindow w = make_ray_window(tracer, v);
   const ReplicatePlan plan(o.rays, o.replicates);
@@ -80,6 +83,27 @@ inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, cons
     rtcInitIntersectContext(&ctx);
     unsigned count = 0;
     TraceCounters counters;
+    if (lean && (ahead > 0 || (ahead < 0 && static_cast<double>(tracer.surface().nx()) *
+                                                   tracer.surface().ny() >= kAheadMinCells))) {  // as measure_g1 traces a heightfield: set up and prefetched ahead
+      std::uint64_t j = c * span;
+      int rep = 0;
+      run_ahead<Vec3>(
+          (std::min(n, (c + 1) * span) - c * span) * R,
+          [&] {
+            CounterRng rng(o.seed, streams[rep], j);
+            const Vec2 ab = plan.strata.point(j, rng);
+            const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
+            tracer.prefetch_front(down, org);
+            if (++rep == R) {
+              rep = 0;
+              ++j;
+            }
+            return org;
+          },
+          [&](const Vec3& org) { count += tracer.front_facet(down, org, counters) != DownwardRays::kNone; });
+      hits[c] = count;
+      return;
+    }
     for (std::uint64_t j = c * span; j < std::min(n, (c + 1) * span); ++j)
       for (int rep = 0; rep < R; ++rep) {
         CounterRng rng(o.seed, streams[rep], j);

@@ -1,14 +1,17 @@
 // Benchmark (not a test): rays/s of the G1 measurement against a bare rtcIntersect1 loop over
 // the same scene and the very same rays, scene build time and memory, for several tile
 // resolutions (Beckmann alpha = 0.5, 4 cells per correlation length).
-//   microsim_bench [--rays N] [--repeat K] [--large] [--walks P] [--only g1|bare|lean] [resolution...]
+//   microsim_bench [--rays N] [--repeat K] [--large] [--walks P] [--only g1|bare|lean|ahead] [resolution...]
 // (default 1024 2048 4096 8192; --large adds 16384, about 9 GB and several processor minutes).
 // Tiles run in increasing size, so the process's peak resident memory after a tile is that
 // tile's peak (B/facet: peak bytes per facet, generation and tracing in this process).
 //   --walks P: after each tile's G1 rows, P-path mirror and
 //   dielectric walk rows against the replay of their own queries (bench_walks.hpp), and after
 //   the first tile's, the Smith random-walk model's walks per processor second.
-//   lean_Mray/s: the primary-ray path of (a) (Tracer::front_facet) alone on the bare loop's rays.
+//   lean_Mray/s: the primary-ray path of (a) (Tracer::front_facet, rays set up and prefetched
+//   ahead from kAheadMinCells cells on, as in measure_g1) alone on the bare loop's rays.
+//   --only ahead: bare loop and lean path with and without the look-ahead, interleaved (rates
+//   per processor second, ratio to bare).
 // Each direction runs K times (default 3), the estimator and the bare loop interleaved in the
 // same process; the best of each is reported (on a shared machine the slower runs are the ones
 // that lost the CPU), and the ratio is that of the best rates.
@@ -75,6 +78,19 @@ int main(int argc, char** argv) {
       const Vec3 v = direction_from_angles(rad(theta_deg), 0.0);
       Rate a, b, bare, lean;
       double facet_s = 1e30;
+      if (only == "ahead") {  // the look-ahead alone: lean path with and without it, interleaved
+        Rate bare1, with, without;
+        for (int k = 0; k < repeat; ++k) {
+          bare1.best_of(bare_g1_rays_per_second(tracer, v, o));
+          without.best_of(bare_g1_rays_per_second(tracer, v, o, true, 0));
+          with.best_of(bare_g1_rays_per_second(tracer, v, o, true, 1));
+        }
+        std::printf("%5d^2 %3.0fdeg bare %.2f  lean without look-ahead %.2f (%.2f)  with %.2f (%.2f)\n",
+                    res, theta_deg, bare1.cpu / 1e6, without.cpu / 1e6, without.cpu / bare1.cpu,
+                    with.cpu / 1e6, with.cpu / bare1.cpu);
+        std::fflush(stdout);
+        continue;
+      }
       if (!only.empty()) {
         for (int k = 0; k < repeat; ++k) {
           if (only == "g1") measure_g1(tracer, v, o, &table);

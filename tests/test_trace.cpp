@@ -362,3 +362,46 @@ TEST(Tracer, FacetTriangleEqualsMicrosurfaceFacet) {
   EXPECT_GT(n, 1000);
   EXPECT_GT(differ_next, compared_next * 9 / 10);
 }
+
+TEST(Tracer, PrefetchFrontNamesTheCellWhereTheRayCrossesTheMeanHeight) {
+  // prefetch_front (a hint for memory only) must name the cell where the ray crosses the mean
+  // height: on a rough tile seen from the zenith the cell of the facet front_facet finds (same
+  // x, y); on a flat tile at 0.2 seen at 60 and 85 degrees from 0.05 above it that same cell
+  // (2.8 and 18 cells over, wrapped); also in the numbering of a sample region. Power: the
+  // guess for the vertical ray through the same origin (or, seen from the zenith, for the
+  // origin one cell over) names another cell.
+  struct Case {
+    Microsurface s;
+    double theta, lift;
+  };
+  std::vector<Case> cases;
+  cases.push_back({beckmann_tile(64, 3, 0.5), 0.0, 0.0});
+  const Microsurface flat = Microsurface::heightfield(32, 32, 1.0, 1.0, std::vector<float>(32 * 32, 0.2f));
+  cases.push_back({flat, 60.0, 0.05});
+  cases.push_back({flat, 85.0, 0.05});
+  Microsurface region = beckmann_tile(64, 4, 0.5);
+  region.set_sample_region(8, 40, 16, 48, true);
+  cases.push_back({std::move(region), 0.0, 0.0});
+  for (const Case& cs : cases) {
+    Tracer tracer(cs.s);
+    int compared = 0, same = 0, same_wrong = 0;
+    for (int k = 0; k < 2000; ++k) {
+      CounterRng rng(5, 3, static_cast<std::uint64_t>(k));
+      const double phi = 2 * kPi * rng.uniform();
+      const Vec3 v = direction_from_angles(rad(cs.theta), phi);
+      const Vec3 o(rng.uniform() - 0.5, rng.uniform() - 0.5, tracer.z_top() + cs.lift);
+      const DownwardRays down(tracer, v), vertical(tracer, Vec3(0, 0, 1));
+      TraceCounters c;
+      const std::size_t f = tracer.front_facet(down, o, c);
+      if (f == DownwardRays::kNone) continue;
+      ++compared;
+      same += tracer.prefetch_front(down, o) / 2 == f / 2;
+      const std::size_t wrong = cs.theta > 0 ? tracer.prefetch_front(vertical, o)
+                                             : tracer.prefetch_front(down, o + Vec3(cs.s.dx(), 0, 0));
+      same_wrong += wrong / 2 == f / 2;
+    }
+    EXPECT_GT(compared, 1900) << "theta " << cs.theta;
+    EXPECT_GE(same, compared - 2) << "theta " << cs.theta;  // rounding exactly at a cell border
+    EXPECT_LT(same_wrong, compared / 10) << "theta " << cs.theta;
+  }
+}

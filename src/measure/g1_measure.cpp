@@ -4,6 +4,7 @@
 #include "microsim/measure/stats.hpp"
 #include "microsim/surface/undersurface.hpp"
 #include "microsim/trace/facet_plane.hpp"
+#include "microsim/trace/ray_pipeline.hpp"
 
 #include <sys/resource.h>
 #include <tbb/blocked_range.h>
@@ -38,9 +39,11 @@ constexpr std::uint64_t kChunk = 1 << 14;
 // replicate (a chunk's part of the tile no longer fits in cache there). Each ray keeps its own
 // random stream and the tallies are integer counts per replicate, so they are identical for any
 // order, chunking and thread count.
-template <class Body>
-std::vector<Tally> run_replicates(int R, std::uint64_t n, int nbins, TraceCounters& counters,
-                                  std::atomic<std::uint64_t>& done, UnitRange share, Body&& body) {
+// `chunk(j0, j1, first, active, t)` runs one chunk: rays [j0, j1) of replicates first ..
+// first + active - 1 into the tallies t[0 .. active - 1].
+template <class Chunk>
+std::vector<Tally> run_chunks(int R, std::uint64_t n, int nbins, TraceCounters& counters,
+                              std::atomic<std::uint64_t>& done, UnitRange share, Chunk&& chunk) {
   const std::uint64_t first = std::min<std::uint64_t>(share.first, R);
   const std::uint64_t end = std::min<std::uint64_t>(share.end, R);
   const std::uint64_t active = end > first ? end - first : 0;
@@ -54,8 +57,7 @@ std::vector<Tally> run_replicates(int R, std::uint64_t n, int nbins, TraceCounte
     const std::uint64_t j0 = c * span, j1 = std::min(n, j0 + span);
     Tally* t = &parts[c * active];
     for (std::uint64_t q = 0; q < active; ++q) t[q] = Tally(nbins);
-    for (std::uint64_t j = j0; j < j1; ++j)
-      for (std::uint64_t q = 0; q < active; ++q) body(static_cast<int>(first + q), j, t[q]);
+    chunk(j0, j1, first, active, t);
     done += active * (j1 - j0);
   });
   for (std::uint64_t c = 0; c < nc; ++c)
@@ -70,6 +72,47 @@ std::vector<Tally> run_replicates(int R, std::uint64_t n, int nbins, TraceCounte
       counters += p.counters;
     }
   return reps;
+}
+
+template <class Body>
+std::vector<Tally> run_replicates(int R, std::uint64_t n, int nbins, TraceCounters& counters,
+                                  std::atomic<std::uint64_t>& done, UnitRange share, Body&& body) {
+  return run_chunks(R, n, nbins, counters, done, share,
+                    [&](std::uint64_t j0, std::uint64_t j1, std::uint64_t first,
+                        std::uint64_t active, Tally* t) {
+                      for (std::uint64_t j = j0; j < j1; ++j)
+                        for (std::uint64_t q = 0; q < active; ++q)
+                          body(static_cast<int>(first + q), j, t[q]);
+                    });
+}
+
+// run_replicates for rays that are set up ahead of their tracing (trace/ray_pipeline.hpp):
+// `prepare(rep, j)` returns a ray's state a few rays before `body(state, tally)` traces it, in
+// the same order as run_replicates, so the tallies are the same.
+template <class State, class Prepare, class Body>
+std::vector<Tally> run_replicates_ahead(int R, std::uint64_t n, int nbins, TraceCounters& counters,
+                                        std::atomic<std::uint64_t>& done, UnitRange share,
+                                        Prepare&& prepare, Body&& body) {
+  struct Slot {
+    State state;
+    std::uint64_t q;
+  };
+  return run_chunks(R, n, nbins, counters, done, share,
+                    [&](std::uint64_t j0, std::uint64_t j1, std::uint64_t first,
+                        std::uint64_t active, Tally* t) {
+                      std::uint64_t j = j0, q = 0;  // the cursor of the next ray to prepare
+                      run_ahead<Slot>(
+                          (j1 - j0) * active,
+                          [&] {
+                            Slot s{prepare(static_cast<int>(first + q), j), q};
+                            if (++q == active) {
+                              q = 0;
+                              ++j;
+                            }
+                            return s;
+                          },
+                          [&](const Slot& s) { body(s.state, t[s.q]); });
+                    });
 }
 
 double process_cpu_seconds() {
@@ -279,19 +322,40 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   std::vector<std::uint64_t> streams(R);
   for (int q = 0; q < R; ++q) streams[q] = ReplicatePlan::stream(0xA000 + key, q);
   const DownwardRays down(tracer, v);
+  auto origin = [&](int rep, std::uint64_t j) {
+    CounterRng rng(o.seed, streams[rep], j);
+    const Vec2 ab = plan.strata.point(j, rng);
+    return Vec3(w.origin0 + ab.x() * w.e1 + ab.y() * w.e2);
+  };
+  // A large heightfield's rays are set up a few rays ahead, their grid vertices and table
+  // entry prefetched (Tracer::prefetch_front): on tiles larger than the caches the memory reads
+  // of consecutive rays then overlap.
+  const bool ahead = static_cast<double>(s.nx()) * s.ny() >= kAheadMinCells;
   std::vector<Tally> ray_reps =
-      run_replicates(R, n_rep, nbins, counters, done, reps, [&](int rep, std::uint64_t j, Tally& t) {
-        CounterRng rng(o.seed, streams[rep], j);
-        const Vec2 ab = plan.strata.point(j, rng);
-        const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
-        if (heightfield) {
-          const std::size_t k = tracer.front_facet(down, org, t.counters);
-          if (k < nf) ++t.hits[ft.bin(k)];
-          return;
-        }
-        const TraceHit h = tracer.first_hit(org, -v, nullptr, t.counters);
-        if (h.hit && !h.backface && h.facet < nf) ++t.hits[r.binning.bin_of(h.normal)];
-      });
+      heightfield && ahead
+          ? run_replicates_ahead<Vec3>(
+                R, n_rep, nbins, counters, done, reps,
+                [&](int rep, std::uint64_t j) {
+                  const Vec3 org = origin(rep, j);
+                  ft.prefetch(tracer.prefetch_front(down, org));
+                  return org;
+                },
+                [&](const Vec3& org, Tally& t) {
+                  const std::size_t k = tracer.front_facet(down, org, t.counters);
+                  if (k < nf) ++t.hits[ft.bin(k)];
+                })
+          : run_replicates(R, n_rep, nbins, counters, done, reps,
+                           [&](int rep, std::uint64_t j, Tally& t) {
+                             if (heightfield) {
+                               const std::size_t k = tracer.front_facet(down, origin(rep, j), t.counters);
+                               if (k < nf) ++t.hits[ft.bin(k)];
+                               return;
+                             }
+                             const TraceHit h =
+                                 tracer.first_hit(origin(rep, j), -v, nullptr, t.counters);
+                             if (h.hit && !h.backface && h.facet < nf)
+                               ++t.hits[r.binning.bin_of(h.normal)];
+                           });
   report();
   r.raycast_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_raycast).count();

@@ -1,7 +1,10 @@
 #include "microsim/trace/tracer.hpp"
 
+#include <sys/mman.h>
+
 #include <chrono>
 #include <limits>
+#include <new>
 
 namespace microsim {
 namespace {
@@ -98,10 +101,30 @@ Tracer::Tracer(const Microsurface& surface) : surface_(surface) {
     }
     grid_width_ = surface.traced_cells_x() + 1 + 2 * pad_;
     grid_height_ = surface.traced_cells_y() + 1 + 2 * pad_;
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-        static_cast<std::size_t>(grid_width_) * grid_height_));
+    // The vertex buffer in a mapping of its own, advised to use transparent huge pages: a ray
+    // reads the three vertex rows of its grid leaf, a row apart (12 bytes per vertex), so on a
+    // large tile each ray otherwise costs three TLB misses besides its cache misses (Embree's
+    // `hugepages` option covers its own allocations, not a geometry's buffers). 16 bytes of
+    // padding: Embree may read the last vertex with a 16-byte load.
+    const std::size_t nverts = static_cast<std::size_t>(grid_width_) * grid_height_;
+    vertex_bytes_ = 3 * sizeof(float) * nverts + 16;
+    vertex_pages_ = mmap(nullptr, vertex_bytes_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS,
+                         -1, 0);
+    if (vertex_pages_ == MAP_FAILED) {
+      vertex_pages_ = nullptr;
+      rtcReleaseGeometry(geom);
+      rtcReleaseScene(scene_);
+      rtcReleaseDevice(device_);
+      throw std::bad_alloc();
+    }
+#ifdef MADV_HUGEPAGE
+    madvise(vertex_pages_, vertex_bytes_, MADV_HUGEPAGE);  // a hint: no huge pages is no error
+#endif
+    auto* v = static_cast<float*>(vertex_pages_);
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, v, 0,
+                               3 * sizeof(float), nverts);
     grid_vertices_ = v;
+    double height_sum = 0;
     for (int j = 0; j < grid_height_; ++j)
       for (int i = 0; i < grid_width_; ++i) {
         Vec3 p = surface.grid_point(i - pad_, j - pad_);
@@ -109,7 +132,9 @@ Tracer::Tracer(const Microsurface& surface) : surface_(surface) {
         q[0] = static_cast<float>(p.x());
         q[1] = static_cast<float>(p.y());
         q[2] = static_cast<float>(p.z());
+        height_sum += q[2];
       }
+    mean_height_ = height_sum / (static_cast<double>(grid_width_) * grid_height_);
     auto* g = static_cast<RTCGrid*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_GRID, 0,
                                                             RTC_FORMAT_GRID, sizeof(RTCGrid), 1));
     g->startVertexID = 0;
@@ -175,6 +200,7 @@ Tracer::Tracer(const Microsurface& surface) : surface_(surface) {
 Tracer::~Tracer() {
   if (scene_) rtcReleaseScene(scene_);
   if (device_) rtcReleaseDevice(device_);
+  if (vertex_pages_) munmap(vertex_pages_, vertex_bytes_);
 }
 
 namespace {
@@ -448,6 +474,34 @@ DownwardRays::DownwardRays(const Tracer& tracer, const Vec3& v) {
   // As Tracer::trace: how far past the tile border a ray may travel in the padded copy.
   const double dxy = std::max(std::abs(dir.x()), std::abs(dir.y()));
   margin = dxy > 0 ? 0.5 * std::min(s.dx(), s.dy()) / dxy : 0.0;
+  run_x = dir.x() / -dir.z();
+  run_y = dir.y() / -dir.z();
+}
+
+std::size_t Tracer::prefetch_front(const DownwardRays& rays, const Vec3& org) const {
+  if (!rays.lean) return DownwardRays::kNone;
+  // Where the ray crosses the mean height, in grid vertex coordinates of the padded grid.
+  const double drop = org.z() - mean_height_;
+  const Macrosurface& macro = surface_.macro();
+  double x = org.x() + drop * rays.run_x + 0.5 * macro.size_x;
+  double y = org.y() + drop * rays.run_y + 0.5 * macro.size_y;
+  x -= macro.size_x * std::floor(x / macro.size_x);
+  y -= macro.size_y * std::floor(y / macro.size_y);
+  // Embree's grid leaves are 3 x 3 vertex blocks starting at even indices: the leaf's rows.
+  const long nx = surface_.nx(), ny = surface_.ny();
+  const long ci = std::min(static_cast<long>(x / surface_.dx()), nx - 1);
+  const long cj = std::min(static_cast<long>(y / surface_.dy()), ny - 1);
+  const long gi = (ci + pad_) & ~1L, gj = (cj + pad_) & ~1L;
+  if (gi + 2 < grid_width_ && gj + 2 < grid_height_) {
+    const float* p = grid_vertices_ + 3 * (static_cast<std::size_t>(gj) * grid_width_ + gi);
+    const std::size_t row = 3 * static_cast<std::size_t>(grid_width_);
+    for (int r = 0; r < 3; ++r, p += row) {
+      __builtin_prefetch(p);
+      __builtin_prefetch(p + 8);  // the block's 9 floats may straddle a cache line
+    }
+  }
+  return macro.region ? surface_.facet_index(ci, cj, 0)
+                      : 2 * (static_cast<std::size_t>(cj) * nx + ci);
 }
 
 // Tracer::trace<false> for a Front ray without source plane on a periodic heightfield, step for

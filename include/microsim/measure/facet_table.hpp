@@ -74,6 +74,10 @@ class FacetTable {
     normal_area(k, m, a);
     return a;
   }
+  // A hint for a bin(k) call a little later (no effect on any result); k may be out of range.
+  void prefetch(std::size_t k) const {
+    if (k < bin16_.size()) __builtin_prefetch(bin16_.data() + k);
+  }
   int bin(std::size_t k) const {
     if (!bin16_.empty()) return bin16_[k] == kNoBin16 ? -1 : bin16_[k];
     return bin32_[k];

@@ -77,6 +77,7 @@ struct DownwardRays {
   Vec3 dir;                  // -v
   float fdir[3] = {0, 0, 0};  // the float direction Embree sees
   double margin = 0;         // past the tile border (Tracer::trace)
+  double run_x = 0, run_y = 0;  // xy travelled per unit of height descended (prefetch_front)
   bool lean = false;         // the dedicated path applies (periodic heightfield)
 };
 
@@ -116,6 +117,12 @@ class Tracer {
   // The facet whose front face the ray from org along rays.dir meets first, or
   // DownwardRays::kNone (nothing met, or a back face first; counted as first_hit counts them).
   std::size_t front_facet(const DownwardRays& rays, const Vec3& org, TraceCounters& c) const;
+  // A hint, no effect on any result: starts loading the grid vertices near where the ray from
+  // org along rays.dir is expected to meet the surface (where it crosses the mean height), so
+  // that a front_facet call a few rays later finds them in cache. On large tiles consecutive
+  // rays rarely share vertices and each ray otherwise waits for its own memory reads. Returns
+  // the facet expected there (for the caller's own per-facet data), or DownwardRays::kNone.
+  std::size_t prefetch_front(const DownwardRays& rays, const Vec3& org) const;
 
   // Which of the surface's facets a raw Embree hit refers to, and (optionally) its exact unit
   // normal.
@@ -141,6 +148,9 @@ class Tracer {
   int grid_width_ = 0;     // heightfield: vertices per grid row in Embree
   int grid_height_ = 0;
   const float* grid_vertices_ = nullptr;  // heightfield: Embree's vertex buffer (x, y, z)
+  void* vertex_pages_ = nullptr;  // heightfield: the vertex buffer's own mapping (huge pages)
+  std::size_t vertex_bytes_ = 0;
+  double mean_height_ = 0;  // heightfield: mean of the traced grid's heights (prefetch_front)
   bool window_ = false;    // non-periodic heightfield: traced without wrap, footprint below
   double foot_x0_ = 0, foot_x1_ = 0, foot_y0_ = 0, foot_y1_ = 0;
   std::vector<std::uint32_t> mesh_prim_to_facet_;  // periodic meshes: copies map back
