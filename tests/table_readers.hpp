@@ -147,7 +147,7 @@ struct Warp2 {
 // An RGL material at one measured incidence (phi_i index p, theta_i index t): eval, pdf, sample.
 class RglReader {
  public:
-  RglReader(const std::string& path, int p, int t) : f_(read_tensor_file(path)), p_(p), t_(t) {
+  RglReader(const std::string& path, int p, int t) : f_(read_tensor_file(path)) {
     const Tensor& th = f_.at("theta_i");
     const Tensor& ph = f_.at("phi_i");
     iso_ = ph.shape[0] <= 2;
@@ -224,7 +224,7 @@ class RglReader {
   }
 
   std::map<std::string, Tensor> f_;
-  int p_, t_, R_ = 0;
+  int R_ = 0;
   bool iso_ = true, jacobian_ = true;
   double theta_i_ = 0, phi_i_ = 0;
   Bilinear2 ndf_, sigma_, spectra_;

@@ -317,7 +317,7 @@ TEST(BsdfMeasure, MirrorBoxAlbedoIsItsVisibleAreaRatio) {
     EXPECT_EQ(r.albedo(0, 0).mean, e.mean);  // convex: one bounce
     EXPECT_LT(std::abs(e.mean - ratio) / e.stderr_, zc) << e.mean << " vs " << ratio;
     // Power: the plain macro-area normalization (ratio 1) is rejected where walls are lit.
-    if (th > 0) EXPECT_GT(std::abs(e.mean - 1.0) / e.stderr_, zc);
+    if (th > 0) { EXPECT_GT(std::abs(e.mean - 1.0) / e.stderr_, zc); }
     // The top's mirror lobe: the share 1 of the albedo leaves upward in the specular pixel.
     const int px = r.map.pixel_of(direction_from_angles(rad(th), kPi));
     EXPECT_NEAR(r.f_pixel(0, 4, px).mean * r.map.pixel_cos_integral(px), 1.0, 6 * r.f_pixel(0, 4, px).stderr_ * r.map.pixel_cos_integral(px));
@@ -397,7 +397,7 @@ TEST(BsdfMeasure, VCavityEnsembleEqualsItsGroovesClosedForm) {
     }
     EXPECT_LT(std::abs(e.mean - (*model)[k]) / e.stderr_, zc) << k << ": " << e.mean << " vs " << (*model)[k];
     // Power: a 5% change of a slot holding more than 5% is rejected.
-    if ((*model)[k] > 0.05) EXPECT_GT(std::abs(e.mean - 1.05 * (*model)[k]) / e.stderr_, zc);
+    if ((*model)[k] > 0.05) { EXPECT_GT(std::abs(e.mean - 1.05 * (*model)[k]) / e.stderr_, zc); }
   }
   // The record carries the models beside the rows.
   const Json j = bsdf_summary_json(r, s);
@@ -534,7 +534,7 @@ TEST(BsdfRecord, AlbedoTablesMergeOverSurfacesByTheTableRule) {
     const Estimate m = results[0].model_albedo(side, slot);
     EXPECT_EQ(m.mean, results[1].model_albedo(side, slot).mean);
     const double se = std::hypot(row["albedo_stderr"].get<double>(), m.stderr_);
-    if (se > 0) EXPECT_NEAR(row["z_smith_multiple"].get<double>(), (row["albedo"].get<double>() - m.mean) / se, 1e-12);
+    if (se > 0) { EXPECT_NEAR(row["z_smith_multiple"].get<double>(), (row["albedo"].get<double>() - m.mean) / se, 1e-12); }
     EXPECT_TRUE(row["p_smith_multiple"].is_null() == !row["z_smith_multiple"].is_number());
     // A wrong model (the walk's value 30% higher) moves z by 0.3 m / se: the rule sees it.
     if (se > 0 && m.mean > 0.05) {

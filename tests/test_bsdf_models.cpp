@@ -288,7 +288,7 @@ TEST_P(MicrofacetSampling, DirectionsFollowTheJacobianDensity) {
       density(c.eta_ratio, true), o);
   const microsim::ChiSquareResult& r = t.run();
   EXPECT_TRUE(r.passed(0.01, 4)) << t.describe();  // family-wise over the four cases
-  if (reflection) EXPECT_NEAR(t.pdf_integral(), 1.0, 1e-3);
+  if (reflection) { EXPECT_NEAR(t.pdf_integral(), 1.0, 1e-3); }
   const microsim::ChiSquareResult w =
       reflection ? t.run_against(density(0, false), true) : t.run_against(density(1.05 * c.eta_ratio, true), true);
   EXPECT_LT(w.p_value, 1e-4) << w.summary();

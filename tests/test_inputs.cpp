@@ -673,7 +673,7 @@ TEST_F(Inputs, InterruptsLeaveNothingBehind) {
       EXPECT_EQ(left, 0);
     } else {  // finished before the signal: then its output is complete
       EXPECT_EQ(WEXITSTATUS(status), 0);
-      EXPECT_NO_THROW(nlohmann::json::parse(slurp(out)));
+      EXPECT_TRUE(nlohmann::json::accept(slurp(out)));
     }
     fs::remove_all(dir);
   }
