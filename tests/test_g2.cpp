@@ -281,6 +281,39 @@ TEST(G2Properties, CoincidentDirectionsGiveTheIndependentlyMeasuredG1) {
   EXPECT_GT(std::abs(plain / area - ga.mean), 3 * se) << plain / area << " vs " << ga.mean;
 }
 
+TEST(G2Measure, WallsPressedAgainstANeighbourAreHiddenFromBothDirections) {
+  // Touching walls of tiled boxes (000 Fig. 6) and of leaning parallelepipeds (000 Fig. 3)
+  // coincide with an opposite-facing twin: only the last column's walls facing +x are seen, so
+  // G2(o, m, i) = 1/N for that bin at o = i (= G1(v, m), 000 eq. 16) and for o != i on the
+  // same side. Tolerance from the replicate error; power: 10 % off 1/N, and the value 1 that
+  // occlusion rays leaving a buried wall report, are rejected.
+  BoxParams bp;
+  bp.tiles = 4;
+  ParallelepipedParams pp;
+  pp.tiles = 3;
+  const std::vector<std::pair<Microsurface, int>> cases = {{generate_tiled_boxes(bp), 4},
+                                                           {generate_parallelepiped(pp), 3}};
+  const double zmax = sidak_z(0.0027, 4);
+  for (const auto& [s, n] : cases) {
+    Tracer tracer(s);
+    for (const Vec3& i : {dir(60, 0), dir(40, 0)}) {
+      const G2Result r = measure_g2(tracer, dir(60, 0), i, opts(100000, 5));
+      int tested = 0;
+      for (int b : sampled_bins(r, 1000)) {
+        if (r.bins[b].mean_normal.x() < 0.85) continue;  // the walls facing +x
+        const Estimate e = r.bin_g2(b);
+        const double exact = 1.0 / n;
+        ASSERT_GT(e.stderr_, 0);
+        EXPECT_LT(std::abs(e.mean - exact) / e.stderr_, zmax) << n << " " << e.mean;
+        EXPECT_GT(std::abs(e.mean - 1.1 * exact) / e.stderr_, zmax) << n;
+        EXPECT_GT(std::abs(e.mean - 1.0) / e.stderr_, zmax) << n;
+        ++tested;
+      }
+      EXPECT_EQ(tested, 1) << n;
+    }
+  }
+}
+
 TEST(G2Measure, BeckmannTileHeightCorrelatedBeatsSeparableAtOppositeAzimuths) {
   // 001 sec. 5: with the directions on opposite sides the two visibilities of a point correlate
   // through its height (eq. 21); the separable form (eq. 20) ignores it. The forms are built in

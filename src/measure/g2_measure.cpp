@@ -248,8 +248,12 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
     const Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
     const SourcePlane plane = SourcePlane::of(f);
     const int b = ft.bin(k);
-    const bool vo = !tracer.occluded(p, o, &plane, t.counters);
-    const bool vi = o == i ? vo : !tracer.occluded(p, i, &plane, t.counters);
+    // A facet pressed against an opposite-facing twin (touching walls, 000 Fig. 6) is hidden
+    // from every direction, as in measure_g1: its occlusion rays would start inside the
+    // neighbour and skip the twin at distance zero.
+    const bool buried = ft.buried(k);
+    const bool vo = !buried && !tracer.occluded(p, o, &plane, t.counters);
+    const bool vi = o == i ? vo : !buried && !tracer.occluded(p, i, &plane, t.counters);
     ++t.samples[b];
     t.vis_o[b] += vo;
     t.vis_i[b] += vi;

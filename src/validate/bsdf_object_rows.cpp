@@ -1,6 +1,10 @@
 #include "microsim/validate/bsdf_object_rows.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include "microsim/measure/groove_models.hpp"
+#include "microsim/measure/stats.hpp"
 #include "microsim/surface/generators.hpp"
 
 namespace microsim::validation {
@@ -84,6 +88,9 @@ void append_bsdf_object_rows(const BsdfResult& r, const Microsurface& s, const R
       double se = e.stderr_;
       if (std::string(m.name) == "vcavity_multiple" && !groove_se.empty()) se = std::hypot(se, groove_se[k]);
       if (!(se > 0) && std::abs(e.mean - (*a)[k]) < 1e-9) continue;  // nothing to test (empty order)
+      // A fraction of n paths (weights <= 1 on tiles and grooves) resolves no better than
+      // ~0.7/n: an order no path reached has that error, not zero (stats.hpp proportion_floor).
+      se = std::max(se, proportion_floor(r.measured.paths));
       Row row = complete(proto, "albedo_" + order_key(k, K), m.name, m.kind, m.reference, where,
                          e.mean, se, (*a)[k], group + "/albedo_" + m.name, extra);
       row.extra["order"] = order_key(k, K);

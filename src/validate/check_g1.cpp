@@ -1,5 +1,7 @@
 // Check of G1 (both estimators, Smith from the facets and nominal, per normal bin).
 #include "checks_common.hpp"
+#include "microsim/measure/vcavity_measure.hpp"
+#include "microsim/surface/generators.hpp"
 
 namespace microsim::validation {
 
@@ -63,8 +65,13 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
     const Microsurface& s = pass.surface;
     const std::string& label = pass.label;
     for_each_view(o, [&](double t, double p, const Vec3& v) {
+      // A V-cavity ensemble is its grooves, each an infinite periodic groove traced on its own
+      // (as measure g1 does), not the stored strips traced together.
       const G1Result r = measure_with_progress(progress, 2.0 * static_cast<double>(o.rays), go,
-                                               [&](const G1Options& opt) { return measure_g1(pass.tracer, v, opt, &pass.table); });
+                                               [&](const G1Options& opt) {
+                                                 return is_vcavity(s) ? measure_vcavity_g1(s, {v}, opt).at(0)
+                                                                      : measure_g1(pass.tracer, v, opt, &pass.table);
+                                               });
       const std::vector<double> vcav = vcavity_bin_model(pass.table, r.v, binning.size());
       progress.completed += 0.4 * static_cast<double>(s.num_facets());
       progress.update();
