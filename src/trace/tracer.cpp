@@ -343,6 +343,9 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
     if (dir.y() < 0) t = std::min(t, (foot_y0_ - p.y()) / dir.y());
     return std::max(t, 0.0);
   };
+  // A ray that enters a window through a side wall below the surface there meets the solid
+  // from behind first: a miss (the side-wall rule), not the convex-edge graze below.
+  bool side_entry = false;
   if (window_) {
     // Start where the ray enters the footprint (rays from above the guard band start outside
     // it when they are long enough); one that never enters has nothing to meet.
@@ -365,7 +368,10 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
     if (t_in > 0) {
       o += t_in * dir;
       for (int a = 0; a < 2; ++a) o[a] = std::min(std::max(o[a], lo[a]), hi[a]);
-      if (o.z() < z_top_) ++c.side_entries;  // entered through a side wall, inside the slab
+      if (o.z() < z_top_) {  // entered through a side wall, inside the slab
+        ++c.side_entries;
+        side_entry = true;
+      }
     }
   }
 
@@ -422,7 +428,7 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
         }
         out->facet = facet_of_hit(rh.hit.primID, rh.hit.u, rh.hit.v, ng, &out->normal);
         out->backface = out->normal.dot(dir) > 0;
-        if (out->backface && !ctx.context.filter && !back && dir.z() < 0 &&
+        if (out->backface && !ctx.context.filter && !back && dir.z() < 0 && !side_entry &&
             surface_.kind() == Microsurface::Kind::Heightfield) {
           // A downward ray from above a heightfield meets the graph from above first, so a
           // back face first means it grazed a convex edge (a V-groove's ridge) closer than float
