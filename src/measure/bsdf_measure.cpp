@@ -334,8 +334,9 @@ BsdfTally run_paths(std::uint64_t n, int K, int npix, int nplane,
 // per replicate (half a million paths): below, each pass is one chunk on one thread. Here the
 // (replicate, batch) units run several at a time, a pass holding at least kPassChunks chunks,
 // and done(q, tally) receives the replicates in order, on the calling thread. Progress after
-// each pass.
+// each pass. Results do not depend on how units are grouped into passes.
 constexpr std::uint64_t kPassChunks = 16;
+constexpr double kPassBytes = 64.0 * 1024 * 1024;
 template <class Body, class Done>
 void run_replicate_paths(int q0, int q1, std::uint64_t n, int K, int npix, int nplane,
                          const std::function<void(double)>& progress, double progress_span, Body&& body,
@@ -344,10 +345,14 @@ void run_replicate_paths(int q0, int q1, std::uint64_t n, int K, int npix, int n
   const std::uint64_t batches = path_batches(n);
   const std::uint64_t units = static_cast<std::uint64_t>(q1 - q0) * batches;
   std::vector<BsdfTally> reps;  // replicates q0 + k, summed so far
+  // A pass keeps one tally per unit: at most kPassBytes of them (large hemisphere maps: one
+  // unit per pass, as run_paths).
+  const double tally_bytes = 16.0 * 2 * (K + 1) * (1.0 + npix + nplane);
+  const std::uint64_t max_units = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(kPassBytes / tally_bytes));
   std::uint64_t u = 0;
   while (u < units) {
     std::uint64_t u1 = u, chunks = 0;
-    while (u1 < units && chunks < kPassChunks) {
+    while (u1 < units && chunks < kPassChunks && u1 - u < max_units) {
       const std::uint64_t bt = u1 % batches;
       chunks += nchunks * (bt + 1) / batches - nchunks * bt / batches;
       ++u1;
