@@ -134,7 +134,7 @@ inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, cons
 
 // The logged Embree queries of a run (Tracer::log_rays_on_this_thread) traced again by plain
 // rtcIntersect1 calls, in their order, in parallel chunks. Rays per second.
-inline Rate replay_rays_per_second(const Tracer& tracer, const std::vector<RTCRay>& rays) {
+inline Rate replay_rays_per_second(RTCScene scene, const std::vector<RTCRay>& rays) {
   const std::size_t chunk = 8192, nc = (rays.size() + chunk - 1) / chunk;
   std::vector<unsigned> hits(nc);
   const auto t0 = std::chrono::steady_clock::now();
@@ -148,13 +148,17 @@ inline Rate replay_rays_per_second(const Tracer& tracer, const std::vector<RTCRa
       rh.ray = rays[i];
       rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-      rtcIntersect1(tracer.scene(), &ctx, &rh);
+      rtcIntersect1(scene, &ctx, &rh);
       count += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
     }
     hits[c] = count;
   });
   const double wall = seconds_since(t0), cpu = cpu_seconds() - c0;
   return {static_cast<double>(rays.size()) / wall, static_cast<double>(rays.size()) / cpu};
+}
+
+inline Rate replay_rays_per_second(const Tracer& tracer, const std::vector<RTCRay>& rays) {
+  return replay_rays_per_second(tracer.scene(), rays);
 }
 
 }  // namespace microsim::bench

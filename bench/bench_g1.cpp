@@ -1,7 +1,7 @@
 // Benchmark (not a test): rays/s of the G1 measurement against a bare rtcIntersect1 loop over
 // the same scene and the very same rays, scene build time and memory, for several tile
 // resolutions (Beckmann alpha = 0.5, 4 cells per correlation length).
-//   microsim_bench [--rays N] [--repeat K] [--large] [--walks P] [--only g1|bare|lean|ahead] [resolution...]
+//   microsim_bench [--rays N] [--repeat K] [--large] [--walks P] [--only g1|bare|lean|ahead|walk|plain] [resolution...]
 // (default 1024 2048 4096 8192; --large adds 16384, about 9 GB and several processor minutes).
 // Tiles run in increasing size, so the process's peak resident memory after a tile is that
 // tile's peak (B/facet: peak bytes per facet, generation and tracing in this process).
@@ -10,6 +10,8 @@
 //   the first tile's, the Smith random-walk model's walks per processor second.
 //   lean_Mray/s: the primary-ray path of (a) (Tracer::front_facet, rays set up and prefetched
 //   ahead from kAheadMinCells cells on, as in measure_g1) alone on the bare loop's rays.
+//   --only walk / --only plain: measure_bsdf's walks alone / the plain walk tracer alone
+//   (plain_walk.hpp), P paths (--walks, default 1000000), for a profiler.
 //   --only ahead: bare loop and lean path with and without the look-ahead, interleaved (rates
 //   per processor second, ratio to bare).
 // Each direction runs K times (default 3), the estimator and the bare loop interleaved in the
@@ -74,6 +76,10 @@ int main(int argc, char** argv) {
     o.rays = rays;
     const FacetTable table = build_facet_table(s, g1_normal_binning(o));
     const double nf = static_cast<double>(s.num_facets());
+    if (only == "walk" || only == "plain") {  // the walks alone, for a profiler (bench_walks.hpp)
+      run_walks_only(tracer, walks > 0 ? walks : 1000000, repeat, only == "plain");
+      continue;
+    }
     for (double theta_deg : {0.0, 60.0, 85.0}) {
       const Vec3 v = direction_from_angles(rad(theta_deg), 0.0);
       Rate a, b, bare, lean;

@@ -9,10 +9,14 @@
 
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/bsdf_record.hpp"
+#include "microsim/measure/bsdf_walk.hpp"
+#include "microsim/measure/replicates.hpp"
+#include "microsim/measure/sampling.hpp"
 #include "microsim/measure/groove_models.hpp"
 #include "microsim/models/vgroove_multiple.hpp"
 #include "microsim/surface/generators.hpp"
@@ -246,6 +250,89 @@ TEST(BsdfMeasure, IndependentOfThreadCount) {
   EXPECT_EQ(a.measured.albedo, b.measured.albedo);  // bitwise
   EXPECT_EQ(a.measured.pix, b.measured.pix);
   EXPECT_EQ(a.measured.plane2, b.measured.plane2);
+}
+
+// The replicates' walks run several at a time (measure_bsdf keeps both threads busy when a
+// replicate has few chunks), yet every replicate's sums are formed as in one replicate after the
+// other: per chunk of 8192 paths in path order from zero, a batch's two chunks (above 64 chunks
+// a replicate has batches of two) added left to right, the batches added in order to a zero
+// tally, then add_replicate in replicate order. Rebuilt here from the walks themselves, the
+// sums must agree bitwise; the same chunks added in another order must not (power check).
+namespace {
+BsdfTally sequential_reference(const Tracer& tracer, const BsdfOptions& o, bool reversed_chunks) {
+  const Vec3 wi = direction_from_angles(o.theta_i, o.phi_i);
+  const RayWindow window = make_ray_window(tracer, wi);
+  const ReplicatePlan plan(o.rays, o.replicates);
+  const HemisphereMap map(o.resolution);
+  const InPlaneBins bins(o.phi_i, o.resolution);
+  const int K = o.orders, npix = map.size(), nplane = bins.size();
+  const std::uint64_t stream = 0xB5DF0000ull +
+                               static_cast<std::uint64_t>(static_cast<std::int64_t>(o.theta_i * 1e6)) * 7919 +
+                               static_cast<std::uint64_t>(static_cast<std::int64_t>(o.phi_i * 1e6));
+  const std::uint64_t n = plan.per_replicate(), chunk = 8192, nchunks = (n + chunk - 1) / chunk;
+  const std::uint64_t batches = std::min<std::uint64_t>(nchunks, 64);
+  BsdfTally total(K, npix, nplane);
+  for (int q = 0; q < plan.replicates; ++q) {
+    std::vector<BsdfTally> chunks;
+    for (std::uint64_t c = 0; c < nchunks; ++c) {
+      BsdfTally t(K, npix, nplane);
+      for (std::uint64_t i = c * chunk; i < std::min(n, (c + 1) * chunk); ++i) {
+        CounterRng rng(o.seed, ReplicatePlan::stream(stream, q), i);
+        ++t.paths;
+        const Vec2 ab = plan.strata.point(i, rng);
+        const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2, -wi,
+                                         o.material, rng, o.max_events, false, t.counters, t.events);
+        record_walk_end(t, e, 1.0, map, bins);
+      }
+      chunks.push_back(std::move(t));
+    }
+    if (reversed_chunks) std::reverse(chunks.begin(), chunks.end());
+    BsdfTally rep(K, npix, nplane);
+    for (std::uint64_t bt = 0; bt < batches; ++bt) {
+      const std::uint64_t c0 = nchunks * bt / batches, c1 = nchunks * (bt + 1) / batches;
+      EXPECT_LE(c1 - c0, 2u);  // the reference builds batches of one or two chunks
+      BsdfTally part = chunks[c0];
+      if (c1 - c0 == 2) part += chunks[c0 + 1];
+      rep += part;
+    }
+    total.add_replicate(rep);
+  }
+  return total;
+}
+}  // namespace
+
+TEST(BsdfMeasure, ReplicatesRunTogetherSumAsOneAfterTheOther) {
+  Microsurface s = bumpy_heightfield(32, 0.08);
+  Tracer tracer(s);
+  // Conductor weights: sums that are not integers, so that the order of additions shows.
+  // 4 replicates of 3 chunks each (batches of one chunk), and 2 replicates of 80 chunks (64
+  // batches, 16 of them two chunks: 605000 paths rounded up to 655360 whole strata).
+  // The third: a 300 x 300 map, whose tallies (14 MB) are run at most 4 at a time.
+  struct Case {
+    std::uint64_t rays;
+    int reps, res;
+  };
+  for (const Case& c : {Case{4 * 20000, 4, 16}, Case{2 * 605000, 2, 16}, Case{4 * 20000, 4, 300}}) {
+    const std::uint64_t rays = c.rays;
+    const int reps = c.reps;
+    BsdfOptions o = options(mm::Material::conductor(0.2, 3.4), 45.0, 0.0, rays, c.res);
+    o.replicates = reps;
+    o.models = false;
+    const BsdfResult r = measure_bsdf(tracer, o);
+    const BsdfTally ref = sequential_reference(tracer, o, false);
+    EXPECT_EQ(r.measured.paths, ref.paths);
+    EXPECT_EQ(r.measured.events, ref.events);
+    EXPECT_EQ(r.measured.albedo, ref.albedo);  // bitwise
+    EXPECT_EQ(r.measured.albedo2, ref.albedo2);
+    EXPECT_EQ(r.measured.pix, ref.pix);
+    EXPECT_EQ(r.measured.pix2, ref.pix2);
+    EXPECT_EQ(r.measured.plane, ref.plane);
+    EXPECT_EQ(r.measured.both2, ref.both2);
+    if (reps == 4 && c.res == 16) {  // power: the same chunk sums added in the reverse order differ in the last bits
+      const BsdfTally wrong = sequential_reference(tracer, o, true);
+      EXPECT_NE(r.measured.pix, wrong.pix);
+    }
+  }
 }
 
 TEST(BsdfMeasure, MeasuredTablesAreReciprocal) {

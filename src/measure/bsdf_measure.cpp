@@ -89,7 +89,8 @@ int HemisphereMap::pixel_of(const Vec3& d) const {
 // ---------------------------------------------------------------------------------------------
 
 InPlaneBins::InPlaneBins(double phi_i, int n_bins)
-    : n_(n_bins), width_(kPi / std::max(1, n_bins)), delta_(0.5 * kPi / std::max(1, n_bins)) {
+    : n_(n_bins), width_(kPi / std::max(1, n_bins)), delta_(0.5 * kPi / std::max(1, n_bins)),
+      sin_delta_(std::sin(delta_)) {
   s_ = Vec3(-std::cos(phi_i), -std::sin(phi_i), 0.0);
   p_ = Vec3::UnitZ().cross(s_);
 }
@@ -97,7 +98,7 @@ InPlaneBins::InPlaneBins(double phi_i, int n_bins)
 int InPlaneBins::bin_of(const Vec3& d0) const {
   const Vec3 d = d0.normalized();
   const double sb = d.dot(p_);
-  if (std::abs(sb) > std::sin(delta_)) return -1;
+  if (std::abs(sb) > sin_delta_) return -1;
   const double psi = std::atan2(d.dot(s_), std::abs(d.z()));
   const int b = static_cast<int>(std::floor((psi + 0.5 * kPi) / width_));
   return std::clamp(b, 0, n_ - 1);
@@ -326,6 +327,67 @@ BsdfTally run_paths(std::uint64_t n, int K, int npix, int nplane,
   return total;
 }
 
+// The walks of replicates [q0, q1), each replicate's tally exactly as run_paths(n, ...) sums it
+// (each batch a deterministic reduce over its chunks, the batches added in order to a zero
+// tally), so the sums are those of one replicate after the other for any thread count. But
+// run_paths keeps the threads busy only when a batch has several chunks, i.e. above 64 chunks
+// per replicate (half a million paths): below, each pass is one chunk on one thread. Here the
+// (replicate, batch) units run several at a time, a pass holding at least kPassChunks chunks,
+// and done(q, tally) receives the replicates in order, on the calling thread. Progress after
+// each pass. Results do not depend on how units are grouped into passes.
+constexpr std::uint64_t kPassChunks = 16;
+constexpr double kPassBytes = 64.0 * 1024 * 1024;
+template <class Body, class Done>
+void run_replicate_paths(int q0, int q1, std::uint64_t n, int K, int npix, int nplane,
+                         const std::function<void(double)>& progress, double progress_span, Body&& body,
+                         Done&& done) {
+  const std::uint64_t nchunks = (n + kChunk - 1) / kChunk;
+  const std::uint64_t batches = path_batches(n);
+  const std::uint64_t units = static_cast<std::uint64_t>(q1 - q0) * batches;
+  std::vector<BsdfTally> reps;  // replicates q0 + k, summed so far
+  // A pass keeps one tally per unit: at most kPassBytes of them (large hemisphere maps: one
+  // unit per pass, as run_paths).
+  const double tally_bytes = 16.0 * 2 * (K + 1) * (1.0 + npix + nplane);
+  const std::uint64_t max_units = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(kPassBytes / tally_bytes));
+  std::uint64_t u = 0;
+  while (u < units) {
+    std::uint64_t u1 = u, chunks = 0;
+    while (u1 < units && chunks < kPassChunks && u1 - u < max_units) {
+      const std::uint64_t bt = u1 % batches;
+      chunks += nchunks * (bt + 1) / batches - nchunks * bt / batches;
+      ++u1;
+    }
+    std::vector<BsdfTally> parts(u1 - u);
+    tbb::parallel_for(u, u1, [&](std::uint64_t w) {
+      const int q = q0 + static_cast<int>(w / batches);
+      const std::uint64_t bt = w % batches;
+      const std::uint64_t c0 = nchunks * bt / batches, c1 = nchunks * (bt + 1) / batches;
+      parts[w - u] = tbb::parallel_deterministic_reduce(
+          tbb::blocked_range<std::uint64_t>(c0, c1, 1), BsdfTally(),
+          [&](const tbb::blocked_range<std::uint64_t>& range, BsdfTally acc) {
+            if (acc.albedo.empty()) acc = BsdfTally(K, npix, nplane);
+            for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
+              const std::uint64_t end = std::min(n, (c + 1) * kChunk);
+              for (std::uint64_t i = c * kChunk; i < end; ++i) body(q, i, acc);
+            }
+            return acc;
+          },
+          [](BsdfTally a, const BsdfTally& b) {
+            a += b;
+            return a;
+          });
+    });
+    for (std::uint64_t w = u; w < u1; ++w) {
+      const std::uint64_t r = w / batches;
+      if (r == reps.size()) reps.emplace_back(K, npix, nplane);
+      reps[r] += parts[w - u];
+      if (w % batches == batches - 1) done(q0 + static_cast<int>(r), std::move(reps[r]));
+    }
+    u = u1;
+    if (progress) progress(progress_span * static_cast<double>(u) / static_cast<double>(units));
+  }
+}
+
 // Tallies of path sums (replicates == 0) as rows (measure/shards.hpp): first moments, and the
 // second moments when `second`; counts: paths, lost, unterminated, events, trace counters.
 constexpr std::size_t kPathCounts = 4 + kCounterValues;
@@ -422,24 +484,24 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
     // and spread give the calibrated errors (measure/replicates.hpp).
     r.measured = BsdfTally(K, npix, nplane);
     const UnitRange reps = share_of(o.split, static_cast<std::uint64_t>(plan.replicates));
-    const double span = share / std::max<std::uint64_t>(1, reps.size());
     // With a split, the replicates of this process are kept until the others' arrive; the
     // replicates then enter add_replicate in order, as in one process.
     std::vector<BsdfTally> kept(o.split ? plan.replicates : 0, BsdfTally(K, npix, nplane));
-    for (int q = static_cast<int>(reps.first); q < static_cast<int>(reps.end); ++q) {
-      const std::uint64_t rep_stream = ReplicatePlan::stream(stream, q);
-      BsdfTally rep = run_paths(plan.per_replicate(), K, npix, nplane, o.progress, (q - reps.first) * span,
-                                span, [&](std::uint64_t i, BsdfTally& t) {
-        CounterRng rng(o.seed, rep_stream, i);
-        ++t.paths;
-        const Vec2 ab = plan.strata.point(i, rng);
-        const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
-                                         -wi, mat, rng, o.max_events, finite, t.counters, t.events);
-        record_walk_end(t, e, ray_weight, r.map, r.plane);
-      });
-      if (o.split) kept[q] = std::move(rep);
-      else r.measured.add_replicate(rep);
-    }
+    run_replicate_paths(
+        static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), K, npix, nplane,
+        o.progress, share,
+        [&](int q, std::uint64_t i, BsdfTally& t) {
+          CounterRng rng(o.seed, ReplicatePlan::stream(stream, q), i);
+          ++t.paths;
+          const Vec2 ab = plan.strata.point(i, rng);
+          const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
+                                           -wi, mat, rng, o.max_events, finite, t.counters, t.events);
+          record_walk_end(t, e, ray_weight, r.map, r.plane);
+        },
+        [&](int q, BsdfTally&& rep) {
+          if (o.split) kept[q] = std::move(rep);
+          else r.measured.add_replicate(rep);
+        });
     if (o.split) {
       exchange_paths(*o.split, "bsdf", reps, false, kept);
       for (const BsdfTally& rep : kept) r.measured.add_replicate(rep);

@@ -79,6 +79,7 @@ class InPlaneBins {
  private:
   int n_;
   double width_, delta_;
+  double sin_delta_;  // sin(delta_), compared with every direction binned
   Vec3 s_, p_;
 };
 
