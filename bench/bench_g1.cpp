@@ -30,6 +30,7 @@
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/trace/tracer.hpp"
 #include "bench_common.hpp"
+#include "bench_large.hpp"
 #include "bench_walks.hpp"
 
 using namespace microsim;
@@ -89,6 +90,12 @@ int main(int argc, char** argv) {
                     res, theta_deg, bare1.cpu / 1e6, without.cpu / 1e6, without.cpu / bare1.cpu,
                     with.cpu / 1e6, with.cpu / bare1.cpu);
         std::fflush(stdout);
+        continue;
+      }
+      if (only == "packets" || only == "layout" || only == "sample") {  // large-tile experiments (bench_large.hpp)
+        if (only == "packets") print_packet_rows(tracer, v, o, repeat, res, theta_deg);
+        else if (only == "sample") print_sample_rows(tracer, table, v, o, repeat, res, theta_deg);
+        else print_layout_rows(tracer, v, o, repeat, res, theta_deg);
         continue;
       }
       if (!only.empty()) {
