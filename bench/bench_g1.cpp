@@ -1,7 +1,8 @@
 // Benchmark (not a test): rays/s of the G1 measurement against a bare rtcIntersect1 loop over
 // the same scene and the very same rays, scene build time and memory, for several tile
 // resolutions (Beckmann alpha = 0.5, 4 cells per correlation length).
-//   microsim_bench [--rays N] [--repeat K] [--large] [--walks P] [--only g1|bare|lean|ahead|walk|plain] [resolution...]
+//   microsim_bench [--rays N] [--repeat K] [--large] [--walks P]
+//                  [--only g1|bare|lean|ahead|walk|plain|packets|layout|sample] [resolution...]
 // (default 1024 2048 4096 8192; --large adds 16384, about 9 GB and several processor minutes).
 // Tiles run in increasing size, so the process's peak resident memory after a tile is that
 // tile's peak (B/facet: peak bytes per facet, generation and tracing in this process).
@@ -14,6 +15,10 @@
 //   (plain_walk.hpp), P paths (--walks, default 1000000), for a profiler.
 //   --only ahead: bare loop and lean path with and without the look-ahead, interleaved (rates
 //   per processor second, ratio to bare).
+//   --only packets | layout | sample (bench_large.hpp): the bare loop's rays as single rays,
+//   packets of 4/8/16 and coherent streams; the Tracer's scene against other layouts of the
+//   grid (flags, build quality, grid blocks, per-block instances); estimator (b)'s rays with
+//   and without their look-ahead.
 // Each direction runs K times (default 3), the estimator and the bare loop interleaved in the
 // same process; the best of each is reported (on a shared machine the slower runs are the ones
 // that lost the CPU), and the ratio is that of the best rates.
@@ -32,6 +37,7 @@
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/trace/tracer.hpp"
 #include "bench_common.hpp"
+#include "bench_large.hpp"
 #include "bench_walks.hpp"
 
 using namespace microsim;
@@ -95,6 +101,12 @@ int main(int argc, char** argv) {
                     res, theta_deg, bare1.cpu / 1e6, without.cpu / 1e6, without.cpu / bare1.cpu,
                     with.cpu / 1e6, with.cpu / bare1.cpu);
         std::fflush(stdout);
+        continue;
+      }
+      if (only == "packets" || only == "layout" || only == "sample") {  // large-tile experiments (bench_large.hpp)
+        if (only == "packets") print_packet_rows(tracer, v, o, repeat, res, theta_deg);
+        else if (only == "sample") print_sample_rows(tracer, table, v, o, repeat, res, theta_deg);
+        else print_layout_rows(tracer, v, o, repeat, res, theta_deg);
         continue;
       }
       if (!only.empty()) {

@@ -12,6 +12,7 @@
 #include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
 #include "microsim/surface/gaussian.hpp"
+#include "microsim/trace/facet_plane.hpp"
 #include "microsim/trace/ray_pipeline.hpp"
 #include "test_helpers.hpp"
 
@@ -243,6 +244,70 @@ TEST(G1Measure, LargeTileRaysTracedAheadCountTheSameHitsAsAPlainLoop) {
     EXPECT_EQ(b.bins[k].raycast_hits_r, expected[k]) << "bin " << k;
     differ += other_seed[k] != expected[k];
   }
+  EXPECT_GT(differ, a.binning.size() / 4);  // power: another seed's counts differ
+}
+
+TEST(G1Measure, LargeTileAreaSamplesDrawnAheadCountTheSameAsAPlainLoop) {
+  // From kAheadMinCells cells on, estimator (b) sets its draws up ahead of tracing them, with
+  // the drawn block's data prefetched: its samples and visible counts per bin and replicate
+  // must equal, for 1 and 2 threads, those of a plain loop of the same draws (same streams,
+  // cumulative weights, sample points and occlusion rays). Power: another seed differs.
+  GaussianParams p;
+  p.resolution = 1536;
+  p.correlation_length = 4.0 / 1536;
+  const Microsurface s = generate_gaussian(p);
+  ASSERT_GE(double(s.nx()) * s.ny(), kAheadMinCells);
+  const Tracer tracer(s);
+  const Vec3 v = direction_from_angles(rad(80), 2.0);
+  const G1Options o = opts(64000, 5);
+  const FacetTable table = build_facet_table(s, g1_normal_binning(o));
+  const std::size_t nf = s.num_facets();
+  const auto weights = [&](std::size_t k0, std::size_t k1, double* w) {
+    table.for_each_cross(k0, k1, [&](std::size_t k, const Vec3& c) { w[k - k0] = std::max(0.0, 0.5 * c.dot(v)); });
+  };
+  const BlockFacetSampler sampler(nf, BlockFacetSampler::Blocks{}, weights);
+  struct Counts {
+    std::vector<std::vector<std::uint64_t>> samples, visible;  // [bin][replicate]
+  };
+  auto plain = [&](std::uint64_t seed) {
+    const ReplicatePlan plan(o.rays, o.replicates);
+    const std::uint64_t key = direction_stream_key(v), n = plan.per_replicate();
+    const std::size_t nb = g1_normal_binning(o).size();
+    Counts c{std::vector<std::vector<std::uint64_t>>(nb, std::vector<std::uint64_t>(plan.replicates)),
+             std::vector<std::vector<std::uint64_t>>(nb, std::vector<std::uint64_t>(plan.replicates))};
+    TraceCounters tc;
+    for (int q = 0; q < plan.replicates; ++q)
+      for (std::uint64_t j = 0; j < n; ++j) {
+        CounterRng rng(seed, ReplicatePlan::stream(0xB000 + key, q), j);
+        const double u = (static_cast<double>(j) + rng.uniform()) / n * sampler.total();
+        // no search hint: the same facet
+        const std::size_t k = sampler.draw(u, BlockFacetSampler::Blocks{}, weights);
+        const Triangle f = facet_triangle(s, k);
+        const double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
+        const SourcePlane plane = SourcePlane::of(f);
+        ++c.samples[table.bin(k)][q];
+        if (!tracer.occluded(f.point(r1 * (1 - r2), r1 * r2), v, &plane, tc)) ++c.visible[table.bin(k)][q];
+      }
+    return c;
+  };
+  auto run = [&](int threads) {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, threads);
+    return measure_g1(tracer, v, o, &table);
+  };
+  const G1Result a = run(1), b = run(2);
+  const Counts expected = plain(o.seed), other_seed = plain(o.seed + 1);
+  ASSERT_EQ(static_cast<std::size_t>(a.binning.size()), expected.samples.size());
+  int differ = 0;
+  std::uint64_t occluded = 0;
+  for (int k = 0; k < a.binning.size(); ++k) {
+    EXPECT_EQ(a.bins[k].samples_r, expected.samples[k]) << "bin " << k;
+    EXPECT_EQ(a.bins[k].visible_r, expected.visible[k]) << "bin " << k;
+    EXPECT_EQ(b.bins[k].samples_r, expected.samples[k]) << "bin " << k;
+    EXPECT_EQ(b.bins[k].visible_r, expected.visible[k]) << "bin " << k;
+    differ += other_seed.visible[k] != expected.visible[k];
+    occluded += a.bins[k].samples - a.bins[k].visible;
+  }
+  EXPECT_GT(occluded, 1000u);  // at 80 degrees the occlusion rays do meet the surface
   EXPECT_GT(differ, a.binning.size() / 4);  // power: another seed's counts differ
 }
 

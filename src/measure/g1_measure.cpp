@@ -16,6 +16,7 @@
 #include <atomic>
 #include <chrono>
 #include <memory>
+#include <type_traits>
 
 namespace microsim {
 
@@ -97,6 +98,11 @@ std::vector<Tally> run_replicates_ahead(int R, std::uint64_t n, int nbins, Trace
     State state;
     std::uint64_t q;
   };
+  // prepare(rep, j), or prepare(rep, j, tally) for one that keeps a search hint in the tally
+  auto call_prepare = [&](int rep, std::uint64_t j, Tally& t) {
+    if constexpr (std::is_invocable_v<Prepare&, int, std::uint64_t, Tally&>) return prepare(rep, j, t);
+    else return prepare(rep, j);
+  };
   return run_chunks(R, n, nbins, counters, done, share,
                     [&](std::uint64_t j0, std::uint64_t j1, std::uint64_t first,
                         std::uint64_t active, Tally* t) {
@@ -104,14 +110,14 @@ std::vector<Tally> run_replicates_ahead(int R, std::uint64_t n, int nbins, Trace
                       run_ahead<Slot>(
                           (j1 - j0) * active,
                           [&] {
-                            Slot s{prepare(static_cast<int>(first + q), j), q};
+                            Slot s{call_prepare(static_cast<int>(first + q), j, t[q]), q};
                             if (++q == active) {
                               q = 0;
                               ++j;
                             }
                             return s;
                           },
-                          [&](const Slot& s) { body(s.state, t[s.q]); });
+                          [&](Slot& s) { body(s.state, t[s.q]); });
                     });
 }
 
@@ -364,23 +370,52 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   auto t_sample = std::chrono::steady_clock::now();
   const double cpu_sample = process_cpu_seconds();
   const double total = r.front_projected;
+  // After the draw of facet k (rng has drawn u): the sample point on k and its occlusion ray.
+  auto sample_facet = [&](CounterRng& rng, std::size_t k, Tally& t) {
+    const int b = ft.bin(k);
+    if (ft.buried(k)) {  // pressed against a twin: never visible
+      ++t.samples[b];
+      return;
+    }
+    const Triangle f = facet_triangle(s, k);  // s.facet(k), without its modulos
+    double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
+    Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
+    SourcePlane plane = SourcePlane::of(f);
+    ++t.samples[b];
+    if (!tracer.occluded(p, v, &plane, t.counters)) ++t.visible[b];
+  };
+  // A large periodic heightfield's draws are set up a few rays ahead (as (a)'s rays): the block
+  // of facets found, its heights, bins and the grid leaves of its cells prefetched
+  // (FacetTable::prefetch_range, Tracer::prefetch_cells); the same draws in the same order.
+  struct Draw {
+    CounterRng rng{0, 0, 0};
+    double u = 0;
+    std::size_t block = 0;
+  };
+  const bool sample_ahead = heightfield && ahead && s.macro().periodic && !s.macro().region;
+  constexpr std::size_t kB = BlockFacetSampler::kBlock;
   std::vector<Tally> sample_reps =
-      run_replicates(R, n_rep, nbins, counters, done, reps, [&](int rep, std::uint64_t j, Tally& t) {
-        CounterRng rng(o.seed, ReplicatePlan::stream(0xB000 + key, rep), j);
-        double u = (static_cast<double>(j) + rng.uniform()) / n_rep * total;
-        const std::size_t k = sampler.draw(u, BlockFacetSampler::Blocks{}, weights, &t.draw_hint);
-        const int b = ft.bin(k);
-        if (ft.buried(k)) {  // pressed against a twin: never visible
-          ++t.samples[b];
-          return;
-        }
-        const Triangle f = facet_triangle(s, k);  // s.facet(k), without its modulos
-        double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
-        Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
-        SourcePlane plane = SourcePlane::of(f);
-        ++t.samples[b];
-        if (!tracer.occluded(p, v, &plane, t.counters)) ++t.visible[b];
-      });
+      sample_ahead
+          ? run_replicates_ahead<Draw>(
+                R, n_rep, nbins, counters, done, reps,
+                [&](int rep, std::uint64_t j, Tally& t) {
+                  CounterRng rng(o.seed, ReplicatePlan::stream(0xB000 + key, rep), j);
+                  const double u = (static_cast<double>(j) + rng.uniform()) / n_rep * total;
+                  const std::size_t b = sampler.block(u, &t.draw_hint);
+                  const std::size_t k0 = b * kB, k1 = std::min(nf, k0 + kB);
+                  ft.prefetch_range(k0, k1);
+                  const long c0 = static_cast<long>(k0 / 2), c1 = static_cast<long>((k1 - 1) / 2);
+                  const long j0 = c0 / s.nx();
+                  // a block's cells in one row (else the row the block starts in)
+                  tracer.prefetch_cells(c0 - j0 * s.nx(), c1 / s.nx() == j0 ? c1 - j0 * s.nx() : s.nx() - 1, j0);
+                  return Draw{rng, u, b};
+                },
+                [&](Draw& d, Tally& t) { sample_facet(d.rng, sampler.draw_in(d.block, d.u, weights), t); })
+          : run_replicates(R, n_rep, nbins, counters, done, reps, [&](int rep, std::uint64_t j, Tally& t) {
+              CounterRng rng(o.seed, ReplicatePlan::stream(0xB000 + key, rep), j);
+              double u = (static_cast<double>(j) + rng.uniform()) / n_rep * total;
+              sample_facet(rng, sampler.draw(u, BlockFacetSampler::Blocks{}, weights, &t.draw_hint), t);
+            });
   report();
   r.sample_cpu_seconds = process_cpu_seconds() - cpu_sample;
   if (o.split) exchange_g1(*o.split, reps, ray_reps, sample_reps, counters, nbins);

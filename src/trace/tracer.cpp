@@ -510,6 +510,20 @@ std::size_t Tracer::prefetch_front(const DownwardRays& rays, const Vec3& org) co
                       : 2 * (static_cast<std::size_t>(cj) * nx + ci);
 }
 
+void Tracer::prefetch_cells(long i0, long i1, long j) const {
+  if (!grid_vertices_) return;
+  // Embree's grid leaves are 3 x 3 vertex blocks starting at even indices: the leaves' rows.
+  const long gi0 = (i0 + pad_) & ~1L, gi1 = std::min<long>(i1 + pad_ + 2, grid_width_ - 1);
+  const long gj = (j + pad_) & ~1L;
+  if (gi0 > gi1 || gj + 2 >= grid_height_) return;
+  const std::size_t row = 3 * static_cast<std::size_t>(grid_width_);
+  const float* p = grid_vertices_ + 3 * (static_cast<std::size_t>(gj) * grid_width_);
+  for (int r = 0; r < 3; ++r, p += row)
+    for (long g = 3 * gi0; g <= 3 * gi1 + 2; g += 16) __builtin_prefetch(p + g);  // 64-byte lines
+  // (the last line of each row when the step above skipped it)
+  for (int r = 0; r < 3; ++r) __builtin_prefetch(grid_vertices_ + 3 * ((gj + r) * static_cast<std::size_t>(grid_width_) + gi1) + 2);
+}
+
 // Tracer::trace<false> for a Front ray without source plane on a periodic heightfield, step for
 // step (the same float queries, so the same Embree answers), reduced to the facet met.
 std::size_t Tracer::front_facet(const DownwardRays& rays, const Vec3& org, TraceCounters& c) const {

@@ -78,6 +78,20 @@ class FacetTable {
   void prefetch(std::size_t k) const {
     if (k < bin16_.size()) __builtin_prefetch(bin16_.data() + k);
   }
+  // The same hint for facets [k0, k1) (at most a row of cells): their bins and, on a
+  // heightfield, the two rows of heights that their cross products read.
+  void prefetch_range(std::size_t k0, std::size_t k1) const {
+    if (k1 <= k0) return;
+    prefetch(k0);
+    prefetch(k1 - 1);
+    if (!heights_ || k0 < region_facets_) return;
+    for (std::size_t k : {k0, k1 - 1}) {
+      const std::size_t cell = (k - region_facets_) / 2, j0 = cell / nx_;
+      const std::size_t i0 = cell - j0 * nx_, j1 = j0 + 1 == ny_ ? 0 : j0 + 1;
+      __builtin_prefetch(heights_ + j0 * nx_ + i0);
+      __builtin_prefetch(heights_ + j1 * nx_ + i0);
+    }
+  }
   int bin(std::size_t k) const {
     if (!bin16_.empty()) return bin16_[k] == kNoBin16 ? -1 : bin16_[k];
     return bin32_[k];
@@ -182,10 +196,19 @@ class BlockFacetSampler {
   template <class BlockWeights>
   std::size_t draw(double u, Blocks, const BlockWeights& block_weights,
                    std::size_t* hint = nullptr) const {
+    return draw_in(block(u, hint), u, block_weights);
+  }
+  // draw() in two steps, for callers that load a block's data (prefetch) before drawing in
+  // it: the block of kBlock facets that u falls in (hint as for draw), then the facet.
+  std::size_t block(double u, std::size_t* hint = nullptr) const {
     std::size_t b = hint ? upper_block(u, *hint) : upper_block(u, 0);
     if (hint) *hint = b;
     b = std::min(b, cdf_.size() - 1);
     while (b > 0 && cdf_[b] == cdf_[b - 1]) --b;  // never an empty block
+    return b;
+  }
+  template <class BlockWeights>
+  std::size_t draw_in(std::size_t b, double u, const BlockWeights& block_weights) const {
     const double local = u - (b > 0 ? cdf_[b - 1] : 0.0);
     std::size_t last = b * kBlock;  // last facet of positive weight seen (rounding fallback)
     double s = 0;

@@ -123,6 +123,10 @@ class Tracer {
   // rays rarely share vertices and each ray otherwise waits for its own memory reads. Returns
   // the facet expected there (for the caller's own per-facet data), or DownwardRays::kNone.
   std::size_t prefetch_front(const DownwardRays& rays, const Vec3& org) const;
+  // The same hint for rays that start on the surface: the vertex rows of the grid leaves that
+  // hold cells i0 .. i1 of tile row j (0 <= i0 <= i1 < nx, 0 <= j < ny; a few cells, e.g. a
+  // block of facets drawn from). No effect on any result; nothing for other surfaces.
+  void prefetch_cells(long i0, long i1, long j) const;
 
   // Which of the surface's facets a raw Embree hit refers to, and (optionally) its exact unit
   // normal.
