@@ -267,7 +267,7 @@ TEST(ValidateChecks, BeckmannEnsembleIdentitiesPassAndModelsAreReported) {
                                      << ": " << row.measured << " +- " << row.stderr_.value_or(0)
                                      << " model " << row.model.value_or(0);
     }
-    if (row.model_name == "smith_nominal") EXPECT_EQ(row.error, "surfaces");
+    if (row.model_name == "smith_nominal") { EXPECT_EQ(row.error, "surfaces"); }
   }
   EXPECT_GT(identities, 50u);
   EXPECT_EQ(count_rows(r, "g1", "smith_nominal"), 3u);
@@ -296,7 +296,9 @@ TEST(ValidateChecks, VCavityG1IsCheckedGrooveByGroove) {
   mv::Result r = mv::run({one_surface(generate_vcavity(vp), "vcavity", o)}, 0.01);
   int ratios = 0, estimators = 0;
   for (const auto& row : r.rows) {
-    if (row.kind == mv::Kind::Identity) EXPECT_EQ(row.verdict, "pass") << row.quantity << " " << row.condition;
+    if (row.kind == mv::Kind::Identity) {
+      EXPECT_EQ(row.verdict, "pass") << row.quantity << " " << row.condition;
+    }
     if (row.quantity == "visible_area_ratio") {
       EXPECT_NEAR(row.measured, 1.0, 1e-6);
       ++ratios;
@@ -328,8 +330,9 @@ TEST(ValidateChecks, BrokenMacrosurfaceFails) {
   mv::Result bad = mv::run({one_surface(flat_mesh(2.0), "bad", o)}, 0.01);
   EXPECT_TRUE(bad.any_failure());
   for (const auto& row : bad.rows) {
-    if (row.quantity == "eq_1c" || row.quantity == "eq_1b_z" || row.quantity == "visible_area_ratio")
+    if (row.quantity == "eq_1c" || row.quantity == "eq_1b_z" || row.quantity == "visible_area_ratio") {
       EXPECT_EQ(row.verdict, "FAIL") << row.quantity;
+    }
   }
 }
 
@@ -508,8 +511,9 @@ TEST(ValidateChecks, FlatPlaneG2IsOneAtTheHotspotAndMirrorAlbedoIsOne) {
   for (const auto& row : r.rows) {
     if (row.quantity == "g2" || row.quantity == "g2_hotspot" || row.quantity == "g2_hotspot_bin") {
       EXPECT_DOUBLE_EQ(row.measured, 1.0) << row.model_name << " " << row.condition;
-      if (row.model_name == "g1_independent" || row.model_name == "g1_bin_independent")
+      if (row.model_name == "g1_independent" || row.model_name == "g1_bin_independent") {
         EXPECT_DOUBLE_EQ(*row.model, 1.0);
+      }
     }
     if (row.quantity == "albedo_total") {
       EXPECT_DOUBLE_EQ(row.measured, 1.0) << row.condition;  // a mirror plane loses nothing
@@ -547,10 +551,11 @@ TEST(ValidateChecks, BeckmannG2VndfAlbedoIdentitiesPass) {
   o.checks = {"g2", "vndf", "bsdf_albedo"};
   mv::Result r = mv::run({one_surface(gaussian(128, 0.5, 3), "beckmann", o)}, 0.01);
   for (const auto& row : r.rows)
-    if (row.kind == mv::Kind::Identity)
+    if (row.kind == mv::Kind::Identity) {
       EXPECT_EQ(row.verdict, "pass") << row.quantity << " vs " << row.model_name << " " << row.condition
                                      << ": " << row.measured << " +- " << row.stderr_.value_or(0)
                                      << " model " << row.model.value_or(0);
+    }
   EXPECT_EQ(count_rows(r, "vndf_sampler_chi2_per_dof", "sampler_model"), 2u);
   EXPECT_EQ(count_rows(r, "vndf_chi2_per_dof", "nominal"), 2u);
   EXPECT_EQ(count_rows(r, "g2", "height_correlated_nominal"), 2u);
@@ -712,7 +717,9 @@ TEST(ValidateChecks, VCavityG2AndVndfAreCheckedGrooveByGroove) {
   mv::Result r = mv::run({one_surface(strips, "vcavity", o)}, 0.01);
   int g2_rows = 0, vndf_rows = 0;
   for (const auto& row : r.rows) {
-    if (row.kind == mv::Kind::Identity) EXPECT_EQ(row.verdict, "pass") << row.quantity << " " << row.condition;
+    if (row.kind == mv::Kind::Identity) {
+      EXPECT_EQ(row.verdict, "pass") << row.quantity << " " << row.condition;
+    }
     if ((row.quantity == "g2" || row.quantity == "vndf_chi2_per_dof") && row.model_name == "vcavity") {
       EXPECT_EQ(row.verdict, "agrees") << row.quantity << " " << row.condition << ": " << row.measured
                                        << " +- " << *row.stderr_ << " model " << *row.model;
