@@ -214,7 +214,7 @@ TEST(ExactCases, VGroovePerFacetG1IsEq24) {
       EXPECT_LT(std::abs(e.mean - exact), 3 * std::max(e.stderr_, 1e-6)) << t << " " << sign;
       EXPECT_LT(std::abs(ea.mean - exact), 3 * std::max(ea.stderr_, 1e-6)) << t << " " << sign;
       // Power: the same data refuse eq. (24) with cos(theta_o) replaced by 1.01 cos(theta_o).
-      if (exact < 1) EXPECT_GT(std::abs(e.mean - 1.01 * exact), 3 * e.stderr_);
+      if (exact < 1) { EXPECT_GT(std::abs(e.mean - 1.01 * exact), 3 * e.stderr_); }
       ++tested;
     }
   }

@@ -557,8 +557,11 @@ TEST_F(Inputs, EveryShippedPresetLoadsAndGivesItsValues) {
       if (field == "two_d") field = "two_d";
       if (!d.contains(field)) continue;
       ++compared;
-      if (d[field].is_number()) EXPECT_DOUBLE_EQ(d[field].get<double>(), std::stod(value)) << key;
-      else if (d[field].is_string()) EXPECT_EQ("\"" + d[field].get<std::string>() + "\"", value) << key;
+      if (d[field].is_number()) {
+        EXPECT_DOUBLE_EQ(d[field].get<double>(), std::stod(value)) << key;
+      } else if (d[field].is_string()) {
+        EXPECT_EQ("\"" + d[field].get<std::string>() + "\"", value) << key;
+      }
     }
     EXPECT_GT(compared, 0) << "no preset value recorded in the description of " << name;
   }

@@ -103,11 +103,11 @@ INSTANTIATE_TEST_SUITE_P(
                       Preset{"beckmann-1.0-converged.toml", "gaussian", "exr", "--resolution 64 --correlation-length 0.0625 "},
                       Preset{"beckmann-1.0-fine.toml", "gaussian", "exr", "--resolution 64 --correlation-length 0.0625 "},
                       Preset{"gaussian-ggx.toml", "gaussian-ggx", "exr", "--resolution 64 --correlation-length 0.03125 "},
-                      Preset{"flat.toml", "flat", "exr"}, Preset{"box.toml", "box", "ply"},
-                      Preset{"tiled-boxes.toml", "tiled-boxes", "ply"},
-                      Preset{"square-wave.toml", "square-wave", "ply"}, Preset{"vgroove.toml", "vgroove", "exr"},
+                      Preset{"flat.toml", "flat", "exr", ""}, Preset{"box.toml", "box", "ply", ""},
+                      Preset{"tiled-boxes.toml", "tiled-boxes", "ply", ""},
+                      Preset{"square-wave.toml", "square-wave", "ply", ""}, Preset{"vgroove.toml", "vgroove", "exr", ""},
                       Preset{"vcavity.toml", "vcavity", "ply", "--grooves 64 "},
-                      Preset{"parallelepiped.toml", "parallelepiped", "ply"},
+                      Preset{"parallelepiped.toml", "parallelepiped", "ply", ""},
                       Preset{"ellipsoid.toml", "ellipsoid", "ply", "--rings 16 --segments 64 "}),
     [](const ::testing::TestParamInfo<Preset>& i) {
       std::string n = i.param.file.substr(0, i.param.file.size() - 5);

@@ -13,9 +13,11 @@
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/measure/g2_measure.hpp"
 #include "microsim/measure/stats.hpp"
+#include "microsim/measure/vcavity_measure.hpp"
 #include "microsim/measure/vndf_measure.hpp"
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/surface/generators.hpp"
+#include "microsim/surface/rounding_bound.hpp"
 #include "microsim/validate/validate.hpp"
 #include "test_helpers.hpp"
 
@@ -265,7 +267,7 @@ TEST(ValidateChecks, BeckmannEnsembleIdentitiesPassAndModelsAreReported) {
                                      << ": " << row.measured << " +- " << row.stderr_.value_or(0)
                                      << " model " << row.model.value_or(0);
     }
-    if (row.model_name == "smith_nominal") EXPECT_EQ(row.error, "surfaces");
+    if (row.model_name == "smith_nominal") { EXPECT_EQ(row.error, "surfaces"); }
   }
   EXPECT_GT(identities, 50u);
   EXPECT_EQ(count_rows(r, "g1", "smith_nominal"), 3u);
@@ -294,7 +296,9 @@ TEST(ValidateChecks, VCavityG1IsCheckedGrooveByGroove) {
   mv::Result r = mv::run({one_surface(generate_vcavity(vp), "vcavity", o)}, 0.01);
   int ratios = 0, estimators = 0;
   for (const auto& row : r.rows) {
-    if (row.kind == mv::Kind::Identity) EXPECT_EQ(row.verdict, "pass") << row.quantity << " " << row.condition;
+    if (row.kind == mv::Kind::Identity) {
+      EXPECT_EQ(row.verdict, "pass") << row.quantity << " " << row.condition;
+    }
     if (row.quantity == "visible_area_ratio") {
       EXPECT_NEAR(row.measured, 1.0, 1e-6);
       ++ratios;
@@ -326,8 +330,9 @@ TEST(ValidateChecks, BrokenMacrosurfaceFails) {
   mv::Result bad = mv::run({one_surface(flat_mesh(2.0), "bad", o)}, 0.01);
   EXPECT_TRUE(bad.any_failure());
   for (const auto& row : bad.rows) {
-    if (row.quantity == "eq_1c" || row.quantity == "eq_1b_z" || row.quantity == "visible_area_ratio")
+    if (row.quantity == "eq_1c" || row.quantity == "eq_1b_z" || row.quantity == "visible_area_ratio") {
       EXPECT_EQ(row.verdict, "FAIL") << row.quantity;
+    }
   }
 }
 
@@ -506,8 +511,9 @@ TEST(ValidateChecks, FlatPlaneG2IsOneAtTheHotspotAndMirrorAlbedoIsOne) {
   for (const auto& row : r.rows) {
     if (row.quantity == "g2" || row.quantity == "g2_hotspot" || row.quantity == "g2_hotspot_bin") {
       EXPECT_DOUBLE_EQ(row.measured, 1.0) << row.model_name << " " << row.condition;
-      if (row.model_name == "g1_independent" || row.model_name == "g1_bin_independent")
+      if (row.model_name == "g1_independent" || row.model_name == "g1_bin_independent") {
         EXPECT_DOUBLE_EQ(*row.model, 1.0);
+      }
     }
     if (row.quantity == "albedo_total") {
       EXPECT_DOUBLE_EQ(row.measured, 1.0) << row.condition;  // a mirror plane loses nothing
@@ -545,10 +551,11 @@ TEST(ValidateChecks, BeckmannG2VndfAlbedoIdentitiesPass) {
   o.checks = {"g2", "vndf", "bsdf_albedo"};
   mv::Result r = mv::run({one_surface(gaussian(128, 0.5, 3), "beckmann", o)}, 0.01);
   for (const auto& row : r.rows)
-    if (row.kind == mv::Kind::Identity)
+    if (row.kind == mv::Kind::Identity) {
       EXPECT_EQ(row.verdict, "pass") << row.quantity << " vs " << row.model_name << " " << row.condition
                                      << ": " << row.measured << " +- " << row.stderr_.value_or(0)
                                      << " model " << row.model.value_or(0);
+    }
   EXPECT_EQ(count_rows(r, "vndf_sampler_chi2_per_dof", "sampler_model"), 2u);
   EXPECT_EQ(count_rows(r, "vndf_chi2_per_dof", "nominal"), 2u);
   EXPECT_EQ(count_rows(r, "g2", "height_correlated_nominal"), 2u);
@@ -620,4 +627,165 @@ TEST(ValidateChecks, WrongVndfModelFailsTheSamplerIdentity) {
   mv::assign_verdicts(rows, 0.01);
   EXPECT_EQ(rows[0].verdict, "pass") << rows[0].measured;
   EXPECT_EQ(rows[1].verdict, "FAIL") << rows[1].measured;
+}
+
+namespace {
+
+// `s` with facet `f`'s third vertex replaced by a new, unshared vertex moved within the facet's
+// plane so that the facet's area grows by the fraction `rel`: a crack that breaks 000 eq. 1b
+// by rel A_f m_f / A.
+Microsurface with_facet_area_scaled(const Microsurface& s, std::size_t f, double rel) {
+  std::vector<Eigen::Vector3f> v = s.vertices();
+  std::vector<std::array<std::uint32_t, 3>> t = s.triangles();
+  const Eigen::Vector3d a = v[t[f][0]].cast<double>(), b = v[t[f][1]].cast<double>(), c = v[t[f][2]].cast<double>();
+  // Moving c away from the line ab along the in-plane height scales the area by 1 + rel.
+  const Eigen::Vector3d e = (b - a).normalized();
+  const Eigen::Vector3d h = (c - a) - (c - a).dot(e) * e;
+  v.push_back((c + rel * h).cast<float>());
+  t[f][2] = static_cast<std::uint32_t>(v.size() - 1);
+  Microsurface out = Microsurface::mesh(v, t, s.macro());
+  out.description = s.description;
+  return out;
+}
+
+mv::Result d_identities(Microsurface s) {
+  mv::Options o;
+  o.checks = {"d_identities"};
+  return mv::run({one_surface(std::move(s), "s", o)}, 0.01);
+}
+
+}  // namespace
+
+// 000 eq. 1b on the V-cavity's strips: a groove's two ends are translates only before their
+// vertices are rounded to float, so the sum is exact to the bound that rounding allows
+// (surface/rounding_bound.hpp), computed from the vertices; a closed or bit-exactly periodic
+// mesh keeps the double-rounding tolerance. Power: a crack that changes one facet's area fails.
+TEST(ValidateChecks, Eq1bToleranceIsTheVertexRoundingBound) {
+  // The flat periodic square: its seams are bit-exact translates, the bound is zero.
+  const FacetSumRounding flat = facet_sum_rounding_bound(flat_mesh(1.0));
+  EXPECT_EQ(flat.boundary_half_edges, 4u);
+  EXPECT_EQ(flat.seam_matched, 4u);
+  EXPECT_EQ(flat.bound, Vec3::Zero());
+  for (std::uint64_t seed : {1, 2, 3}) {
+    VCavityParams vp;
+    vp.grooves = 512;
+    vp.seed = seed;
+    const Microsurface s = generate_vcavity(vp);
+    const FacetSumRounding b = facet_sum_rounding_bound(s);
+    EXPECT_EQ(b.boundary_half_edges, 6u * 512u);  // every strip is open on its six edges
+    EXPECT_EQ(b.open_vertices, 6u * 512u);
+    const mv::Result r = d_identities(s);
+    ASSERT_EQ(r.rows.size(), 4u);
+    for (const auto& row : r.rows) {
+      EXPECT_EQ(row.verdict, "pass") << row.quantity << " residual " << row.measured - *row.model
+                                     << " tolerance " << row.tolerance;
+      std::printf("vcavity seed %llu %s: residual %.3g, tolerance %.3g\n", static_cast<unsigned long long>(seed),
+                  row.quantity.c_str(), row.measured - *row.model, row.tolerance);
+    }
+  }
+  // Power on exact geometry: one facet of the flat square 1e-6 larger (a crack) fails eq. 1c.
+  const mv::Result flat_bad = d_identities(with_facet_area_scaled(flat_mesh(1.0), 0, 1e-6));
+  EXPECT_TRUE(flat_bad.any_failure());
+  for (const auto& row : flat_bad.rows)
+    std::printf("flat, facet +1e-6: %s residual %.3g, tolerance %.3g, %s\n", row.quantity.c_str(),
+                row.measured - *row.model, row.tolerance, row.verdict.c_str());
+  // Power on the V-cavity: one facet of its steepest groove (the last: slopes are stratified)
+  // 1 % larger fails eq. 1b x or y (the rounding of coordinates up to 22 allows ~3e-7 there).
+  VCavityParams vp;
+  vp.grooves = 512;
+  const Microsurface vs = generate_vcavity(vp);
+  const mv::Result vbad = d_identities(with_facet_area_scaled(vs, vs.num_facets() - 4, 1e-2));
+  EXPECT_TRUE(vbad.any_failure());
+  for (const auto& row : vbad.rows)
+    std::printf("vcavity, facet +1e-2: %s residual %.3g, tolerance %.3g, %s\n", row.quantity.c_str(),
+                row.measured - *row.model, row.tolerance, row.verdict.c_str());
+}
+
+// A V-cavity ensemble's G2 and VNDF are checked groove by groove, as its G1: the V-cavity model
+// (001 eq. 24-25, averaged over the facets) is exact for separate infinite grooves, so the
+// measured G2 and VNDF agree with it within their ray-count errors. Power: the stored strips
+// traced together (grooves masking each other, rays leaving through the strips' open ends) are
+// told apart from the same model.
+TEST(ValidateChecks, VCavityG2AndVndfAreCheckedGrooveByGroove) {
+  VCavityParams vp;
+  vp.grooves = 512;
+  const Microsurface strips = generate_vcavity(vp);
+  mv::Options o;
+  o.theta_deg = {60, 80};
+  o.rays = 400000;  // G2 and VNDF take a quarter each
+  o.checks = {"g2", "vndf"};
+  mv::Result r = mv::run({one_surface(strips, "vcavity", o)}, 0.01);
+  int g2_rows = 0, vndf_rows = 0;
+  for (const auto& row : r.rows) {
+    if (row.kind == mv::Kind::Identity) {
+      EXPECT_EQ(row.verdict, "pass") << row.quantity << " " << row.condition;
+    }
+    if ((row.quantity == "g2" || row.quantity == "vndf_chi2_per_dof") && row.model_name == "vcavity") {
+      EXPECT_EQ(row.verdict, "agrees") << row.quantity << " " << row.condition << ": " << row.measured
+                                       << " +- " << *row.stderr_ << " model " << *row.model;
+      std::printf("%s %s: %.5f +- %.5f, model %.5f, z %.2f\n", row.quantity.c_str(), row.condition.c_str(),
+                  row.measured, *row.stderr_, *row.model, row.z.value_or(0));
+      (row.quantity == "g2" ? g2_rows : vndf_rows) += 1;
+    }
+  }
+  EXPECT_EQ(g2_rows, 2);
+  EXPECT_EQ(vndf_rows, 2);
+
+  // Power: the strips traced together, against the same V-cavity model.
+  Tracer joint(strips);
+  G2Options g;
+  g.rays = 100000;
+  // A grazing pair, where masking is strong enough for the difference to matter.
+  const Vec3 vo = direction_from_angles(rad(80), 0), vi = direction_from_angles(rad(70), rad(180));
+  const G2Result together = measure_g2(joint, vo, vi, g);
+  const G2Result grooves = measure_vcavity_g2(strips, vo, vi, g);
+  const double z_together = (together.g2().mean - together.vcavity) / together.g2().stderr_;
+  const double z_grooves = (grooves.g2().mean - grooves.vcavity) / grooves.g2().stderr_;
+  std::printf("g2 o 80/0 i 70/180: grooves %.5f +- %.5f (z %.2f), strips together %.5f +- %.5f (z %.2f), model %.5f\n",
+              grooves.g2().mean, grooves.g2().stderr_, z_grooves, together.g2().mean, together.g2().stderr_,
+              z_together, grooves.vcavity);
+  EXPECT_LT(std::abs(z_grooves), 3.5);
+  EXPECT_GT(std::abs(z_together), 5.0);
+  VndfOptions vo_opt;
+  vo_opt.rays = 100000;
+  const Vec3 v80 = direction_from_angles(rad(80), 0);
+  const VndfResult joint_vndf = measure_vndf(joint, v80, vo_opt);
+  const VndfResult groove_vndf = measure_vcavity_vndf(strips, v80, vo_opt);
+  const std::vector<double> p = vcavity_vndf_probabilities(strips, v80, groove_vndf.binning);
+  const GofResult gj = histogram_gof(joint_vndf.bin_hits, joint_vndf.hits, p, vo_opt.family_alpha);
+  const GofResult gg = histogram_gof(groove_vndf.bin_hits, groove_vndf.hits, p, vo_opt.family_alpha);
+  std::printf("vndf theta 80: grooves chi2/dof %.3f (p %.3g), strips together chi2/dof %.3f (p %.3g)\n",
+              gg.chi2 / gg.dof, gg.p_value, gj.chi2 / gj.dof, gj.p_value);
+  EXPECT_TRUE(gg.pass());
+  EXPECT_GT(gg.p_value, 1e-3);
+  EXPECT_FALSE(gj.pass());
+  EXPECT_LT(gj.p_value, 1e-6);
+}
+
+// The groove-by-groove G2's standard error is calibrated: over independent seeds the z-scores
+// against the V-cavity model (exact for separate grooves) have unit variance. Power: errors
+// reported 1.5 times too small are rejected by the same bounds.
+TEST(ValidateChecks, VCavityG2ErrorIsCalibrated) {
+  VCavityParams vp;
+  vp.grooves = 256;
+  const Microsurface strips = generate_vcavity(vp);
+  const Vec3 vo = direction_from_angles(rad(80), 0), vi = direction_from_angles(rad(70), rad(180));
+  const int n = 40;
+  double sum_z2 = 0;
+  for (int seed = 1; seed <= n; ++seed) {
+    G2Options g;
+    g.rays = 8192;
+    g.seed = static_cast<std::uint64_t>(seed);
+    const G2Result r = measure_vcavity_g2(strips, vo, vi, g);
+    const Estimate e = r.g2();
+    const double z = (e.mean - r.vcavity) / e.stderr_;
+    sum_z2 += z * z;
+  }
+  // sum z^2 ~ chi^2 with n dof (t-distributed z from 32 replicates: variance 32/30): two-sided
+  // 0.1 % bounds of chi^2_40 are 17.9 and 73.4.
+  std::printf("sum z^2 over %d seeds: %.1f (chi2_40 0.1%%-99.9%%: 17.9-73.4)\n", n, sum_z2);
+  EXPECT_GT(sum_z2, 17.9);
+  EXPECT_LT(sum_z2, 73.4);
+  // Power: with errors 1.5 times too small every z grows by 1.5 and the same bound rejects it.
+  EXPECT_GT(2.25 * sum_z2, 73.4);
 }

@@ -151,7 +151,9 @@ TEST(VGrooveClosedForm, EqualsExact2DTracePerOrder) {
             }
           }
           for (const auto& [n, t] : cf)
-            if (t.fraction > tol_share) EXPECT_TRUE(tr.count(n)) << "order " << n << " not traced";
+            if (t.fraction > tol_share) {
+              EXPECT_TRUE(tr.count(n)) << "order " << n << " not traced";
+            }
           ++cases;
         }
   EXPECT_EQ(cases, 150);
@@ -212,7 +214,7 @@ TEST(VCavityMultiple, QuadratureEqualsMonteCarloOverGrooves) {
         EXPECT_NEAR(mean, q[k], 1e-6);
       }
       // Power: a 2% change of any non-negligible slot is seen.
-      if (q[k] > 0.01 && se > 0) EXPECT_GT(std::abs(mean - 1.02 * q[k]) / se, zc);
+      if (q[k] > 0.01 && se > 0) { EXPECT_GT(std::abs(mean - 1.02 * q[k]) / se, zc); }
     }
   }
 }
@@ -271,7 +273,7 @@ TEST(BsdfObjectRows, VGrooveOrdersAgainstTheClosedForm) {
   for (const auto& row : rows) {
     EXPECT_EQ(row.model_name, "vgroove_multiple");
     EXPECT_EQ(row.kind, validation::Kind::Identity);
-    if (row.quantity == "albedo_order_3") EXPECT_NEAR(*row.model, 0.4679, 1e-4);
+    if (row.quantity == "albedo_order_3") { EXPECT_NEAR(*row.model, 0.4679, 1e-4); }
     if (*row.stderr_ > 0) {
       EXPECT_LT(std::abs(row.measured - *row.model) / *row.stderr_, 3.5) << row.quantity;
       if (row.quantity == "albedo_order_3" || row.quantity == "albedo_order_4plus") ++tested;

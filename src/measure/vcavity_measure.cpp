@@ -7,8 +7,11 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
+#include <string>
 
 #include "microsim/models/vgroove_multiple.hpp"
 #include "microsim/surface/generators.hpp"
@@ -209,6 +212,279 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
   for (auto& r : results) r.seconds = seconds / nv;
   if (o.progress) o.progress(1.0);
   return results;
+}
+
+namespace {
+
+// The 2K facets of a vcavity ensemble: side 1 of groove k = m_k (stored facets 4k, 4k+1),
+// side 0 = m'_k (4k+2, 4k+3); normals and areas from the stored strips.
+struct GrooveSides {
+  std::size_t K = 0;
+  std::vector<Vec3> normal;
+  std::vector<double> area;
+};
+GrooveSides groove_sides(const Microsurface& s, const char* what) {
+  if (!is_vcavity(s) || s.num_facets() % 4 != 0)
+    throw UsageError(std::string(what) + ": not a vcavity surface (generate vcavity)");
+  GrooveSides g;
+  g.K = s.num_facets() / 4;
+  g.normal.resize(2 * g.K);
+  g.area.resize(2 * g.K);
+  for (std::size_t k = 0; k < g.K; ++k)
+    for (int side = 0; side < 2; ++side) {
+      const std::size_t f = 4 * k + (side == 1 ? 0 : 2);
+      const Triangle a = s.facet(f), b = s.facet(f + 1);
+      g.normal[2 * k + side] = a.normal();
+      g.area[2 * k + side] = a.area() + b.area();
+    }
+  return g;
+}
+
+// Groove k traced on its own (as measure_vcavity_g1): x along d (the horizontal direction of
+// m_k), y along the ridge, one period [-1/2, 1/2] per tile; cell i = 1 (x in [0, 1/2]) has
+// normal m_k, and the surface there is z = top (1 - 2|x|).
+struct GrooveTile {
+  Vec3 d, t;
+  float top;
+  Microsurface surface;
+  explicit GrooveTile(const Vec3& m)
+      : d(std::hypot(m.x(), m.y()) > 0 ? Vec3(m.x(), m.y(), 0).normalized() : Vec3::UnitX()),
+        t(Vec3::UnitZ().cross(d)),
+        top(static_cast<float>(0.5 * std::hypot(m.x(), m.y()) / m.z())),
+        surface(Microsurface::heightfield(2, 2, 1.0, 1.0, {0.0f, top, 0.0f, top})) {}
+  Vec3 to_local(const Vec3& w) const { return Vec3(w.dot(d), w.dot(t), w.z()); }
+  // The point of side `side` at (u, w) in [0, 1)^2, uniform over the side's area.
+  Vec3 point(int side, double u, double w) const {
+    const double x = (side == 1 ? 0.5 : -0.5) * u;
+    return Vec3(x, w - 0.5, top * (1 - 2 * std::abs(x)));
+  }
+};
+
+}  // namespace
+
+G2Result measure_vcavity_g2(const Microsurface& s, const Vec3& o_in, const Vec3& i_in, const G2Options& opt) {
+  if (!(o_in.z() > 0)) throw UsageError("--theta-o must be in [0, 90) degrees");
+  if (!(i_in.z() > 0)) throw UsageError("--theta-i must be in [0, 90) degrees");
+  if (opt.rays == 0) throw UsageError("--rays must be positive");
+  const GrooveSides g = groove_sides(s, "measure_vcavity_g2");
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::size_t K = g.K;
+  G2Result r;
+  r.o = o_in.normalized();
+  r.i = i_in.normalized();
+  const Vec3 o = r.o, i = r.i;
+  r.macro_area = s.macro().area;
+  r.binning = g2_normal_binning(opt);
+  const int nbins = r.binning.size();
+  r.bins.assign(nbins, G2NormalBin{});
+
+  // Exact sums over the 2K facets (the weights and models of measure_g2) and the CDF of w_f.
+  std::vector<int> bin(2 * K);
+  std::vector<double> cdf(2 * K);
+  double back_o = 0, back_i = 0, vcav_total = 0;
+  for (std::size_t j = 0; j < 2 * K; ++j) {
+    const Vec3& m = g.normal[j];
+    const double a = g.area[j], om = o.dot(m), im = i.dot(m);
+    bin[j] = r.binning.bin_of(m);
+    G2NormalBin& nb = r.bins[bin[j]];
+    const bool front = om > 0 && im > 0;
+    const double w = front ? 0.5 * a * (om + im) : 0.0;
+    nb.area += a;
+    r.total_area += a;
+    if (front) {
+      nb.front_area += a;
+      nb.weight += w;
+      nb.mean_normal += w * m;
+      const double v2 = w * models::vcavity_G2(o, i, m);  // 001 eq. (24)-(25)
+      nb.vcavity_sum += v2;
+      vcav_total += v2;
+      r.front_area += a;
+    }
+    back_o += a * std::max(0.0, -om);
+    back_i += a * std::max(0.0, -im);
+    cdf[j] = (j ? cdf[j - 1] : 0.0) + w;
+  }
+  for (auto& nb : r.bins)
+    if (nb.mean_normal.norm() > 0) nb.mean_normal.normalize();
+  r.lambda_o = back_o / (o.z() * r.macro_area);  // DESIGN.md, 001 App. A
+  r.lambda_i = back_i / (i.z() * r.macro_area);
+  r.weight = cdf.back();
+  if (!(r.weight > 0)) throw RuntimeFailure("no facet faces both directions");
+  r.vcavity = vcav_total / r.weight;
+
+  // Stratified samples along the CDF per replicate, from the unordered pair {o, i} (swapping
+  // the directions draws the same points); the facet index is nondecreasing in the sample
+  // index, so each groove handles a contiguous range of each replicate.
+  const std::uint64_t ko = direction_stream_key(o), ki = direction_stream_key(i);
+  const std::uint64_t base = 0xC3000000ull ^ mix64(std::min(ko, ki) ^ mix64(std::max(ko, ki)));
+  const ReplicatePlan plan(opt.rays, opt.replicates);
+  const int R = plan.replicates;
+  const std::uint64_t n_rep = plan.per_replicate();
+  r.replicates = R;
+  r.samples = plan.total();
+  const double total = r.weight;
+  std::vector<std::uint32_t> side_of(n_rep * R);
+  tbb::parallel_for(std::uint64_t(0), n_rep * R, [&](std::uint64_t gi) {
+    const int q = static_cast<int>(gi / n_rep);
+    const std::uint64_t j = gi % n_rep;
+    CounterRng rng(opt.seed, ReplicatePlan::stream(base, q), j);
+    const double u = (static_cast<double>(j) + rng.uniform()) / n_rep * total;
+    std::size_t f = std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin();
+    f = std::min(f, 2 * K - 1);
+    while (f > 0 && cdf[f] == cdf[f - 1]) --f;  // never a zero-weight facet
+    side_of[gi] = static_cast<std::uint32_t>(f);
+  });
+
+  struct G2Counts {
+    std::atomic<std::uint64_t> samples{0}, vis_o{0}, vis_i{0}, vis_both{0};
+  };
+  std::vector<G2Counts> counts(static_cast<std::size_t>(R) * nbins);
+  std::vector<TraceCounters> groove_counters(K);
+  tbb::parallel_for(std::size_t(0), K, [&](std::size_t k) {
+    const GrooveTile tile(g.normal[2 * k + 1]);
+    Tracer tracer(tile.surface);
+    const SourcePlane plane[2] = {SourcePlane::of(tile.surface.facet(0)), SourcePlane::of(tile.surface.facet(2))};
+    const Vec3 ol = tile.to_local(o), il = tile.to_local(i);
+    TraceCounters& tc = groove_counters[k];
+    for (int q = 0; q < R; ++q) {
+      std::uint64_t n[2] = {0, 0}, vo[2] = {0, 0}, vi[2] = {0, 0}, vb[2] = {0, 0};
+      const auto first = side_of.begin() + static_cast<std::ptrdiff_t>(q * n_rep), last = first + n_rep;
+      const auto lo = std::lower_bound(first, last, static_cast<std::uint32_t>(2 * k));
+      const auto hi = std::lower_bound(first, last, static_cast<std::uint32_t>(2 * k + 2));
+      for (auto it = lo; it != hi; ++it) {
+        const std::uint64_t j = static_cast<std::uint64_t>(it - first);
+        const int side = static_cast<int>(*it - 2 * k);
+        CounterRng rng(opt.seed, ReplicatePlan::stream(base, q), j);
+        rng.uniform();  // the draw that placed the sample on its facet
+        const double u = rng.uniform();
+        const double w = rng.uniform();
+        const Vec3 p = tile.point(side, u, w);
+        const bool see_o = !tracer.occluded(p, ol, &plane[side], tc);
+        const bool see_i = o == i ? see_o : !tracer.occluded(p, il, &plane[side], tc);
+        ++n[side];
+        vo[side] += see_o;
+        vi[side] += see_i;
+        vb[side] += see_o && see_i;
+      }
+      for (int side = 0; side < 2; ++side) {
+        G2Counts& c = counts[static_cast<std::size_t>(q) * nbins + bin[2 * k + side]];
+        c.samples += n[side];
+        c.vis_o += vo[side];
+        c.vis_i += vi[side];
+        c.vis_both += vb[side];
+      }
+    }
+  });
+  for (int b = 0; b < nbins; ++b) {
+    G2NormalBin& nb = r.bins[b];
+    for (auto* x : {&nb.samples_r, &nb.visible_o_r, &nb.visible_i_r, &nb.visible_both_r}) x->assign(R, 0);
+    for (int q = 0; q < R; ++q) {
+      const G2Counts& c = counts[static_cast<std::size_t>(q) * nbins + b];
+      nb.samples_r[q] = c.samples;
+      nb.visible_o_r[q] = c.vis_o;
+      nb.visible_i_r[q] = c.vis_i;
+      nb.visible_both_r[q] = c.vis_both;
+      nb.samples += c.samples;
+      nb.visible_o += c.vis_o;
+      nb.visible_i += c.vis_i;
+      nb.visible_both += c.vis_both;
+    }
+    r.visible_o += nb.visible_o;
+    r.visible_i += nb.visible_i;
+    r.visible_both += nb.visible_both;
+  }
+  for (std::size_t k = 0; k < K; ++k) r.counters += groove_counters[k];  // in groove order
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (opt.progress) opt.progress(1.0);
+  return r;
+}
+
+VndfResult measure_vcavity_vndf(const Microsurface& s, const Vec3& v_in, const VndfOptions& o) {
+  if (!(v_in.z() > 0)) throw UsageError("--theta must be in [0, 90) degrees");
+  if (o.rays == 0) throw UsageError("--rays must be positive");
+  const GrooveSides g = groove_sides(s, "measure_vcavity_vndf");
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::size_t K = g.K;
+  VndfResult r;
+  r.v = v_in.normalized();
+  const Vec3 v = r.v;
+  r.binning = vndf_binning(o);
+  r.macro_area = s.macro().area;
+  const int nbins = r.binning.size();
+  std::vector<int> bin(2 * K);
+  r.front_projected.assign(nbins, 0.0);
+  for (std::size_t j = 0; j < 2 * K; ++j) {
+    bin[j] = r.binning.bin_of(g.normal[j]);
+    const double proj = std::max(0.0, g.area[j] * v.dot(g.normal[j]));
+    if (bin[j] >= 0) r.front_projected[bin[j]] += proj;
+    r.front_projected_total += proj;
+  }
+  if (!(r.front_projected_total > 0)) throw RuntimeFailure("no facet faces the direction");
+  r.window_area_perp = v.z() * r.macro_area;  // K unit tiles seen along v
+  r.rays = o.rays;
+  // Ray j: groove, then origin on its tile, all from its own counter (i.i.d. rays); the rays
+  // are bucketed by groove (counting sort, in ray order) so that each groove's scene is built once.
+  const std::uint64_t stream = 0xD100 + direction_stream_key(v);
+  std::vector<std::uint32_t> groove_of(r.rays);
+  tbb::parallel_for(std::uint64_t(0), r.rays, [&](std::uint64_t j) {
+    CounterRng rng(o.seed, stream, j);
+    groove_of[j] = static_cast<std::uint32_t>(std::min<std::uint64_t>(K - 1, static_cast<std::uint64_t>(rng.uniform() * K)));
+  });
+  std::vector<std::uint64_t> start(K + 1, 0);
+  for (std::uint32_t k : groove_of) ++start[k + 1];
+  for (std::size_t k = 0; k < K; ++k) start[k + 1] += start[k];
+  std::vector<std::uint64_t> order(r.rays);
+  {
+    std::vector<std::uint64_t> next(start.begin(), start.end() - 1);
+    for (std::uint64_t j = 0; j < r.rays; ++j) order[next[groove_of[j]]++] = j;
+  }
+  std::vector<std::atomic<std::uint64_t>> counts(static_cast<std::size_t>(nbins) + 1);
+  std::vector<TraceCounters> groove_counters(K);
+  tbb::parallel_for(std::size_t(0), K, [&](std::size_t k) {
+    if (start[k] == start[k + 1]) return;
+    const GrooveTile tile(g.normal[2 * k + 1]);
+    Tracer tracer(tile.surface);
+    const Vec3 vl = tile.to_local(v);
+    std::uint64_t hits[2] = {0, 0};
+    for (std::uint64_t n = start[k]; n < start[k + 1]; ++n) {
+      CounterRng rng(o.seed, stream, order[n]);
+      rng.uniform();  // the draw that chose the groove
+      const double a = rng.uniform();
+      const double b = rng.uniform();
+      const TraceHit h = tracer.first_hit(Vec3(a - 0.5, b - 0.5, tracer.z_top()), -vl, nullptr, groove_counters[k]);
+      if (h.hit && !h.backface) ++hits[(h.facet / 2) % 2];
+    }
+    for (int side = 0; side < 2; ++side) {
+      const int b = bin[2 * k + side];
+      counts[b >= 0 ? static_cast<std::size_t>(b) : static_cast<std::size_t>(nbins)] += hits[side];
+    }
+  });
+  r.bin_hits.assign(nbins, 0);
+  for (int b = 0; b < nbins; ++b) r.bin_hits[b] = counts[b];
+  r.hits_below = counts[nbins];
+  for (const auto& c : counts) r.hits += c;
+  for (std::size_t k = 0; k < K; ++k) r.counters += groove_counters[k];  // in groove order
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (o.progress) o.progress(1.0);
+  return r;
+}
+
+std::vector<double> vcavity_vndf_probabilities(const Microsurface& s, const Vec3& v_in,
+                                               const DirectionBinning& binning) {
+  const GrooveSides g = groove_sides(s, "vcavity_vndf_probabilities");
+  const Vec3 v = v_in.normalized();
+  std::vector<double> p(binning.size(), 0.0);
+  double total = 0;
+  for (std::size_t j = 0; j < 2 * g.K; ++j) {
+    const Vec3& m = g.normal[j];
+    // Visible projected area of the side: A (v.m)+ G1 (000 eq. 2, 001 eq. 24).
+    const double vis = g.area[j] * std::max(0.0, v.dot(m)) * models::vcavity_G1(v, m);
+    const int b = binning.bin_of(m);
+    if (b >= 0) p[b] += vis;
+    total += vis;
+  }
+  for (double& x : p) x /= total;
+  return p;
 }
 
 BsdfTally trace_vcavity_bsdf(const Microsurface& s, const BsdfOptions& o, const Vec3& wi,

@@ -1,5 +1,7 @@
 // Check of G2 (hotspot identity, Smith forms, V-cavity).
 #include "checks_common.hpp"
+#include "microsim/measure/vcavity_measure.hpp"
+#include "microsim/surface/generators.hpp"
 
 namespace microsim::validation {
 
@@ -37,9 +39,13 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
   const Options& o = set.options;
   G2Options go = check_options<G2Options>(o, share_of_rays(o, 4));
   const DirectionBinning binning = g2_normal_binning(go);
+  // A V-cavity ensemble is its grooves, each an infinite periodic groove traced on its own
+  // (001 Sec. 6.1, as measure g1 and check_g1 do), not the stored strips traced together.
   auto measure = [&](const Tracer& tracer, const Vec3& a, const Vec3& b, const FacetTable& table) {
-    G2Result r = measure_with_progress(progress, 2.0 * static_cast<double>(go.rays), go,
-                                       [&](const G2Options& g) { return measure_g2(tracer, a, b, g, &table); });
+    const Microsurface& s = tracer.surface();
+    G2Result r = measure_with_progress(progress, 2.0 * static_cast<double>(go.rays), go, [&](const G2Options& g) {
+      return is_vcavity(s) ? measure_vcavity_g2(s, a, b, g) : measure_g2(tracer, a, b, g, &table);
+    });
     progress.update();
     return r;
   };
@@ -76,7 +82,9 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
       model_row("direction_correlated_numeric", fn.direction_correlated, "001 eq. (22), Lambda from the facets");
       model_row("height_direction_correlated_numeric", fn.height_direction_correlated,
                 "001 eq. (23), Lambda from the facets");
-      model_row("vcavity", a.vcavity, "001 eq. (24)-(25), averaged over the facets facing both");
+      model_row("vcavity", a.vcavity,
+                is_vcavity(s) ? "001 eq. (24)-(25), averaged over the facets facing both (exact for separate grooves)"
+                              : "001 eq. (24)-(25), averaged over the facets facing both");
       Table g2_rows = g2_table();
       pass.rows().push_back(add_row(g2_rows, a, s));
     }
@@ -95,7 +103,10 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
       g1o.normal_theta_bins = go.normal_theta_bins;
       g1o.normal_phi_bins = go.normal_phi_bins;
       const G1Result g = measure_with_progress(progress, 2.0 * static_cast<double>(g1o.rays), g1o,
-                                               [&](const G1Options& opt) { return measure_g1(tracer, v, opt, &table); });
+                                               [&](const G1Options& opt) {
+                                                 return is_vcavity(s) ? measure_vcavity_g1(s, {v}, opt).at(0)
+                                                                      : measure_g1(tracer, v, opt, &table);
+                                               });
       progress.update();
       const std::string where = (label.empty() ? "" : label + ", ") + "theta " + angle(t);
       const Json ang = {{"theta_deg", t}};

@@ -1,5 +1,7 @@
 // Check of the VNDF (histogram against D_v, sampler identity).
 #include "checks_common.hpp"
+#include "microsim/measure/vcavity_measure.hpp"
+#include "microsim/surface/generators.hpp"
 
 namespace microsim::validation {
 
@@ -33,10 +35,31 @@ void check_vndf(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
     for_each_view(o, [&](double t, double p, const Vec3& v) {
       const double unit = static_cast<double>(vo.rays);
       const VndfResult r = measure_with_progress(
-          progress, unit, vo, [&](const VndfOptions& opt) { return measure_vndf(pass.tracer, v, opt, &pass.table); });
+          progress, unit, vo, [&](const VndfOptions& opt) {
+            // A V-cavity ensemble: groove by groove (001 Sec. 6.1), as check_g1 measures it.
+            return is_vcavity(s) ? measure_vcavity_vndf(s, v, opt) : measure_vndf(pass.tracer, v, opt, &pass.table);
+          });
       const std::string where = (pass.label.empty() ? "" : pass.label + ", ") + "theta " + angle(t) + " phi " + angle(p);
       const Json ang = {{"theta_deg", t}, {"phi_deg", p}};
       std::optional<SamplerTest> sampler;
+      if (is_vcavity(s)) {
+        // The V-cavity model's VNDF over the ensemble's own facets: exact for separate grooves
+        // (the surface's own statistics, so the ray-count error is the right one).
+        const GofResult g = histogram_gof(r.bin_hits, r.hits, vcavity_vndf_probabilities(s, r.v, r.binning),
+                                          vo.family_alpha);
+        Row m = make_row(set, "", "vndf_chi2_per_dof", "vcavity", Kind::Model,
+                         "001 eq. (13) with the V-cavity G1 (001 eq. 24) over the facets, bin sums");
+        m.condition += " " + where;
+        set_chi2(m, g.chi2, g.dof);
+        m.error = "rays";
+        m.group = set.name + "/vndf_vcavity";
+        m.extra = ang;
+        m.extra["chi2"] = g.chi2;
+        m.extra["dof"] = g.dof;
+        m.extra["p_value"] = g.p_value;
+        m.extra["max_abs_z"] = g.max_abs_z;
+        out.rows.push_back(m);
+      }
       if (s.nominal) {
         const std::vector<double> model =
             bin_integrals(r.binning, [&](const Vec3& m) { return s.nominal->D_visible(r.v, m); });

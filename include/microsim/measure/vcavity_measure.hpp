@@ -6,6 +6,8 @@
 
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/g1_measure.hpp"
+#include "microsim/measure/g2_measure.hpp"
+#include "microsim/measure/vndf_measure.hpp"
 
 namespace microsim {
 
@@ -19,6 +21,26 @@ namespace microsim {
 // Each groove's Embree scene is built once for all views.
 std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vector<Vec3>& views,
                                          const G1Options& options);
+
+// G2(o, m, i) of a vcavity ensemble (000 eq. 16, the weights of measure_g2): points drawn over
+// the whole ensemble with density w_f = A_f (max(0, o.m_f) + max(0, i.m_f)) / 2 over the
+// facets facing both (a stratified CDF over the 2K facets per replicate, the stream depending
+// on the unordered pair {o, i}), each traced with two occlusion rays on its own groove, an
+// infinite periodic V-groove in the groove's frame. For such a groove the V-cavity G2
+// min(G1(o, m), G1(i, m)) (001 eq. 24-25) is exact per facet, so `vcavity` is the value the
+// measurement must reproduce. Deterministic for any thread count.
+G2Result measure_vcavity_g2(const Microsurface& s, const Vec3& o, const Vec3& i, const G2Options& options);
+
+// The VNDF histogram (001 eq. 13) of a vcavity ensemble: every ray picks a groove uniformly
+// (every groove covers the same macro area) and a uniform origin on its tile, i.i.d. (the bin
+// counts are multinomial, as measure_vndf's), and is traced along -v on that groove alone.
+VndfResult measure_vcavity_vndf(const Microsurface& s, const Vec3& v, const VndfOptions& options);
+
+// The V-cavity model's VNDF of a vcavity ensemble, exact for its separate grooves: the bin
+// probabilities sum_{f in B} A_f (v.m_f)+ G1_vcavity(v, m_f) / sum_f (same) over its facets
+// (each groove's visible projected area, 000 eq. 2 with 001 eq. 24).
+std::vector<double> vcavity_vndf_probabilities(const Microsurface& s, const Vec3& v,
+                                               const DirectionBinning& binning);
 
 // The BSDF random walk on a vcavity ensemble: each groove traced on its own as an infinite
 // periodic V-groove (its tile one period, in the groove's frame) with the same number of
