@@ -347,19 +347,29 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
           if (k < nf) ++t.hits[ft.bin(k)];
         });
   } else if (heightfield) {
-    // The same rays in the same order as run_replicates, ray j of every replicate in turn.
-    ray_reps = run_chunks(R, n_rep, nbins, counters, done, reps,
-                          [&](std::uint64_t j0, std::uint64_t j1, std::uint64_t first,
-                              std::uint64_t active, Tally* t) {
-                            for (std::uint64_t j = j0; j < j1; ++j) {
-                              const Strata::Cell cell = plan.strata.cell(j);
-                              for (std::uint64_t q = 0; q < active; ++q) {
-                                const Vec3 org = origin(static_cast<int>(first + q), j, cell);
-                                const std::size_t k = tracer.front_facet(down, org, t[q].counters);
-                                if (k < nf) ++t[q].hits[ft.bin(k)];
-                              }
-                            }
-                          });
+    // The same rays in the same order as run_replicates, ray j of every replicate in turn; the
+    // hits of a chunk counted in one flat array (replicate-major), read from the table's
+    // stored bins, and added to the tallies at the end of the chunk.
+    const std::uint16_t* bins16 = ft.bins16();
+    const std::size_t nb = static_cast<std::size_t>(nbins);
+    ray_reps = run_chunks(
+        R, n_rep, nbins, counters, done, reps,
+        [&](std::uint64_t j0, std::uint64_t j1, std::uint64_t first, std::uint64_t active, Tally* t) {
+          std::vector<std::uint64_t> hits(active * nb + 1);  // + 1: the facets without a bin
+          const std::size_t nobin = active * nb;
+          for (std::uint64_t j = j0; j < j1; ++j) {
+            const Strata::Cell cell = plan.strata.cell(j);
+            for (std::uint64_t q = 0; q < active; ++q) {
+              const Vec3 org = origin(static_cast<int>(first + q), j, cell);
+              const std::size_t k = tracer.front_facet(down, org, t[q].counters);
+              if (k >= nf) continue;
+              const int b = bins16 ? (bins16[k] == FacetTable::kNoBin16 ? -1 : bins16[k]) : ft.bin(k);
+              ++hits[b < 0 ? nobin : q * nb + static_cast<std::size_t>(b)];
+            }
+          }
+          for (std::uint64_t q = 0; q < active; ++q)
+            for (std::size_t b = 0; b < nb; ++b) t[q].hits[b] += hits[q * nb + b];
+        });
   } else {
     ray_reps = run_replicates(R, n_rep, nbins, counters, done, reps,
                               [&](int rep, std::uint64_t j, Tally& t) {
