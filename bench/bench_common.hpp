@@ -72,8 +72,8 @@ inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, cons
   const int R = plan.replicates;
   const std::uint64_t n = plan.per_replicate(), span = std::max<std::uint64_t>(1, (1u << 14) / R);
   const std::uint64_t key = direction_stream_key(v), nc = (n + span - 1) / span;
-  std::vector<std::uint64_t> streams(R);
-  for (int q = 0; q < R; ++q) streams[q] = ReplicatePlan::stream(0xA000 + key, q);
+  std::vector<std::uint64_t> keys(R);  // as measure_g1: the generators' keys once per replicate
+  for (int q = 0; q < R; ++q) keys[q] = CounterRng::key(o.seed, ReplicatePlan::stream(0xA000 + key, q));
   std::vector<unsigned> hits(nc);
   const DownwardRays down(tracer, v);
   const auto t0 = std::chrono::steady_clock::now();
@@ -90,8 +90,8 @@ inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, cons
       run_ahead<Vec3>(
           (std::min(n, (c + 1) * span) - c * span) * R,
           [&] {
-            CounterRng rng(o.seed, streams[rep], j);
-            const Vec2 ab = plan.strata.point(j, rng);
+            CounterRng rng(CounterRng::Keyed{}, keys[rep], j);
+            const Vec2 ab = plan.strata.point(plan.strata.cell(j), rng);
             const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
             tracer.prefetch_front(down, org);
             if (++rep == R) {
@@ -104,10 +104,11 @@ inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, cons
       hits[c] = count;
       return;
     }
-    for (std::uint64_t j = c * span; j < std::min(n, (c + 1) * span); ++j)
+    for (std::uint64_t j = c * span; j < std::min(n, (c + 1) * span); ++j) {
+      const Strata::Cell cell = plan.strata.cell(j);  // as measure_g1: once per ray index
       for (int rep = 0; rep < R; ++rep) {
-        CounterRng rng(o.seed, streams[rep], j);
-        const Vec2 ab = plan.strata.point(j, rng);
+        CounterRng rng(CounterRng::Keyed{}, keys[rep], j);
+        const Vec2 ab = plan.strata.point(cell, rng);
         const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
         if (lean) {
           count += tracer.front_facet(down, org, counters) != DownwardRays::kNone;
@@ -126,6 +127,7 @@ inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, cons
         rtcIntersect1(tracer.scene(), &ctx, &rh);
         count += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
       }
+    }
     hits[c] = count;  // kept so the loop cannot be optimised away
   });
   const double wall = seconds_since(t0), cpu = cpu_seconds() - c0;

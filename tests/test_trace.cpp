@@ -316,6 +316,72 @@ TEST(Tracer, FrontFacetEqualsFirstHitFacet) {
   }
 }
 
+TEST(Tracer, FrontFacetFastDecodingEqualsCheckedDecoding) {
+  // front_facet names most hits from Embree's grid coordinates and the sign of its float normal
+  // alone (DownwardRays::band, graze), and leaves hits near a cell's borders or diagonal, and
+  // grazing ones, to the checked decoding (the facet whose exact normal is aligned with Ng).
+  // Both must give the same facet and counters on every ray: uniform origins, and rays aimed
+  // exactly at Embree's float vertices and at points of shared edges (cell borders and
+  // diagonals), where the grid coordinates round across a border. Tiles: rough, smooth
+  // (neighbours nearly coplanar), flat (coplanar), 256^2 (a wider band), a sample region.
+  // Power: the decoding without its band and grazing limit (every hit named from u, v and Ng
+  // alone) must disagree on the rays aimed at edges.
+  std::vector<Microsurface> surfaces;
+  surfaces.push_back(beckmann_tile(64, 21, 0.5));
+  surfaces.push_back(beckmann_tile(64, 22, 1.0));
+  surfaces.push_back(bumpy_heightfield(32, 0.03));
+  surfaces.push_back(flat_heightfield(16));
+  surfaces.push_back(beckmann_tile(256, 23, 0.5));
+  surfaces.push_back(beckmann_tile(64, 24, 0.5));
+  surfaces.back().set_sample_region(8, 40, 16, 48, true);
+  std::uint64_t compared = 0, hits = 0, naive_differ = 0, naive_differ_uniform = 0;
+  for (std::size_t si = 0; si < surfaces.size(); ++si) {
+    const Microsurface& s = surfaces[si];
+    const Tracer tracer(s);
+    auto fpoint = [&](long i, long j) {  // Embree's vertex (i, j): float x, y, z
+      const Vec3 p = s.grid_point(i, j);
+      return Vec3(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+    };
+    for (double theta : {0.0, 30.0, 60.0, 85.0, 89.0})
+      for (int k = 0; k < 4000; ++k) {
+        CounterRng rng(31, 100 * si + static_cast<std::uint64_t>(theta), static_cast<std::uint64_t>(k));
+        const double phi = 2 * kPi * rng.uniform();
+        const Vec3 v = direction_from_angles(rad(theta), phi);
+        const double a = rng.uniform(), b = rng.uniform(), t = rng.uniform();
+        const long i = static_cast<long>(a * s.nx()), j = static_cast<long>(b * s.ny());
+        const int kind = k % 5;
+        Vec3 p;  // the point aimed at
+        if (kind == 0) p = Vec3(a - 0.5, b - 0.5, 0);  // uniform (origin at the top below)
+        else if (kind == 1) p = fpoint(i, j);           // a vertex
+        else if (kind == 2) p = fpoint(i, j) + t * (fpoint(i + 1, j) - fpoint(i, j));  // x border
+        else if (kind == 3) p = fpoint(i, j) + t * (fpoint(i, j + 1) - fpoint(i, j));  // y border
+        else p = fpoint(i + 1, j) + t * (fpoint(i, j + 1) - fpoint(i + 1, j));        // diagonal
+        const Vec3 o = kind == 0 ? Vec3(p.x(), p.y(), tracer.z_top())
+                                 : Vec3(p + ((tracer.z_top() - p.z()) / v.z()) * v);
+        DownwardRays fast(tracer, v), checked(tracer, v), naive(tracer, v);
+        checked.exact_decode = true;
+        naive.band = 0;
+        naive.graze = 0;
+        TraceCounters c1, c2, c3;
+        const std::size_t expected = tracer.front_facet(checked, o, c1);
+        const std::size_t got = tracer.front_facet(fast, o, c2);
+        ASSERT_EQ(got, expected) << "surface " << si << " theta " << theta << " ray " << k;
+        for (auto [x, y] : {std::pair{c1.rays, c2.rays}, {c1.border_crossings, c2.border_crossings},
+                            {c1.lost_below, c2.lost_below}, {c1.backface_hits, c2.backface_hits},
+                            {c1.unresolved, c2.unresolved}})
+          ASSERT_EQ(x, y) << "surface " << si << " theta " << theta << " ray " << k;
+        const bool differ = tracer.front_facet(naive, o, c3) != expected;
+        naive_differ += differ;
+        naive_differ_uniform += differ && kind == 0;
+        hits += expected != DownwardRays::kNone;
+        ++compared;
+      }
+  }
+  EXPECT_GT(hits, compared * 9 / 10);
+  EXPECT_GT(naive_differ, compared / 100);  // power: a decoding without the band is wrong there
+  EXPECT_LT(naive_differ_uniform, naive_differ / 10);  // (and rarely on uniform rays)
+}
+
 TEST(Tracer, FacetTriangleEqualsMicrosurfaceFacet) {
   // The walks' plane of the facet a ray leaves (facet_plane) must be bit for bit the one
   // Microsurface::facet gives, on a tile, on a region of it (facets renumbered) and on a window.

@@ -61,7 +61,14 @@ inline std::uint64_t mix64(std::uint64_t x) {
 class CounterRng {
  public:
   CounterRng(std::uint64_t seed, std::uint64_t stream, std::uint64_t index)
-      : state_(mix64(mix64(seed ^ mix64(stream + 0x51ED270B27E3A5F1ull)) ^ index)) {}
+      : state_(mix64(key(seed, stream) ^ index)) {}
+  // The part of the state that depends on (seed, stream) only: loops over many indices of one
+  // stream compute it once and construct CounterRng(Keyed{}, key, index), the same generator.
+  static std::uint64_t key(std::uint64_t seed, std::uint64_t stream) {
+    return mix64(seed ^ mix64(stream + 0x51ED270B27E3A5F1ull));
+  }
+  struct Keyed {};
+  CounterRng(Keyed, std::uint64_t key, std::uint64_t index) : state_(mix64(key ^ index)) {}
   std::uint64_t next_u64() { return mix64(state_ += 0x9E3779B97F4A7C15ull); }
   // Uniform in [0, 1), 53 random bits.
   double uniform() { return (next_u64() >> 11) * (1.0 / 9007199254740992.0); }

@@ -325,43 +325,66 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   // table's (the same normal from the same heights, binned once), its hit decoded by the lean
   // primary-ray path (Tracer::front_facet); a mesh's table holds float normals, so its hits
   // are binned from the exact one.
-  std::vector<std::uint64_t> streams(R);
-  for (int q = 0; q < R; ++q) streams[q] = ReplicatePlan::stream(0xA000 + key, q);
+  // Per replicate the generator's key (CounterRng::key), per ray index j its stratum (the same
+  // in every replicate): computed once, not per ray.
+  std::vector<std::uint64_t> keys(R);
+  for (int q = 0; q < R; ++q) keys[q] = CounterRng::key(o.seed, ReplicatePlan::stream(0xA000 + key, q));
   const DownwardRays down(tracer, v);
-  auto origin = [&](int rep, std::uint64_t j) {
-    CounterRng rng(o.seed, streams[rep], j);
-    const Vec2 ab = plan.strata.point(j, rng);
+  auto origin = [&](int rep, std::uint64_t j, const Strata::Cell& cell) {
+    CounterRng rng(CounterRng::Keyed{}, keys[rep], j);
+    const Vec2 ab = plan.strata.point(cell, rng);
     return Vec3(w.origin0 + ab.x() * w.e1 + ab.y() * w.e2);
   };
   // A large heightfield's rays are set up a few rays ahead, their grid vertices and table
   // entry prefetched (Tracer::prefetch_front): on tiles larger than the caches the memory reads
   // of consecutive rays then overlap.
   const bool ahead = static_cast<double>(s.nx()) * s.ny() >= kAheadMinCells;
-  std::vector<Tally> ray_reps =
-      heightfield && ahead
-          ? run_replicates_ahead<Vec3>(
-                R, n_rep, nbins, counters, done, reps,
-                [&](int rep, std::uint64_t j) {
-                  const Vec3 org = origin(rep, j);
-                  ft.prefetch(tracer.prefetch_front(down, org));
-                  return org;
-                },
-                [&](const Vec3& org, Tally& t) {
-                  const std::size_t k = tracer.front_facet(down, org, t.counters);
-                  if (k < nf) ++t.hits[ft.bin(k)];
-                })
-          : run_replicates(R, n_rep, nbins, counters, done, reps,
-                           [&](int rep, std::uint64_t j, Tally& t) {
-                             if (heightfield) {
-                               const std::size_t k = tracer.front_facet(down, origin(rep, j), t.counters);
-                               if (k < nf) ++t.hits[ft.bin(k)];
-                               return;
-                             }
-                             const TraceHit h =
-                                 tracer.first_hit(origin(rep, j), -v, nullptr, t.counters);
-                             if (h.hit && !h.backface && h.facet < nf)
-                               ++t.hits[r.binning.bin_of(h.normal)];
-                           });
+  std::vector<Tally> ray_reps;
+  if (heightfield && ahead) {
+    ray_reps = run_replicates_ahead<Vec3>(
+        R, n_rep, nbins, counters, done, reps,
+        [&](int rep, std::uint64_t j) {
+          const Vec3 org = origin(rep, j, plan.strata.cell(j));
+          ft.prefetch(tracer.prefetch_front(down, org));
+          return org;
+        },
+        [&](const Vec3& org, Tally& t) {
+          const std::size_t k = tracer.front_facet(down, org, t.counters);
+          if (k < nf) ++t.hits[ft.bin(k)];
+        });
+  } else if (heightfield) {
+    // The same rays in the same order as run_replicates, ray j of every replicate in turn; the
+    // hits of a chunk counted in one flat array (replicate-major), read from the table's
+    // stored bins, and added to the tallies at the end of the chunk.
+    const std::uint16_t* bins16 = ft.bins16();
+    const std::size_t nb = static_cast<std::size_t>(nbins);
+    ray_reps = run_chunks(
+        R, n_rep, nbins, counters, done, reps,
+        [&](std::uint64_t j0, std::uint64_t j1, std::uint64_t first, std::uint64_t active, Tally* t) {
+          std::vector<std::uint64_t> hits(active * nb + 1);  // + 1: the facets without a bin
+          const std::size_t nobin = active * nb;
+          for (std::uint64_t j = j0; j < j1; ++j) {
+            const Strata::Cell cell = plan.strata.cell(j);
+            for (std::uint64_t q = 0; q < active; ++q) {
+              const Vec3 org = origin(static_cast<int>(first + q), j, cell);
+              const std::size_t k = tracer.front_facet(down, org, t[q].counters);
+              if (k >= nf) continue;
+              const int b = bins16 ? (bins16[k] == FacetTable::kNoBin16 ? -1 : bins16[k]) : ft.bin(k);
+              ++hits[b < 0 ? nobin : q * nb + static_cast<std::size_t>(b)];
+            }
+          }
+          for (std::uint64_t q = 0; q < active; ++q)
+            for (std::size_t b = 0; b < nb; ++b) t[q].hits[b] += hits[q * nb + b];
+        });
+  } else {
+    ray_reps = run_replicates(R, n_rep, nbins, counters, done, reps,
+                              [&](int rep, std::uint64_t j, Tally& t) {
+                                const TraceHit h = tracer.first_hit(
+                                    origin(rep, j, plan.strata.cell(j)), -v, nullptr, t.counters);
+                                if (h.hit && !h.backface && h.facet < nf)
+                                  ++t.hits[r.binning.bin_of(h.normal)];
+                              });
+  }
   report();
   r.raycast_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_raycast).count();

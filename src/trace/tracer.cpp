@@ -2,7 +2,9 @@
 
 #include <sys/mman.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <new>
 
@@ -254,7 +256,9 @@ bool Tracer::grid_facet_guess(float u, float v, const Vec3& ng, long& i, long& j
     c = cell_cross_of(h[j0 * nx + i0], h[j0 * nx + i1], h[j1 * nx + i0], h[j1 * nx + i1], half,
                       dx, dy);
   }
-  return alignment_of(c, ng) > 1 - 2e-6;
+  // alignment_of(c, ng) > 1 - 2e-6, without its division.
+  const double d = c.dot(ng);
+  return d > 0 && d * d > (1 - 2e-6) * (c.squaredNorm() * ng.squaredNorm());
 }
 
 std::size_t Tracer::facet_of_hit(unsigned prim_id, float u, float v, const Vec3& ng,
@@ -482,6 +486,32 @@ DownwardRays::DownwardRays(const Tracer& tracer, const Vec3& v) {
   margin = dxy > 0 ? 0.5 * std::min(s.dx(), s.dy()) / dxy : 0.0;
   run_x = dir.x() / -dir.z();
   run_y = dir.y() / -dir.z();
+  if (!lean) return;
+  z0 = tracer.z_top_;
+  t_slab0 = (tracer.z_bottom_ - z0) / dir.z();  // as front_facet divides it
+  inv_x = dir.x() != 0 ? 1 / dir.x() : 0.0;
+  inv_y = dir.y() != 0 ? 1 / dir.y() : 0.0;
+  cells_x = tracer.grid_width_ - 1;
+  cells_y = tracer.grid_height_ - 1;
+  // Embree reports a grid hit as u = fl(fl(s + a) r), s the quad's column, a in [0, 1] its
+  // barycentric coordinate in the triangle (a 1 - a' in the second one), r = rcp(cells_x)
+  // refined by one Newton step (relative error < 2^-22), and a = U rcp(U + V + W) with U, V,
+  // W of one sign; likewise v. So u cells_x = s + a within cells_x (2^-24 + 2^-22 + 2^-24)
+  // + 2^-22 cells, and a within 2^-22 of [0, 1], a + b within 2^-21 of [0, 1] (first
+  // triangle) or [1, 2] (second). Four times that: outside the band the cell and half
+  // named are the triangle Embree met.
+  band = std::ldexp(std::max(cells_x, cells_y) + 2, -20);
+  // Embree's Ng is the cross product of float edges relative to the float origin: vertices
+  // up to L away (the longest segment plus a cell) are rounded to 2^-24 L, and its float x, y
+  // to 2^-24 of the tile, against edges at least a cell long: Ng is within 2^-22 ((L + tile) /
+  // cell + 1) of the facet's exact normal; four times that is the grazing limit.
+  const Macrosurface& m = s.macro();
+  const double cell = std::min(s.dx(), s.dy()), tile = std::max(m.size_x, m.size_y);
+  const double longest = std::min(t_slab0, dxy > 0 ? 2 * (m.size_x + m.size_y) / dxy + margin
+                                                   : std::numeric_limits<double>::infinity()) +
+                         2 * (s.dx() + s.dy());
+  const double delta = std::ldexp((longest + tile) / cell + 1, -20);
+  graze = delta * delta;
 }
 
 std::size_t Tracer::prefetch_front(const DownwardRays& rays, const Vec3& org) const {
@@ -540,17 +570,31 @@ std::size_t Tracer::front_facet(const DownwardRays& rays, const Vec3& org, Trace
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   std::uint64_t crossings = 0;
+  const double inf = std::numeric_limits<double>::infinity();
   const int max_segments = 100000;
   for (int segment = 0; segment < max_segments; ++segment) {
-    double t_exit = std::numeric_limits<double>::infinity();
-    if (dir.x() > 0) t_exit = std::min(t_exit, (hx - o.x()) / dir.x());
-    if (dir.x() < 0) t_exit = std::min(t_exit, (-hx - o.x()) / dir.x());
-    if (dir.y() > 0) t_exit = std::min(t_exit, (hy - o.y()) / dir.y());
-    if (dir.y() < 0) t_exit = std::min(t_exit, (-hy - o.y()) / dir.y());
-    t_exit = std::max(t_exit, 0.0);
-    const double t_slab = (z_bottom_ - o.z()) / dir.z();  // dir.z < 0
+    // From the window's height the slab distance is a constant of the direction (the same
+    // quotient); dir.z < 0.
+    const double t_slab = o.z() == rays.z0 ? rays.t_slab0 : (z_bottom_ - o.z()) / dir.z();
     if (t_slab < 0) break;  // below the slab already: lost
-    const double tfar = std::min(t_exit + rays.margin, t_slab);
+    // The border distance t_exit, first estimated with 1 / dir (within 1e-15 of the quotient):
+    // when the ray certainly leaves the slab first (t_exit >= t_slab), the segment ends at
+    // t_slab and a miss is lost, as with the quotient; else the quotients, as Tracer::trace.
+    double est = inf;
+    if (dir.x() > 0) est = (hx - o.x()) * rays.inv_x;
+    else if (dir.x() < 0) est = (-hx - o.x()) * rays.inv_x;
+    if (dir.y() > 0) est = std::min(est, (hy - o.y()) * rays.inv_y);
+    else if (dir.y() < 0) est = std::min(est, (-hy - o.y()) * rays.inv_y);
+    const bool slab_first = est * (1 - 1e-12) >= t_slab;
+    double t_exit = inf, tfar = t_slab;
+    if (!slab_first) {
+      if (dir.x() > 0) t_exit = std::min(t_exit, (hx - o.x()) / dir.x());
+      if (dir.x() < 0) t_exit = std::min(t_exit, (-hx - o.x()) / dir.x());
+      if (dir.y() > 0) t_exit = std::min(t_exit, (hy - o.y()) / dir.y());
+      if (dir.y() < 0) t_exit = std::min(t_exit, (-hy - o.y()) / dir.y());
+      t_exit = std::max(t_exit, 0.0);
+      tfar = std::min(t_exit + rays.margin, t_slab);
+    }
     RTCRayHit rh;
     rh.ray.org_x = static_cast<float>(o.x());
     rh.ray.org_y = static_cast<float>(o.y());
@@ -565,6 +609,29 @@ std::size_t Tracer::front_facet(const DownwardRays& rays, const Vec3& org, Trace
     rtcIntersect1(scene_, &ctx, &rh);
     if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
       const Vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+      const long nx = surface_.nx(), ny = surface_.ny();
+      // Fast decoding (DownwardRays::band, graze): away from the cell's borders and diagonal
+      // the grid coordinates name the triangle met, and unless the ray grazes it Ng's sign
+      // along dir is the exact normal's (a front face: Ng.dir < 0).
+      const double gu = static_cast<double>(rh.hit.u) * rays.cells_x;
+      const double gv = static_cast<double>(rh.hit.v) * rays.cells_y;
+      const long ci = static_cast<long>(gu), cj = static_cast<long>(gv);
+      const double fu = gu - static_cast<double>(ci), fv = gv - static_cast<double>(cj);
+      const double diag = fu + fv - 1, b = rays.band;
+      const double d = ng.dot(dir);
+      if (fu > b && fu < 1 - b && fv > b && fv < 1 - b && std::abs(diag) > b && d < 0 &&
+          d * d > rays.graze * ng.squaredNorm() && !rays.exact_decode) {
+        long i = ci - pad_, j = cj - pad_;  // in [-pad, n + pad - 1] with pad <= 1: one wrap
+        if (i < 0) i += nx;
+        else if (i >= nx) i -= nx;
+        if (j < 0) j += ny;
+        else if (j >= ny) j -= ny;
+        const int half = diag > 0 ? 1 : 0;
+        ++c.rays;
+        c.border_crossings += crossings;
+        return macro.region ? surface_.facet_index(i, j, half)
+                            : 2 * (static_cast<std::size_t>(j) * nx + i) + half;
+      }
       long i, j;
       int half;
       Vec3 cr;
@@ -573,11 +640,10 @@ std::size_t Tracer::front_facet(const DownwardRays& rays, const Vec3& org, Trace
       if (grid_facet_guess(rh.hit.u, rh.hit.v, ng, i, j, half, cr)) {
         // Back face: m.dir > 0 for the unit normal m = cr / |cr|. Unless the unnormalised dot
         // is within rounding of zero its sign is that of the normalised one (no square root).
-        const double d = cr.dot(dir);
+        const double dc = cr.dot(dir);
         const double scale = std::abs(cr.x() * dir.x()) + std::abs(cr.y() * dir.y()) +
                              std::abs(cr.z() * dir.z());
-        backface = std::abs(d) > 1e-12 * scale ? d > 0 : cr.normalized().dot(dir) > 0;
-        const long nx = surface_.nx(), ny = surface_.ny();
+        backface = std::abs(dc) > 1e-12 * scale ? dc > 0 : cr.normalized().dot(dir) > 0;
         const long wi = wrap_index(i, nx), wj = wrap_index(j, ny);
         facet = macro.region ? surface_.facet_index(wi, wj, half)
                              : 2 * (static_cast<std::size_t>(wj) * nx + wi) + half;
@@ -596,7 +662,7 @@ std::size_t Tracer::front_facet(const DownwardRays& rays, const Vec3& org, Trace
       c.border_crossings += crossings;
       return facet;
     }
-    if (t_slab <= t_exit) break;  // left the slab downward inside the tile: lost
+    if (slab_first || t_slab <= t_exit) break;  // left the slab downward inside the tile: lost
     // Move to the border and re-enter through the opposite side (both at a corner).
     o += t_exit * dir;
     const double tol = 1e-12 * std::max(macro.size_x, macro.size_y);

@@ -96,6 +96,11 @@ class FacetTable {
     if (!bin16_.empty()) return bin16_[k] == kNoBin16 ? -1 : bin16_[k];
     return bin32_[k];
   }
+  // The bins as stored, for loops that read many: bin(k) is bins16()[k] when bins16() is not
+  // null (kNoBin16: none), else bin32()[k].
+  static constexpr std::uint16_t kNoBin16 = 0xFFFF;
+  const std::uint16_t* bins16() const { return bin16_.empty() ? nullptr : bin16_.data(); }
+  const int* bins32() const { return bin32_.empty() ? nullptr : bin32_.data(); }
   // Meshes: facets pressed against an opposite-facing twin with the same three vertex
   // positions (walls of touching boxes, 000 Fig. 6): no ray can reach them, so area sampling
   // counts them occluded without tracing (an occlusion ray leaving one starts inside the
@@ -105,7 +110,6 @@ class FacetTable {
   double bytes_per_facet() const;
 
  private:
-  static constexpr std::uint16_t kNoBin16 = 0xFFFF;
   // 2 x area x normal of heightfield facet k; facet 2c = (v00, v10, v01), 2c+1 = (v10, v11, v01)
   // of cell c (Microsurface::facet).
   // With a sample region, its facets come first (Microsurface::facet numbering).

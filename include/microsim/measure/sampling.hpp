@@ -12,21 +12,32 @@ namespace microsim {
 struct Strata {
   std::uint32_t grid = 1;
   std::uint64_t per_stratum = 1;
+  double inv_grid = 1;  // 1 / grid, exact (a power of two): the same quotients as a division
   explicit Strata(std::uint64_t n) {
     while (static_cast<std::uint64_t>(grid) * 2 * grid * 2 <= n && grid < (1u << 15)) grid *= 2;
     std::uint64_t cells = static_cast<std::uint64_t>(grid) * grid;
     per_stratum = (n + cells - 1) / cells;
+    inv_grid = 1.0 / grid;
   }
   std::uint64_t total() const { return per_stratum * grid * grid; }
-  Vec2 point(std::uint64_t i, CounterRng& rng) const {
-    std::uint32_t sx, sy;
-    morton_decode(i / per_stratum, sx, sy);
+  // The stratum of point i (the same for every replicate's point i).
+  struct Cell {
+    std::uint32_t x = 0, y = 0;
+  };
+  Cell cell(std::uint64_t i) const {
+    Cell c;
+    morton_decode(i / per_stratum, c.x, c.y);
+    return c;
+  }
+  // Point i, given its stratum cell(i).
+  Vec2 point(const Cell& c, CounterRng& rng) const {
     // Two statements: the order of a call's arguments is unspecified (GCC and Clang differ),
     // and the draws must not depend on the compiler. y first keeps earlier GCC results.
     const double jy = rng.uniform();
     const double jx = rng.uniform();
-    return Vec2((sx + jx) / grid, (sy + jy) / grid);
+    return Vec2((c.x + jx) * inv_grid, (c.y + jy) * inv_grid);
   }
+  Vec2 point(std::uint64_t i, CounterRng& rng) const { return point(cell(i), rng); }
 };
 
 // The window the parallel rays along -v start from: origin0 + a e1 + b e2, (a, b) in [0,1]^2.

@@ -79,6 +79,19 @@ struct DownwardRays {
   double margin = 0;         // past the tile border (Tracer::trace)
   double run_x = 0, run_y = 0;  // xy travelled per unit of height descended (prefetch_front)
   bool lean = false;         // the dedicated path applies (periodic heightfield)
+  // Constants of the lean path, so that a ray costs no division in the common case:
+  double z0 = 0, t_slab0 = 0;   // the window's height (Tracer::z_top) and the distance from it
+                                // to the slab bottom along dir
+  double inv_x = 0, inv_y = 0;  // 1 / dir.x, 1 / dir.y (0 for a zero component)
+  double cells_x = 0, cells_y = 0;  // cells of Embree's grid (its hit u, v run over them)
+  // Decoding a hit (Tracer::front_facet). Grid coordinates u (cells_x) and v (cells_y) further
+  // than `band` cells from their cell's borders and diagonal name the cell and the half directly
+  // (Embree rounds them within a few 1e-7 of the grid size, see DownwardRays()); and when
+  // (Ng.dir)^2 > graze |Ng|^2 the sign of Embree's float normal Ng along dir is that of the
+  // facet's exact normal. Anything closer takes the checked decoding (the facet whose normal is
+  // aligned with Ng, the back face from the exact normal). exact_decode: always the checked one.
+  double band = 0, graze = 0;
+  bool exact_decode = false;
 };
 
 class Tracer {
