@@ -20,8 +20,8 @@ namespace microsim {
 
 constexpr int kDefaultReplicates = 32;
 
-// How `rays` requested rays are split: R replicates of `per_replicate` rays each (each rounded
-// up to whole strata, so the total is >= rays). R is lowered to `rays` for tiny requests.
+// How `rays` requested rays are split: R replicates of ceil(rays / R) rays each (the total is
+// rays rounded up to a multiple of R). R is lowered to `rays` for tiny requests.
 struct ReplicatePlan {
   int replicates = 1;
   Strata strata{1};

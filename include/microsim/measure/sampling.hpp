@@ -1,41 +1,50 @@
 // Sampling pieces shared by the estimators: stratified, Morton-ordered points of the unit
 // square, and the window that parallel rays along -v start from.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 
 #include "microsim/trace/tracer.hpp"
 
 namespace microsim {
 
-// Stratified origins: a G x G grid of strata (G a power of two, G^2 <= n) visited in Morton
-// order, r points per stratum; the count is rounded up to r G^2.
+// Stratified origins along the Morton (Z-order) curve: point i of n lies in the i-th of n equal
+// pieces [i/n, (i+1)/n) of the curve through a 2^16 x 2^16 grid of equal fine cells, uniform
+// inside it. Every piece has area 1/n, so the count is exactly n, whatever n (no rounding up to
+// whole squares); consecutive points are close on the tile (coherent rays); for n = r 4^k the
+// pieces tile each of the 4^k Morton squares r at a time. The fine cell is drawn by where a
+// uniform position along the piece falls, the point uniform inside that cell: each fine cell is
+// reached with the probability of its share of the piece, so the n pieces together sample the
+// square uniformly.
 struct Strata {
-  std::uint32_t grid = 1;
-  std::uint64_t per_stratum = 1;
-  double inv_grid = 1;  // 1 / grid, exact (a power of two): the same quotients as a division
-  explicit Strata(std::uint64_t n) {
-    while (static_cast<std::uint64_t>(grid) * 2 * grid * 2 <= n && grid < (1u << 15)) grid *= 2;
-    std::uint64_t cells = static_cast<std::uint64_t>(grid) * grid;
-    per_stratum = (n + cells - 1) / cells;
-    inv_grid = 1.0 / grid;
-  }
-  std::uint64_t total() const { return per_stratum * grid * grid; }
-  // The stratum of point i (the same for every replicate's point i).
+  static constexpr int kFineBits = 16;  // fine cells per side: 2^16
+  static constexpr std::uint64_t kFineCells = std::uint64_t(1) << (2 * kFineBits);
+  std::uint64_t n = 1;
+  double cells_per_piece = static_cast<double>(kFineCells);  // 4^16 / n
+  explicit Strata(std::uint64_t count)
+      : n(count > 0 ? count : 1),
+        cells_per_piece(static_cast<double>(kFineCells) / static_cast<double>(n)) {}
+  std::uint64_t total() const { return n; }
+  // Point i's piece of the curve (the same for every replicate's point i): its start, in fine
+  // cells along the curve.
   struct Cell {
-    std::uint32_t x = 0, y = 0;
+    double start = 0;
   };
-  Cell cell(std::uint64_t i) const {
-    Cell c;
-    morton_decode(i / per_stratum, c.x, c.y);
-    return c;
-  }
-  // Point i, given its stratum cell(i).
+  Cell cell(std::uint64_t i) const { return Cell{static_cast<double>(i) * cells_per_piece}; }
+  // Point i, given its piece cell(i).
   Vec2 point(const Cell& c, CounterRng& rng) const {
-    // Two statements: the order of a call's arguments is unspecified (GCC and Clang differ),
-    // and the draws must not depend on the compiler. y first keeps earlier GCC results.
-    const double jy = rng.uniform();
+    // Separate statements: the order of a call's arguments is unspecified (GCC and Clang
+    // differ), and the draws must not depend on the compiler.
+    const double along = rng.uniform();
     const double jx = rng.uniform();
-    return Vec2((c.x + jx) * inv_grid, (c.y + jy) * inv_grid);
+    const double jy = rng.uniform();
+    // Fine cell index along the curve; the clamp keeps a rounding at the very end inside.
+    const double pos = c.start + along * cells_per_piece;
+    const std::uint64_t code = std::min(static_cast<std::uint64_t>(pos), kFineCells - 1);
+    std::uint32_t fx, fy;
+    morton_decode(code, fx, fy);
+    constexpr double kInvSide = 1.0 / static_cast<double>(1u << kFineBits);  // exact
+    return Vec2((fx + jx) * kInvSide, (fy + jy) * kInvSide);
   }
   Vec2 point(std::uint64_t i, CounterRng& rng) const { return point(cell(i), rng); }
 };
