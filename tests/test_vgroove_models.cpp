@@ -16,6 +16,7 @@
 #include <microsim/models/vgroove_multiple.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <random>
 #include <vector>
@@ -229,12 +230,14 @@ TEST(VCavityMultiple, QuadratureEqualsMonteCarloOverGrooves) {
 
 namespace {
 
-microsim::BsdfResult mirror_bsdf(const microsim::Microsurface& s, double theta_deg, std::uint64_t rays) {
+microsim::BsdfResult mirror_bsdf(const microsim::Microsurface& s, double theta_deg, std::uint64_t rays,
+                                 std::uint64_t seed = 1) {
   microsim::Tracer tracer(s);
   microsim::BsdfOptions o;
   o.theta_i = rad(theta_deg);
   o.rays = rays;
   o.resolution = 8;
+  o.seed = seed;
   return microsim::measure_bsdf(tracer, o);
 }
 
@@ -286,31 +289,44 @@ TEST(BsdfObjectRows, VGrooveOrdersAgainstTheClosedForm) {
 
 TEST(BsdfObjectRows, AnOrderNoPathReachedHasTheErrorOfItsPathCount) {
   // A V-cavity ensemble at theta_i = 70 deg with few paths: order 3 has a closed-form albedo of
-  // order 1/paths, and no path may land in it. Its error is then the resolution of the path
-  // count (stats.hpp proportion_floor, ~0.7/n), not zero (which gave z = -inf). Power: the
-  // floor stays that small, so a model 10/n away from the count is still rejected.
+  // order 1/paths, so that some realizations land no path in it. Its error is then the
+  // resolution of the path count (stats.hpp proportion_floor, ~0.7/n), not zero (which gave
+  // z = -inf). The seeds are searched in order for the first realization with such an empty
+  // order (bounded: about one realization in three has one, so 32 seeds all miss it with
+  // probability ~1e-5 whatever the sampler's realizations). Power: the floor stays that small,
+  // so a model 10/n away from the count is still rejected.
   using namespace microsim;
   VCavityParams vp;
   vp.grooves = 512;
   Microsurface s = generate_vcavity(vp);
-  const BsdfResult r = mirror_bsdf(s, 70.0, 25000);
-  std::vector<validation::Row> rows;
-  append_bsdf_object_rows(r, s, validation::Row{}, "theta 70", "vc", Json::object(), rows);
-  const double floor = proportion_floor(r.measured.paths);
-  ASSERT_GT(floor, 0);
-  int empty = 0, tested = 0;
-  for (const auto& row : rows) {
-    if (row.model_name != "vcavity_multiple_grooves") continue;
-    ASSERT_TRUE(row.stderr_.has_value());
-    EXPECT_GE(*row.stderr_, floor) << row.quantity;
-    const double z = (row.measured - *row.model) / *row.stderr_;
-    EXPECT_LT(std::abs(z), 3.5) << row.quantity << " " << row.measured << " vs " << *row.model;
-    ++tested;
-    if (row.measured == 0 && *row.model > 0) {
-      ++empty;
-      EXPECT_GT(std::abs(row.measured - (*row.model + 10.0 / r.measured.paths)) / *row.stderr_, 3.5);
+  constexpr std::uint64_t kSeeds = 32;
+  for (std::uint64_t seed = 1; seed <= kSeeds; ++seed) {
+    const BsdfResult r = mirror_bsdf(s, 70.0, 25000, seed);
+    std::vector<validation::Row> rows;
+    append_bsdf_object_rows(r, s, validation::Row{}, "theta 70", "vc", Json::object(), rows);
+    bool has_empty = false;
+    for (const auto& row : rows)
+      has_empty |= row.model_name == "vcavity_multiple_grooves" && row.measured == 0 && *row.model > 0;
+    if (!has_empty) continue;
+    const double floor = proportion_floor(r.measured.paths);
+    ASSERT_GT(floor, 0);
+    int empty = 0, tested = 0;
+    for (const auto& row : rows) {
+      if (row.model_name != "vcavity_multiple_grooves") continue;
+      ASSERT_TRUE(row.stderr_.has_value());
+      EXPECT_GE(*row.stderr_, floor) << row.quantity;
+      const double z = (row.measured - *row.model) / *row.stderr_;
+      EXPECT_LT(std::abs(z), 3.5) << row.quantity << " " << row.measured << " vs " << *row.model << " seed " << seed;
+      ++tested;
+      if (row.measured == 0 && *row.model > 0) {
+        ++empty;
+        EXPECT_GT(std::abs(row.measured - (*row.model + 10.0 / r.measured.paths)) / *row.stderr_, 3.5);
+      }
     }
+    EXPECT_GE(tested, 3);
+    EXPECT_GE(empty, 1);
+    std::printf("[ info ] seed %llu: %d empty order(s) among %d rows\n", static_cast<unsigned long long>(seed), empty, tested);
+    return;
   }
-  EXPECT_GE(tested, 3);
-  EXPECT_GE(empty, 1);  // the case this test is about occurs for these paths and seed
+  FAIL() << "no realization of seeds 1.." << kSeeds << " left an order empty";
 }
