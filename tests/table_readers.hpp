@@ -196,15 +196,26 @@ class RglReader {
   bool sample(const Vec2& xi, Vec3* wo, double* pdf) const {
     const Vec2 s = lum_.sample(xi);
     const Vec2 um = vndf_.sample(s);
-    const double th = um.x() * um.x() * 0.5 * kPi;
-    const double ph = (2 * um.y() - 1) * kPi + (iso_ ? phi_i_ : 0.0);
-    const Vec3 m = direction_from_angles(th, ph);
+    const Vec3 m = half_vector(um);
     *wo = 2.0 * wi().dot(m) * m - wi();
     *pdf = lum_.pdf(s) * vndf_.pdf(um) / jac(um, m);
     return wo->z() > 0;
   }
+  // The sample grid (resolution() x resolution() vertices of `spectra`) and the outgoing
+  // direction its vertex (i, j) stands for: the vndf warp's image of the vertex, reflected.
+  int resolution() const { return R_; }
+  Vec3 vertex_direction(int i, int j) const {
+    const Vec2 um = vndf_.sample(Vec2(static_cast<double>(i) / (R_ - 1), static_cast<double>(j) / (R_ - 1)));
+    const Vec3 m = half_vector(um);
+    return 2.0 * wi().dot(m) * m - wi();
+  }
 
  private:
+  Vec3 half_vector(const Vec2& um) const {
+    const double th = um.x() * um.x() * 0.5 * kPi;
+    const double ph = (2 * um.y() - 1) * kPi + (iso_ ? phi_i_ : 0.0);
+    return direction_from_angles(th, ph);
+  }
   static double u_theta(double t) { return std::sqrt(t / (0.5 * kPi)); }
   static double u_phi(double p) { return (p + kPi) / (2 * kPi); }
   Vec2 u_of(const Vec3& m) const {

@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <optional>
 #include <random>
+#include <utility>
+#include <vector>
 
 #include "microsim/io/merl.hpp"
 #include "microsim/io/rgl_bsdf.hpp"
@@ -83,6 +85,43 @@ Agreement agreement(const BsdfResult& r, F&& reader_f, double min_theta_o = 0.0,
     a.chi2 += z * z;
     ++a.n;
   }
+  return a;
+}
+
+// The measured f as the writer fills the RGL file (rgl_bsdf.hpp, "spectra"): bilinear between
+// the pixel centres of the equal-area map, constant beyond the outermost centres.
+double map_f(const BsdfResult& r, const Vec3& wo) {
+  const int R = r.map.resolution(), K = r.options.orders;
+  const Vec2 sq = r.map.to_square(wo);
+  const double x = std::clamp((sq.x() + 1.0) * 0.5 * R - 0.5, 0.0, R - 1.0);
+  const double y = std::clamp((sq.y() + 1.0) * 0.5 * R - 0.5, 0.0, R - 1.0);
+  const int i = std::min(static_cast<int>(x), R - 2), j = std::min(static_cast<int>(y), R - 2);
+  const double a = x - i, b = y - j;
+  auto m = [&](int ii, int jj) { return r.f_pixel(0, K, jj * R + ii).mean; };
+  return (1 - b) * ((1 - a) * m(i, j) + a * m(i + 1, j)) + b * ((1 - a) * m(i, j + 1) + a * m(i + 1, j + 1));
+}
+
+// The reader against the measured f where the format holds it exactly: at the outgoing
+// directions of the sample grid's vertices (wo above the horizon). `max_dev` is the largest
+// |reader - measured| in f cos(theta_o), relative to the largest measured value there.
+constexpr double kFloatExact = 1e-5;
+struct VertexAgreement {
+  double max_dev = 0, peak = 0;
+  int n = 0;
+};
+VertexAgreement at_vertices(const RglReader& reader, const BsdfResult& r) {
+  VertexAgreement a;
+  std::vector<std::pair<double, double>> got_want;
+  for (int j = 0; j < reader.resolution(); ++j)
+    for (int i = 0; i < reader.resolution(); ++i) {
+      const Vec3 wo = reader.vertex_direction(i, j);
+      if (!(wo.z() > 0)) continue;
+      const double want = map_f(r, wo) * wo.z();
+      got_want.emplace_back(reader.eval(wo), want);
+      a.peak = std::max(a.peak, want);
+    }
+  for (const auto& gw : got_want) a.max_dev = std::max(a.max_dev, std::abs(gw.first - gw.second) / a.peak);
+  a.n = static_cast<int>(got_want.size());
   return a;
 }
 
@@ -184,6 +223,14 @@ TEST(RglFile, MirrorWhiteFurnace) {
 
 TEST(RglFile, AnisotropicTableOverTheFullCircle) {
   // An azimuth grid from -180 to 180 degrees: absolute phi_m, one table per (phi_i, theta_i).
+  // Each table is compared with its measurement where the format holds the measurement exactly:
+  // at the sample grid's vertices (at_vertices), to float32 rounding (2^-24 = 6e-8 per stored
+  // value; at most 1.7e-7 of the peak over 12 seeds). Between vertices the reader interpolates
+  // f cos / D over the warped sample square, which rounds off the measured map's kinks at the
+  // pixel centres: on this 12 x 12 map, on a lobe's flank and in the grazing ring (80.8
+  // degrees), that differs from the pixel mean by more than its noise (the largest |z| of the 10
+  // tables at the pixel centres reached 1.02-1.06 times the Sidak bound for 3 of 24 seeds and
+  // samplings), so the pixel centres are no test of the file.
   const BsdfTable t = measure(kGold, {20, 50}, 100000, 12, {-180, -90, 0, 90, 180});
   const RglOptions o;
   const std::string path = temp("gold_aniso.bsdf");
@@ -196,8 +243,15 @@ TEST(RglFile, AnisotropicTableOverTheFullCircle) {
     for (int q = 0; q < 2; ++q) {
       RglReader reader(path, p, q);
       const BsdfResult& r = t.at(p, q);
-      const Agreement a = agreement(r, [&](const Vec3& wo) { return reader.eval(wo) / wo.z(); }, 0.0, 0.05);
-      EXPECT_LT(a.max_abs_z, sidak_z(1e-3, a.n)) << "phi_i " << deg(t.phi_i[p]) << " theta_i " << deg(t.theta_i[q]);
+      const VertexAgreement v = at_vertices(reader, r);
+      EXPECT_GT(v.n, reader.resolution() * reader.resolution() / 2);
+      EXPECT_LT(v.max_dev, kFloatExact) << "phi_i " << deg(t.phi_i[p]) << " theta_i " << deg(t.theta_i[q]);
+      // Power: the file's spectra scaled by 1.02, and this incidence's table against the
+      // measurement of the azimuth 90 degrees on (the table rotated in phi), are rejected.
+      RglReader scaled(path, p, q);
+      scaled.scale_spectra(1.02);
+      EXPECT_GT(at_vertices(scaled, r).max_dev, kFloatExact) << "power check: scaled";
+      EXPECT_GT(at_vertices(reader, t.at((p + 1) % 4, q)).max_dev, kFloatExact) << "power check: rotated";
       double sum = 0.0;
       for (int j = 0; j < map.resolution(); ++j)
         for (int i = 0; i < map.resolution(); ++i)
