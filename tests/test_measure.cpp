@@ -199,20 +199,43 @@ TEST(G1Measure, ResultsDoNotDependOnThreadCount) {
   }
 }
 
+namespace {
+// A tile large enough for the estimators' look-ahead paths (from kAheadMinCells cells on), its
+// tracer and facet table, a view and options: measure_g1 with a given number of threads, to
+// compare with a plain loop over the same rays.
+struct AheadCase {
+  const Microsurface s;
+  const Tracer tracer;
+  const Vec3 v;
+  const G1Options o;
+  const FacetTable table;
+  AheadCase(const Vec3& view, const G1Options& options)
+      : s(generate_gaussian([] {
+          GaussianParams p;
+          p.resolution = 1536;
+          p.correlation_length = 4.0 / 1536;
+          return p;
+        }())),
+        tracer(s), v(view), o(options), table(build_facet_table(s, g1_normal_binning(o))) {}
+  G1Result measure(int threads) const {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, threads);
+    return measure_g1(tracer, v, o, &table);
+  }
+};
+}  // namespace
+
 TEST(G1Measure, LargeTileRaysTracedAheadCountTheSameHitsAsAPlainLoop) {
   // From kAheadMinCells cells on, estimator (a) sets its rays up ahead of tracing them
   // (trace/ray_pipeline.hpp): its hits must equal, ray for ray in total and for 1 and 2
   // threads, those of a plain loop of front_facet over the same rays (same streams, strata and
   // window). Power: the plain loop with another seed counts differently.
-  GaussianParams p;
-  p.resolution = 1536;
-  p.correlation_length = 4.0 / 1536;
-  const Microsurface s = generate_gaussian(p);
-  ASSERT_GE(double(s.nx()) * s.ny(), kAheadMinCells);
-  const Tracer tracer(s);
-  const Vec3 v = direction_from_angles(rad(60), 0.5);
-  const G1Options o = opts(64000, 9);
-  const FacetTable table = build_facet_table(s, g1_normal_binning(o));
+  const AheadCase t(direction_from_angles(rad(60), 0.5), opts(64000, 9));
+  ASSERT_GE(double(t.s.nx()) * t.s.ny(), kAheadMinCells);
+  const Microsurface& s = t.s;
+  const Tracer& tracer = t.tracer;
+  const Vec3 v = t.v;
+  const G1Options& o = t.o;
+  const FacetTable& table = t.table;
   // Hits per normal bin and replicate.
   auto plain = [&](std::uint64_t seed) {
     const RayWindow w = make_ray_window(tracer, v);
@@ -231,11 +254,7 @@ TEST(G1Measure, LargeTileRaysTracedAheadCountTheSameHitsAsAPlainLoop) {
       }
     return hits;
   };
-  auto run = [&](int threads) {
-    tbb::global_control c(tbb::global_control::max_allowed_parallelism, threads);
-    return measure_g1(tracer, v, o, &table);
-  };
-  const G1Result a = run(1), b = run(2);
+  const G1Result a = t.measure(1), b = t.measure(2);
   const auto expected = plain(o.seed), other_seed = plain(o.seed + 1);
   ASSERT_EQ(static_cast<std::size_t>(a.binning.size()), expected.size());
   int differ = 0;
@@ -252,15 +271,13 @@ TEST(G1Measure, LargeTileAreaSamplesDrawnAheadCountTheSameAsAPlainLoop) {
   // the drawn block's data prefetched: its samples and visible counts per bin and replicate
   // must equal, for 1 and 2 threads, those of a plain loop of the same draws (same streams,
   // cumulative weights, sample points and occlusion rays). Power: another seed differs.
-  GaussianParams p;
-  p.resolution = 1536;
-  p.correlation_length = 4.0 / 1536;
-  const Microsurface s = generate_gaussian(p);
-  ASSERT_GE(double(s.nx()) * s.ny(), kAheadMinCells);
-  const Tracer tracer(s);
-  const Vec3 v = direction_from_angles(rad(80), 2.0);
-  const G1Options o = opts(64000, 5);
-  const FacetTable table = build_facet_table(s, g1_normal_binning(o));
+  const AheadCase t(direction_from_angles(rad(80), 2.0), opts(64000, 5));
+  ASSERT_GE(double(t.s.nx()) * t.s.ny(), kAheadMinCells);
+  const Microsurface& s = t.s;
+  const Tracer& tracer = t.tracer;
+  const Vec3 v = t.v;
+  const G1Options& o = t.o;
+  const FacetTable& table = t.table;
   const std::size_t nf = s.num_facets();
   const auto weights = [&](std::size_t k0, std::size_t k1, double* w) {
     table.for_each_cross(k0, k1, [&](std::size_t k, const Vec3& c) { w[k - k0] = std::max(0.0, 0.5 * c.dot(v)); });
@@ -290,11 +307,7 @@ TEST(G1Measure, LargeTileAreaSamplesDrawnAheadCountTheSameAsAPlainLoop) {
       }
     return c;
   };
-  auto run = [&](int threads) {
-    tbb::global_control c(tbb::global_control::max_allowed_parallelism, threads);
-    return measure_g1(tracer, v, o, &table);
-  };
-  const G1Result a = run(1), b = run(2);
+  const G1Result a = t.measure(1), b = t.measure(2);
   const Counts expected = plain(o.seed), other_seed = plain(o.seed + 1);
   ASSERT_EQ(static_cast<std::size_t>(a.binning.size()), expected.samples.size());
   int differ = 0;
