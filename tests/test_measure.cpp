@@ -231,31 +231,26 @@ TEST(G1Measure, LargeTileRaysTracedAheadCountTheSameHitsAsAPlainLoop) {
   // window). Power: the plain loop with another seed counts differently.
   const AheadCase t(direction_from_angles(rad(60), 0.5), opts(64000, 9));
   ASSERT_GE(double(t.s.nx()) * t.s.ny(), kAheadMinCells);
-  const Microsurface& s = t.s;
-  const Tracer& tracer = t.tracer;
-  const Vec3 v = t.v;
-  const G1Options& o = t.o;
-  const FacetTable& table = t.table;
   // Hits per normal bin and replicate.
   auto plain = [&](std::uint64_t seed) {
-    const RayWindow w = make_ray_window(tracer, v);
-    const ReplicatePlan plan(o.rays, o.replicates);
-    const DownwardRays down(tracer, v);
-    const std::uint64_t key = direction_stream_key(v);
-    std::vector<std::vector<std::uint64_t>> hits(g1_normal_binning(o).size(),
+    const RayWindow w = make_ray_window(t.tracer, t.v);
+    const ReplicatePlan plan(t.o.rays, t.o.replicates);
+    const DownwardRays down(t.tracer, t.v);
+    const std::uint64_t key = direction_stream_key(t.v);
+    std::vector<std::vector<std::uint64_t>> hits(g1_normal_binning(t.o).size(),
                                                  std::vector<std::uint64_t>(plan.replicates));
     TraceCounters c;
     for (int q = 0; q < plan.replicates; ++q)
       for (std::uint64_t j = 0; j < plan.per_replicate(); ++j) {
         CounterRng rng(seed, ReplicatePlan::stream(0xA000 + key, q), j);
         const Vec2 ab = plan.strata.point(j, rng);
-        const std::size_t k = tracer.front_facet(down, w.origin0 + ab.x() * w.e1 + ab.y() * w.e2, c);
-        if (k < s.num_facets()) ++hits[table.bin(k)][q];
+        const std::size_t k = t.tracer.front_facet(down, w.origin0 + ab.x() * w.e1 + ab.y() * w.e2, c);
+        if (k < t.s.num_facets()) ++hits[t.table.bin(k)][q];
       }
     return hits;
   };
   const G1Result a = t.measure(1), b = t.measure(2);
-  const auto expected = plain(o.seed), other_seed = plain(o.seed + 1);
+  const auto expected = plain(t.o.seed), other_seed = plain(t.o.seed + 1);
   ASSERT_EQ(static_cast<std::size_t>(a.binning.size()), expected.size());
   int differ = 0;
   for (int k = 0; k < a.binning.size(); ++k) {
@@ -273,23 +268,18 @@ TEST(G1Measure, LargeTileAreaSamplesDrawnAheadCountTheSameAsAPlainLoop) {
   // cumulative weights, sample points and occlusion rays). Power: another seed differs.
   const AheadCase t(direction_from_angles(rad(80), 2.0), opts(64000, 5));
   ASSERT_GE(double(t.s.nx()) * t.s.ny(), kAheadMinCells);
-  const Microsurface& s = t.s;
-  const Tracer& tracer = t.tracer;
-  const Vec3 v = t.v;
-  const G1Options& o = t.o;
-  const FacetTable& table = t.table;
-  const std::size_t nf = s.num_facets();
+  const std::size_t nf = t.s.num_facets();
   const auto weights = [&](std::size_t k0, std::size_t k1, double* w) {
-    table.for_each_cross(k0, k1, [&](std::size_t k, const Vec3& c) { w[k - k0] = std::max(0.0, 0.5 * c.dot(v)); });
+    t.table.for_each_cross(k0, k1, [&](std::size_t k, const Vec3& c) { w[k - k0] = std::max(0.0, 0.5 * c.dot(t.v)); });
   };
   const BlockFacetSampler sampler(nf, BlockFacetSampler::Blocks{}, weights);
   struct Counts {
     std::vector<std::vector<std::uint64_t>> samples, visible;  // [bin][replicate]
   };
   auto plain = [&](std::uint64_t seed) {
-    const ReplicatePlan plan(o.rays, o.replicates);
-    const std::uint64_t key = direction_stream_key(v), n = plan.per_replicate();
-    const std::size_t nb = g1_normal_binning(o).size();
+    const ReplicatePlan plan(t.o.rays, t.o.replicates);
+    const std::uint64_t key = direction_stream_key(t.v), n = plan.per_replicate();
+    const std::size_t nb = g1_normal_binning(t.o).size();
     Counts c{std::vector<std::vector<std::uint64_t>>(nb, std::vector<std::uint64_t>(plan.replicates)),
              std::vector<std::vector<std::uint64_t>>(nb, std::vector<std::uint64_t>(plan.replicates))};
     TraceCounters tc;
@@ -299,16 +289,16 @@ TEST(G1Measure, LargeTileAreaSamplesDrawnAheadCountTheSameAsAPlainLoop) {
         const double u = (static_cast<double>(j) + rng.uniform()) / n * sampler.total();
         // no search hint: the same facet
         const std::size_t k = sampler.draw(u, BlockFacetSampler::Blocks{}, weights);
-        const Triangle f = facet_triangle(s, k);
+        const Triangle f = facet_triangle(t.s, k);
         const double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
         const SourcePlane plane = SourcePlane::of(f);
-        ++c.samples[table.bin(k)][q];
-        if (!tracer.occluded(f.point(r1 * (1 - r2), r1 * r2), v, &plane, tc)) ++c.visible[table.bin(k)][q];
+        ++c.samples[t.table.bin(k)][q];
+        if (!t.tracer.occluded(f.point(r1 * (1 - r2), r1 * r2), t.v, &plane, tc)) ++c.visible[t.table.bin(k)][q];
       }
     return c;
   };
   const G1Result a = t.measure(1), b = t.measure(2);
-  const Counts expected = plain(o.seed), other_seed = plain(o.seed + 1);
+  const Counts expected = plain(t.o.seed), other_seed = plain(t.o.seed + 1);
   ASSERT_EQ(static_cast<std::size_t>(a.binning.size()), expected.samples.size());
   int differ = 0;
   std::uint64_t occluded = 0;
