@@ -105,9 +105,11 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
 
   // Area sampling: the stratified samples of every replicate along the view's CDF, each groove
   // handling the contiguous run of each replicate's samples on its two sides.
+  // Only the replicates of this process are traced (measure/shards.hpp).
+  const UnitRange reps = share_of(o.split, static_cast<std::uint64_t>(R));
   std::vector<CdfSamples> sample_facet;
   for (std::size_t iv = 0; iv < nv; ++iv)
-    sample_facet.emplace_back(cdfs[iv], o.seed, stream_of(0xC000, iv), n_samples, UnitRange{0, static_cast<std::uint64_t>(R)});
+    sample_facet.emplace_back(cdfs[iv], o.seed, stream_of(0xC000, iv), n_samples, reps);
   std::vector<Counts> counts(nv * R * nbins);
   auto at = [&](std::size_t iv, int q, int b) -> Counts& {
     return counts[(iv * R + q) * nbins + b];
@@ -128,7 +130,7 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
       TraceCounters& tc = groove_counters[k * nv + iv];
       const Vec3 v = results[iv].v;
       const Vec3 vl(v.dot(d), v.dot(t), v.z());
-      for (int q = 0; q < R; ++q) {
+      for (int q = static_cast<int>(reps.first); q < static_cast<int>(reps.end); ++q) {
         std::uint64_t hits[2] = {0, 0}, samples[2] = {0, 0}, visible[2] = {0, 0};
         // (a) stratified rays over the tile along -v.
         const std::uint64_t stream =
@@ -161,6 +163,31 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
     }
   });
 
+  for (std::size_t iv = 0; iv < nv; ++iv)  // in groove order
+    for (std::size_t k = 0; k < K; ++k) results[iv].counters += groove_counters[k * nv + iv];
+  if (o.split)  // the other processes' replicates, view by view, in measure_g1's layout
+    for (std::size_t iv = 0; iv < nv; ++iv) {
+      const std::size_t nb = static_cast<std::size_t>(nbins);
+      Tallies t("g1", R, reps, 3 * nb, 0, kCounterValues, 0);
+      for (int q = 0; q < R; ++q)
+        for (int b = 0; b < nbins; ++b) {
+          std::uint64_t* row = t.count_row(q);
+          row[b] = at(iv, q, b).hits;
+          row[nb + b] = at(iv, q, b).samples;
+          row[2 * nb + b] = at(iv, q, b).visible;
+        }
+      put_counters(results[iv].counters, t.tail_counts.data());
+      o.split->exchange(t);
+      for (int q = 0; q < R; ++q)
+        for (int b = 0; b < nbins; ++b) {
+          const std::uint64_t* row = t.count_row(q);
+          at(iv, q, b).hits = row[b];
+          at(iv, q, b).samples = row[nb + b];
+          at(iv, q, b).visible = row[2 * nb + b];
+        }
+      results[iv].counters = get_counters(t.tail_counts.data());
+    }
+
   // Per-replicate counts into the results.
   for (std::size_t iv = 0; iv < nv; ++iv) {
     G1Result& r = results[iv];
@@ -186,8 +213,6 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
       r.sample_visible += nb.visible;
     }
   }
-  for (std::size_t iv = 0; iv < nv; ++iv)  // in groove order
-    for (std::size_t k = 0; k < K; ++k) results[iv].counters += groove_counters[k * nv + iv];
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (auto& r : results) r.seconds = seconds / nv;
   if (o.progress) o.progress(1.0);
