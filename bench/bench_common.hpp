@@ -163,4 +163,82 @@ inline Rate replay_rays_per_second(const Tracer& tracer, const std::vector<RTCRa
   return replay_rays_per_second(tracer.scene(), rays);
 }
 
+// --- Pieces of the bare loops, shared by the large-tile experiments (bench_large.hpp) ---------
+
+// A rate of `rays` rays over the wall time since t0 and the processor time since c0.
+inline Rate rate_since(double rays, std::chrono::steady_clock::time_point t0, double c0) {
+  const double wall = seconds_since(t0), cpu = cpu_seconds() - c0;
+  return {rays / wall, rays / cpu};
+}
+
+// Estimator (a)'s or (b)'s ray indices as measure_g1 orders them: R replicates of n rays in
+// chunks of `span` ray indices (ray j of every replicate in turn), and the replicates' streams
+// for a base stream (0xA000: primary rays, 0xB000: area samples) of the direction v.
+struct G1RayChunks {
+  ReplicatePlan plan;
+  int R;
+  std::uint64_t n, span, chunks;
+  std::vector<std::uint64_t> streams;
+  G1RayChunks(const Vec3& v, const G1Options& o, std::uint64_t base)
+      : plan(o.rays, o.replicates), R(plan.replicates), n(plan.per_replicate()),
+        span(std::max<std::uint64_t>(1, (1u << 14) / R)), chunks((n + span - 1) / span), streams(R) {
+    for (int q = 0; q < R; ++q) streams[q] = ReplicatePlan::stream(base + direction_stream_key(v), q);
+  }
+  std::uint64_t first(std::uint64_t c) const { return c * span; }
+  std::uint64_t end(std::uint64_t c) const { return std::min(n, (c + 1) * span); }
+};
+
+// A plain Embree query from `org` along `dir` to infinity (no instance, no hit yet).
+inline RTCRayHit bare_ray_hit(const Vec3& org, const float dir[3]) {
+  RTCRayHit rh{};
+  rh.ray.org_x = float(org.x());
+  rh.ray.org_y = float(org.y());
+  rh.ray.org_z = float(org.z());
+  rh.ray.dir_x = dir[0];
+  rh.ray.dir_y = dir[1];
+  rh.ray.dir_z = dir[2];
+  rh.ray.tfar = 1e30f;
+  rh.ray.mask = ~0u;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  return rh;
+}
+
+// The w x h grid points (i0 + i - 1, j0 + j - 1) of a periodic heightfield (the Tracer's grid
+// padded by one cell around the tile) as float triples, row by row, into `out`.
+inline void grid_vertices(const Microsurface& s, int i0, int j0, int w, int h, float* out) {
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      const Vec3 p = s.grid_point(i0 + i - 1, j0 + j - 1);
+      float* q = out + 3 * (static_cast<std::size_t>(j) * w + i);
+      q[0] = float(p.x());
+      q[1] = float(p.y());
+      q[2] = float(p.z());
+    }
+}
+
+// One grid geometry over `gw` x `gh` shared vertices (row stride gw, e.g. from grid_vertices),
+// split into grid primitives of at most block x block cells (block 0: one primitive), committed
+// and attached to `scene`.
+inline void attach_grid_blocks(RTCDevice device, RTCScene scene, const float* vertices, int gw, int gh, int block) {
+  RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_GRID);
+  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, vertices, 0, 12,
+                             static_cast<std::size_t>(gw) * gh);
+  const int cells_x = gw - 1, cells_y = gh - 1, b = block > 0 ? block : std::max(cells_x, cells_y);
+  const int bx = (cells_x + b - 1) / b, by = (cells_y + b - 1) / b;
+  auto* grids = static_cast<RTCGrid*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_GRID, 0, RTC_FORMAT_GRID,
+                                                              sizeof(RTCGrid), static_cast<std::size_t>(bx) * by));
+  for (int jb = 0; jb < by; ++jb)
+    for (int ib = 0; ib < bx; ++ib) {
+      RTCGrid& r = grids[jb * bx + ib];
+      r.startVertexID = static_cast<unsigned>(static_cast<std::size_t>(jb) * b * gw + static_cast<std::size_t>(ib) * b);
+      r.stride = static_cast<unsigned>(gw);
+      r.width = static_cast<unsigned short>(std::min(b, cells_x - ib * b) + 1);
+      r.height = static_cast<unsigned short>(std::min(b, cells_y - jb * b) + 1);
+    }
+  rtcCommitGeometry(g);
+  rtcAttachGeometry(scene, g);
+  rtcReleaseGeometry(g);
+}
+
 }  // namespace microsim::bench

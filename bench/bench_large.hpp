@@ -70,17 +70,12 @@ inline Rate batch_rays_per_second(const Tracer& tracer, RTCScene scene, const Ve
                                   const G1Options& o, Batch batch, std::uint64_t* hits_out) {
   const Vec3 v = v_in.normalized();
   const RayWindow w = make_ray_window(tracer, v);
-  const ReplicatePlan plan(o.rays, o.replicates);
-  const int R = plan.replicates;
-  const std::uint64_t n = plan.per_replicate(), span = std::max<std::uint64_t>(1, (1u << 14) / R);
-  const std::uint64_t key = direction_stream_key(v), nc = (n + span - 1) / span;
-  std::vector<std::uint64_t> streams(R);
-  for (int q = 0; q < R; ++q) streams[q] = ReplicatePlan::stream(0xA000 + key, q);
-  std::vector<unsigned> hits(nc);
+  const G1RayChunks rays(v, o, 0xA000);
+  std::vector<unsigned> hits(rays.chunks);
   const float dir[3] = {float(-v.x()), float(-v.y()), float(-v.z())};
   const auto t0 = std::chrono::steady_clock::now();
   const double c0 = cpu_seconds();
-  tbb::parallel_for(std::uint64_t(0), nc, [&](std::uint64_t c) {
+  tbb::parallel_for(std::uint64_t(0), rays.chunks, [&](std::uint64_t c) {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     if (batch != Batch::Single) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -92,17 +87,7 @@ inline Rate batch_rays_per_second(const Tracer& tracer, RTCScene scene, const Ve
       switch (batch) {
         case Batch::Single:
           for (const Vec3& p : org) {
-            RTCRayHit rh{};
-            rh.ray.org_x = float(p.x());
-            rh.ray.org_y = float(p.y());
-            rh.ray.org_z = float(p.z());
-            rh.ray.dir_x = dir[0];
-            rh.ray.dir_y = dir[1];
-            rh.ray.dir_z = dir[2];
-            rh.ray.tfar = 1e30f;
-            rh.ray.mask = ~0u;
-            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-            rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+            RTCRayHit rh = bare_ray_hit(p, dir);
             rtcIntersect1(scene, &ctx, &rh);
             count += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
           }
@@ -117,20 +102,7 @@ inline Rate batch_rays_per_second(const Tracer& tracer, RTCScene scene, const Ve
           count += trace_packets<16, RTCRayHit16>(scene, ctx, org, dir, [&](const int* va, RTCIntersectContext* cx, RTCRayHit16* p) { rtcIntersect16(va, scene, cx, p); });
           break;
         case Batch::Stream: {
-          for (std::size_t k = 0; k < org.size(); ++k) {
-            RTCRayHit& rh = stream[k];
-            rh = RTCRayHit{};
-            rh.ray.org_x = float(org[k].x());
-            rh.ray.org_y = float(org[k].y());
-            rh.ray.org_z = float(org[k].z());
-            rh.ray.dir_x = dir[0];
-            rh.ray.dir_y = dir[1];
-            rh.ray.dir_z = dir[2];
-            rh.ray.tfar = 1e30f;
-            rh.ray.mask = ~0u;
-            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-            rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-          }
+          for (std::size_t k = 0; k < org.size(); ++k) stream[k] = bare_ray_hit(org[k], dir);
           rtcIntersect1M(scene, &ctx, stream.data(), static_cast<unsigned>(org.size()), sizeof(RTCRayHit));
           for (std::size_t k = 0; k < org.size(); ++k) count += stream[k].hit.geomID != RTC_INVALID_GEOMETRY_ID;
           break;
@@ -138,21 +110,21 @@ inline Rate batch_rays_per_second(const Tracer& tracer, RTCScene scene, const Ve
       }
       org.clear();
     };
-    for (std::uint64_t j = c * span; j < std::min(n, (c + 1) * span); ++j)
-      for (int rep = 0; rep < R; ++rep) {
-        CounterRng rng(o.seed, streams[rep], j);
-        const Vec2 ab = plan.strata.point(j, rng);
+    for (std::uint64_t j = rays.first(c); j < rays.end(c); ++j)
+      for (int rep = 0; rep < rays.R; ++rep) {
+        CounterRng rng(o.seed, rays.streams[rep], j);
+        const Vec2 ab = rays.plan.strata.point(j, rng);
         org.push_back(w.origin0 + ab.x() * w.e1 + ab.y() * w.e2);
         if (org.size() == 64) flush();
       }
     flush();
     hits[c] = count;
   });
-  const double wall = seconds_since(t0), cpu = cpu_seconds() - c0;
+  const Rate rate = rate_since(static_cast<double>(rays.plan.total()), t0, c0);
   std::uint64_t total = 0;
   for (unsigned h : hits) total += h;
   *hits_out = total;
-  return {static_cast<double>(plan.total()) / wall, static_cast<double>(plan.total()) / cpu};
+  return rate;
 }
 
 // Another Embree scene of a periodic heightfield's grid (padded by one cell as the Tracer's):
@@ -177,37 +149,14 @@ struct LayoutScene {
       madvise(m, bytes, MADV_HUGEPAGE);
       maps.emplace_back(m, bytes);
       auto* f = static_cast<float*>(m);
-      for (int j = 0; j < h; ++j)
-        for (int i = 0; i < w; ++i) {
-          const Vec3 p = s.grid_point(i0 + i - 1, j0 + j - 1);
-          float* q = f + 3 * (static_cast<std::size_t>(j) * w + i);
-          q[0] = float(p.x());
-          q[1] = float(p.y());
-          q[2] = float(p.z());
-        }
+      grid_vertices(s, i0, j0, w, h, f);
       return f;
     };
     scene = rtcNewScene(device);
     rtcSetSceneFlags(scene, flags);
     rtcSetSceneBuildQuality(scene, quality);
     if (!instances) {
-      float* v = vertex_buffer(0, 0, gw, gh);
-      RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_GRID);
-      rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, v, 0, 12, static_cast<std::size_t>(gw) * gh);
-      const int cells_x = gw - 1, cells_y = gh - 1, b = block > 0 ? block : std::max(cells_x, cells_y);
-      const int bx = (cells_x + b - 1) / b, by = (cells_y + b - 1) / b;
-      auto* grids = static_cast<RTCGrid*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_GRID, 0, RTC_FORMAT_GRID, sizeof(RTCGrid), static_cast<std::size_t>(bx) * by));
-      for (int jb = 0; jb < by; ++jb)
-        for (int ib = 0; ib < bx; ++ib) {
-          RTCGrid& r = grids[jb * bx + ib];
-          r.startVertexID = static_cast<unsigned>(static_cast<std::size_t>(jb) * b * gw + static_cast<std::size_t>(ib) * b);
-          r.stride = gw;
-          r.width = static_cast<unsigned short>(std::min(b, cells_x - ib * b) + 1);
-          r.height = static_cast<unsigned short>(std::min(b, cells_y - jb * b) + 1);
-        }
-      rtcCommitGeometry(g);
-      rtcAttachGeometry(scene, g);
-      rtcReleaseGeometry(g);
+      attach_grid_blocks(device, scene, vertex_buffer(0, 0, gw, gh), gw, gh, block);
     } else {
       const int cells_x = gw - 1, cells_y = gh - 1, b = block;
       for (int jb = 0; jb * b < cells_y; ++jb)
@@ -217,16 +166,7 @@ struct LayoutScene {
           RTCScene sub = rtcNewScene(device);
           rtcSetSceneFlags(sub, flags);
           rtcSetSceneBuildQuality(sub, quality);
-          RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_GRID);
-          rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, v, 0, 12, static_cast<std::size_t>(w) * h);
-          auto* r = static_cast<RTCGrid*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_GRID, 0, RTC_FORMAT_GRID, sizeof(RTCGrid), 1));
-          r->startVertexID = 0;
-          r->stride = w;
-          r->width = static_cast<unsigned short>(w);
-          r->height = static_cast<unsigned short>(h);
-          rtcCommitGeometry(g);
-          rtcAttachGeometry(sub, g);
-          rtcReleaseGeometry(g);
+          attach_grid_blocks(device, sub, v, w, h, 0);
           rtcCommitScene(sub);
           subs.push_back(sub);
           RTCGeometry inst = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
@@ -313,13 +253,11 @@ inline Rate sample_rays_per_second(const Tracer& tracer, const FacetTable& ft, c
   };
   const BlockFacetSampler sampler(nf, BlockFacetSampler::Blocks{}, weights);
   const double total = sampler.total();
-  const ReplicatePlan plan(o.rays, o.replicates);
-  const int R = plan.replicates;
-  const std::uint64_t n = plan.per_replicate(), span = std::max<std::uint64_t>(1, (1u << 14) / R);
-  const std::uint64_t key = direction_stream_key(v), nc = (n + span - 1) / span;
-  std::vector<std::uint64_t> streams(R);
-  for (int q = 0; q < R; ++q) streams[q] = ReplicatePlan::stream(0xB000 + key, q);
-  std::vector<unsigned> vis(nc);
+  const G1RayChunks rays(v, o, 0xB000);
+  const int R = rays.R;
+  const std::uint64_t n = rays.n;
+  const std::vector<std::uint64_t>& streams = rays.streams;
+  std::vector<unsigned> vis(rays.chunks);
   struct Draw {
     CounterRng rng{0, 0, 0};
     double u = 0;
@@ -327,7 +265,7 @@ inline Rate sample_rays_per_second(const Tracer& tracer, const FacetTable& ft, c
   };
   const auto t0 = std::chrono::steady_clock::now();
   const double c0 = cpu_seconds();
-  tbb::parallel_for(std::uint64_t(0), nc, [&](std::uint64_t c) {
+  tbb::parallel_for(std::uint64_t(0), rays.chunks, [&](std::uint64_t c) {
     TraceCounters counters;
     unsigned count = 0;
     std::vector<std::size_t> hint(R, 0);
@@ -338,7 +276,7 @@ inline Rate sample_rays_per_second(const Tracer& tracer, const FacetTable& ft, c
       const SourcePlane plane = SourcePlane::of(f);
       count += ft.bin(k) >= -1 && !tracer.occluded(p, v, &plane, counters);
     };
-    const std::uint64_t j0 = c * span, j1 = std::min(n, (c + 1) * span);
+    const std::uint64_t j0 = rays.first(c), j1 = rays.end(c);
     if (!ahead) {
       for (std::uint64_t j = j0; j < j1; ++j)
         for (int rep = 0; rep < R; ++rep) {
@@ -371,11 +309,11 @@ inline Rate sample_rays_per_second(const Tracer& tracer, const FacetTable& ft, c
     }
     vis[c] = count;
   });
-  const double wall = seconds_since(t0), cpu = cpu_seconds() - c0;
+  const Rate rate = rate_since(static_cast<double>(rays.plan.total()), t0, c0);
   std::uint64_t t = 0;
   for (unsigned x : vis) t += x;
   *visible = t;
-  return {static_cast<double>(plan.total()) / wall, static_cast<double>(plan.total()) / cpu};
+  return rate;
 }
 
 // --only sample: estimator (b)'s rays with and without the look-ahead, interleaved.

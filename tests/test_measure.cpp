@@ -199,44 +199,58 @@ TEST(G1Measure, ResultsDoNotDependOnThreadCount) {
   }
 }
 
+namespace {
+// A tile large enough for the estimators' look-ahead paths (from kAheadMinCells cells on), its
+// tracer and facet table, a view and options: measure_g1 with a given number of threads, to
+// compare with a plain loop over the same rays.
+struct AheadCase {
+  const Microsurface s;
+  const Tracer tracer;
+  const Vec3 v;
+  const G1Options o;
+  const FacetTable table;
+  AheadCase(const Vec3& view, const G1Options& options)
+      : s(generate_gaussian([] {
+          GaussianParams p;
+          p.resolution = 1536;
+          p.correlation_length = 4.0 / 1536;
+          return p;
+        }())),
+        tracer(s), v(view), o(options), table(build_facet_table(s, g1_normal_binning(o))) {}
+  G1Result measure(int threads) const {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, threads);
+    return measure_g1(tracer, v, o, &table);
+  }
+};
+}  // namespace
+
 TEST(G1Measure, LargeTileRaysTracedAheadCountTheSameHitsAsAPlainLoop) {
   // From kAheadMinCells cells on, estimator (a) sets its rays up ahead of tracing them
   // (trace/ray_pipeline.hpp): its hits must equal, ray for ray in total and for 1 and 2
   // threads, those of a plain loop of front_facet over the same rays (same streams, strata and
   // window). Power: the plain loop with another seed counts differently.
-  GaussianParams p;
-  p.resolution = 1536;
-  p.correlation_length = 4.0 / 1536;
-  const Microsurface s = generate_gaussian(p);
-  ASSERT_GE(double(s.nx()) * s.ny(), kAheadMinCells);
-  const Tracer tracer(s);
-  const Vec3 v = direction_from_angles(rad(60), 0.5);
-  const G1Options o = opts(64000, 9);
-  const FacetTable table = build_facet_table(s, g1_normal_binning(o));
+  const AheadCase t(direction_from_angles(rad(60), 0.5), opts(64000, 9));
+  ASSERT_GE(double(t.s.nx()) * t.s.ny(), kAheadMinCells);
   // Hits per normal bin and replicate.
   auto plain = [&](std::uint64_t seed) {
-    const RayWindow w = make_ray_window(tracer, v);
-    const ReplicatePlan plan(o.rays, o.replicates);
-    const DownwardRays down(tracer, v);
-    const std::uint64_t key = direction_stream_key(v);
-    std::vector<std::vector<std::uint64_t>> hits(g1_normal_binning(o).size(),
+    const RayWindow w = make_ray_window(t.tracer, t.v);
+    const ReplicatePlan plan(t.o.rays, t.o.replicates);
+    const DownwardRays down(t.tracer, t.v);
+    const std::uint64_t key = direction_stream_key(t.v);
+    std::vector<std::vector<std::uint64_t>> hits(g1_normal_binning(t.o).size(),
                                                  std::vector<std::uint64_t>(plan.replicates));
     TraceCounters c;
     for (int q = 0; q < plan.replicates; ++q)
       for (std::uint64_t j = 0; j < plan.per_replicate(); ++j) {
         CounterRng rng(seed, ReplicatePlan::stream(0xA000 + key, q), j);
         const Vec2 ab = plan.strata.point(j, rng);
-        const std::size_t k = tracer.front_facet(down, w.origin0 + ab.x() * w.e1 + ab.y() * w.e2, c);
-        if (k < s.num_facets()) ++hits[table.bin(k)][q];
+        const std::size_t k = t.tracer.front_facet(down, w.origin0 + ab.x() * w.e1 + ab.y() * w.e2, c);
+        if (k < t.s.num_facets()) ++hits[t.table.bin(k)][q];
       }
     return hits;
   };
-  auto run = [&](int threads) {
-    tbb::global_control c(tbb::global_control::max_allowed_parallelism, threads);
-    return measure_g1(tracer, v, o, &table);
-  };
-  const G1Result a = run(1), b = run(2);
-  const auto expected = plain(o.seed), other_seed = plain(o.seed + 1);
+  const G1Result a = t.measure(1), b = t.measure(2);
+  const auto expected = plain(t.o.seed), other_seed = plain(t.o.seed + 1);
   ASSERT_EQ(static_cast<std::size_t>(a.binning.size()), expected.size());
   int differ = 0;
   for (int k = 0; k < a.binning.size(); ++k) {
@@ -252,27 +266,20 @@ TEST(G1Measure, LargeTileAreaSamplesDrawnAheadCountTheSameAsAPlainLoop) {
   // the drawn block's data prefetched: its samples and visible counts per bin and replicate
   // must equal, for 1 and 2 threads, those of a plain loop of the same draws (same streams,
   // cumulative weights, sample points and occlusion rays). Power: another seed differs.
-  GaussianParams p;
-  p.resolution = 1536;
-  p.correlation_length = 4.0 / 1536;
-  const Microsurface s = generate_gaussian(p);
-  ASSERT_GE(double(s.nx()) * s.ny(), kAheadMinCells);
-  const Tracer tracer(s);
-  const Vec3 v = direction_from_angles(rad(80), 2.0);
-  const G1Options o = opts(64000, 5);
-  const FacetTable table = build_facet_table(s, g1_normal_binning(o));
-  const std::size_t nf = s.num_facets();
+  const AheadCase t(direction_from_angles(rad(80), 2.0), opts(64000, 5));
+  ASSERT_GE(double(t.s.nx()) * t.s.ny(), kAheadMinCells);
+  const std::size_t nf = t.s.num_facets();
   const auto weights = [&](std::size_t k0, std::size_t k1, double* w) {
-    table.for_each_cross(k0, k1, [&](std::size_t k, const Vec3& c) { w[k - k0] = std::max(0.0, 0.5 * c.dot(v)); });
+    t.table.for_each_cross(k0, k1, [&](std::size_t k, const Vec3& c) { w[k - k0] = std::max(0.0, 0.5 * c.dot(t.v)); });
   };
   const BlockFacetSampler sampler(nf, BlockFacetSampler::Blocks{}, weights);
   struct Counts {
     std::vector<std::vector<std::uint64_t>> samples, visible;  // [bin][replicate]
   };
   auto plain = [&](std::uint64_t seed) {
-    const ReplicatePlan plan(o.rays, o.replicates);
-    const std::uint64_t key = direction_stream_key(v), n = plan.per_replicate();
-    const std::size_t nb = g1_normal_binning(o).size();
+    const ReplicatePlan plan(t.o.rays, t.o.replicates);
+    const std::uint64_t key = direction_stream_key(t.v), n = plan.per_replicate();
+    const std::size_t nb = g1_normal_binning(t.o).size();
     Counts c{std::vector<std::vector<std::uint64_t>>(nb, std::vector<std::uint64_t>(plan.replicates)),
              std::vector<std::vector<std::uint64_t>>(nb, std::vector<std::uint64_t>(plan.replicates))};
     TraceCounters tc;
@@ -282,20 +289,16 @@ TEST(G1Measure, LargeTileAreaSamplesDrawnAheadCountTheSameAsAPlainLoop) {
         const double u = (static_cast<double>(j) + rng.uniform()) / n * sampler.total();
         // no search hint: the same facet
         const std::size_t k = sampler.draw(u, BlockFacetSampler::Blocks{}, weights);
-        const Triangle f = facet_triangle(s, k);
+        const Triangle f = facet_triangle(t.s, k);
         const double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
         const SourcePlane plane = SourcePlane::of(f);
-        ++c.samples[table.bin(k)][q];
-        if (!tracer.occluded(f.point(r1 * (1 - r2), r1 * r2), v, &plane, tc)) ++c.visible[table.bin(k)][q];
+        ++c.samples[t.table.bin(k)][q];
+        if (!t.tracer.occluded(f.point(r1 * (1 - r2), r1 * r2), t.v, &plane, tc)) ++c.visible[t.table.bin(k)][q];
       }
     return c;
   };
-  auto run = [&](int threads) {
-    tbb::global_control c(tbb::global_control::max_allowed_parallelism, threads);
-    return measure_g1(tracer, v, o, &table);
-  };
-  const G1Result a = run(1), b = run(2);
-  const Counts expected = plain(o.seed), other_seed = plain(o.seed + 1);
+  const G1Result a = t.measure(1), b = t.measure(2);
+  const Counts expected = plain(t.o.seed), other_seed = plain(t.o.seed + 1);
   ASSERT_EQ(static_cast<std::size_t>(a.binning.size()), expected.samples.size());
   int differ = 0;
   std::uint64_t occluded = 0;

@@ -2,6 +2,7 @@
 // beside the four Smith forms (001 eq. 20-23) and the V-cavity model.
 #include <iomanip>
 #include <iostream>
+#include <memory>
 
 #include "cli_common.hpp"
 #include "measure_options.hpp"
@@ -9,6 +10,8 @@
 #include "ensemble.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/measure/g2_measure.hpp"
+#include "microsim/measure/vcavity_measure.hpp"
+#include "microsim/surface/generators.hpp"
 #include "microsim/trace/tracer.hpp"
 
 namespace microsim::cli {
@@ -23,6 +26,11 @@ struct G2CliOptions {
   std::uint64_t seed = 1;
   int replicates = 32;
 };
+
+const char* const kGrooveByGroove =
+    "true for a V-cavity ensemble: 001 Sec. 6.1 made explicit, each groove (normals m, m' drawn "
+    "from (n.m) D(m)) traced on its own as an infinite periodic V-groove, the points drawn over "
+    "the whole ensemble with the weights w_f; `vcavity` (001 eq. 24-25) is then exact";
 
 const char* kForms[] = {"separable", "height_correlated", "direction_correlated",
                         "height_direction_correlated"};
@@ -112,17 +120,28 @@ int run_measure_g2(const G2CliOptions& o, const GlobalOptions& g) {
   TraceCounters counters;
   double build_seconds = 0;
   std::vector<Table> per_surface = measure_over_surfaces(g, o.files, [&](const Microsurface& s, std::size_t k) {
-    if (k == 0) j["surface"] = s.description;
-    Tracer tracer(s);
-    build_seconds += tracer.build_seconds();
-    const FacetTable table = build_facet_table(s, g2_normal_binning(go));
+    // A V-cavity ensemble is measured groove by groove (001 Sec. 6.1), each groove an infinite
+    // periodic V-groove of its own; its stored strips traced together would mask each other.
+    const bool grooves = is_vcavity(s);
+    if (k == 0) {
+      j["surface"] = s.description;
+      j["groove_by_groove"] = grooves;
+      if (grooves) j["definitions"]["groove_by_groove"] = kGrooveByGroove;
+    }
+    std::unique_ptr<Tracer> tracer;
+    FacetTable table;
+    if (!grooves) {
+      tracer = std::make_unique<Tracer>(s);
+      build_seconds += tracer->build_seconds();
+      table = build_facet_table(s, g2_normal_binning(go));
+    }
     Table rows = g2_table();
     for (double p_o : po)
       for (double t_o : to)
         for (double p_i : pi)
           for (double t_i : ti) {
-            G2Result r = measure_g2(tracer, direction_from_angles(rad(t_o), rad(p_o)),
-                                    direction_from_angles(rad(t_i), rad(p_i)), go, &table);
+            const Vec3 vo = direction_from_angles(rad(t_o), rad(p_o)), vi = direction_from_angles(rad(t_i), rad(p_i));
+            G2Result r = grooves ? measure_vcavity_g2(s, vo, vi, go) : measure_g2(*tracer, vo, vi, go, &table);
             counters += r.counters;
             Json& row = add_row(rows, r, s);
             row["theta_o_deg"] = t_o;  // exactly as requested

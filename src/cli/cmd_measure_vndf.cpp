@@ -3,6 +3,7 @@
 // sampler of the surface's nominal NDF.
 #include <iomanip>
 #include <iostream>
+#include <memory>
 
 #include "cli_common.hpp"
 #include "measure_options.hpp"
@@ -10,7 +11,9 @@
 #include "ensemble.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/measure/stats.hpp"
+#include "microsim/measure/vcavity_measure.hpp"
 #include "microsim/measure/vndf_measure.hpp"
+#include "microsim/surface/generators.hpp"
 #include "microsim/trace/tracer.hpp"
 
 namespace microsim::cli {
@@ -26,6 +29,15 @@ struct VndfCliOptions {
   std::uint64_t seed = 1;
   int theta_bins = 18, phi_bins = 16;
 };
+
+const char* const kGrooveByGroove =
+    "true for a V-cavity ensemble: 001 Sec. 6.1 made explicit, every ray picks a groove uniformly "
+    "(equal macro areas) and a uniform origin on its tile and is traced on that groove alone, an "
+    "infinite periodic V-groove";
+const char* const kChi2Vcavity =
+    "*_vcavity: the chi-square test of the hit histogram against the V-cavity model's bin "
+    "probabilities over the ensemble's facets, sum_f A_f (v.m_f)+ G1_vcavity(v, m_f) (001 eq. 13 "
+    "with eq. 24), exact for separate grooves";
 
 void print_vndf_table(const Json& rows, bool ensemble) {
   std::cout << std::setw(7) << "theta" << std::setw(6) << "phi" << std::setw(11) << "chi2/dof"
@@ -109,15 +121,29 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
   TraceCounters counters;
   std::uint64_t lost = 0;
   std::vector<Table> per_surface = measure_over_surfaces(g, o.files, [&](const Microsurface& s, std::size_t k) {
-    if (k == 0) j["surface"] = s.description;
-    Tracer tracer(s);
+    // A V-cavity ensemble is measured groove by groove (001 Sec. 6.1), each groove an infinite
+    // periodic V-groove of its own; its stored strips traced together would mask each other.
+    const bool grooves = is_vcavity(s);
+    if (k == 0) {
+      j["surface"] = s.description;
+      j["groove_by_groove"] = grooves;
+      if (grooves) {
+        j["definitions"]["groove_by_groove"] = kGrooveByGroove;
+        j["definitions"]["chi2_vcavity"] = kChi2Vcavity;
+      }
+    }
     const DirectionBinning bins = vndf_binning(vo);
-    const FacetTable table = build_facet_table(s, bins);
+    std::unique_ptr<Tracer> tracer;
+    FacetTable table;
+    if (!grooves) {
+      tracer = std::make_unique<Tracer>(s);
+      table = build_facet_table(s, bins);
+    }
     Table rows = vndf_table(vo.family_alpha);
     for (double p : phis)
       for (double t : thetas) {
         const Vec3 v = direction_from_angles(rad(t), rad(p));
-        VndfResult r = measure_vndf(tracer, v, vo, &table);
+        VndfResult r = grooves ? measure_vcavity_vndf(s, v, vo) : measure_vndf(*tracer, v, vo, &table);
         counters += r.counters;
         lost += !s.macro().finite_object() ? r.counters.lost_below + r.counters.unresolved : r.counters.unresolved;
         std::optional<SamplerTest> sampler;
@@ -126,6 +152,15 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
           sampler = test_vndf_sampler(*s.nominal, v, vo.sampler_samples, bins, vo.seed,
                                       vo.family_alpha);
         Json& row = add_row(rows, r, s, vo, sampler);
+        if (grooves) {  // the V-cavity model's VNDF over the ensemble's own facets (exact here)
+          const GofResult gof =
+              histogram_gof(r.bin_hits, r.hits, vcavity_vndf_probabilities(s, r.v, r.binning), vo.family_alpha);
+          row["chi2_vcavity"] = gof.chi2;
+          row["dof_vcavity"] = gof.dof;
+          row["p_value_vcavity"] = gof.p_value;
+          row["max_abs_z_vcavity"] = gof.max_abs_z;
+          row["pass_vcavity"] = gof.pass();
+        }
         row["theta_deg"] = t;
         row["phi_deg"] = p;
         ++done;

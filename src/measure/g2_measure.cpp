@@ -12,6 +12,7 @@
 #include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
 #include "microsim/measure/stats.hpp"
+#include "estimator_steps.hpp"
 
 namespace microsim {
 
@@ -151,17 +152,9 @@ DirectionBinning g2_normal_binning(const G2Options& o) {
 G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, const G2Options& opt,
                     const FacetTable* table) {
   const Microsurface& s = tracer.surface();
-  if (!(o_in.z() > 0)) throw UsageError("--theta-o must be in [0, 90) degrees");
-  if (!(i_in.z() > 0)) throw UsageError("--theta-i must be in [0, 90) degrees");
-  if (opt.rays == 0) throw UsageError("--rays must be positive");
+  G2Result r = start_g2(o_in, i_in, opt, s.macro().area);
   auto t0 = std::chrono::steady_clock::now();
-  G2Result r;
-  r.o = o_in.normalized();
-  r.i = i_in.normalized();
-  r.macro_area = s.macro().area;
-  r.binning = g2_normal_binning(opt);
   const int nbins = r.binning.size();
-  r.bins.assign(nbins, G2NormalBin{});
   const Vec3 o = r.o, i = r.i;
 
   FacetTable own;
@@ -227,14 +220,10 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
   if (!(r.weight > 0)) throw RuntimeFailure("no facet faces both directions");
   r.vcavity = vcav_total / r.weight;
 
-  // Random stream from the unordered pair {o, i}: swapping the directions traces the same points.
-  const std::uint64_t ko = direction_stream_key(o), ki = direction_stream_key(i);
-  const std::uint64_t stream = 0xC2000000ull ^ mix64(std::min(ko, ki) ^ mix64(std::max(ko, ki)));
-  const ReplicatePlan plan(opt.rays, opt.replicates);
+  const std::uint64_t stream = pair_stream(o, i, 0xC2000000ull);
+  const ReplicatePlan plan = plan_g2(r, opt);
   const int R = plan.replicates;
   const std::uint64_t n_rep = plan.per_replicate();
-  r.replicates = R;
-  r.samples = plan.total();
   std::atomic<std::uint64_t> done{0};
   const double front = r.weight;
   // Per replicate a stratified pass along the CDF of w_f (facet order is spatially coherent).
@@ -290,43 +279,7 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
     }
     if (opt.progress) opt.progress(static_cast<double>(done.load()) / (n_rep * (share1 - share0)));
   }
-  if (opt.split) {
-    // Completes the replicates' counts from the other processes (measure/shards.hpp).
-    const std::size_t nb = static_cast<std::size_t>(nbins);
-    Tallies t("g2", R, reps, 4 * nb, 0, kCounterValues, 0);
-    for (int q = 0; q < R; ++q)
-      for (std::size_t b = 0; b < nb; ++b) {
-        const G2NormalBin& bin = r.bins[b];
-        std::uint64_t* row = t.count_row(q);
-        row[b] = bin.samples_r[q];
-        row[nb + b] = bin.visible_o_r[q];
-        row[2 * nb + b] = bin.visible_i_r[q];
-        row[3 * nb + b] = bin.visible_both_r[q];
-      }
-    put_counters(r.counters, t.tail_counts.data());
-    opt.split->exchange(t);
-    for (int q = 0; q < R; ++q)
-      for (std::size_t b = 0; b < nb; ++b) {
-        G2NormalBin& bin = r.bins[b];
-        const std::uint64_t* row = t.count_row(q);
-        bin.samples_r[q] = row[b];
-        bin.visible_o_r[q] = row[nb + b];
-        bin.visible_i_r[q] = row[2 * nb + b];
-        bin.visible_both_r[q] = row[3 * nb + b];
-      }
-    r.counters = get_counters(t.tail_counts.data());
-  }
-  for (G2NormalBin& nb : r.bins) {
-    for (int q = 0; q < R; ++q) {
-      nb.samples += nb.samples_r[q];
-      nb.visible_o += nb.visible_o_r[q];
-      nb.visible_i += nb.visible_i_r[q];
-      nb.visible_both += nb.visible_both_r[q];
-    }
-    r.visible_o += nb.visible_o;
-    r.visible_i += nb.visible_i;
-    r.visible_both += nb.visible_both;
-  }
+  finish_g2(r, opt, reps);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }

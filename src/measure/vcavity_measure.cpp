@@ -2,6 +2,7 @@
 #include "microsim/measure/bsdf_walk.hpp"
 #include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
+#include "estimator_steps.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -102,29 +103,13 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
     r.sample_rays = n_samples * sample_plan.replicates;
   }
 
-  // Area sampling: facet index of every stratified sample of replicate q (nondecreasing in
-  // the sample index), so that each groove handles a contiguous range of each replicate.
-  auto sample_stream = [&](std::size_t iv, int q) {
-    return ReplicatePlan::stream(stream_of(0xC000, iv), q);
-  };
-  std::vector<std::vector<std::uint32_t>> sample_facet(nv);
-  for (std::size_t iv = 0; iv < nv; ++iv) {
-    const std::vector<double>& cdf = cdfs[iv];
-    const double total = cdf.back();
-    std::vector<std::uint32_t>& sf = sample_facet[iv];
-    sf.resize(n_samples * R);
-    tbb::parallel_for(std::uint64_t(0), n_samples * R, [&](std::uint64_t g) {
-      const int q = static_cast<int>(g / n_samples);
-      const std::uint64_t i = g % n_samples;
-      CounterRng rng(o.seed, sample_stream(iv, q), i);
-      double u = (static_cast<double>(i) + rng.uniform()) / n_samples * total;
-      std::size_t j = std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin();
-      j = std::min(j, 2 * K - 1);
-      while (j > 0 && cdf[j] == cdf[j - 1]) --j;  // never a zero-weight facet
-      sf[g] = static_cast<std::uint32_t>(j);
-    });
-  }
-
+  // Area sampling: the stratified samples of every replicate along the view's CDF, each groove
+  // handling the contiguous run of each replicate's samples on its two sides.
+  // Only the replicates of this process are traced (measure/shards.hpp).
+  const UnitRange reps = share_of(o.split, static_cast<std::uint64_t>(R));
+  std::vector<CdfSamples> sample_facet;
+  for (std::size_t iv = 0; iv < nv; ++iv)
+    sample_facet.emplace_back(cdfs[iv], o.seed, stream_of(0xC000, iv), n_samples, reps);
   std::vector<Counts> counts(nv * R * nbins);
   auto at = [&](std::size_t iv, int q, int b) -> Counts& {
     return counts[(iv * R + q) * nbins + b];
@@ -145,7 +130,7 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
       TraceCounters& tc = groove_counters[k * nv + iv];
       const Vec3 v = results[iv].v;
       const Vec3 vl(v.dot(d), v.dot(t), v.z());
-      for (int q = 0; q < R; ++q) {
+      for (int q = static_cast<int>(reps.first); q < static_cast<int>(reps.end); ++q) {
         std::uint64_t hits[2] = {0, 0}, samples[2] = {0, 0}, visible[2] = {0, 0};
         // (a) stratified rays over the tile along -v.
         const std::uint64_t stream =
@@ -158,19 +143,16 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
           if (h.hit && !h.backface) ++hits[(h.facet / 2) % 2];
         }
         // (b) this groove's share of the replicate's stratified area samples.
-        const auto first = sample_facet[iv].begin() + q * n_samples, last = first + n_samples;
-        const auto lo = std::lower_bound(first, last, static_cast<std::uint32_t>(2 * k));
-        const auto hi = std::lower_bound(first, last, static_cast<std::uint32_t>(2 * k + 2));
-        for (auto it = lo; it != hi; ++it) {
-          const std::uint64_t i = static_cast<std::uint64_t>(it - first);
-          const int side = static_cast<int>(*it - 2 * k);
-          CounterRng rng(o.seed, sample_stream(iv, q), i);
-          rng.uniform();  // the draw that placed the sample on its facet
-          const double x = (side == 1 ? 0.5 : -0.5) * rng.uniform(), y = rng.uniform() - 0.5;
-          const Vec3 p(x, y, top * (1 - 2 * std::abs(x)));
-          ++samples[side];
-          if (!tracer.occluded(p, vl, &plane[side], tc)) ++visible[side];
-        }
+        sample_facet[iv].for_each(q, static_cast<std::uint32_t>(2 * k), static_cast<std::uint32_t>(2 * k + 2),
+                                  [&](std::uint64_t i, std::uint32_t f) {
+                                    const int side = static_cast<int>(f - 2 * k);
+                                    CounterRng rng = sample_facet[iv].rng(q, i);
+                                    const double x = (side == 1 ? 0.5 : -0.5) * rng.uniform();
+                                    const double y = rng.uniform() - 0.5;
+                                    const Vec3 p(x, y, top * (1 - 2 * std::abs(x)));
+                                    ++samples[side];
+                                    if (!tracer.occluded(p, vl, &plane[side], tc)) ++visible[side];
+                                  });
         for (int side = 0; side < 2; ++side) {
           Counts& c = at(iv, q, bin[2 * k + side]);
           c.hits += hits[side];
@@ -180,6 +162,31 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
       }
     }
   });
+
+  for (std::size_t iv = 0; iv < nv; ++iv)  // in groove order
+    for (std::size_t k = 0; k < K; ++k) results[iv].counters += groove_counters[k * nv + iv];
+  if (o.split)  // the other processes' replicates, view by view, in measure_g1's layout
+    for (std::size_t iv = 0; iv < nv; ++iv) {
+      const std::size_t nb = static_cast<std::size_t>(nbins);
+      Tallies t("g1", R, reps, 3 * nb, 0, kCounterValues, 0);
+      for (int q = 0; q < R; ++q)
+        for (int b = 0; b < nbins; ++b) {
+          std::uint64_t* row = t.count_row(q);
+          row[b] = at(iv, q, b).hits;
+          row[nb + b] = at(iv, q, b).samples;
+          row[2 * nb + b] = at(iv, q, b).visible;
+        }
+      put_counters(results[iv].counters, t.tail_counts.data());
+      o.split->exchange(t);
+      for (int q = 0; q < R; ++q)
+        for (int b = 0; b < nbins; ++b) {
+          const std::uint64_t* row = t.count_row(q);
+          at(iv, q, b).hits = row[b];
+          at(iv, q, b).samples = row[nb + b];
+          at(iv, q, b).visible = row[2 * nb + b];
+        }
+      results[iv].counters = get_counters(t.tail_counts.data());
+    }
 
   // Per-replicate counts into the results.
   for (std::size_t iv = 0; iv < nv; ++iv) {
@@ -206,8 +213,6 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
       r.sample_visible += nb.visible;
     }
   }
-  for (std::size_t iv = 0; iv < nv; ++iv)  // in groove order
-    for (std::size_t k = 0; k < K; ++k) results[iv].counters += groove_counters[k * nv + iv];
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (auto& r : results) r.seconds = seconds / nv;
   if (o.progress) o.progress(1.0);
@@ -263,20 +268,12 @@ struct GrooveTile {
 }  // namespace
 
 G2Result measure_vcavity_g2(const Microsurface& s, const Vec3& o_in, const Vec3& i_in, const G2Options& opt) {
-  if (!(o_in.z() > 0)) throw UsageError("--theta-o must be in [0, 90) degrees");
-  if (!(i_in.z() > 0)) throw UsageError("--theta-i must be in [0, 90) degrees");
-  if (opt.rays == 0) throw UsageError("--rays must be positive");
+  G2Result r = start_g2(o_in, i_in, opt, s.macro().area);
   const GrooveSides g = groove_sides(s, "measure_vcavity_g2");
   const auto t0 = std::chrono::steady_clock::now();
   const std::size_t K = g.K;
-  G2Result r;
-  r.o = o_in.normalized();
-  r.i = i_in.normalized();
   const Vec3 o = r.o, i = r.i;
-  r.macro_area = s.macro().area;
-  r.binning = g2_normal_binning(opt);
   const int nbins = r.binning.size();
-  r.bins.assign(nbins, G2NormalBin{});
 
   // Exact sums over the 2K facets (the weights and models of measure_g2) and the CDF of w_f.
   std::vector<int> bin(2 * K);
@@ -312,28 +309,12 @@ G2Result measure_vcavity_g2(const Microsurface& s, const Vec3& o_in, const Vec3&
   if (!(r.weight > 0)) throw RuntimeFailure("no facet faces both directions");
   r.vcavity = vcav_total / r.weight;
 
-  // Stratified samples along the CDF per replicate, from the unordered pair {o, i} (swapping
-  // the directions draws the same points); the facet index is nondecreasing in the sample
-  // index, so each groove handles a contiguous range of each replicate.
-  const std::uint64_t ko = direction_stream_key(o), ki = direction_stream_key(i);
-  const std::uint64_t base = 0xC3000000ull ^ mix64(std::min(ko, ki) ^ mix64(std::max(ko, ki)));
-  const ReplicatePlan plan(opt.rays, opt.replicates);
+  // Stratified samples along the CDF per replicate (this process's replicates only), each
+  // groove handling the contiguous run of each replicate's samples on its two sides.
+  const ReplicatePlan plan = plan_g2(r, opt);
   const int R = plan.replicates;
-  const std::uint64_t n_rep = plan.per_replicate();
-  r.replicates = R;
-  r.samples = plan.total();
-  const double total = r.weight;
-  std::vector<std::uint32_t> side_of(n_rep * R);
-  tbb::parallel_for(std::uint64_t(0), n_rep * R, [&](std::uint64_t gi) {
-    const int q = static_cast<int>(gi / n_rep);
-    const std::uint64_t j = gi % n_rep;
-    CounterRng rng(opt.seed, ReplicatePlan::stream(base, q), j);
-    const double u = (static_cast<double>(j) + rng.uniform()) / n_rep * total;
-    std::size_t f = std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin();
-    f = std::min(f, 2 * K - 1);
-    while (f > 0 && cdf[f] == cdf[f - 1]) --f;  // never a zero-weight facet
-    side_of[gi] = static_cast<std::uint32_t>(f);
-  });
+  const UnitRange reps = share_of(opt.split, static_cast<std::uint64_t>(R));
+  const CdfSamples samples(cdf, opt.seed, pair_stream(o, i, 0xC3000000ull), plan.per_replicate(), reps);
 
   struct G2Counts {
     std::atomic<std::uint64_t> samples{0}, vis_o{0}, vis_i{0}, vis_both{0};
@@ -346,26 +327,22 @@ G2Result measure_vcavity_g2(const Microsurface& s, const Vec3& o_in, const Vec3&
     const SourcePlane plane[2] = {SourcePlane::of(tile.surface.facet(0)), SourcePlane::of(tile.surface.facet(2))};
     const Vec3 ol = tile.to_local(o), il = tile.to_local(i);
     TraceCounters& tc = groove_counters[k];
-    for (int q = 0; q < R; ++q) {
+    for (int q = static_cast<int>(reps.first); q < static_cast<int>(reps.end); ++q) {
       std::uint64_t n[2] = {0, 0}, vo[2] = {0, 0}, vi[2] = {0, 0}, vb[2] = {0, 0};
-      const auto first = side_of.begin() + static_cast<std::ptrdiff_t>(q * n_rep), last = first + n_rep;
-      const auto lo = std::lower_bound(first, last, static_cast<std::uint32_t>(2 * k));
-      const auto hi = std::lower_bound(first, last, static_cast<std::uint32_t>(2 * k + 2));
-      for (auto it = lo; it != hi; ++it) {
-        const std::uint64_t j = static_cast<std::uint64_t>(it - first);
-        const int side = static_cast<int>(*it - 2 * k);
-        CounterRng rng(opt.seed, ReplicatePlan::stream(base, q), j);
-        rng.uniform();  // the draw that placed the sample on its facet
-        const double u = rng.uniform();
-        const double w = rng.uniform();
-        const Vec3 p = tile.point(side, u, w);
-        const bool see_o = !tracer.occluded(p, ol, &plane[side], tc);
-        const bool see_i = o == i ? see_o : !tracer.occluded(p, il, &plane[side], tc);
-        ++n[side];
-        vo[side] += see_o;
-        vi[side] += see_i;
-        vb[side] += see_o && see_i;
-      }
+      samples.for_each(q, static_cast<std::uint32_t>(2 * k), static_cast<std::uint32_t>(2 * k + 2),
+                       [&](std::uint64_t j, std::uint32_t f) {
+                         const int side = static_cast<int>(f - 2 * k);
+                         CounterRng rng = samples.rng(q, j);
+                         const double u = rng.uniform();
+                         const double w = rng.uniform();
+                         const Vec3 p = tile.point(side, u, w);
+                         const bool see_o = !tracer.occluded(p, ol, &plane[side], tc);
+                         const bool see_i = o == i ? see_o : !tracer.occluded(p, il, &plane[side], tc);
+                         ++n[side];
+                         vo[side] += see_o;
+                         vi[side] += see_i;
+                         vb[side] += see_o && see_i;
+                       });
       for (int side = 0; side < 2; ++side) {
         G2Counts& c = counts[static_cast<std::size_t>(q) * nbins + bin[2 * k + side]];
         c.samples += n[side];
@@ -384,32 +361,21 @@ G2Result measure_vcavity_g2(const Microsurface& s, const Vec3& o_in, const Vec3&
       nb.visible_o_r[q] = c.vis_o;
       nb.visible_i_r[q] = c.vis_i;
       nb.visible_both_r[q] = c.vis_both;
-      nb.samples += c.samples;
-      nb.visible_o += c.vis_o;
-      nb.visible_i += c.vis_i;
-      nb.visible_both += c.vis_both;
     }
-    r.visible_o += nb.visible_o;
-    r.visible_i += nb.visible_i;
-    r.visible_both += nb.visible_both;
   }
   for (std::size_t k = 0; k < K; ++k) r.counters += groove_counters[k];  // in groove order
+  finish_g2(r, opt, reps);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (opt.progress) opt.progress(1.0);
   return r;
 }
 
 VndfResult measure_vcavity_vndf(const Microsurface& s, const Vec3& v_in, const VndfOptions& o) {
-  if (!(v_in.z() > 0)) throw UsageError("--theta must be in [0, 90) degrees");
-  if (o.rays == 0) throw UsageError("--rays must be positive");
+  VndfResult r = start_vndf(v_in, o, s.macro().area);
   const GrooveSides g = groove_sides(s, "measure_vcavity_vndf");
   const auto t0 = std::chrono::steady_clock::now();
   const std::size_t K = g.K;
-  VndfResult r;
-  r.v = v_in.normalized();
   const Vec3 v = r.v;
-  r.binning = vndf_binning(o);
-  r.macro_area = s.macro().area;
   const int nbins = r.binning.size();
   std::vector<int> bin(2 * K);
   r.front_projected.assign(nbins, 0.0);
@@ -421,22 +387,23 @@ VndfResult measure_vcavity_vndf(const Microsurface& s, const Vec3& v_in, const V
   }
   if (!(r.front_projected_total > 0)) throw RuntimeFailure("no facet faces the direction");
   r.window_area_perp = v.z() * r.macro_area;  // K unit tiles seen along v
-  r.rays = o.rays;
-  // Ray j: groove, then origin on its tile, all from its own counter (i.i.d. rays); the rays
-  // are bucketed by groove (counting sort, in ray order) so that each groove's scene is built once.
+  // Ray j: groove, then origin on its tile, all from its own counter (i.i.d. rays); this
+  // process's rays are bucketed by groove (counting sort, in ray order) so that each groove's
+  // scene is built once.
+  const UnitRange share = share_of(o.split, r.rays);
   const std::uint64_t stream = 0xD100 + direction_stream_key(v);
-  std::vector<std::uint32_t> groove_of(r.rays);
-  tbb::parallel_for(std::uint64_t(0), r.rays, [&](std::uint64_t j) {
-    CounterRng rng(o.seed, stream, j);
-    groove_of[j] = static_cast<std::uint32_t>(std::min<std::uint64_t>(K - 1, static_cast<std::uint64_t>(rng.uniform() * K)));
+  std::vector<std::uint32_t> groove_of(share.size());
+  tbb::parallel_for(std::uint64_t(0), share.size(), [&](std::uint64_t n) {
+    CounterRng rng(o.seed, stream, share.first + n);
+    groove_of[n] = static_cast<std::uint32_t>(std::min<std::uint64_t>(K - 1, static_cast<std::uint64_t>(rng.uniform() * K)));
   });
   std::vector<std::uint64_t> start(K + 1, 0);
   for (std::uint32_t k : groove_of) ++start[k + 1];
   for (std::size_t k = 0; k < K; ++k) start[k + 1] += start[k];
-  std::vector<std::uint64_t> order(r.rays);
+  std::vector<std::uint64_t> order(share.size());
   {
     std::vector<std::uint64_t> next(start.begin(), start.end() - 1);
-    for (std::uint64_t j = 0; j < r.rays; ++j) order[next[groove_of[j]]++] = j;
+    for (std::uint64_t n = 0; n < share.size(); ++n) order[next[groove_of[n]]++] = share.first + n;
   }
   std::vector<std::atomic<std::uint64_t>> counts(static_cast<std::size_t>(nbins) + 1);
   std::vector<TraceCounters> groove_counters(K);
@@ -459,11 +426,8 @@ VndfResult measure_vcavity_vndf(const Microsurface& s, const Vec3& v_in, const V
       counts[b >= 0 ? static_cast<std::size_t>(b) : static_cast<std::size_t>(nbins)] += hits[side];
     }
   });
-  r.bin_hits.assign(nbins, 0);
-  for (int b = 0; b < nbins; ++b) r.bin_hits[b] = counts[b];
-  r.hits_below = counts[nbins];
-  for (const auto& c : counts) r.hits += c;
   for (std::size_t k = 0; k < K; ++k) r.counters += groove_counters[k];  // in groove order
+  finish_vndf(r, o, share, std::vector<std::uint64_t>(counts.begin(), counts.end()));
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (o.progress) o.progress(1.0);
   return r;

@@ -10,6 +10,7 @@
 
 #include "microsim/measure/sampling.hpp"
 #include "microsim/measure/stats.hpp"
+#include "estimator_steps.hpp"
 
 namespace microsim {
 
@@ -103,13 +104,8 @@ std::vector<double> VndfResult::smith_numeric_probabilities() const {
 VndfResult measure_vndf(const Tracer& tracer, const Vec3& v_in, const VndfOptions& o,
                         const FacetTable* table) {
   const Microsurface& s = tracer.surface();
-  if (!(v_in.z() > 0)) throw UsageError("--theta must be in [0, 90) degrees");
-  if (o.rays == 0) throw UsageError("--rays must be positive");
+  VndfResult r = start_vndf(v_in, o, s.macro().area);
   auto t0 = std::chrono::steady_clock::now();
-  VndfResult r;
-  r.v = v_in.normalized();
-  r.binning = vndf_binning(o);
-  r.macro_area = s.macro().area;
   const Vec3 v = r.v;
   const int nbins = r.binning.size();
 
@@ -185,19 +181,7 @@ VndfResult measure_vndf(const Tracer& tracer, const Vec3& v_in, const VndfOption
     for (int b = 0; b <= nbins; ++b) counts[b] += part[b];
     if (o.progress) o.progress(static_cast<double>(first + n) / r.rays);
   }
-  if (o.split) {
-    // Integer bin counts and counters: the other processes' rays are added (measure/shards.hpp).
-    Tallies t("vndf", r.rays, share, 0, 0, counts.size() + kCounterValues, 0);
-    std::copy(counts.begin(), counts.end(), t.tail_counts.begin());
-    put_counters(r.counters, t.tail_counts.data() + counts.size());
-    o.split->exchange(t);
-    std::copy(t.tail_counts.begin(), t.tail_counts.begin() + static_cast<std::ptrdiff_t>(counts.size()),
-              counts.begin());
-    r.counters = get_counters(t.tail_counts.data() + counts.size());
-  }
-  r.bin_hits.assign(counts.begin(), counts.begin() + nbins);
-  r.hits_below = counts[nbins];
-  for (auto c : counts) r.hits += c;
+  finish_vndf(r, o, share, std::move(counts));
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }

@@ -16,6 +16,24 @@ namespace microsim::validation {
 // as a deviation) is an info row.
 constexpr double kVndfMinBinMass = 0.01;
 
+namespace {
+// The chi-square row (chi2/dof, model 1) of one view's hit histogram against a model's bin
+// probabilities, with the ray-count error.
+Row chi2_row(const SurfaceSet& set, const std::string& model, Kind kind, const std::string& source,
+             const std::string& where, const GofResult& g, const std::string& group, const Json& ang) {
+  Row m = make_row(set, "", "vndf_chi2_per_dof", model, kind, source);
+  m.condition += " " + where;
+  set_chi2(m, g.chi2, g.dof);
+  m.error = "rays";
+  m.group = group;
+  m.extra = ang;
+  m.extra["chi2"] = g.chi2;
+  m.extra["dof"] = g.dof;
+  m.extra["p_value"] = g.p_value;
+  return m;
+}
+}  // namespace
+
 double vndf_work(const SurfaceSet& set) {
   const double n = static_cast<double>(share_of_rays(set.options, 4));
   const double dirs = static_cast<double>(set.options.theta_deg.size() * set.options.phi_deg.size());
@@ -47,16 +65,9 @@ void check_vndf(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         // (the surface's own statistics, so the ray-count error is the right one).
         const GofResult g = histogram_gof(r.bin_hits, r.hits, vcavity_vndf_probabilities(s, r.v, r.binning),
                                           vo.family_alpha);
-        Row m = make_row(set, "", "vndf_chi2_per_dof", "vcavity", Kind::Model,
-                         "001 eq. (13) with the V-cavity G1 (001 eq. 24) over the facets, bin sums");
-        m.condition += " " + where;
-        set_chi2(m, g.chi2, g.dof);
-        m.error = "rays";
-        m.group = set.name + "/vndf_vcavity";
-        m.extra = ang;
-        m.extra["chi2"] = g.chi2;
-        m.extra["dof"] = g.dof;
-        m.extra["p_value"] = g.p_value;
+        Row m = chi2_row(set, "vcavity", Kind::Model,
+                         "001 eq. (13) with the V-cavity G1 (001 eq. 24) over the facets, bin sums", where, g,
+                         set.name + "/vndf_vcavity", ang);
         m.extra["max_abs_z"] = g.max_abs_z;
         out.rows.push_back(m);
       }
@@ -64,16 +75,8 @@ void check_vndf(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         const std::vector<double> model =
             bin_integrals(r.binning, [&](const Vec3& m) { return s.nominal->D_visible(r.v, m); });
         const GofResult g = histogram_gof(r.bin_hits, r.hits, model, vo.family_alpha);
-        Row m = make_row(set, "", "vndf_chi2_per_dof", "nominal", Kind::Info,
-                         "001 eq. (13): D_v of the nominal NDF, bin integrals");
-        m.condition += " " + where;
-        set_chi2(m, g.chi2, g.dof);
-        m.error = "rays";
-        m.group = set.name + "/vndf_nominal";
-        m.extra = ang;
-        m.extra["chi2"] = g.chi2;
-        m.extra["dof"] = g.dof;
-        m.extra["p_value"] = g.p_value;
+        Row m = chi2_row(set, "nominal", Kind::Info, "001 eq. (13): D_v of the nominal NDF, bin integrals", where,
+                         g, set.name + "/vndf_nominal", ang);
         m.error = "rays (one surface: surface-to-surface variation not included)";
         out.rows.push_back(m);
         auto& dv = dv_by_direction[{t, p}];
