@@ -94,4 +94,21 @@ void record_walk_end(BsdfTally& t, const WalkEnd& e, double w0, const Hemisphere
   }
 }
 
+void record_walk_end(ExitCounts<std::uint32_t>& t, const WalkEnd& e, const HemisphereMap& map,
+                     const InPlaneBins& plane) {
+  switch (e.kind) {
+    case WalkEnd::Reflected:
+    case WalkEnd::Transmitted: {
+      const bool reflected = e.kind == WalkEnd::Reflected;
+      const bool binned = reflected ? e.direction.z() > 0.0 : e.direction.z() < 0.0;
+      t.add_exit(reflected ? 0 : 1, e.order, binned ? map.pixel_of(e.direction) : -1,
+                 binned ? plane.bin_of(e.direction) : -1);
+      break;
+    }
+    case WalkEnd::Missed: break;
+    case WalkEnd::Lost: ++t.lost; break;
+    case WalkEnd::Unterminated: ++t.unterminated; break;
+  }
+}
+
 }  // namespace microsim

@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/exit_counts.hpp"
 #include "microsim/models/microfacet_bsdf.hpp"
 #include "microsim/trace/tracer.hpp"
 
@@ -33,6 +34,9 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
 // and direction (binned when they point into their side's hemisphere: a finite object's
 // reflected ray below the base plane counts in the albedo only), losses and unterminated walks.
 void record_walk_end(BsdfTally& t, const WalkEnd& e, double w0, const HemisphereMap& map,
+                     const InPlaneBins& plane);
+// The same for paths of weight 1 (w0 = 1, e.weight = 1) into integer counts.
+void record_walk_end(ExitCounts<std::uint32_t>& t, const WalkEnd& e, const HemisphereMap& map,
                      const InPlaneBins& plane);
 
 }  // namespace microsim
