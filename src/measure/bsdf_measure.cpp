@@ -490,6 +490,8 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
     // With a split, the replicates of this process are kept until the others' arrive; the
     // replicates then enter add_replicate in order, as in one process.
     std::vector<BsdfTally> kept(o.split ? plan.replicates : 0, BsdfTally(K, npix, nplane));
+    // Rays leaving a facet that provably meet nothing are not traced (trace/escape_test.hpp).
+    const EscapeTest escape(tracer);
     auto keep = [&](int q, BsdfTally&& rep) {
       if (o.split) kept[q] = std::move(rep);
       else r.measured.add_replicate(rep);
@@ -508,7 +510,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
             ++t.paths;
             const Vec2 ab = plan.strata.point(i, rng);
             const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
-                                             -wi, mat, rng, o.max_events, finite, t.counters, t.events);
+                                             -wi, mat, rng, o.max_events, finite, t.counters, t.events, &escape);
             record_walk_end(t, e, r.map, r.plane);
           },
           [&](int q, ExitCounts<std::uint64_t>&& rep) { keep(q, rep.tally()); });
@@ -521,7 +523,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
             ++t.paths;
             const Vec2 ab = plan.strata.point(i, rng);
             const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
-                                             -wi, mat, rng, o.max_events, finite, t.counters, t.events);
+                                             -wi, mat, rng, o.max_events, finite, t.counters, t.events, &escape);
             record_walk_end(t, e, ray_weight, r.map, r.plane);
           },
           keep);

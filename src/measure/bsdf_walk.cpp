@@ -6,7 +6,7 @@ namespace microsim {
 
 WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir0,
                        const models::Material& mat, CounterRng& rng, int max_events, bool finite,
-                       TraceCounters& counters, std::uint64_t& events) {
+                       TraceCounters& counters, std::uint64_t& events, const EscapeTest* escape) {
   using models::MaterialKind;
   const Microsurface& s = tracer.surface();
   const FacetPlanes planes(tracer);
@@ -72,6 +72,10 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
       }
     }
     dir.normalize();
+    if (escape && escape->clear(hit.point, dir, hit.facet, side)) {
+      hit = escape->no_hit(hit.point, dir, counters, side);
+      continue;
+    }
     const SourcePlane plane = planes.plane(hit.facet);
     hit = tracer.first_hit(hit.point, dir, &plane, counters, side);
   }
