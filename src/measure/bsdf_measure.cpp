@@ -491,7 +491,9 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
     // replicates then enter add_replicate in order, as in one process.
     std::vector<BsdfTally> kept(o.split ? plan.replicates : 0, BsdfTally(K, npix, nplane));
     // Rays leaving a facet that provably meet nothing are not traced (trace/escape_test.hpp).
-    const EscapeTest escape(tracer);
+    std::optional<EscapeTest> escape_test;
+    if (o.escape_test) escape_test.emplace(tracer);
+    const EscapeTest* escape = escape_test ? &*escape_test : nullptr;
     auto keep = [&](int q, BsdfTally&& rep) {
       if (o.split) kept[q] = std::move(rep);
       else r.measured.add_replicate(rep);
@@ -510,7 +512,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
             ++t.paths;
             const Vec2 ab = plan.strata.point(i, rng);
             const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
-                                             -wi, mat, rng, o.max_events, finite, t.counters, t.events, &escape);
+                                             -wi, mat, rng, o.max_events, finite, t.counters, t.events, escape);
             record_walk_end(t, e, r.map, r.plane);
           },
           [&](int q, ExitCounts<std::uint64_t>&& rep) { keep(q, rep.tally()); });
@@ -523,7 +525,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
             ++t.paths;
             const Vec2 ab = plan.strata.point(i, rng);
             const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
-                                             -wi, mat, rng, o.max_events, finite, t.counters, t.events, &escape);
+                                             -wi, mat, rng, o.max_events, finite, t.counters, t.events, escape);
             record_walk_end(t, e, ray_weight, r.map, r.plane);
           },
           keep);

@@ -41,6 +41,7 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
       return e;
     }
     ++events;
+    if (escape) escape->prefetch(hit.facet, mat.kind == MaterialKind::Dielectric);
     // Normal on the side of the current medium; v toward where the ray came from.
     const Vec3 m = side == RaySide::Front ? hit.normal : Vec3(-hit.normal);
     const Vec3 v = -dir;

@@ -10,7 +10,12 @@ namespace microsim {
 
 namespace {
 constexpr int kMaxSteps = 4096;  // cells and blocks visited before giving up (the tracer decides)
+// The finest pyramid level kept: blocks of 4 x 4 cells (finer, the cells' own corners decide).
+constexpr int kMinLevel = 2;
 inline long wrap(long i, long n) {
+  if (i >= 0 && i < n) return i;  // nearly always: no division
+  if (i >= n && i < 2 * n) return i - n;
+  if (i < 0 && i >= -n) return i + n;
   i %= n;
   return i < 0 ? i + n : i;
 }
@@ -31,12 +36,16 @@ EscapeTest::EscapeTest(const Tracer& tracer, double lower) : tracer_(tracer) {
   x0_ = -0.5 * s.macro().size_x;
   y0_ = -0.5 * s.macro().size_y;
   h_ = s.heights().data();
+  grid_ = static_cast<const float*>(
+      rtcGetGeometryBufferData(rtcGetGeometry(tracer.scene(), 0), RTC_BUFFER_TYPE_VERTEX, 0));
+  gw_ = static_cast<std::size_t>(nx_) + 3;  // Tracer: one periodic cell around the tile
   // Steepest facet slope (|grad h|), for turning horizontal errors into heights.
   double slope2 = 0;
   for (long j = 0; j < ny_; ++j)
     for (long i = 0; i < nx_; ++i) {
-      const double h00 = height(i, j, 0), h10 = height(i + 1, j, 0), h01 = height(i, j + 1, 0),
-                   h11 = height(i + 1, j + 1, 0);
+      const std::size_t r0 = static_cast<std::size_t>(j) * nx_, r1 = static_cast<std::size_t>(j + 1 == ny_ ? 0 : j + 1) * nx_;
+      const long i1 = i + 1 == nx_ ? 0 : i + 1;
+      const double h00 = h_[r0 + i], h10 = h_[r0 + i1], h01 = h_[r1 + i], h11 = h_[r1 + i1];
       const double a0 = (h10 - h00) / dx_, b0 = (h01 - h00) / dy_;
       const double a1 = (h11 - h01) / dx_, b1 = (h11 - h10) / dy_;
       slope2 = std::max({slope2, a0 * a0 + b0 * b0, a1 * a1 + b1 * b1});
@@ -74,8 +83,13 @@ EscapeTest::EscapeTest(const Tracer& tracer, double lower) : tracer_(tracer) {
         tbb::parallel_for(0L, hgt, [&](long bj) {
           for (long bi = 0; bi < w; ++bi) {
             float m = -std::numeric_limits<float>::infinity();
-            for (long j = bj * size; j <= std::min((bj + 1) * size, ny_); ++j)
-              for (long i = bi * size; i <= std::min((bi + 1) * size, nx_); ++i) m = std::max(m, height(i, j, side));
+            for (long j = bj * size; j <= std::min((bj + 1) * size, ny_); ++j) {
+              const float* row = h_ + static_cast<std::size_t>(j == ny_ ? 0 : j) * nx_;
+              for (long i = bi * size; i <= std::min((bi + 1) * size, nx_); ++i) {
+                const float v = row[i == nx_ ? 0 : i];
+                m = std::max(m, side == 0 ? v : -v);
+              }
+            }
             lev[static_cast<std::size_t>(bj) * w + bi] = m;
           }
         });
@@ -97,11 +111,28 @@ EscapeTest::EscapeTest(const Tracer& tracer, double lower) : tracer_(tracer) {
       levels_[side].push_back(std::move(lev));
     }
     top_[side] = levels_[side].back()[0];
+    if (levels_[side].size() > 1) std::vector<float>().swap(levels_[side][0]);  // level 1: not traversed
     if (lower != 0)
       for (auto& lev : levels_[side])
         for (float& m : lev) m = static_cast<float>(m - lower);
   }
   applies_ = true;
+}
+
+void EscapeTest::prefetch(std::size_t facet, bool back) const {
+  if (!applies_) return;
+  const std::size_t cell = facet / 2;
+  const long cj = static_cast<long>(cell / static_cast<std::size_t>(nx_));
+  const long ci = static_cast<long>(cell - static_cast<std::size_t>(cj) * nx_);
+  const int nlev = static_cast<int>(bw_.size());
+  for (int s = 0; s < (back ? 2 : 1); ++s)
+    for (int L = kMinLevel; L < std::min(nlev, kMinLevel + 3); ++L) {
+      const long bi = ci >> L, bj = cj >> L, w = bw_[L - 1], h = bh_[L - 1];
+      const float* lev = levels_[s][L - 1].data();
+      // the block's row and the rows above and below (the ray's next blocks)
+      for (long r = std::max(0L, bj - 1); r <= std::min(h - 1, bj + 1); ++r)
+        __builtin_prefetch(lev + static_cast<std::size_t>(r) * w + bi);
+    }
 }
 
 bool EscapeTest::clear(const Vec3& p, const Vec3& d, std::size_t facet, RaySide side) const {
@@ -121,6 +152,9 @@ bool EscapeTest::clear_frame(const Vec3& p, const Vec3& d, long ci, long cj, int
   const double u0 = (p.x() - x0_) / dx_, v0 = (p.y() - y0_) / dy_;  // cell units
   const double du = d.x() / dx_, dv = d.y() / dy_, z0 = p.z(), dz = d.z();
   const double inf = std::numeric_limits<double>::infinity();
+  // Crossing times by multiplication: their rounding moves a crossing by far less than the
+  // margin allows for (the clearances are continuous along the ray).
+  const double iu = du != 0 ? 1 / du : 0, iv = dv != 0 ? 1 / dv : 0;
   // Corner heights of cell (i, j) and its triangles' planes in local coordinates (a, b) in [0, 1]^2:
   // half 0 (v00, v10, v01): g00 + (g10 - g00) a + (g01 - g00) b; half 1 (v10, v11, v01):
   // g11 + (g11 - g01) (a - 1) + (g11 - g10) (b - 1) (Microsurface::facet).
@@ -128,8 +162,11 @@ bool EscapeTest::clear_frame(const Vec3& p, const Vec3& d, long ci, long cj, int
     double c, ga, gb;  // height at (a, b) = c + ga a + gb b
   };
   auto planes = [&](long i, long j, Plane out[2], double* gmax) {
-    const double g00 = height(i, j, s), g10 = height(i + 1, j, s), g01 = height(i, j + 1, s),
-                 g11 = height(i + 1, j + 1, s);
+    // The cell's corners from the tracer's vertex buffer (the rows its traversal just read).
+    const float* r0 = grid_ + 3 * (static_cast<std::size_t>(wrap(j, ny_) + 1) * gw_ + wrap(i, nx_) + 1) + 2;
+    const float* r1 = r0 + 3 * gw_;
+    const double sg = s == 0 ? 1.0 : -1.0;
+    const double g00 = sg * r0[0], g10 = sg * r0[3], g01 = sg * r1[0], g11 = sg * r1[3];
     out[0] = {g00, g10 - g00, g01 - g00};
     out[1] = {g11 - (g11 - g01) - (g11 - g10), g11 - g01, g11 - g10};
     if (gmax) *gmax = std::max({g00, g10, g01, g11});
@@ -141,8 +178,8 @@ bool EscapeTest::clear_frame(const Vec3& p, const Vec3& d, long ci, long cj, int
   };
   // Where the ray leaves cell (i, j) (from inside): t and the next cell.
   auto cell_exit = [&](long i, long j, long& ni, long& nj) {
-    const double tx = du > 0 ? (i + 1 - u0) / du : du < 0 ? (i - u0) / du : inf;
-    const double ty = dv > 0 ? (j + 1 - v0) / dv : dv < 0 ? (j - v0) / dv : inf;
+    const double tx = du > 0 ? (i + 1 - u0) * iu : du < 0 ? (i - u0) * iu : inf;
+    const double ty = dv > 0 ? (j + 1 - v0) * iv : dv < 0 ? (j - v0) * iv : inf;
     const double t = std::min(tx, ty);
     ni = i + (tx <= t ? (du > 0 ? 1 : -1) : 0);
     nj = j + (ty <= t ? (dv > 0 ? 1 : -1) : 0);
@@ -197,40 +234,58 @@ bool EscapeTest::clear_frame(const Vec3& p, const Vec3& d, long ci, long cj, int
   double t = t_cell;
 
   const int nlev = static_cast<int>(bw_.size());  // levels 1 .. nlev; the last is the whole tile
-  int start = 1;
+  int start = kMinLevel;
   for (int step = 0; step < kMaxSteps; ++step) {
     const double zt = z0 + dz * t;
     if (zt > top_[s] + M) return true;
     const long wi = wrap(i, nx_), wj = wrap(j, ny_);
+    // The cell's own highest corner: no block holding the cell is lower, so below it the
+    // triangles decide. Near the surface (after a cell step) it is read first; after a block
+    // was skipped the ray is usually high and the blocks come first (the cell's corners are
+    // then rarely in cache).
+    long ni = i, nj = j;
+    double te = inf;
+    bool above_cell = false;
+    auto cell_test = [&]() {
+      planes(i, j, P, &gmax);
+      te = cell_exit(i, j, ni, nj);
+      if (te == inf) return false;
+      above_cell = zt > gmax + M;
+      return above_cell || (triangle_clear(P[0], 0, i, j, t, te) && triangle_clear(P[1], 1, i, j, t, te));
+    };
+    const bool blocks_first = start > kMinLevel;
+    if (!blocks_first) {
+      if (!cell_test()) return false;
+      if (!above_cell) {
+        i = ni;
+        j = nj;
+        t = std::max(t, te);
+        continue;
+      }
+    }
     bool jumped = false;
-    for (int L = std::min(start, nlev - 1); L >= 1; --L) {
+    for (int L = std::min(start, nlev - 1); L >= kMinLevel; --L) {
       const long bi = wi >> L, bj = wj >> L;
       if (!(zt > levels_[s][L - 1][static_cast<std::size_t>(bj) * bw_[L - 1] + bi] + M)) continue;
       // Above the block's highest vertex where it enters: over all of it. Its bounds unwrapped.
       const long ilo = i - (wi - (bi << L)), ihi = ilo + std::min(1L << L, nx_ - (bi << L));
       const long jlo = j - (wj - (bj << L)), jhi = jlo + std::min(1L << L, ny_ - (bj << L));
-      const double tx = du > 0 ? (ihi - u0) / du : du < 0 ? (ilo - u0) / du : inf;
-      const double ty = dv > 0 ? (jhi - v0) / dv : dv < 0 ? (jlo - v0) / dv : inf;
-      const double te = std::min(tx, ty);
-      if (te == inf) return false;  // vertical and below the top: not reached here (rise)
-      const long fi = std::min(std::max(static_cast<long>(std::floor(u0 + du * te)), ilo), ihi - 1);
-      const long fj = std::min(std::max(static_cast<long>(std::floor(v0 + dv * te)), jlo), jhi - 1);
-      i = tx <= te ? (du > 0 ? ihi : ilo - 1) : fi;
-      j = ty <= te ? (dv > 0 ? jhi : jlo - 1) : fj;
-      t = std::max(t, te);
+      const double tx = du > 0 ? (ihi - u0) * iu : du < 0 ? (ilo - u0) * iu : inf;
+      const double ty = dv > 0 ? (jhi - v0) * iv : dv < 0 ? (jlo - v0) * iv : inf;
+      const double tb = std::min(tx, ty);
+      if (tb == inf) return false;  // vertical: stays over this block (not claimed)
+      const long fi = std::min(std::max(static_cast<long>(std::floor(u0 + du * tb)), ilo), ihi - 1);
+      const long fj = std::min(std::max(static_cast<long>(std::floor(v0 + dv * tb)), jlo), jhi - 1);
+      i = tx <= tb ? (du > 0 ? ihi : ilo - 1) : fi;
+      j = ty <= tb ? (dv > 0 ? jhi : jlo - 1) : fj;
+      t = std::max(t, tb);
       start = L + 1;
       jumped = true;
       break;
     }
     if (jumped) continue;
-    start = 1;
-    planes(i, j, P, &gmax);
-    long ni, nj;
-    const double te = cell_exit(i, j, ni, nj);
-    if (te == inf) return false;
-    if (!(zt > gmax + M) &&
-        !(triangle_clear(P[0], 0, i, j, t, te) && triangle_clear(P[1], 1, i, j, t, te)))
-      return false;
+    start = kMinLevel;
+    if (blocks_first && !cell_test()) return false;
     i = ni;
     j = nj;
     t = std::max(t, te);

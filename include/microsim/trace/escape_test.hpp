@@ -38,6 +38,9 @@ class EscapeTest {
   // What Tracer::first_hit(p, d, source, counters, side) returns when none of its queries hits
   // (the wrap-arounds it counts on the way, the exit below for a Back ray).
   TraceHit no_hit(const Vec3& p, const Vec3& d, TraceCounters& counters, RaySide side) const;
+  // A hint, no effect on any result: starts loading the pyramid's blocks around facet `facet`
+  // for the rays that will leave it (front side; `back` too), so that clear() finds them in cache.
+  void prefetch(std::size_t facet, bool back) const;
   double margin() const { return margin_; }
 
  private:
@@ -50,10 +53,13 @@ class EscapeTest {
   long nx_ = 0, ny_ = 0;
   double dx_ = 0, dy_ = 0, x0_ = 0, y0_ = 0;
   const float* h_ = nullptr;  // the surface's heights, row-major
+  const float* grid_ = nullptr;  // the tracer's vertex buffer (x, y, z; one periodic cell around)
+  std::size_t gw_ = 0;           // its vertices per row
   double margin_ = 0;          // M (height units)
   double shrink_ = 0;          // the source facet's footprint shrunk by this (cell units)
   // levels_[s][L - 1]: blocks of 2^L cells, the maximum of s-frame heights over each block's
-  // vertices (bounds inclusive), row-major over ceil(n / 2^L) blocks.
+  // vertices (bounds inclusive), row-major over ceil(n / 2^L) blocks (level 1 only builds the
+  // next; the traversal starts at level 2).
   std::vector<std::vector<float>> levels_[2];
   std::vector<long> bw_, bh_;  // blocks per row / column at each level
   double top_[2] = {0, 0};      // the highest s-frame height
