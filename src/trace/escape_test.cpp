@@ -21,11 +21,6 @@ inline long wrap(long i, long n) {
 }
 }  // namespace
 
-float EscapeTest::height(long i, long j, int s) const {
-  const float h = h_[static_cast<std::size_t>(wrap(j, ny_)) * nx_ + wrap(i, nx_)];
-  return s == 0 ? h : -h;
-}
-
 EscapeTest::EscapeTest(const Tracer& tracer, double lower) : tracer_(tracer) {
   const Microsurface& s = tracer.surface();
   if (s.kind() != Microsurface::Kind::Heightfield || !s.macro().periodic || s.has_region()) return;

@@ -8,10 +8,10 @@
 //
 // The proof: the ray must stay farther than a margin M from the surface (above it, or below it
 // for the back side), except over its own facet, whose hits the tracer's filter rejects.
-// Blocks of 2^L x 2^L cells (L >= 1) carry the maximum of their vertices' heights (a pyramid
+// Blocks of 2^L x 2^L cells (L >= 2) carry the maximum of their vertices' heights (a pyramid
 // over the periodic tile; the back side uses the minimum); the ray skips a block when it is
-// above that maximum plus M where it enters it (it only rises). Cells the pyramid cannot skip
-// are tested per triangle: the ray's clearance to the triangle's plane is linear along the
+// above that maximum plus M where it enters it (it only rises). A cell's own corners come from
+// the tracer's vertex buffer; cells the ray is not above are tested per triangle: the ray's clearance to the triangle's plane is linear along the
 // ray, so its values where the ray enters and leaves the triangle's footprint bound it.
 // M covers what separates this double-precision geometry from Embree's: float vertices (x, y
 // rounded, heights exact floats), the float ray (origin and direction rounded), the ray re-entering
@@ -44,8 +44,7 @@ class EscapeTest {
   double margin() const { return margin_; }
 
  private:
-  // Heights g = sign * h over the periodic grid: the ray in that frame must stay above.
-  float height(long i, long j, int s) const;  // wrapped vertex (i, j); s 0: +h, 1: -h
+  // In the frame where the surface is g = +-h (s 0: +h, 1: -h) and the ray must stay above.
   bool clear_frame(const Vec3& p, const Vec3& d, long ci, long cj, int half, int s) const;
 
   const Tracer& tracer_;
