@@ -1,5 +1,6 @@
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/bsdf_walk.hpp"
+#include "microsim/measure/exit_counts.hpp"
 #include "microsim/measure/groove_models.hpp"
 #include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
@@ -337,14 +338,16 @@ BsdfTally run_paths(std::uint64_t n, int K, int npix, int nplane,
 // each pass. Results do not depend on how units are grouped into passes.
 constexpr std::uint64_t kPassChunks = 16;
 constexpr double kPassBytes = 64.0 * 1024 * 1024;
-template <class Body, class Done>
+// Unit: the tally a unit's chunks are summed in (BsdfTally, or ExitCounts for paths of weight 1);
+// Rep: the replicate's (added from its units in order).
+template <class Unit, class Rep, class Body, class Done>
 void run_replicate_paths(int q0, int q1, std::uint64_t n, int K, int npix, int nplane,
                          const std::function<void(double)>& progress, double progress_span, Body&& body,
                          Done&& done) {
   const std::uint64_t nchunks = (n + kChunk - 1) / kChunk;
   const std::uint64_t batches = path_batches(n);
   const std::uint64_t units = static_cast<std::uint64_t>(q1 - q0) * batches;
-  std::vector<BsdfTally> reps;  // replicates q0 + k, summed so far
+  std::vector<Rep> reps;  // replicates q0 + k, summed so far
   // A pass keeps one tally per unit: at most kPassBytes of them (large hemisphere maps: one
   // unit per pass, as run_paths).
   const double tally_bytes = 16.0 * 2 * (K + 1) * (1.0 + npix + nplane);
@@ -357,22 +360,22 @@ void run_replicate_paths(int q0, int q1, std::uint64_t n, int K, int npix, int n
       chunks += nchunks * (bt + 1) / batches - nchunks * bt / batches;
       ++u1;
     }
-    std::vector<BsdfTally> parts(u1 - u);
+    std::vector<Unit> parts(u1 - u);
     tbb::parallel_for(u, u1, [&](std::uint64_t w) {
       const int q = q0 + static_cast<int>(w / batches);
       const std::uint64_t bt = w % batches;
       const std::uint64_t c0 = nchunks * bt / batches, c1 = nchunks * (bt + 1) / batches;
       parts[w - u] = tbb::parallel_deterministic_reduce(
-          tbb::blocked_range<std::uint64_t>(c0, c1, 1), BsdfTally(),
-          [&](const tbb::blocked_range<std::uint64_t>& range, BsdfTally acc) {
-            if (acc.albedo.empty()) acc = BsdfTally(K, npix, nplane);
+          tbb::blocked_range<std::uint64_t>(c0, c1, 1), Unit(),
+          [&](const tbb::blocked_range<std::uint64_t>& range, Unit acc) {
+            if (acc.albedo.empty()) acc = Unit(K, npix, nplane);
             for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
               const std::uint64_t end = std::min(n, (c + 1) * kChunk);
               for (std::uint64_t i = c * kChunk; i < end; ++i) body(q, i, acc);
             }
             return acc;
           },
-          [](BsdfTally a, const BsdfTally& b) {
+          [](Unit a, const Unit& b) {
             a += b;
             return a;
           });
@@ -487,21 +490,45 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
     // With a split, the replicates of this process are kept until the others' arrive; the
     // replicates then enter add_replicate in order, as in one process.
     std::vector<BsdfTally> kept(o.split ? plan.replicates : 0, BsdfTally(K, npix, nplane));
-    run_replicate_paths(
-        static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), K, npix, nplane,
-        o.progress, share,
-        [&](int q, std::uint64_t i, BsdfTally& t) {
-          CounterRng rng(o.seed, ReplicatePlan::stream(stream, q), i);
-          ++t.paths;
-          const Vec2 ab = plan.strata.point(i, rng);
-          const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
-                                           -wi, mat, rng, o.max_events, finite, t.counters, t.events);
-          record_walk_end(t, e, ray_weight, r.map, r.plane);
-        },
-        [&](int q, BsdfTally&& rep) {
-          if (o.split) kept[q] = std::move(rep);
-          else r.measured.add_replicate(rep);
-        });
+    // Rays leaving a facet that provably meet nothing are not traced (trace/escape_test.hpp).
+    std::optional<EscapeTest> escape_test;
+    if (o.escape_test) escape_test.emplace(tracer);
+    const EscapeTest* escape = escape_test ? &*escape_test : nullptr;
+    auto keep = [&](int q, BsdfTally&& rep) {
+      if (o.split) kept[q] = std::move(rep);
+      else r.measured.add_replicate(rep);
+    };
+    // Every exit of weight exactly 1 (mirror, dielectric; rays of weight 1): integer counts
+    // (measure/exit_counts.hpp), the same tallies bit for bit. A unit counts in 32 bits.
+    const bool unit_weight = ray_weight == 1.0 &&
+                             (mat.kind == MaterialKind::Mirror || mat.kind == MaterialKind::Dielectric) &&
+                             plan.per_replicate() < (std::uint64_t(1) << 32);
+    if (unit_weight)
+      run_replicate_paths<ExitCounts<std::uint32_t>, ExitCounts<std::uint64_t>>(
+          static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), K, npix, nplane,
+          o.progress, share,
+          [&](int q, std::uint64_t i, ExitCounts<std::uint32_t>& t) {
+            CounterRng rng(o.seed, ReplicatePlan::stream(stream, q), i);
+            ++t.paths;
+            const Vec2 ab = plan.strata.point(i, rng);
+            const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
+                                             -wi, mat, rng, o.max_events, finite, t.counters, t.events, escape);
+            record_walk_end(t, e, r.map, r.plane);
+          },
+          [&](int q, ExitCounts<std::uint64_t>&& rep) { keep(q, rep.tally()); });
+    else
+      run_replicate_paths<BsdfTally, BsdfTally>(
+          static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), K, npix, nplane,
+          o.progress, share,
+          [&](int q, std::uint64_t i, BsdfTally& t) {
+            CounterRng rng(o.seed, ReplicatePlan::stream(stream, q), i);
+            ++t.paths;
+            const Vec2 ab = plan.strata.point(i, rng);
+            const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
+                                             -wi, mat, rng, o.max_events, finite, t.counters, t.events, escape);
+            record_walk_end(t, e, ray_weight, r.map, r.plane);
+          },
+          keep);
     if (o.split) {
       exchange_paths(*o.split, "bsdf", reps, false, kept);
       for (const BsdfTally& rep : kept) r.measured.add_replicate(rep);

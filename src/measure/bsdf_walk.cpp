@@ -6,7 +6,7 @@ namespace microsim {
 
 WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir0,
                        const models::Material& mat, CounterRng& rng, int max_events, bool finite,
-                       TraceCounters& counters, std::uint64_t& events) {
+                       TraceCounters& counters, std::uint64_t& events, const EscapeTest* escape) {
   using models::MaterialKind;
   const Microsurface& s = tracer.surface();
   const FacetPlanes planes(tracer);
@@ -41,6 +41,7 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
       return e;
     }
     ++events;
+    if (escape) escape->prefetch(hit.facet, mat.kind == MaterialKind::Dielectric);
     // Normal on the side of the current medium; v toward where the ray came from.
     const Vec3 m = side == RaySide::Front ? hit.normal : Vec3(-hit.normal);
     const Vec3 v = -dir;
@@ -72,6 +73,10 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
       }
     }
     dir.normalize();
+    if (escape && escape->clear(hit.point, dir, hit.facet, side)) {
+      hit = escape->no_hit(hit.point, dir, counters, side);
+      continue;
+    }
     const SourcePlane plane = planes.plane(hit.facet);
     hit = tracer.first_hit(hit.point, dir, &plane, counters, side);
   }
@@ -85,6 +90,23 @@ void record_walk_end(BsdfTally& t, const WalkEnd& e, double w0, const Hemisphere
       const bool reflected = e.kind == WalkEnd::Reflected;
       const bool binned = reflected ? e.direction.z() > 0.0 : e.direction.z() < 0.0;
       t.add_exit(reflected ? 0 : 1, e.order, w0 * e.weight, binned ? map.pixel_of(e.direction) : -1,
+                 binned ? plane.bin_of(e.direction) : -1);
+      break;
+    }
+    case WalkEnd::Missed: break;
+    case WalkEnd::Lost: ++t.lost; break;
+    case WalkEnd::Unterminated: ++t.unterminated; break;
+  }
+}
+
+void record_walk_end(ExitCounts<std::uint32_t>& t, const WalkEnd& e, const HemisphereMap& map,
+                     const InPlaneBins& plane) {
+  switch (e.kind) {
+    case WalkEnd::Reflected:
+    case WalkEnd::Transmitted: {
+      const bool reflected = e.kind == WalkEnd::Reflected;
+      const bool binned = reflected ? e.direction.z() > 0.0 : e.direction.z() < 0.0;
+      t.add_exit(reflected ? 0 : 1, e.order, binned ? map.pixel_of(e.direction) : -1,
                  binned ? plane.bin_of(e.direction) : -1);
       break;
     }

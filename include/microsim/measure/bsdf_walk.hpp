@@ -7,7 +7,9 @@
 #include <cstdint>
 
 #include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/exit_counts.hpp"
 #include "microsim/models/microfacet_bsdf.hpp"
+#include "microsim/trace/escape_test.hpp"
 #include "microsim/trace/tracer.hpp"
 
 namespace microsim {
@@ -25,14 +27,19 @@ struct WalkEnd {
 // light below the base plane: 000 "Inherent Assumptions", the visible area exceeds the
 // macrosurface's). On a periodic tile a reflected ray leaves upward, a transmitted one downward
 // from inside the slab; anything else is Lost. `events` counts the scattering events.
+// `escape` (optional, trace/escape_test.hpp): rays it proves to leave the surface are not traced
+// (the same WalkEnd and counters, bit for bit).
 WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir,
                        const models::Material& mat, CounterRng& rng, int max_events, bool finite,
-                       TraceCounters& counters, std::uint64_t& events);
+                       TraceCounters& counters, std::uint64_t& events, const EscapeTest* escape = nullptr);
 
 // Adds a walk's end to the tallies with the path's starting weight w0: exits with their order
 // and direction (binned when they point into their side's hemisphere: a finite object's
 // reflected ray below the base plane counts in the albedo only), losses and unterminated walks.
 void record_walk_end(BsdfTally& t, const WalkEnd& e, double w0, const HemisphereMap& map,
+                     const InPlaneBins& plane);
+// The same for paths of weight 1 (w0 = 1, e.weight = 1) into integer counts.
+void record_walk_end(ExitCounts<std::uint32_t>& t, const WalkEnd& e, const HemisphereMap& map,
                      const InPlaneBins& plane);
 
 }  // namespace microsim
