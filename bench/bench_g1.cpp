@@ -37,6 +37,7 @@
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/trace/tracer.hpp"
 #include "bench_common.hpp"
+#include "bench_bins.hpp"
 #include "bench_large.hpp"
 #include "bench_walks.hpp"
 
@@ -101,6 +102,10 @@ int main(int argc, char** argv) {
                     res, theta_deg, bare1.cpu / 1e6, without.cpu / 1e6, without.cpu / bare1.cpu,
                     with.cpu / 1e6, with.cpu / bare1.cpu);
         std::fflush(stdout);
+        continue;
+      }
+      if (only == "bins") {  // what (a) pays for the hit's bin and count (bench_bins.hpp)
+        print_bin_rows(tracer, table, v, o, repeat, res, theta_deg);
         continue;
       }
       if (only == "packets" || only == "layout" || only == "sample") {  // large-tile experiments (bench_large.hpp)
