@@ -2,7 +2,7 @@
 // the same scene and the very same rays, scene build time and memory, for several tile
 // resolutions (Beckmann alpha = 0.5, 4 cells per correlation length).
 //   microsim_bench [--rays N] [--repeat K] [--large] [--walks P]
-//                  [--only g1|bare|lean|ahead|walk|plain|packets|layout|sample] [resolution...]
+//                  [--only g1|bare|lean|ahead|walk|plain|packets|layout|sample|bins] [resolution...]
 // (default 1024 2048 4096 8192; --large adds 16384, about 9 GB and several processor minutes).
 // Tiles run in increasing size, so the process's peak resident memory after a tile is that
 // tile's peak (B/facet: peak bytes per facet, generation and tracing in this process).
@@ -19,6 +19,8 @@
 //   packets of 4/8/16 and coherent streams; the Tracer's scene against other layouts of the
 //   grid (flags, build quality, grid blocks, per-block instances); estimator (b)'s rays with
 //   and without their look-ahead.
+//   --only bins (bench_bins.hpp): the lean path with the hit's bin and count variants of (a)
+//   (none, a bin from the index, the table's bin with 64- or 16-bit counts), median ratios.
 // Each direction runs K times (default 3), the estimator and the bare loop interleaved in the
 // same process; the best of each is reported (on a shared machine the slower runs are the ones
 // that lost the CPU), and the ratio is that of the best rates.

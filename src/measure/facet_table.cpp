@@ -1,31 +1,11 @@
 #include "microsim/measure/facet_table.hpp"
 
-#include <sys/mman.h>
-
 #include <algorithm>
 #include <array>
-#include <cstdint>
 
 #include <tbb/blocked_range.h>
 
 namespace microsim {
-
-namespace {
-// Room for n elements, whose 2 MiB-aligned interior is advised to use transparent huge pages
-// before anything is written to it (the pages are then huge from their first touch). The
-// estimators read one entry per ray at scattered facets: on large tiles (256 MiB of bins at
-// 8192^2) 4 KiB pages cost a TLB miss per ray besides the cache miss. A hint only.
-template <class T>
-void reserve_on_huge_pages(std::vector<T>& v, std::size_t n) {
-  v.reserve(n);
-#ifdef MADV_HUGEPAGE
-  constexpr std::uintptr_t kHuge = std::uintptr_t(1) << 21;
-  const auto begin = reinterpret_cast<std::uintptr_t>(v.data());
-  const std::uintptr_t b = (begin + kHuge - 1) & ~(kHuge - 1), e = (begin + n * sizeof(T)) & ~(kHuge - 1);
-  if (e > b) madvise(reinterpret_cast<void*>(b), e - b, MADV_HUGEPAGE);
-#endif
-}
-}  // namespace
 
 FacetTable::FacetTable(const Microsurface& s, const DirectionBinning& binning) {
   size_ = s.num_facets();
@@ -47,13 +27,8 @@ FacetTable::FacetTable(const Microsurface& s, const DirectionBinning& binning) {
     area_.resize(size_);
   }
   const bool small = binning.size() < kNoBin16;
-  if (small) {
-    reserve_on_huge_pages(bin16_, size_);
-    bin16_.resize(size_);
-  } else {
-    reserve_on_huge_pages(bin32_, size_);
-    bin32_.resize(size_);
-  }
+  if (small) bin16_.resize(size_);
+  else bin32_.resize(size_);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, size_, 1 << 14),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t k = range.begin(); k != range.end(); ++k) {
