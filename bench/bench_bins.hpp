@@ -19,6 +19,7 @@ enum class BinVariant {
   FakeBin64,    // a bin from the facet index (no memory read), 64-bit counts
   Table64,      // the table's bin, 64-bit counts (estimator (a) before)
   Table16,      // the table's bin, 16-bit counts per chunk
+  Batched64,    // the table's bin, looked up for 32 hits at once after their rays, 64-bit counts
 };
 
 inline const char* bin_variant_name(BinVariant b) {
@@ -26,7 +27,8 @@ inline const char* bin_variant_name(BinVariant b) {
     case BinVariant::None: return "lean, no bin";
     case BinVariant::FakeBin64: return "index bin, u64";
     case BinVariant::Table64: return "table bin, u64";
-    default: return "table bin, u16";
+    case BinVariant::Table16: return "table bin, u16";
+    default: return "table bin batched, u64";
   }
 }
 
@@ -56,6 +58,15 @@ inline Rate binned_lean_rays_per_second(const Tracer& tracer, const FacetTable& 
     std::vector<std::uint64_t> h64(var == BinVariant::Table16 ? 0 : R * nb + 1);
     std::vector<std::uint16_t> h16(var == BinVariant::Table16 ? R * nb + 1 : 0);
     const std::size_t nobin = R * nb;
+    std::size_t pend_k[32], pend_q[32];
+    int pending = 0;
+    auto flush = [&] {
+      for (int i = 0; i < pending; ++i) {
+        const std::uint16_t b = bins16[pend_k[i]];
+        ++h64[b == FacetTable::kNoBin16 ? nobin : pend_q[i] * nb + b];
+      }
+      pending = 0;
+    };
     for (std::uint64_t j = c * span; j < std::min(n, (c + 1) * span); ++j) {
       const Strata::Cell cell = plan.strata.cell(j);
       for (int q = 0; q < R; ++q) {
@@ -65,6 +76,11 @@ inline Rate binned_lean_rays_per_second(const Tracer& tracer, const FacetTable& 
         const std::size_t k = tracer.front_facet(down, org, counters);
         if (k >= nf) continue;
         switch (var) {
+          case BinVariant::Batched64:
+            pend_k[pending] = k;
+            pend_q[pending] = q;
+            if (++pending == 32) flush();
+            break;
           case BinVariant::None: ++h64[0]; break;
           case BinVariant::FakeBin64: ++h64[q * nb + (k >> 7) % nb]; break;
           case BinVariant::Table64: {
@@ -80,6 +96,7 @@ inline Rate binned_lean_rays_per_second(const Tracer& tracer, const FacetTable& 
         }
       }
     }
+    flush();
     std::uint64_t s = 0;
     for (std::size_t b = 0; b < h64.size(); ++b) s += h64[b] * (b + 1);
     for (std::size_t b = 0; b < h16.size(); ++b) s += h16[b] * (b + 1);
@@ -97,7 +114,7 @@ inline Rate binned_lean_rays_per_second(const Tracer& tracer, const FacetTable& 
 inline void print_bin_rows(const Tracer& tracer, const FacetTable& table, const Vec3& v,
                            const G1Options& o, int repeat, int res, double theta_deg) {
   const BinVariant vars[] = {BinVariant::None, BinVariant::FakeBin64, BinVariant::Table64,
-                             BinVariant::Table16};
+                             BinVariant::Table16, BinVariant::Batched64};
   constexpr int kVars = sizeof(vars) / sizeof(vars[0]);
   Rate bare, rate[kVars];
   std::vector<double> ratios[kVars];
