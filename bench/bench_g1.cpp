@@ -2,7 +2,7 @@
 // the same scene and the very same rays, scene build time and memory, for several tile
 // resolutions (Beckmann alpha = 0.5, 4 cells per correlation length).
 //   microsim_bench [--rays N] [--repeat K] [--large] [--walks P]
-//                  [--only g1|bare|lean|ahead|walk|plain|packets|layout|sample] [resolution...]
+//                  [--only g1|bare|lean|ahead|walk|plain|packets|layout|sample|bins] [resolution...]
 // (default 1024 2048 4096 8192; --large adds 16384, about 9 GB and several processor minutes).
 // Tiles run in increasing size, so the process's peak resident memory after a tile is that
 // tile's peak (B/facet: peak bytes per facet, generation and tracing in this process).
@@ -19,6 +19,8 @@
 //   packets of 4/8/16 and coherent streams; the Tracer's scene against other layouts of the
 //   grid (flags, build quality, grid blocks, per-block instances); estimator (b)'s rays with
 //   and without their look-ahead.
+//   --only bins (bench_bins.hpp): the lean path with the hit's bin and count variants of (a)
+//   (none, a bin from the index, the table's bin with 64- or 16-bit counts), median ratios.
 // Each direction runs K times (default 3), the estimator and the bare loop interleaved in the
 // same process; the best of each is reported (on a shared machine the slower runs are the ones
 // that lost the CPU), and the ratio is that of the best rates.
@@ -37,6 +39,7 @@
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/trace/tracer.hpp"
 #include "bench_common.hpp"
+#include "bench_bins.hpp"
 #include "bench_large.hpp"
 #include "bench_walks.hpp"
 
@@ -101,6 +104,10 @@ int main(int argc, char** argv) {
                     res, theta_deg, bare1.cpu / 1e6, without.cpu / 1e6, without.cpu / bare1.cpu,
                     with.cpu / 1e6, with.cpu / bare1.cpu);
         std::fflush(stdout);
+        continue;
+      }
+      if (only == "bins") {  // what (a) pays for the hit's bin and count (bench_bins.hpp)
+        print_bin_rows(tracer, table, v, o, repeat, res, theta_deg);
         continue;
       }
       if (only == "packets" || only == "layout" || only == "sample") {  // large-tile experiments (bench_large.hpp)

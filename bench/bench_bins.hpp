@@ -1,0 +1,141 @@
+// Experiment of microsim_bench (--only bins): what estimator (a) pays after the primary ray
+// for the hit facet's normal bin and its count, on the bare loop's rays (bench_common.hpp),
+// every variant interleaved in one process. Rates per processor second and ratio to the bare
+// query; every variant counts the same hits (printed), and those that bin count the same bins.
+#pragma once
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <vector>
+
+#include "bench_common.hpp"
+#include "microsim/measure/facet_table.hpp"
+
+namespace microsim::bench {
+
+enum class BinVariant {
+  None,         // the lean path alone: hits counted, no bin
+  FakeBin64,    // a bin from the facet index (no memory read), 64-bit counts
+  Table64,      // the table's bin, 64-bit counts (estimator (a) before)
+  Table16,      // the table's bin, 16-bit counts per chunk
+  Batched64,    // the table's bin, looked up for 32 hits at once after their rays, 64-bit counts
+};
+
+inline const char* bin_variant_name(BinVariant b) {
+  switch (b) {
+    case BinVariant::None: return "lean, no bin";
+    case BinVariant::FakeBin64: return "index bin, u64";
+    case BinVariant::Table64: return "table bin, u64";
+    case BinVariant::Table16: return "table bin, u16";
+    default: return "table bin batched, u64";
+  }
+}
+
+// (a)'s loop on a heightfield below kAheadMinCells (g1_measure.cpp), with the variant's bin and
+// count. Returns the rate; `checksum` gets a sum over the counts (equal between the variants
+// that bin).
+inline Rate binned_lean_rays_per_second(const Tracer& tracer, const FacetTable& table,
+                                        const Vec3& v_in, const G1Options& o, BinVariant var,
+                                        std::uint64_t& checksum) {
+  const Vec3 v = v_in.normalized();
+  const RayWindow w = make_ray_window(tracer, v);
+  const ReplicatePlan plan(o.rays, o.replicates);
+  const int R = plan.replicates;
+  const std::uint64_t n = plan.per_replicate(), span = std::max<std::uint64_t>(1, (1u << 14) / R);
+  const std::uint64_t key = direction_stream_key(v), nc = (n + span - 1) / span;
+  std::vector<std::uint64_t> keys(R);
+  for (int q = 0; q < R; ++q) keys[q] = CounterRng::key(o.seed, ReplicatePlan::stream(0xA000 + key, q));
+  const std::size_t nb = static_cast<std::size_t>(g1_normal_binning(o).size());
+  const std::size_t nf = tracer.surface().num_facets();
+  const std::uint16_t* bins16 = table.bins16();
+  std::vector<std::uint64_t> sums(nc);
+  const DownwardRays down(tracer, v);
+  const auto t0 = std::chrono::steady_clock::now();
+  const double c0 = cpu_seconds();
+  tbb::parallel_for(std::uint64_t(0), nc, [&](std::uint64_t c) {
+    TraceCounters counters;
+    std::vector<std::uint64_t> h64(var == BinVariant::Table16 ? 0 : R * nb + 1);
+    std::vector<std::uint16_t> h16(var == BinVariant::Table16 ? R * nb + 1 : 0);
+    const std::size_t nobin = R * nb;
+    std::size_t pend_k[32], pend_q[32];
+    int pending = 0;
+    auto flush = [&] {
+      for (int i = 0; i < pending; ++i) {
+        const std::uint16_t b = bins16[pend_k[i]];
+        ++h64[b == FacetTable::kNoBin16 ? nobin : pend_q[i] * nb + b];
+      }
+      pending = 0;
+    };
+    for (std::uint64_t j = c * span; j < std::min(n, (c + 1) * span); ++j) {
+      const Strata::Cell cell = plan.strata.cell(j);
+      for (int q = 0; q < R; ++q) {
+        CounterRng rng(CounterRng::Keyed{}, keys[q], j);
+        const Vec2 ab = plan.strata.point(cell, rng);
+        const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
+        const std::size_t k = tracer.front_facet(down, org, counters);
+        if (k >= nf) continue;
+        switch (var) {
+          case BinVariant::Batched64:
+            pend_k[pending] = k;
+            pend_q[pending] = q;
+            if (++pending == 32) flush();
+            break;
+          case BinVariant::None: ++h64[0]; break;
+          case BinVariant::FakeBin64: ++h64[q * nb + (k >> 7) % nb]; break;
+          case BinVariant::Table64: {
+            const std::uint16_t b = bins16[k];
+            ++h64[b == FacetTable::kNoBin16 ? nobin : q * nb + b];
+            break;
+          }
+          case BinVariant::Table16: {
+            const std::uint16_t b = bins16[k];
+            ++h16[b == FacetTable::kNoBin16 ? nobin : q * nb + b];
+            break;
+          }
+        }
+      }
+    }
+    flush();
+    std::uint64_t s = 0;
+    for (std::size_t b = 0; b < h64.size(); ++b) s += h64[b] * (b + 1);
+    for (std::size_t b = 0; b < h16.size(); ++b) s += h16[b] * (b + 1);
+    sums[c] = s;
+  });
+  const double wall = seconds_since(t0), cpu = cpu_seconds() - c0;
+  checksum = 0;
+  for (std::uint64_t s : sums) checksum += s;
+  return {static_cast<double>(plan.total()) / wall, static_cast<double>(plan.total()) / cpu};
+}
+
+// Each repetition runs the bare loop and then every variant; the ratio reported is the median
+// over repetitions of variant / bare of the same repetition (neighbours in time share the
+// machine's load), beside the best rates.
+inline void print_bin_rows(const Tracer& tracer, const FacetTable& table, const Vec3& v,
+                           const G1Options& o, int repeat, int res, double theta_deg) {
+  const BinVariant vars[] = {BinVariant::None, BinVariant::FakeBin64, BinVariant::Table64,
+                             BinVariant::Table16, BinVariant::Batched64};
+  constexpr int kVars = sizeof(vars) / sizeof(vars[0]);
+  Rate bare, rate[kVars];
+  std::vector<double> ratios[kVars];
+  std::uint64_t sum[kVars] = {};
+  for (int k = 0; k < repeat; ++k) {
+    const Rate b = bare_g1_rays_per_second(tracer, v, o);
+    bare.best_of(b);
+    for (int i = 0; i < kVars; ++i) {
+      const Rate r = binned_lean_rays_per_second(tracer, table, v, o, vars[i], sum[i]);
+      rate[i].best_of(r);
+      ratios[i].push_back(r.cpu / b.cpu);
+    }
+  }
+  std::printf("%5d^2 %3.0fdeg bare %.2f", res, theta_deg, bare.cpu / 1e6);
+  for (int i = 0; i < kVars; ++i) {
+    std::sort(ratios[i].begin(), ratios[i].end());
+    std::printf(" | %s %.2f (median ratio %.3f) sum %llu", bin_variant_name(vars[i]), rate[i].cpu / 1e6,
+                ratios[i][ratios[i].size() / 2], static_cast<unsigned long long>(sum[i]));
+  }
+  std::printf("\n");
+  std::fflush(stdout);
+}
+
+}  // namespace microsim::bench
