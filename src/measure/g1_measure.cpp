@@ -350,7 +350,9 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
         },
         [&](const Vec3& org, Tally& t) {
           const std::size_t k = tracer.front_facet(down, org, t.counters);
-          if (k < nf) ++t.hits[ft.bin(k)];
+          if (k >= nf) return;
+          const int b = ft.bin(k);  // -1: a facet outside the binning's range (not tallied)
+          if (b >= 0) ++t.hits[static_cast<std::size_t>(b)];
         });
   } else if (heightfield) {
     // The same rays in the same order as run_replicates, ray j of every replicate in turn; the
@@ -381,8 +383,9 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
                               [&](int rep, std::uint64_t j, Tally& t) {
                                 const TraceHit h = tracer.first_hit(
                                     origin(rep, j, plan.strata.cell(j)), -v, nullptr, t.counters);
-                                if (h.hit && !h.backface && h.facet < nf)
-                                  ++t.hits[r.binning.bin_of(h.normal)];
+                                if (!h.hit || h.backface || h.facet >= nf) return;
+                                const int b = r.binning.bin_of(h.normal);  // -1: out of range
+                                if (b >= 0) ++t.hits[static_cast<std::size_t>(b)];
                               });
   }
   report();
