@@ -82,15 +82,19 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
   }
 }
 
-void record_walk_end(BsdfTally& t, const WalkEnd& e, double w0, const HemisphereMap& map,
-                     const InPlaneBins& plane) {
+namespace {
+// Where a walk's end goes in a tally: `add(s, px, b)` for an exit on side s (0 reflected, 1
+// transmitted) in pixel px and in-plane bin b (-1: below the side's horizon, not binned).
+template <class Tally, class AddExit>
+void record_end(Tally& t, const WalkEnd& e, const HemisphereMap& map, const InPlaneBins& plane,
+                AddExit add) {
   switch (e.kind) {
     case WalkEnd::Reflected:
     case WalkEnd::Transmitted: {
       const bool reflected = e.kind == WalkEnd::Reflected;
       const bool binned = reflected ? e.direction.z() > 0.0 : e.direction.z() < 0.0;
-      t.add_exit(reflected ? 0 : 1, e.order, w0 * e.weight, binned ? map.pixel_of(e.direction) : -1,
-                 binned ? plane.bin_of(e.direction) : -1);
+      add(reflected ? 0 : 1, binned ? map.pixel_of(e.direction) : -1,
+          binned ? plane.bin_of(e.direction) : -1);
       break;
     }
     case WalkEnd::Missed: break;
@@ -98,22 +102,17 @@ void record_walk_end(BsdfTally& t, const WalkEnd& e, double w0, const Hemisphere
     case WalkEnd::Unterminated: ++t.unterminated; break;
   }
 }
+}  // namespace
+
+void record_walk_end(BsdfTally& t, const WalkEnd& e, double w0, const HemisphereMap& map,
+                     const InPlaneBins& plane) {
+  record_end(t, e, map, plane,
+             [&](int s, int px, int b) { t.add_exit(s, e.order, w0 * e.weight, px, b); });
+}
 
 void record_walk_end(ExitCounts<std::uint32_t>& t, const WalkEnd& e, const HemisphereMap& map,
                      const InPlaneBins& plane) {
-  switch (e.kind) {
-    case WalkEnd::Reflected:
-    case WalkEnd::Transmitted: {
-      const bool reflected = e.kind == WalkEnd::Reflected;
-      const bool binned = reflected ? e.direction.z() > 0.0 : e.direction.z() < 0.0;
-      t.add_exit(reflected ? 0 : 1, e.order, binned ? map.pixel_of(e.direction) : -1,
-                 binned ? plane.bin_of(e.direction) : -1);
-      break;
-    }
-    case WalkEnd::Missed: break;
-    case WalkEnd::Lost: ++t.lost; break;
-    case WalkEnd::Unterminated: ++t.unterminated; break;
-  }
+  record_end(t, e, map, plane, [&](int s, int px, int b) { t.add_exit(s, e.order, px, b); });
 }
 
 }  // namespace microsim

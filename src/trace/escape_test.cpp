@@ -1,4 +1,5 @@
 #include "microsim/trace/escape_test.hpp"
+#include "microsim/trace/tile_border.hpp"
 
 #include <tbb/parallel_for.h>
 
@@ -300,12 +301,7 @@ TraceHit EscapeTest::no_hit(const Vec3& org, const Vec3& dir, TraceCounters& c, 
   if (o.y() < -hy || o.y() > hy) o.y() -= macro.size_y * std::floor((o.y() + hy) / macro.size_y);
   const double z_top = tracer_.z_top(), z_bottom = tracer_.z_bottom();
   for (int segment = 0; segment < 100000; ++segment) {
-    double t_exit = std::numeric_limits<double>::infinity();
-    if (dir.x() > 0) t_exit = std::min(t_exit, (hx - o.x()) / dir.x());
-    if (dir.x() < 0) t_exit = std::min(t_exit, (-hx - o.x()) / dir.x());
-    if (dir.y() > 0) t_exit = std::min(t_exit, (hy - o.y()) / dir.y());
-    if (dir.y() < 0) t_exit = std::min(t_exit, (-hy - o.y()) / dir.y());
-    t_exit = std::max(t_exit, 0.0);
+    const double t_exit = distance_to_tile_border(o, dir, hx, hy);
     double t_slab = std::numeric_limits<double>::infinity();
     if (dir.z() > 0) t_slab = (z_top - o.z()) / dir.z();
     if (dir.z() < 0) t_slab = (z_bottom - o.z()) / dir.z();
@@ -317,11 +313,7 @@ TraceHit EscapeTest::no_hit(const Vec3& org, const Vec3& dir, TraceCounters& c, 
       return out;
     }
     o += t_exit * dir;
-    const double tol = 1e-12 * std::max(macro.size_x, macro.size_y);
-    if (dir.x() > 0 && o.x() >= hx - tol) o.x() -= macro.size_x;
-    else if (dir.x() < 0 && o.x() <= -hx + tol) o.x() += macro.size_x;
-    if (dir.y() > 0 && o.y() >= hy - tol) o.y() -= macro.size_y;
-    else if (dir.y() < 0 && o.y() <= -hy + tol) o.y() += macro.size_y;
+    reenter_opposite_side(o, dir, macro);
     ++c.border_crossings;
   }
   ++c.unresolved;

@@ -1,4 +1,5 @@
 #include "microsim/trace/tracer.hpp"
+#include "microsim/trace/tile_border.hpp"
 
 #include <sys/mman.h>
 
@@ -382,11 +383,7 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
   for (int segment = 0; segment < max_segments; ++segment) {
     double t_exit = std::numeric_limits<double>::infinity();
     if (macro.periodic) {
-      if (dir.x() > 0) t_exit = std::min(t_exit, (hx - o.x()) / dir.x());
-      if (dir.x() < 0) t_exit = std::min(t_exit, (-hx - o.x()) / dir.x());
-      if (dir.y() > 0) t_exit = std::min(t_exit, (hy - o.y()) / dir.y());
-      if (dir.y() < 0) t_exit = std::min(t_exit, (-hy - o.y()) / dir.y());
-      t_exit = std::max(t_exit, 0.0);
+      t_exit = distance_to_tile_border(o, dir, hx, hy);
     } else if (window_) {
       t_exit = footprint_exit(o);
     }
@@ -464,11 +461,7 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
     if (!macro.periodic) return false;
     // Move to the border and re-enter through the opposite side (both at a corner).
     o += t_exit * dir;
-    const double tol = 1e-12 * std::max(macro.size_x, macro.size_y);
-    if (dir.x() > 0 && o.x() >= hx - tol) o.x() -= macro.size_x;
-    else if (dir.x() < 0 && o.x() <= -hx + tol) o.x() += macro.size_x;
-    if (dir.y() > 0 && o.y() >= hy - tol) o.y() -= macro.size_y;
-    else if (dir.y() < 0 && o.y() <= -hy + tol) o.y() += macro.size_y;
+    reenter_opposite_side(o, dir, macro);
     ++c.border_crossings;
   }
   ++c.unresolved;
@@ -588,11 +581,7 @@ std::size_t Tracer::front_facet(const DownwardRays& rays, const Vec3& org, Trace
     const bool slab_first = est * (1 - 1e-12) >= t_slab;
     double t_exit = inf, tfar = t_slab;
     if (!slab_first) {
-      if (dir.x() > 0) t_exit = std::min(t_exit, (hx - o.x()) / dir.x());
-      if (dir.x() < 0) t_exit = std::min(t_exit, (-hx - o.x()) / dir.x());
-      if (dir.y() > 0) t_exit = std::min(t_exit, (hy - o.y()) / dir.y());
-      if (dir.y() < 0) t_exit = std::min(t_exit, (-hy - o.y()) / dir.y());
-      t_exit = std::max(t_exit, 0.0);
+      t_exit = distance_to_tile_border(o, dir, hx, hy);
       tfar = std::min(t_exit + rays.margin, t_slab);
     }
     RTCRayHit rh;
@@ -665,11 +654,7 @@ std::size_t Tracer::front_facet(const DownwardRays& rays, const Vec3& org, Trace
     if (slab_first || t_slab <= t_exit) break;  // left the slab downward inside the tile: lost
     // Move to the border and re-enter through the opposite side (both at a corner).
     o += t_exit * dir;
-    const double tol = 1e-12 * std::max(macro.size_x, macro.size_y);
-    if (dir.x() > 0 && o.x() >= hx - tol) o.x() -= macro.size_x;
-    else if (dir.x() < 0 && o.x() <= -hx + tol) o.x() += macro.size_x;
-    if (dir.y() > 0 && o.y() >= hy - tol) o.y() -= macro.size_y;
-    else if (dir.y() < 0 && o.y() <= -hy + tol) o.y() += macro.size_y;
+    reenter_opposite_side(o, dir, macro);
     ++crossings;
     if (segment + 1 == max_segments) {
       ++c.rays;
