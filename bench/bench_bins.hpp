@@ -40,12 +40,12 @@ inline Rate binned_lean_rays_per_second(const Tracer& tracer, const FacetTable& 
                                         std::uint64_t& checksum) {
   const Vec3 v = v_in.normalized();
   const RayWindow w = make_ray_window(tracer, v);
-  const ReplicatePlan plan(o.rays, o.replicates);
-  const int R = plan.replicates;
-  const std::uint64_t n = plan.per_replicate(), span = std::max<std::uint64_t>(1, (1u << 14) / R);
-  const std::uint64_t key = direction_stream_key(v), nc = (n + span - 1) / span;
+  const G1RayChunks rays(v, o, 0xA000);  // measure_g1's chunks and streams
+  const ReplicatePlan& plan = rays.plan;
+  const int R = rays.R;
+  const std::uint64_t nc = rays.chunks;
   std::vector<std::uint64_t> keys(R);
-  for (int q = 0; q < R; ++q) keys[q] = CounterRng::key(o.seed, ReplicatePlan::stream(0xA000 + key, q));
+  for (int q = 0; q < R; ++q) keys[q] = CounterRng::key(o.seed, rays.streams[q]);
   const std::size_t nb = static_cast<std::size_t>(g1_normal_binning(o).size());
   const std::size_t nf = tracer.surface().num_facets();
   const std::uint16_t* bins16 = table.bins16();
@@ -67,7 +67,7 @@ inline Rate binned_lean_rays_per_second(const Tracer& tracer, const FacetTable& 
       }
       pending = 0;
     };
-    for (std::uint64_t j = c * span; j < std::min(n, (c + 1) * span); ++j) {
+    for (std::uint64_t j = rays.first(c); j < rays.end(c); ++j) {
       const Strata::Cell cell = plan.strata.cell(j);
       for (int q = 0; q < R; ++q) {
         CounterRng rng(CounterRng::Keyed{}, keys[q], j);
@@ -102,10 +102,10 @@ inline Rate binned_lean_rays_per_second(const Tracer& tracer, const FacetTable& 
     for (std::size_t b = 0; b < h16.size(); ++b) s += h16[b] * (b + 1);
     sums[c] = s;
   });
-  const double wall = seconds_since(t0), cpu = cpu_seconds() - c0;
+  const Rate rate = rate_since(static_cast<double>(plan.total()), t0, c0);
   checksum = 0;
   for (std::uint64_t s : sums) checksum += s;
-  return {static_cast<double>(plan.total()) / wall, static_cast<double>(plan.total()) / cpu};
+  return rate;
 }
 
 // Each repetition runs the bare loop and then every variant; the ratio reported is the median
