@@ -503,17 +503,20 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
     const bool unit_weight = ray_weight == 1.0 &&
                              (mat.kind == MaterialKind::Mirror || mat.kind == MaterialKind::Dielectric) &&
                              plan.per_replicate() < (std::uint64_t(1) << 32);
+    // Path i of replicate q, walked into a unit's tally t (either kind).
+    auto walk = [&](int q, std::uint64_t i, auto& t) {
+      CounterRng rng(o.seed, ReplicatePlan::stream(stream, q), i);
+      ++t.paths;
+      const Vec2 ab = plan.strata.point(i, rng);
+      return walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2, -wi, mat,
+                            rng, o.max_events, finite, t.counters, t.events, escape);
+    };
     if (unit_weight)
       run_replicate_paths<ExitCounts<std::uint32_t>, ExitCounts<std::uint64_t>>(
           static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), K, npix, nplane,
           o.progress, share,
           [&](int q, std::uint64_t i, ExitCounts<std::uint32_t>& t) {
-            CounterRng rng(o.seed, ReplicatePlan::stream(stream, q), i);
-            ++t.paths;
-            const Vec2 ab = plan.strata.point(i, rng);
-            const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
-                                             -wi, mat, rng, o.max_events, finite, t.counters, t.events, escape);
-            record_walk_end(t, e, r.map, r.plane);
+            record_walk_end(t, walk(q, i, t), r.map, r.plane);
           },
           [&](int q, ExitCounts<std::uint64_t>&& rep) { keep(q, rep.tally()); });
     else
@@ -521,12 +524,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
           static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), K, npix, nplane,
           o.progress, share,
           [&](int q, std::uint64_t i, BsdfTally& t) {
-            CounterRng rng(o.seed, ReplicatePlan::stream(stream, q), i);
-            ++t.paths;
-            const Vec2 ab = plan.strata.point(i, rng);
-            const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
-                                             -wi, mat, rng, o.max_events, finite, t.counters, t.events, escape);
-            record_walk_end(t, e, ray_weight, r.map, r.plane);
+            record_walk_end(t, walk(q, i, t), ray_weight, r.map, r.plane);
           },
           keep);
     if (o.split) {
