@@ -426,18 +426,18 @@ const std::vector<Case>& cases() {
       // Presets: every failure names the file and the key.
       {"generate gaussian --config {T}missing.toml -o {o}", 2, "missing.toml", "exr"},
       {"generate gaussian --config {T}p_unknown.toml -o {o}", 2, "resolutionn", "exr"},
-      {"generate gaussian --config {T}p_type.toml -o {o}", 2, "'resolution'", "exr"},
-      {"generate gaussian --config {T}p_float.toml -o {o}", 2, "'resolution'", "exr"},
-      {"generate gaussian --config {T}p_bool.toml -o {o}", 2, "'alpha'", "exr"},
-      {"generate gaussian --config {T}p_alpha.toml --resolution 16 -o {o}", 2, "'alpha'", "exr"},
-      {"generate gaussian --config {T}p_nan.toml --resolution 16 -o {o}", 2, "'size'", "exr"},
+      {"generate gaussian --config {T}p_type.toml -o {o}", 2, "--resolution", "exr"},
+      {"generate gaussian --config {T}p_float.toml -o {o}", 2, "--resolution", "exr"},
+      {"generate gaussian --config {T}p_bool.toml -o {o}", 2, "--alpha", "exr"},
+      {"generate gaussian --config {T}p_alpha.toml --resolution 16 -o {o}", 2, "--alpha", "exr"},
+      {"generate gaussian --config {T}p_nan.toml --resolution 16 -o {o}", 2, "--size", "exr"},
       {"generate gaussian --config {T}p_malformed.toml -o {o}", 2, "p_malformed.toml", "exr"},
       {"generate gaussian --config {T}p_empty_value.toml -o {o}", 2, "p_empty_value.toml", "exr"},
       {"generate gaussian --config {T}p_binary.toml -o {o}", 2, "p_binary.toml", "exr"},
       {"generate gaussian --config {T}p_section.toml -o {o}", 2, "p_section.toml", "exr"},
       {"generate gaussian --config {T}p_twice.toml -o {o}", 2, "'alpha'", "exr"},
       {"generate gaussian --config {T}p_array.toml -o {o}", 2, "'alpha'", "exr"},
-      {"generate gaussian --config {T}p_seed.toml -o {o}", 2, "'seed'", "exr"},
+      {"generate gaussian --config {T}p_seed.toml -o {o}", 2, "--seed", "exr"},
       {"generate gaussian --config {T}p_config.toml -o {o}", 2, "'config'", "exr"},
       {"generate vgroove --config {T}p_flag.toml -o {o}", 2, "'two-d'", "ply"},
       {"generate box --config {T}p_alpha.toml -o {o}", 2, "'alpha'", "ply"},
@@ -757,3 +757,4 @@ TEST_F(Inputs, TilesLargerThanTheMemoryAreRefusedBeforeAllocating) {
     fs::remove(json);
   }
 }
+
