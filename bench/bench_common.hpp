@@ -56,6 +56,39 @@ inline double rss_mib() {
   return 0;
 }
 
+// Estimator (a)'s or (b)'s ray indices as measure_g1 orders them: R replicates of n rays in
+// chunks of `span` ray indices (ray j of every replicate in turn), and the replicates' streams
+// for a base stream (0xA000: primary rays, 0xB000: area samples) of the direction v.
+struct G1RayChunks {
+  ReplicatePlan plan;
+  int R;
+  std::uint64_t n, span, chunks;
+  std::vector<std::uint64_t> streams;
+  G1RayChunks(const Vec3& v, const G1Options& o, std::uint64_t base)
+      : plan(o.rays, o.replicates), R(plan.replicates), n(plan.per_replicate()),
+        span(std::max<std::uint64_t>(1, (1u << 14) / R)), chunks((n + span - 1) / span), streams(R) {
+    for (int q = 0; q < R; ++q) streams[q] = ReplicatePlan::stream(base + direction_stream_key(v), q);
+  }
+  std::uint64_t first(std::uint64_t c) const { return c * span; }
+  std::uint64_t end(std::uint64_t c) const { return std::min(n, (c + 1) * span); }
+};
+
+// A plain Embree query from `org` along `dir` to infinity (no instance, no hit yet).
+inline RTCRayHit bare_ray_hit(const Vec3& org, const float dir[3]) {
+  RTCRayHit rh{};
+  rh.ray.org_x = float(org.x());
+  rh.ray.org_y = float(org.y());
+  rh.ray.org_z = float(org.z());
+  rh.ray.dir_x = dir[0];
+  rh.ray.dir_y = dir[1];
+  rh.ray.dir_z = dir[2];
+  rh.ray.tfar = 1e30f;
+  rh.ray.mask = ~0u;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  return rh;
+}
+
 // Estimator (a)'s primary rays exactly as measure_g1 casts them (same seed, replicate streams,
 // stratified Morton-ordered origins on the ray window, chunks of the same ray indices, ray j of
 // every replicate in turn), each traced by one plain rtcIntersect1 from the window to infinity: no
@@ -68,13 +101,14 @@ inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, cons
                                     bool lean = false, int ahead = -1) {
   const Vec3 v = v_in.normalized();
   const RayWindow w = make_ray_window(tracer, v);
-  const ReplicatePlan plan(o.rays, o.replicates);
-  const int R = plan.replicates;
-  const std::uint64_t n = plan.per_replicate(), span = std::max<std::uint64_t>(1, (1u << 14) / R);
-  const std::uint64_t key = direction_stream_key(v), nc = (n + span - 1) / span;
+  const G1RayChunks rays(v, o, 0xA000);
+  const ReplicatePlan& plan = rays.plan;
+  const int R = rays.R;
+  const std::uint64_t nc = rays.chunks;
   std::vector<std::uint64_t> keys(R);  // as measure_g1: the generators' keys once per replicate
-  for (int q = 0; q < R; ++q) keys[q] = CounterRng::key(o.seed, ReplicatePlan::stream(0xA000 + key, q));
+  for (int q = 0; q < R; ++q) keys[q] = CounterRng::key(o.seed, rays.streams[q]);
   std::vector<unsigned> hits(nc);
+  const float dir[3] = {float(-v.x()), float(-v.y()), float(-v.z())};
   const DownwardRays down(tracer, v);
   const auto t0 = std::chrono::steady_clock::now();
   const double c0 = cpu_seconds();
@@ -85,10 +119,10 @@ inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, cons
     TraceCounters counters;
     if (lean && (ahead > 0 || (ahead < 0 && static_cast<double>(tracer.surface().nx()) *
                                                    tracer.surface().ny() >= kAheadMinCells))) {  // as measure_g1 traces a heightfield: set up and prefetched ahead
-      std::uint64_t j = c * span;
+      std::uint64_t j = rays.first(c);
       int rep = 0;
       run_ahead<Vec3>(
-          (std::min(n, (c + 1) * span) - c * span) * R,
+          (rays.end(c) - rays.first(c)) * R,
           [&] {
             CounterRng rng(CounterRng::Keyed{}, keys[rep], j);
             const Vec2 ab = plan.strata.point(plan.strata.cell(j), rng);
@@ -104,7 +138,7 @@ inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, cons
       hits[c] = count;
       return;
     }
-    for (std::uint64_t j = c * span; j < std::min(n, (c + 1) * span); ++j) {
+    for (std::uint64_t j = rays.first(c); j < rays.end(c); ++j) {
       const Strata::Cell cell = plan.strata.cell(j);  // as measure_g1: once per ray index
       for (int rep = 0; rep < R; ++rep) {
         CounterRng rng(CounterRng::Keyed{}, keys[rep], j);
@@ -114,16 +148,7 @@ inline Rate bare_g1_rays_per_second(const Tracer& tracer, const Vec3& v_in, cons
           count += tracer.front_facet(down, org, counters) != DownwardRays::kNone;
           continue;
         }
-        RTCRayHit rh{};
-        rh.ray.org_x = float(org.x());
-        rh.ray.org_y = float(org.y());
-        rh.ray.org_z = float(org.z());
-        rh.ray.dir_x = float(-v.x());
-        rh.ray.dir_y = float(-v.y());
-        rh.ray.dir_z = float(-v.z());
-        rh.ray.tfar = 1e30f;
-        rh.ray.mask = ~0u;
-        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        RTCRayHit rh = bare_ray_hit(org, dir);
         rtcIntersect1(tracer.scene(), &ctx, &rh);
         count += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
       }
@@ -169,39 +194,6 @@ inline Rate replay_rays_per_second(const Tracer& tracer, const std::vector<RTCRa
 inline Rate rate_since(double rays, std::chrono::steady_clock::time_point t0, double c0) {
   const double wall = seconds_since(t0), cpu = cpu_seconds() - c0;
   return {rays / wall, rays / cpu};
-}
-
-// Estimator (a)'s or (b)'s ray indices as measure_g1 orders them: R replicates of n rays in
-// chunks of `span` ray indices (ray j of every replicate in turn), and the replicates' streams
-// for a base stream (0xA000: primary rays, 0xB000: area samples) of the direction v.
-struct G1RayChunks {
-  ReplicatePlan plan;
-  int R;
-  std::uint64_t n, span, chunks;
-  std::vector<std::uint64_t> streams;
-  G1RayChunks(const Vec3& v, const G1Options& o, std::uint64_t base)
-      : plan(o.rays, o.replicates), R(plan.replicates), n(plan.per_replicate()),
-        span(std::max<std::uint64_t>(1, (1u << 14) / R)), chunks((n + span - 1) / span), streams(R) {
-    for (int q = 0; q < R; ++q) streams[q] = ReplicatePlan::stream(base + direction_stream_key(v), q);
-  }
-  std::uint64_t first(std::uint64_t c) const { return c * span; }
-  std::uint64_t end(std::uint64_t c) const { return std::min(n, (c + 1) * span); }
-};
-
-// A plain Embree query from `org` along `dir` to infinity (no instance, no hit yet).
-inline RTCRayHit bare_ray_hit(const Vec3& org, const float dir[3]) {
-  RTCRayHit rh{};
-  rh.ray.org_x = float(org.x());
-  rh.ray.org_y = float(org.y());
-  rh.ray.org_z = float(org.z());
-  rh.ray.dir_x = dir[0];
-  rh.ray.dir_y = dir[1];
-  rh.ray.dir_z = dir[2];
-  rh.ray.tfar = 1e30f;
-  rh.ray.mask = ~0u;
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  return rh;
 }
 
 // The w x h grid points (i0 + i - 1, j0 + j - 1) of a periodic heightfield (the Tracer's grid

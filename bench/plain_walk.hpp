@@ -20,6 +20,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "bench_common.hpp"
 #include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
 #include "microsim/trace/tracer.hpp"
@@ -46,17 +47,12 @@ class PlainWalker {
     const int nx = s.nx(), ny = s.ny(), w = nx + 3, h = ny + 3;
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                           3 * sizeof(float), std::size_t(w) * h + 1));
+    grid_vertices(s, 0, 0, w, h, v);  // periodic heights, one cell around
     float zmin = 1e30f, zmax = -1e30f;
-    for (int j = 0; j < h; ++j)
-      for (int i = 0; i < w; ++i) {
-        const Vec3 p = s.grid_point(i - 1, j - 1);  // periodic heights, one cell around
-        float* q = v + 3 * (std::size_t(j) * w + i);
-        q[0] = float(p.x());
-        q[1] = float(p.y());
-        q[2] = float(p.z());
-        zmin = std::min(zmin, q[2]);
-        zmax = std::max(zmax, q[2]);
-      }
+    for (std::size_t k = 0; k < std::size_t(w) * h; ++k) {
+      zmin = std::min(zmin, v[3 * k + 2]);
+      zmax = std::max(zmax, v[3 * k + 2]);
+    }
     auto* grid = static_cast<RTCGrid*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_GRID, 0, RTC_FORMAT_GRID,
                                                                sizeof(RTCGrid), 1));
     grid->startVertexID = 0;

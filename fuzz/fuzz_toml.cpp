@@ -1,5 +1,5 @@
 // TOML presets through the function every command uses for --config (cli::apply_preset): the
-// file checks, CLI11's ConfigTOML parser, key lookup and each option's own validator. The command
+// library's preset reader (io/preset_file.hpp), key lookup and each option's own validator. The command
 // here has one option of every kind the real commands declare (bounded number, integer, seed,
 // flag, free string, comma list); the preset is applied after an empty command line, as
 // `microsim generate KIND --config FILE` does.

@@ -5,7 +5,10 @@
 // sampling draws directions with the density it reports (chi-square harness) and weights eval / pdf.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <optional>
 #include <random>
 #include <utility>
@@ -308,31 +311,133 @@ TEST(RglFile, ImportanceSamplingMatchesItsDensityAndEval) {
   std::remove(path.c_str());
 }
 
+// The measured f for light l and view v as the MERL file must hold it (io/merl.hpp, written
+// again here from that description): 0 below the horizon; by reciprocity the direction nearer
+// the normal is the light's; the pair turned about the normal so that the light has the
+// measured azimuth; f read from the measured maps (bilinear between pixel centres, map_f) of
+// the two measured incidences that bracket theta(l), linear in theta_i, constant outside them.
+double merl_expected_f(const BsdfTable& t, Vec3 l, Vec3 v) {
+  if (l.z() <= 0 || v.z() <= 0) return 0.0;
+  if (v.z() > l.z()) std::swap(l, v);
+  const double turn = t.phi_i[0] - std::atan2(l.y(), l.x());
+  v = Vec3(std::cos(turn) * v.x() - std::sin(turn) * v.y(), std::sin(turn) * v.x() + std::cos(turn) * v.y(), v.z());
+  const double th = theta_of(l.normalized());
+  const std::vector<double>& ti = t.theta_i;
+  if (th <= ti.front()) return map_f(t.at(0, 0), v);
+  if (th >= ti.back()) return map_f(t.at(0, ti.size() - 1), v);
+  std::size_t k = 0;
+  while (ti[k + 1] < th) ++k;
+  const double w = (th - ti[k]) / (ti[k + 1] - ti[k]);
+  return (1 - w) * map_f(t.at(0, k), v) + w * map_f(t.at(0, k + 1), v);
+}
+
+// The MERL cell (theta_h, theta_d, phi_d) of a pair (l, v), and the pair at a cell's centre
+// (half vector at azimuth 0; l = R_y(theta_h) d(theta_d, phi_d), v its mirror about h).
+struct MerlCell {
+  int h, d, p;
+};
+MerlCell merl_cell_of(const Vec3& l, const Vec3& v) {
+  const Vec3 h = (l + v).normalized();
+  const double th = theta_of(h), ph = std::atan2(h.y(), h.x());
+  const Vec3 a(std::cos(ph) * l.x() + std::sin(ph) * l.y(), -std::sin(ph) * l.x() + std::cos(ph) * l.y(), l.z());
+  const Vec3 d(std::cos(th) * a.x() - std::sin(th) * a.z(), a.y(), std::sin(th) * a.x() + std::cos(th) * a.z());
+  double pd = std::atan2(d.y(), d.x());
+  if (pd < 0) pd += kPi;
+  return {std::min(89, static_cast<int>(std::sqrt(th / (0.5 * kPi)) * 90)),
+          std::min(89, static_cast<int>(theta_of(d) / (0.5 * kPi) * 90)), std::min(179, static_cast<int>(pd / kPi * 180))};
+}
+std::pair<Vec3, Vec3> merl_cell_centre(const MerlCell& c) {
+  const double u = (c.h + 0.5) / 90, th = u * u * 0.5 * kPi;
+  const Vec3 d = direction_from_angles((c.d + 0.5) / 90 * 0.5 * kPi, (c.p + 0.5) / 180 * kPi);
+  const Vec3 l(std::cos(th) * d.x() + std::sin(th) * d.z(), d.y(), -std::sin(th) * d.x() + std::cos(th) * d.z());
+  const Vec3 h(std::sin(th), 0.0, std::cos(th));
+  return {l, 2.0 * l.dot(h) * h - l};
+}
+
+// Largest |reader - expected| over every cell centre of the file, relative to `peak`; cells
+// with a direction within 1e-9 of the horizon are left out (the horizon is where the file
+// steps to 0). `cells` counts the cells compared above the horizon.
+double merl_centre_deviation(const MerlReader& merl, const BsdfTable& t, double peak, int* cells) {
+  double dev = 0.0;
+  *cells = 0;
+  for (int ih = 0; ih < 90; ++ih)
+    for (int id = 0; id < 90; ++id)
+      for (int ip = 0; ip < 180; ++ip) {
+        const auto [l, v] = merl_cell_centre({ih, id, ip});
+        if (std::abs(l.z()) < 1e-9 || std::abs(v.z()) < 1e-9) continue;
+        const double want = merl_expected_f(t, l, v);
+        *cells += want > 0;
+        dev = std::max(dev, std::abs(merl.f(l, v, 0) - want) / peak);
+      }
+  return dev;
+}
+
+// The MERL format holds one value per (theta_h, theta_d, phi_d) cell and no interpolation: a
+// reader returns the value of the cell a pair falls in. So the exact statements are: (1) at
+// every cell centre, the file gives back the measured f there (expected above) to the
+// rounding of the stored doubles and of the two computations of the centre's directions (1e-12
+// of the peak; measured ~1e-16); (2) anywhere else, e.g. at the measured pixel centres, the
+// reader gives the expected f at the centre of the pair's cell, exactly as (1). What the reader
+// gives at a pixel centre therefore differs from the pixel's measured f by f's change across
+// the cell (cells up to 2 degrees wide in theta_h, and the light's zenith off the measured
+// theta_i by up to a degree, which mixes in the neighbouring incidence's map): a bias that
+// grows with the rays, not noise. The earlier test compared the reader with the pixels by
+// their standard errors and reached 0.99 of its Sidak bound; that comparison is no test of the file.
 TEST(MerlFile, ReaderGivesBackTheMeasuredF) {
   const BsdfTable t = measure(kGold, {0, 30, 60}, 200000, 12);
   const std::string path = temp("gold.binary");
   write_merl(path, t);
-  const MerlReader merl(path);
-  // The cells read the light at the smaller zenith angle (reciprocity), so the measured
-  // incidence theta_i itself is what they hold for theta_o > theta_i (3 degrees clear of the
-  // switch); normal incidence is left out: an isotropic table cannot hold the azimuthal
-  // variation of one finite tile seen from straight above.
-  for (int q = 1; q < 3; ++q) {
-    const BsdfResult& r = t.at(0, q);
-    const double min_theta_o = t.theta_i[q] + rad(3.0);
-    const Vec3 wi = direction_from_angles(t.theta_i[q], 0.0);
+  double peak = 0.0;
+  for (int q = 0; q < 3; ++q)
+    for (int px = 0; px < t.at(0, q).map.size(); ++px)
+      peak = std::max(peak, t.at(0, q).f_pixel(0, t.at(0, q).options.orders, px).mean);
+  ASSERT_GT(peak, 0.0);
+  constexpr double kExact = 1e-12;
+  {
+    const MerlReader merl(path);
     for (int c = 1; c < 3; ++c) {  // wavelength independent: equal decoded channels
-      const Vec3 wo = direction_from_angles(0.3, 2.0);
+      const Vec3 wi = direction_from_angles(0.5, 0.0), wo = direction_from_angles(0.3, 2.0);
       EXPECT_NEAR(merl.f(wi, wo, c), merl.f(wi, wo, 0), 1e-12 * merl.f(wi, wo, 0));
     }
-    const auto f = [&](const Vec3& wo) { return merl.f(wi, wo, 0); };
-    const Agreement a = agreement(r, f, min_theta_o, 0.05);
-    ASSERT_GT(a.n, 15);
-    EXPECT_LT(a.max_abs_z, sidak_z(1e-3, a.n)) << "theta_i " << deg(t.theta_i[q]);
-    EXPECT_GT(chi2_p_value(a.chi2, a.n), 1e-3) << "chi2 " << a.chi2 << " over " << a.n;
-    const Agreement b = agreement(r, [&](const Vec3& wo) { return 1.05 * f(wo); }, min_theta_o, 0.05);
-    EXPECT_LT(chi2_p_value(b.chi2, b.n), 1e-3) << "power check: chi2 " << b.chi2;
+    int cells = 0;
+    EXPECT_LT(merl_centre_deviation(merl, t, peak, &cells), kExact);
+    EXPECT_GT(cells, 90 * 90 * 180 / 4);
+    // (2) At the measured pixel centres of theta_i = 30 and 60 degrees (normal incidence holds
+    // the azimuthal variation of one finite tile, which an isotropic table cannot): the cell's
+    // centre value; beyond theta_i (the light's side) the expected f is the pixel's own.
+    double interpolation = 0.0;
+    for (int q = 1; q < 3; ++q) {
+      const BsdfResult& r = t.at(0, q);
+      const int R = r.map.resolution(), K = r.options.orders;
+      const Vec3 wi = direction_from_angles(t.theta_i[q], 0.0);
+      for (int px = 0; px < r.map.size(); ++px) {
+        const Vec3 wo = r.map.from_square(-1 + (px % R + 0.5) * 2.0 / R, -1 + (px / R + 0.5) * 2.0 / R);
+        const auto [l, v] = merl_cell_centre(merl_cell_of(wi, wo));
+        EXPECT_LT(std::abs(merl.f(wi, wo, 0) - merl_expected_f(t, l, v)), kExact * peak) << "pixel " << px;
+        if (theta_of(wo) <= t.theta_i[q]) continue;
+        const double measured = r.f_pixel(0, K, px).mean;
+        EXPECT_LT(std::abs(merl_expected_f(t, wi, wo) - measured), kExact * peak) << "pixel " << px;
+        interpolation = std::max(interpolation, std::abs(merl.f(wi, wo, 0) - measured) / peak);
+      }
+    }
+    std::printf("[ info ] MERL cell centres: largest deviation below %.0e of the peak over %d cells; "
+                "at pixel centres the cell's value is off the pixel's f by up to %.3f of the peak\n",
+                kExact, cells, interpolation);
   }
+  // Power: one stored value of the largest-f cell changed by 1e-6 of itself is found.
+  {
+    std::fstream file(path, std::ios::in | std::ios::out | std::ios::binary);
+    std::vector<double> block(90 * 90 * 180);
+    file.seekg(3 * sizeof(std::int32_t));
+    file.read(reinterpret_cast<char*>(block.data()), static_cast<std::streamsize>(block.size() * sizeof(double)));
+    const std::size_t k = std::max_element(block.begin(), block.end()) - block.begin();
+    block[k] *= 1 + 1e-6;
+    file.seekp(3 * sizeof(std::int32_t) + k * sizeof(double));
+    file.write(reinterpret_cast<const char*>(&block[k]), sizeof(double));
+  }
+  const MerlReader perturbed(path);
+  int cells = 0;
+  EXPECT_GT(merl_centre_deviation(perturbed, t, peak, &cells), 1e3 * kExact) << "power check";
   // An azimuth grid (anisotropic table) is refused.
   const BsdfTable aniso = measure(kGold, {30}, 1000, 4, {-180, 0, 180});
   EXPECT_THROW(merl_cells(aniso), UsageError);

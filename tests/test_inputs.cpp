@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <functional>
 #include <fstream>
@@ -426,18 +427,18 @@ const std::vector<Case>& cases() {
       // Presets: every failure names the file and the key.
       {"generate gaussian --config {T}missing.toml -o {o}", 2, "missing.toml", "exr"},
       {"generate gaussian --config {T}p_unknown.toml -o {o}", 2, "resolutionn", "exr"},
-      {"generate gaussian --config {T}p_type.toml -o {o}", 2, "'resolution'", "exr"},
-      {"generate gaussian --config {T}p_float.toml -o {o}", 2, "'resolution'", "exr"},
-      {"generate gaussian --config {T}p_bool.toml -o {o}", 2, "'alpha'", "exr"},
-      {"generate gaussian --config {T}p_alpha.toml --resolution 16 -o {o}", 2, "'alpha'", "exr"},
-      {"generate gaussian --config {T}p_nan.toml --resolution 16 -o {o}", 2, "'size'", "exr"},
+      {"generate gaussian --config {T}p_type.toml -o {o}", 2, "--resolution", "exr"},
+      {"generate gaussian --config {T}p_float.toml -o {o}", 2, "--resolution", "exr"},
+      {"generate gaussian --config {T}p_bool.toml -o {o}", 2, "--alpha", "exr"},
+      {"generate gaussian --config {T}p_alpha.toml --resolution 16 -o {o}", 2, "--alpha", "exr"},
+      {"generate gaussian --config {T}p_nan.toml --resolution 16 -o {o}", 2, "--size", "exr"},
       {"generate gaussian --config {T}p_malformed.toml -o {o}", 2, "p_malformed.toml", "exr"},
       {"generate gaussian --config {T}p_empty_value.toml -o {o}", 2, "p_empty_value.toml", "exr"},
       {"generate gaussian --config {T}p_binary.toml -o {o}", 2, "p_binary.toml", "exr"},
       {"generate gaussian --config {T}p_section.toml -o {o}", 2, "p_section.toml", "exr"},
       {"generate gaussian --config {T}p_twice.toml -o {o}", 2, "'alpha'", "exr"},
       {"generate gaussian --config {T}p_array.toml -o {o}", 2, "'alpha'", "exr"},
-      {"generate gaussian --config {T}p_seed.toml -o {o}", 2, "'seed'", "exr"},
+      {"generate gaussian --config {T}p_seed.toml -o {o}", 2, "--seed", "exr"},
       {"generate gaussian --config {T}p_config.toml -o {o}", 2, "'config'", "exr"},
       {"generate vgroove --config {T}p_flag.toml -o {o}", 2, "'two-d'", "ply"},
       {"generate box --config {T}p_alpha.toml -o {o}", 2, "'alpha'", "ply"},
@@ -754,6 +755,40 @@ TEST_F(Inputs, TilesLargerThanTheMemoryAreRefusedBeforeAllocating) {
     r = run_microsim(with(small), limit_gib(8));
     EXPECT_EQ(r.err.find("needs about"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("declared256.exr"), std::string::npos) << r.err;
+    fs::remove(json);
+  }
+}
+
+// `info` on a non-periodic window holds its ACF zero-padded to 2 nx x 2 ny (complex doubles,
+// 64 bytes per height, beside the 4 of the heights: metrology_bytes), more than the 40 bytes per
+// cell of tracing it: a window whose metrology cannot fit is refused from its header, before
+// any pixel is allocated. Under a 2 GiB address-space limit (1.6 GiB usable), a declared 5500^2
+// window needs about 1.9 GiB and is refused; power: the same size as a periodic tile (about 1.1
+// GiB) is not refused for memory, by `info` or by `measure g1` on the window.
+TEST_F(Inputs, WindowsWhoseMetrologyCannotFitAreRefusedByInfo) {
+  if (kAddressSanitizer) GTEST_SKIP() << "no address-space limit under AddressSanitizer";
+  std::string csv;
+  for (int j = 0; j < 16; ++j)
+    for (int i = 0; i < 16; ++i) csv += std::to_string(std::sin(0.7 * i) * std::cos(0.4 * j + 0.1 * i)) + (i < 15 ? "," : "\n");
+  write_file(tmp("window.csv"), csv);
+  const std::string window = tmp("window16.exr");
+  ASSERT_EQ(run_microsim("-q generate heightmap --input " + tmp("window.csv") + " --pixel-size 1 --guard-width 2 -o " + window).code, 0);
+  const std::string big_window = declared_tile(window, 5500, "declared_window5500.exr");
+  const std::string big_tile = declared_tile(surface_, 5500, "declared_tile5500.exr");
+  ASSERT_FALSE(big_window.empty());
+  ASSERT_FALSE(big_tile.empty());
+  const std::string json = tmp("window-info.json");
+  Result r = run_microsim("info " + big_window + " --json " + json, limit_gib(2));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find(big_window + " (5500 x 5500 heightfield, a non-periodic window) needs about 1.9"),
+            std::string::npos) << r.err;
+  EXPECT_FALSE(exists(json));
+  for (const std::string& cmd : {"info " + big_tile + " --json " + json,
+                                 "measure g1 " + big_window + " --theta 60 --rays 1000 -o " + json}) {
+    r = run_microsim(cmd, limit_gib(2));
+    EXPECT_EQ(r.err.find("needs about"), std::string::npos) << cmd << "\n" << r.err;
+    EXPECT_NE(r.err.find("declared_"), std::string::npos) << cmd << "\n" << r.err;  // its missing pixels
     fs::remove(json);
   }
 }

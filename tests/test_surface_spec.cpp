@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 
 #include "cli_helpers.hpp"
 #include "microsim/common.hpp"
@@ -233,6 +234,118 @@ TEST(SurfaceSpec, SuiteEntries) {
   e.preset.clear();
   e.args = {{"height", "0.5"}};
   EXPECT_NE(refusal([&] { validation::surface_request(e, 3); }).find("unknown option 'seed' for 'box'"), std::string::npos);
+}
+
+// One preset text for a kind: a malformed one, or a good one with the options it must give.
+struct PresetText {
+  std::string kind, name, text;
+  std::map<std::string, std::string> gives;
+};
+
+// The message up to an unknown key's list of known options (the command line lists its
+// command's options, the library its kind's).
+std::string before_known(const std::string& m) { return m.substr(0, m.find(" (known: ")); }
+
+// Malformed presets, each refused by the command line (`generate KIND --config FILE`) and by
+// the library (read_surface_preset) with the same one line: the reader's own (file, syntax) and
+// the key's (unknown, bad value), the command line only prefixing --config. Before one reader
+// served both, the command line took `alpha = [0.3]` as 0.3 and quoted keys, cut a "quoted #"
+// value at the '#' and kept an unterminated quote, while the library took `normal = 0,0,1`.
+TEST(PresetFile, CommandLineAndLibraryRefuseTheSameMalformedPresets) {
+  const std::vector<PresetText> malformed = {
+      {"gaussian", "binary", std::string("\x7f" "ELF\0\0", 6), {}},
+      {"gaussian", "control", "alpha = 0.3\x01\n", {}},
+      {"gaussian", "large", "# " + std::string(1 << 20, 'x') + "\n", {}},
+      {"gaussian", "section", "[gaussian]\nalpha = 0.3\n", {}},
+      {"gaussian", "array_of_tables", "[[gaussian]]\nalpha = 0.3\n", {}},
+      {"gaussian", "dotted_key", "gaussian.alpha = 0.3\n", {}},
+      {"gaussian", "no_equals", "alpha 0.3\n", {}},
+      {"gaussian", "no_key", "= 0.3\n", {}},
+      {"gaussian", "no_value", "alpha =\n", {}},
+      {"gaussian", "comment_for_value", "alpha = # none\n", {}},
+      {"gaussian", "empty_string", "alpha = \"\"\n", {}},
+      {"gaussian", "quoted_key", "\"alpha\" = 0.3\n", {}},
+      {"gaussian", "unterminated", "alpha = \"0.3\n", {}},
+      {"gaussian", "after_string", "alpha = \"0.3\" 0.4\n", {}},
+      {"gaussian", "array", "alpha = [0.3, 0.4]\n", {}},
+      {"gaussian", "one_element_array", "alpha = [0.3]\n", {}},
+      {"gaussian", "multiline_array", "alpha = [0.3,\n0.4]\n", {}},
+      {"gaussian", "two_words", "alpha = 0.3 0.4\n", {}},
+      {"gaussian", "comma_list", "alpha = 0.3,0.4\n", {}},
+      {"gaussian", "twice_adjacent", "alpha = 0.3\nalpha = 0.4\n", {}},
+      {"gaussian", "twice_apart", "alpha = 0.3\nseed = 2\nalpha = 0.4\n", {}},
+      {"gaussian", "unknown", "resolution = 16\nresolutionn = 32\n", {}},
+      {"gaussian", "config_key", "config = \"other.toml\"\n", {}},
+      {"gaussian", "range", "resolution = 16\nalpha = -1\n", {}},
+      {"gaussian", "not_integer", "resolution = 32.5\n", {}},
+      {"gaussian", "not_number", "resolution = \"abc\"\n", {}},
+      {"gaussian", "bool_for_number", "alpha = true\n", {}},
+      {"gaussian", "nan", "size = nan\n", {}},
+      {"gaussian", "negative_seed", "seed = -1\n", {}},
+      {"square-wave", "flag_value", "2d = 3\n", {}},
+      {"box", "other_kinds_key", "alpha = 0.3\n", {}},
+      {"mesh", "unquoted_list", "normal = 0,0,1\n", {}},
+  };
+  for (const PresetText& p : malformed) {
+    SCOPED_TRACE(p.name);
+    const std::string file = write(p.name + ".toml", p.text);
+    SurfaceRequest r{p.kind, {}};
+    const std::string library = refusal([&] { read_surface_preset(r, file); });
+    ASSERT_EQ(library.rfind(file + ": ", 0), 0u) << library;
+    const std::string out = temp_path("spec", p.name + (p.kind == "gaussian" ? ".exr" : ".ply"));
+    // mesh requires --input on the command line (the preset is read before the input).
+    const std::string input = p.kind == "mesh" ? " --input " + file : "";
+    const Result cli = run("-q generate " + p.kind + input + " --config " + file + " -o " + out, p.name);
+    EXPECT_EQ(cli.code, 2);
+    EXPECT_EQ(before_known(cli.err), before_known("microsim: error: --config " + library + "\n")) << cli.err;
+    EXPECT_FALSE(microsim::testing::exists(out));
+  }
+  // A missing file, the same way.
+  const std::string missing = temp_path("spec", "missing-preset.toml");
+  SurfaceRequest r{"flat", {}};
+  const std::string library = refusal([&] { read_surface_preset(r, missing); });
+  EXPECT_EQ(library, missing + ": no such preset file");
+  const Result cli = run("-q generate flat --config " + missing + " -o " + temp_path("spec", "missing.exr"), "missing");
+  EXPECT_EQ(cli.code, 2);
+  EXPECT_EQ(cli.err, "microsim: error: --config " + library + "\n");
+}
+
+// Good presets (comments, blank lines, tabs, CRLF, quotes of both kinds, a comment after quotes,
+// no final newline, an empty file) give the same options through both and byte-identical
+// surfaces; power: each option the library read, changed on the command line, changes the file.
+TEST(PresetFile, CommandLineAndLibraryAcceptTheSameGoodPresets) {
+  const std::vector<PresetText> good = {
+      {"gaussian", "comments", "# a preset\n\nresolution = 16 # cells\nalpha = 0.7\n",
+       {{"resolution", "16"}, {"alpha", "0.7"}}},
+      {"gaussian", "tabs_crlf", "resolution\t=\t16\r\nalpha=0.7\r\n  seed = 18446744073709551615\r\n",
+       {{"resolution", "16"}, {"alpha", "0.7"}, {"seed", "18446744073709551615"}}},
+      {"gaussian", "quotes", "resolution = \"16\"\nalpha = '0.7'  # single\nsize = 2",
+       {{"resolution", "16"}, {"alpha", "0.7"}, {"size", "2"}}},
+      {"vcavity", "comment_after_quotes", "grooves = 16\nndf = \"ggx\" # a comment, \"quoted\" # twice\n",
+       {{"grooves", "16"}, {"ndf", "ggx"}}},
+      {"square-wave", "flag", "2d = true\nheight = 0.25\n", {{"2d", "true"}, {"height", "0.25"}}},
+      {"flat", "empty", "", {}},
+  };
+  for (const PresetText& p : good) {
+    SCOPED_TRACE(p.name);
+    const std::string file = write(p.name + ".toml", p.text);
+    SurfaceRequest r{p.kind, {}};
+    ASSERT_EQ(refusal([&] { read_surface_preset(r, file); }), "");
+    EXPECT_EQ(r.options, p.gives);
+    const std::string ext = p.kind == "square-wave" || p.kind == "vcavity" ? "ply" : "exr";
+    const std::string out = temp_path("spec", p.name + "-cli." + ext);
+    const Result cli = run("-q generate " + p.kind + " --config " + file + " -o " + out, p.name);
+    ASSERT_EQ(cli.code, 0) << cli.err;
+    const std::string library = saved(generate_surface(r), p.name + "-library." + ext);
+    EXPECT_EQ(saved_file(out), library);
+    for (const auto& [key, value] : p.gives) {
+      if (key == "2d" || key == "ndf") continue;  // not numbers
+      const std::string other = temp_path("spec", p.name + "-" + key + "." + ext);
+      const std::string changed = key == "resolution" ? "32" : key == "grooves" ? "8" : key == "seed" ? "3" : "0.5";
+      ASSERT_EQ(run("-q generate " + p.kind + " --config " + file + " --" + key + " " + changed + " -o " + other, p.name).code, 0);
+      EXPECT_NE(saved_file(other), library) << key;
+    }
+  }
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <tbb/task_arena.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <iomanip>
 #include <sstream>
@@ -70,6 +71,16 @@ std::string fmt(double x, int precision) {
 
 std::string fmt(const Json& x, int precision) {
   return x.is_number() ? fmt(x.get<double>(), precision) : std::string("-");
+}
+
+std::string cell(const Json& x, int precision, int width) {
+  std::string t = fmt(x, precision);
+  for (int digits = precision; t.size() + 1 > static_cast<std::size_t>(width) && digits >= 0; --digits) {
+    std::ostringstream os;
+    os << std::scientific << std::setprecision(digits) << x.get<double>();
+    t = os.str();
+  }
+  return std::string(std::max<int>(1, width - static_cast<int>(t.size())), ' ') + t;
 }
 
 Json run_header(const std::string& command, const GlobalOptions& g) {

@@ -65,6 +65,10 @@ void write_record(const GlobalOptions& g, const std::string& path, const Json& j
 std::string fmt(double x, int precision = 4);
 // A record's number, or "-" where it is null (e.g. a z without an error bar).
 std::string fmt(const Json& x, int precision = 4);
+// A table cell: fmt(x, precision) right-aligned in `width` columns, at least one space before it;
+// a number too long for that (a z of 10^7) in scientific notation instead, so that the columns
+// stay aligned.
+std::string cell(const Json& x, int precision, int width);
 // Fields every JSON record starts with: command, version, threads (and ranks under MPI).
 Json run_header(const std::string& command, const GlobalOptions& g);
 // "a:b:step" (inclusive), "a,b,c" or "a", in degrees.

@@ -1,12 +1,7 @@
 #include "option_checks.hpp"
 
-#include <sys/stat.h>
-
-#include <fstream>
-#include <set>
-#include <sstream>
-
 #include "microsim/common.hpp"
+#include "microsim/io/preset_file.hpp"
 
 namespace microsim::cli {
 
@@ -59,75 +54,36 @@ std::string option_names(const CLI::App& cmd) {
   return names;
 }
 
-// Reads the preset's text, refusing what cannot be one: a missing or non-regular file, more than
-// 1 MiB, control bytes (a binary file), a section header or a line that is not `key = value`.
-std::string read_preset_text(const std::string& path) {
-  struct stat st;
-  if (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
-    throw UsageError("--config " + path + ": no such preset file");
-  if (st.st_size > (1 << 20)) throw UsageError("--config " + path + ": larger than 1 MiB, not a preset");
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  if (!f) throw UsageError("--config " + path + ": cannot be read");
-  std::string text = ss.str();
-  for (std::size_t k = 0; k < text.size(); ++k) {
-    unsigned char c = text[k];
-    if ((c < 0x20 && c != '\n' && c != '\r' && c != '\t') || c == 0x7f)
-      throw UsageError("--config " + path + ": not a text TOML file (control byte at offset " +
-                       std::to_string(k) + ")");
-  }
-  std::istringstream lines(text);
-  std::string line;
-  for (int n = 1; std::getline(lines, line); ++n) {
-    line = CLI::detail::trim_copy(line);
-    if (line.empty() || line[0] == '#') continue;
-    const auto where = "--config " + path + ": line " + std::to_string(n) + ": ";
-    if (line[0] == '[') throw UsageError(where + "sections are not used in presets (keys only)");
-    auto eq = line.find('=');
-    if (eq == std::string::npos || CLI::detail::trim_copy(line.substr(0, eq)).empty() ||
-        CLI::detail::trim_copy(line.substr(eq + 1)).empty())
-      throw UsageError(where + "expected key = value (got '" + line + "')");
-  }
-  return text;
-}
 }  // namespace
 
+// The file is read and checked by the library's preset reader (io/preset_file.hpp), as
+// read_surface_preset reads it; here each key must be one of the command's options, and the
+// messages about a key have the library's form ("PATH: line N: --alpha: must be ...").
 void apply_preset(CLI::App& cmd) {
   CLI::Option* cfg = cmd.get_option_no_throw("--config");
   if (!cfg || cfg->count() == 0) return;
   const std::string path = cfg->results().at(0);
-  std::istringstream in(read_preset_text(path));
-  std::vector<CLI::ConfigItem> items;
+  std::vector<PresetItem> items;
   try {
-    items = CLI::ConfigTOML().from_config(in);
-  } catch (const CLI::ParseError& e) {
-    throw UsageError("--config " + path + ": " + e.what());
+    items = read_preset_file(path);
+  } catch (const UsageError& e) {
+    throw UsageError("--config " + std::string(e.what()));
   }
-  std::set<std::string> seen;
-  for (const CLI::ConfigItem& item : items) {
-    const std::string key = item.fullname();
-    const std::string where = "--config " + path + ": key '" + key + "'";
-    if (!item.parents.empty() || item.name == "--" || item.name == "++")
-      throw UsageError(where + ": sections are not used in presets (keys only)");
-    if (!seen.insert(key).second) throw UsageError(where + " is given twice");
-    CLI::Option* op = key == "config" || key == "help" ? nullptr : cmd.get_option_no_throw("--" + key);
+  for (const PresetItem& item : items) {
+    const std::string where = "--config " + preset_line_where(path, item);
+    CLI::Option* op =
+        item.key == "config" || item.key == "help" ? nullptr : cmd.get_option_no_throw("--" + item.key);
     if (!op || !op->get_configurable())
-      throw UsageError(where + ": unknown key for '" + cmd.get_name() + "' (known: " +
+      throw UsageError(where + "unknown option '" + item.key + "' for '" + cmd.get_name() + "' (known: " +
                        option_names(cmd) + ")");
     if (op->count() > 0) continue;  // the command line wins
-    std::vector<std::string> values = item.inputs;
-    if (op->get_expected_min() == 0) {  // a flag: true or false
-      if (values.size() != 1 || (values[0] != "true" && values[0] != "false"))
-        throw UsageError(where + ": expected true or false");
-    } else if (values.size() != 1 && op->get_items_expected_max() == 1) {
-      throw UsageError(where + ": expected one value (got " + std::to_string(values.size()) + ")");
-    }
+    if (op->get_expected_min() == 0 && item.value != "true" && item.value != "false")  // a flag
+      throw UsageError(where + "--" + item.key + ": expected true or false (got '" + item.value + "')");
     try {
-      op->add_result(values);
+      op->add_result(item.value);
       op->run_callback();
     } catch (const CLI::ParseError& e) {
-      throw UsageError(where + ": " + e.what());
+      throw UsageError(where + e.what());
     }
   }
 }

@@ -27,10 +27,10 @@ constexpr long long kMaxRays = 1000000000000LL;
 
 // Adds --config FILE (a TOML preset of this command's options) to cmd.
 void add_preset_option(CLI::App& cmd, const std::string& help);
-// Applies cmd's --config preset, if given: every key must be one of cmd's long options, values
-// go through the option's own validators, and options given on the command line win. A missing,
-// binary or malformed file, an unknown or repeated key or a bad value: UsageError naming the file
-// and the key.
+// Applies cmd's --config preset, if given: the file is read by the library's preset reader
+// (microsim/io/preset_file.hpp, as read_surface_preset reads it), every key must be one of cmd's
+// long options, values go through the option's own validators, and options given on the command
+// line win. UsageError naming the file, and the line and key where there is one.
 void apply_preset(CLI::App& cmd);
 // cmd's callback, after its preset is applied.
 void on_run(CLI::App* cmd, std::function<void()> run);

@@ -473,6 +473,10 @@ AcfStats acf_stats(const HeightGridView& g, double threshold) {
   return st;
 }
 
+double metrology_bytes(double nx, double ny, bool periodic) {
+  return nx * ny * (sizeof(float) + sizeof(Complex) * (periodic ? 1 : 4));
+}
+
 Metrology measure_metrology(const HeightGridView& g) {
   if (g.nx < 2 || g.ny < 2 || !g.z || g.z->size() != static_cast<std::size_t>(g.nx) * g.ny)
     throw UsageError("metrology needs a grid of at least 2 x 2 heights");

@@ -11,6 +11,7 @@
 #include "microsim/io/output.hpp"
 #include "microsim/surface/heightmap_import.hpp"
 #include "microsim/surface/mesh_check.hpp"
+#include "microsim/surface/metrology.hpp"
 
 namespace microsim {
 
@@ -124,8 +125,6 @@ Microsurface load_heightfield_exr(const std::string& path, bool allow_window) {
     if (h.width < 1 || h.width > kMaxGrid || h.height < 1 || h.height > kMaxGrid)
       throw UsageError(path + ": heightfield size " + std::to_string(h.width) + " x " +
                        std::to_string(h.height) + " is outside [1, " + std::to_string(kMaxGrid) + "] per side");
-    require_memory(heightfield_bytes(h.width, h.height),
-                   path + " (" + std::to_string(h.width) + " x " + std::to_string(h.height) + " heightfield)");
     Json mj;
     try {
       mj = Json::parse(h.attributes["microsim_macrosurface"].get<std::string>());
@@ -133,6 +132,13 @@ Microsurface load_heightfield_exr(const std::string& path, bool allow_window) {
       throw UsageError(path + " has a corrupt microsim header (" + std::string(e.what()) + ")");
     }
     m = macro_from_json(mj, path);
+    // A window read for its metrology (info) peaks at its zero-padded ACF, more than tracing.
+    const bool window_metrology = allow_window && !m.periodic;
+    require_memory(window_metrology ? std::max(heightfield_bytes(h.width, h.height),
+                                               metrology_bytes(h.width, h.height, /*periodic=*/false))
+                                    : heightfield_bytes(h.width, h.height),
+                   path + " (" + std::to_string(h.width) + " x " + std::to_string(h.height) +
+                       (window_metrology ? " heightfield, a non-periodic window" : " heightfield") + ")");
     require_in_range(m.size_x, closed(1e-6, 1e6), path + ": macrosurface field 'size_x'");
     require_in_range(m.size_y, closed(1e-6, 1e6), path + ": macrosurface field 'size_y'");
     // A window is loaded as a grid like a tile; for the estimators it is then made a window

@@ -1,16 +1,14 @@
 // The table of surface kinds and their options (surface_spec.hpp), option values checked as the
-// command line checks them, and the preset reader. The kinds' builders: surface_kinds.cpp.
+// command line checks them, and presets (read by io/preset_file.hpp). The kinds' builders:
+// surface_kinds.cpp.
 #include "microsim/surface/surface_spec.hpp"
-
-#include <sys/stat.h>
 
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
-#include <set>
 #include <sstream>
 
 #include "microsim/common.hpp"
+#include "microsim/io/preset_file.hpp"
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/surface/generators.hpp"
 #include "microsim/surface/guard_band.hpp"
@@ -298,49 +296,11 @@ void set_surface_option(SurfaceRequest& r, const std::string& name, const std::s
 }
 
 void read_surface_preset(SurfaceRequest& r, const std::string& path) {
-  struct stat st;
-  if (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) throw UsageError(path + ": no such preset file");
-  if (st.st_size > (1 << 20)) throw UsageError(path + ": larger than 1 MiB, not a preset");
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  if (!f) throw UsageError(path + ": cannot be read");
-  const std::string text = ss.str();
-  for (std::size_t k = 0; k < text.size(); ++k) {
-    const unsigned char c = text[k];
-    if ((c < 0x20 && c != '\n' && c != '\r' && c != '\t') || c == 0x7f)
-      throw UsageError(path + ": not a text TOML file (control byte at offset " + std::to_string(k) + ")");
-  }
-  const auto trim = [](std::string s) {
-    const auto b = s.find_first_not_of(" \t\r"), e = s.find_last_not_of(" \t\r");
-    return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
-  };
-  std::istringstream lines(text);
-  std::string line;
-  std::set<std::string> seen;
-  for (int n = 1; std::getline(lines, line); ++n) {
-    line = trim(line);
-    if (line.empty() || line[0] == '#') continue;
-    const std::string where = path + ": line " + std::to_string(n) + ": ";
-    if (line[0] == '[') throw UsageError(where + "sections are not used in presets (keys only)");
-    const auto eq = line.find('=');
-    const std::string key = eq == std::string::npos ? "" : trim(line.substr(0, eq));
-    std::string value = eq == std::string::npos ? "" : trim(line.substr(eq + 1));
-    if (!value.empty() && (value[0] == '"' || value[0] == '\'')) {
-      const auto close = value.find(value[0], 1);
-      const std::string rest = close == std::string::npos ? "x" : trim(value.substr(close + 1));
-      if (!rest.empty() && rest[0] != '#') throw UsageError(where + "unterminated string (got '" + line + "')");
-      value = value.substr(1, close - 1);
-    } else {
-      value = trim(value.substr(0, value.find('#')));
-      if (!value.empty() && value[0] == '[') throw UsageError(where + "key '" + key + "': expected one value, not an array");
-    }
-    if (key.empty() || value.empty()) throw UsageError(where + "expected key = value (got '" + line + "')");
-    if (!seen.insert(key).second) throw UsageError(where + "key '" + key + "' is given twice");
+  for (const PresetItem& item : read_preset_file(path)) {
     try {
-      set_surface_option(r, key, value);
+      set_surface_option(r, item.key, item.value);
     } catch (const UsageError& e) {
-      throw UsageError(where + e.what());
+      throw UsageError(preset_line_where(path, item) + e.what());
     }
   }
 }

@@ -96,6 +96,10 @@ struct Metrology {
 };
 // Throws UsageError for grids smaller than 2 x 2.
 Metrology measure_metrology(const HeightGridView& g);
+// Bytes measure_metrology holds at its peak on an nx x ny grid, its float heights included (4 per
+// vertex): the ACF's transform, a complex<double> (16 bytes) per lag, over nx ny lags on a
+// periodic grid and over the zero-padded 2 nx x 2 ny on a window (64 bytes per vertex).
+double metrology_bytes(double nx, double ny, bool periodic);
 Json metrology_to_json(const Metrology& m);
 
 // The facet slopes of a grid (two per cell, the cell split as Microsurface::facet does).

@@ -60,10 +60,10 @@ struct SurfaceRequest {
 // ("--alpha: must be a finite number in (0, 10] (got -1)").
 void set_surface_option(SurfaceRequest& r, const std::string& name, const std::string& value);
 
-// Reads a preset (surfaces/*.toml: `key = value` lines, '#' comments; a value is a number, true,
-// false or a "quoted string") into r, each key through set_surface_option. UsageError naming the
-// file and line for a missing or binary file, a section, an array, a line that is not
-// `key = value`, a key given twice, an unknown key or a bad value.
+// Reads a preset (surfaces/*.toml, by read_preset_file: the command line's --config reads it
+// the same way) into r, each key through set_surface_option. UsageError naming the file (and the
+// line) for what read_preset_file refuses, an unknown key or a bad value
+// ("PATH: line 2: --alpha: must be a finite number in (0, 10] (got -1)").
 void read_surface_preset(SurfaceRequest& r, const std::string& path);
 
 // Checks every option and their combinations (and, when output_path is not empty, that the
