@@ -20,6 +20,8 @@ enum class BinVariant {
   Table64,      // the table's bin, 64-bit counts (estimator (a) before)
   Table16,      // the table's bin, 16-bit counts per chunk
   Batched64,    // the table's bin, looked up for 32 hits at once after their rays, 64-bit counts
+  Blocks64,     // Tracer::front_facets (ray j of every replicate: origins, queries, hits in
+                // turn), the table's bin, 64-bit counts (estimator (a) now)
 };
 
 inline const char* bin_variant_name(BinVariant b) {
@@ -28,6 +30,7 @@ inline const char* bin_variant_name(BinVariant b) {
     case BinVariant::FakeBin64: return "index bin, u64";
     case BinVariant::Table64: return "table bin, u64";
     case BinVariant::Table16: return "table bin, u16";
+    case BinVariant::Blocks64: return "front_facets blocks, table bin, u64";
     default: return "table bin batched, u64";
   }
 }
@@ -69,6 +72,22 @@ inline Rate binned_lean_rays_per_second(const Tracer& tracer, const FacetTable& 
     };
     for (std::uint64_t j = rays.first(c); j < rays.end(c); ++j) {
       const Strata::Cell cell = plan.strata.cell(j);
+      if (var == BinVariant::Blocks64) {
+        tracer.front_facets(
+            down, static_cast<std::size_t>(R),
+            [&](std::size_t q) {
+              CounterRng rng(CounterRng::Keyed{}, keys[q], j);
+              const Vec2 ab = plan.strata.point(cell, rng);
+              return Vec3(w.origin0 + ab.x() * w.e1 + ab.y() * w.e2);
+            },
+            [&](std::size_t) -> TraceCounters& { return counters; },
+            [&](std::size_t q, std::size_t k) {
+              if (k >= nf) return;
+              const std::uint16_t b = bins16[k];
+              ++h64[b == FacetTable::kNoBin16 ? nobin : q * nb + b];
+            });
+        continue;
+      }
       for (int q = 0; q < R; ++q) {
         CounterRng rng(CounterRng::Keyed{}, keys[q], j);
         const Vec2 ab = plan.strata.point(cell, rng);
@@ -111,13 +130,25 @@ inline Rate binned_lean_rays_per_second(const Tracer& tracer, const FacetTable& 
 // Each repetition runs the bare loop and then every variant; the ratio reported is the median
 // over repetitions of variant / bare of the same repetition (neighbours in time share the
 // machine's load), beside the best rates.
+// Reads and writes 64 MiB (twice the L3 of the development machine): the loop after it finds
+// no tile data in the caches.
+inline void evict_caches() {
+  static std::vector<std::uint64_t> junk(std::size_t(8) << 20);
+  std::uint64_t s = 0;
+  for (std::uint64_t& x : junk) s += ++x;
+  if (s == 42) std::printf(" ");  // keeps the loop
+}
+
+// Each repetition runs the bare loop, then every variant, then estimator (a) in measure_g1 (its
+// own rate of the ray-casting phase, which follows the facet sums there), then the bare loop
+// after the caches were evicted. Bins compared as sums per variant.
 inline void print_bin_rows(const Tracer& tracer, const FacetTable& table, const Vec3& v,
                            const G1Options& o, int repeat, int res, double theta_deg) {
-  const BinVariant vars[] = {BinVariant::None, BinVariant::FakeBin64, BinVariant::Table64,
-                             BinVariant::Table16, BinVariant::Batched64};
+  const BinVariant vars[] = {BinVariant::None,      BinVariant::FakeBin64, BinVariant::Table64,
+                             BinVariant::Table16,   BinVariant::Batched64, BinVariant::Blocks64};
   constexpr int kVars = sizeof(vars) / sizeof(vars[0]);
-  Rate bare, rate[kVars];
-  std::vector<double> ratios[kVars];
+  Rate bare, rate[kVars], g1, cold;
+  std::vector<double> ratios[kVars], g1_ratios, cold_ratios;
   std::uint64_t sum[kVars] = {};
   for (int k = 0; k < repeat; ++k) {
     const Rate b = bare_g1_rays_per_second(tracer, v, o);
@@ -127,14 +158,25 @@ inline void print_bin_rows(const Tracer& tracer, const FacetTable& table, const 
       rate[i].best_of(r);
       ratios[i].push_back(r.cpu / b.cpu);
     }
+    const G1Result g = measure_g1(tracer, v, o, &table);
+    const Rate a{g.raycast_rays / g.raycast_seconds, g.raycast_rays / g.raycast_cpu_seconds};
+    g1.best_of(a);
+    g1_ratios.push_back(a.cpu / b.cpu);
+    evict_caches();
+    const Rate bc = bare_g1_rays_per_second(tracer, v, o);
+    cold.best_of(bc);
+    cold_ratios.push_back(bc.cpu / b.cpu);
   }
+  auto median = [](std::vector<double>& x) {
+    std::sort(x.begin(), x.end());
+    return x[x.size() / 2];
+  };
   std::printf("%5d^2 %3.0fdeg bare %.2f", res, theta_deg, bare.cpu / 1e6);
-  for (int i = 0; i < kVars; ++i) {
-    std::sort(ratios[i].begin(), ratios[i].end());
+  for (int i = 0; i < kVars; ++i)
     std::printf(" | %s %.2f (median ratio %.3f) sum %llu", bin_variant_name(vars[i]), rate[i].cpu / 1e6,
-                ratios[i][ratios[i].size() / 2], static_cast<unsigned long long>(sum[i]));
-  }
-  std::printf("\n");
+                median(ratios[i]), static_cast<unsigned long long>(sum[i]));
+  std::printf(" | (a) in measure_g1 %.2f (median ratio %.3f) | bare after eviction %.2f (median ratio %.3f)\n",
+              g1.cpu / 1e6, median(g1_ratios), cold.cpu / 1e6, median(cold_ratios));
   std::fflush(stdout);
 }
 

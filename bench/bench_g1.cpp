@@ -20,7 +20,9 @@
 //   grid (flags, build quality, grid blocks, per-block instances); estimator (b)'s rays with
 //   and without their look-ahead.
 //   --only bins (bench_bins.hpp): the lean path with the hit's bin and count variants of (a)
-//   (none, a bin from the index, the table's bin with 64- or 16-bit counts), median ratios.
+//   (none, a bin from the index, the table's bin with 64- or 16-bit counts, rays in blocks as
+//   (a) traces them), (a) inside measure_g1, and the bare loop after the caches were evicted;
+//   median ratios to the bare loop.
 // Each direction runs K times (default 3), the estimator and the bare loop interleaved in the
 // same process; the best of each is reported (on a shared machine the slower runs are the ones
 // that lost the CPU), and the ratio is that of the best rates.

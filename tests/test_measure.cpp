@@ -199,6 +199,56 @@ TEST(G1Measure, ResultsDoNotDependOnThreadCount) {
   }
 }
 
+TEST(G1Measure, SmallTileRaysTracedInBlocksCountTheSameHitsAsFirstHit) {
+  // Below kAheadMinCells cells, estimator (a) traces ray j of every replicate as one block
+  // (Tracer::front_facets: origins, queries, hits in turn). Its hits per normal bin and
+  // replicate must equal, for 1 and 2 threads, those of a plain loop of first_hit over the same
+  // rays (same streams, strata and window; a hit counts when its front face is met first), on
+  // a rough periodic tile from the zenith to grazing views. Power: the plain loop with each hit
+  // named by the other half of its cell (a decoding off by a diagonal) counts differently.
+  const Microsurface s = beckmann_tile(48, 61, 1.0);
+  const Tracer tracer(s);
+  const G1Options o = opts(48000, 7);
+  const FacetTable table = build_facet_table(s, g1_normal_binning(o));
+  const std::size_t nf = s.num_facets();
+  for (double theta : {0.0, 60.0, 85.0, 89.0}) {
+    const Vec3 v = direction_from_angles(rad(theta), 0.4);
+    auto measure = [&](int threads) {
+      tbb::global_control c(tbb::global_control::max_allowed_parallelism, threads);
+      return measure_g1(tracer, v, o, &table);
+    };
+    // Hits per normal bin and replicate; `flip`: each hit facet replaced by its cell's other half.
+    auto plain = [&](bool flip) {
+      const RayWindow w = make_ray_window(tracer, v);
+      const ReplicatePlan plan(o.rays, o.replicates);
+      const std::uint64_t key = direction_stream_key(v);
+      std::vector<std::vector<std::uint64_t>> hits(g1_normal_binning(o).size(),
+                                                   std::vector<std::uint64_t>(plan.replicates));
+      TraceCounters c;
+      for (int q = 0; q < plan.replicates; ++q)
+        for (std::uint64_t j = 0; j < plan.per_replicate(); ++j) {
+          CounterRng rng(o.seed, ReplicatePlan::stream(0xA000 + key, q), j);
+          const Vec2 ab = plan.strata.point(j, rng);
+          const TraceHit h = tracer.first_hit(w.origin0 + ab.x() * w.e1 + ab.y() * w.e2, -v, nullptr, c);
+          if (!h.hit || h.backface || h.facet >= nf) continue;
+          const int b = table.bin(flip ? h.facet ^ 1 : h.facet);
+          if (b >= 0) ++hits[b][q];
+        }
+      return hits;
+    };
+    const G1Result a = measure(1), b = measure(2);
+    const auto expected = plain(false), flipped = plain(true);
+    ASSERT_EQ(static_cast<std::size_t>(a.binning.size()), expected.size());
+    int differ = 0;
+    for (int k = 0; k < a.binning.size(); ++k) {
+      EXPECT_EQ(a.bins[k].raycast_hits_r, expected[k]) << "theta " << theta << " bin " << k;
+      EXPECT_EQ(b.bins[k].raycast_hits_r, expected[k]) << "theta " << theta << " bin " << k;
+      differ += flipped[k] != expected[k];
+    }
+    EXPECT_GT(differ, 5) << "theta " << theta;  // power: a decoding off by a half is seen
+  }
+}
+
 namespace {
 // A tile large enough for the estimators' look-ahead paths (from kAheadMinCells cells on), its
 // tracer and facet table, a view and options: measure_g1 with a given number of threads, to

@@ -365,15 +365,17 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
         [&](std::uint64_t j0, std::uint64_t j1, std::uint64_t first, std::uint64_t active, Tally* t) {
           std::vector<std::uint64_t> hits(active * nb + 1);  // + 1: the facets without a bin
           const std::size_t nobin = active * nb;
+          // Ray j of the replicates in blocks (Tracer::front_facets): origins, queries, hits.
           for (std::uint64_t j = j0; j < j1; ++j) {
             const Strata::Cell cell = plan.strata.cell(j);
-            for (std::uint64_t q = 0; q < active; ++q) {
-              const Vec3 org = origin(static_cast<int>(first + q), j, cell);
-              const std::size_t k = tracer.front_facet(down, org, t[q].counters);
-              if (k >= nf) continue;
-              const int b = bins16 ? (bins16[k] == FacetTable::kNoBin16 ? -1 : bins16[k]) : ft.bin(k);
-              ++hits[b < 0 ? nobin : q * nb + static_cast<std::size_t>(b)];
-            }
+            tracer.front_facets(
+                down, active, [&](std::size_t q) { return origin(static_cast<int>(first + q), j, cell); },
+                [&](std::size_t q) -> TraceCounters& { return t[q].counters; },
+                [&](std::size_t q, std::size_t k) {
+                  if (k >= nf) return;
+                  const int b = bins16 ? (bins16[k] == FacetTable::kNoBin16 ? -1 : bins16[k]) : ft.bin(k);
+                  ++hits[b < 0 ? nobin : q * nb + static_cast<std::size_t>(b)];
+                });
           }
           for (std::uint64_t q = 0; q < active; ++q)
             for (std::size_t b = 0; b < nb; ++b) t[q].hits[b] += hits[q * nb + b];

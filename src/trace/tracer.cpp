@@ -481,7 +481,14 @@ DownwardRays::DownwardRays(const Tracer& tracer, const Vec3& v) {
   run_y = dir.y() / -dir.z();
   if (!lean) return;
   z0 = tracer.z_top_;
-  t_slab0 = (tracer.z_bottom_ - z0) / dir.z();  // as front_facet divides it
+  z_bottom = tracer.z_bottom_;
+  t_slab0 = (z_bottom - z0) / dir.z();  // as front_query divides it
+  nx = s.nx();
+  ny = s.ny();
+  pad = tracer.pad_;
+  hx = 0.5 * s.macro().size_x;
+  hy = 0.5 * s.macro().size_y;
+  region = s.macro().region;
   inv_x = dir.x() != 0 ? 1 / dir.x() : 0.0;
   inv_y = dir.y() != 0 ? 1 / dir.y() : 0.0;
   cells_x = tracer.grid_width_ - 1;
@@ -548,125 +555,105 @@ void Tracer::prefetch_cells(long i0, long i1, long j) const {
 }
 
 // Tracer::trace<false> for a Front ray without source plane on a periodic heightfield, step for
-// step (the same float queries, so the same Embree answers), reduced to the facet met.
+// step (the same float queries, so the same Embree answers), reduced to the facet met. The
+// common case (one segment, a hit decoded from Embree's grid coordinates) is the inline
+// front_query and front_decode (tracer.hpp); the rest is in the cold functions below.
 std::size_t Tracer::front_facet(const DownwardRays& rays, const Vec3& org, TraceCounters& c) const {
-  const Vec3& dir = rays.dir;
   if (!rays.lean) {
+    const TraceHit h = first_hit(org, rays.dir, nullptr, c);
+    return h.hit && !h.backface ? h.facet : DownwardRays::kNone;
+  }
+  RTCRayHit rh;
+  FrontSegment seg;
+  if (!front_query(rays, front_origin(rays, org), rh, seg)) return front_lost(c, 0);
+  if (ray_log) ray_log->push_back(rh.ray);
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  rtcIntersect1(scene_, &ctx, &rh);
+  if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) return front_decode(rays, org, rh, 0, c);
+  return front_after_miss(rays, org, c);
+}
+
+std::size_t Tracer::front_lost(TraceCounters& c, std::uint64_t crossings) {
+  ++c.rays;
+  c.border_crossings += crossings;
+  ++c.lost_below;
+  return DownwardRays::kNone;
+}
+
+std::vector<RTCRay>* Tracer::ray_log_of_this_thread() { return ray_log; }
+
+// The checked decoding: the facet whose exact normal is aligned with Ng (the neighbours
+// searched when the grid coordinates named the wrong one), the back face from that normal.
+[[gnu::cold]] [[gnu::noinline]] std::size_t Tracer::front_checked(
+    const DownwardRays& rays, const Vec3& org, const RTCRayHit& rh, std::uint64_t crossings,
+    TraceCounters& c) const {
+  const Vec3& dir = rays.dir;
+  const Vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+  const long nx = rays.nx, ny = rays.ny;
+  long i, j;
+  int half;
+  Vec3 cr;
+  std::size_t facet;
+  bool backface;
+  if (grid_facet_guess(rh.hit.u, rh.hit.v, ng, i, j, half, cr)) {
+    // Back face: m.dir > 0 for the unit normal m = cr / |cr|. Unless the unnormalised dot is
+    // within rounding of zero its sign is that of the normalised one (no square root).
+    const double dc = cr.dot(dir);
+    const double scale = std::abs(cr.x() * dir.x()) + std::abs(cr.y() * dir.y()) +
+                         std::abs(cr.z() * dir.z());
+    backface = std::abs(dc) > 1e-12 * scale ? dc > 0 : cr.normalized().dot(dir) > 0;
+    const long wi = wrap_index(i, nx), wj = wrap_index(j, ny);
+    facet = rays.region ? surface_.facet_index(wi, wj, half)
+                        : 2 * (static_cast<std::size_t>(wj) * nx + wi) + half;
+  } else {
+    Vec3 m;
+    facet = facet_of_hit(rh.hit.primID, rh.hit.u, rh.hit.v, ng, &m);
+    backface = m.dot(dir) > 0;
+  }
+  if (backface) {
+    // Grazed a convex edge closer than float spacing: first_hit traces the segment again with
+    // wrong-side hits rejected. Rare; it is taken from the start with its own counts.
     const TraceHit h = first_hit(org, dir, nullptr, c);
     return h.hit && !h.backface ? h.facet : DownwardRays::kNone;
   }
+  ++c.rays;
+  c.border_crossings += crossings;
+  return facet;
+}
+
+// The ray from org missed in its first segment: that segment's distances again (the same
+// arithmetic, no query), then its further segments, as Tracer::trace.
+[[gnu::cold]] [[gnu::noinline]] std::size_t Tracer::front_after_miss(const DownwardRays& rays,
+                                                                   const Vec3& org,
+                                                                   TraceCounters& c) const {
   const Macrosurface& macro = surface_.macro();
-  const double hx = 0.5 * macro.size_x, hy = 0.5 * macro.size_y;
-  Vec3 o = org;
-  if (o.x() < -hx || o.x() > hx) o.x() -= macro.size_x * std::floor((o.x() + hx) / macro.size_x);
-  if (o.y() < -hy || o.y() > hy) o.y() -= macro.size_y * std::floor((o.y() + hy) / macro.size_y);
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
+  Vec3 o = front_origin(rays, org);
+  RTCRayHit rh;
+  FrontSegment seg;
+  front_query(rays, o, rh, seg);  // answered already: a miss
   std::uint64_t crossings = 0;
-  const double inf = std::numeric_limits<double>::infinity();
   const int max_segments = 100000;
-  for (int segment = 0; segment < max_segments; ++segment) {
-    // From the window's height the slab distance is a constant of the direction (the same
-    // quotient); dir.z < 0.
-    const double t_slab = o.z() == rays.z0 ? rays.t_slab0 : (z_bottom_ - o.z()) / dir.z();
-    if (t_slab < 0) break;  // below the slab already: lost
-    // The border distance t_exit, first estimated with 1 / dir (within 1e-15 of the quotient):
-    // when the ray certainly leaves the slab first (t_exit >= t_slab), the segment ends at
-    // t_slab and a miss is lost, as with the quotient; else the quotients, as Tracer::trace.
-    double est = inf;
-    if (dir.x() > 0) est = (hx - o.x()) * rays.inv_x;
-    else if (dir.x() < 0) est = (-hx - o.x()) * rays.inv_x;
-    if (dir.y() > 0) est = std::min(est, (hy - o.y()) * rays.inv_y);
-    else if (dir.y() < 0) est = std::min(est, (-hy - o.y()) * rays.inv_y);
-    const bool slab_first = est * (1 - 1e-12) >= t_slab;
-    double t_exit = inf, tfar = t_slab;
-    if (!slab_first) {
-      t_exit = distance_to_tile_border(o, dir, hx, hy);
-      tfar = std::min(t_exit + rays.margin, t_slab);
-    }
-    RTCRayHit rh;
-    rh.ray.org_x = static_cast<float>(o.x());
-    rh.ray.org_y = static_cast<float>(o.y());
-    rh.ray.org_z = static_cast<float>(o.z());
-    rh.ray.dir_x = rays.fdir[0];
-    rh.ray.dir_y = rays.fdir[1];
-    rh.ray.dir_z = rays.fdir[2];
-    set_ray_extent(rh.ray, tfar);
-    if (ray_log) ray_log->push_back(rh.ray);
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(scene_, &ctx, &rh);
-    if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
-      const Vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
-      const long nx = surface_.nx(), ny = surface_.ny();
-      // Fast decoding (DownwardRays::band, graze): away from the cell's borders and diagonal
-      // the grid coordinates name the triangle met, and unless the ray grazes it Ng's sign
-      // along dir is the exact normal's (a front face: Ng.dir < 0).
-      const double gu = static_cast<double>(rh.hit.u) * rays.cells_x;
-      const double gv = static_cast<double>(rh.hit.v) * rays.cells_y;
-      const long ci = static_cast<long>(gu), cj = static_cast<long>(gv);
-      const double fu = gu - static_cast<double>(ci), fv = gv - static_cast<double>(cj);
-      const double diag = fu + fv - 1, b = rays.band;
-      const double d = ng.dot(dir);
-      if (fu > b && fu < 1 - b && fv > b && fv < 1 - b && std::abs(diag) > b && d < 0 &&
-          d * d > rays.graze * ng.squaredNorm() && !rays.exact_decode) {
-        long i = ci - pad_, j = cj - pad_;  // in [-pad, n + pad - 1] with pad <= 1: one wrap
-        if (i < 0) i += nx;
-        else if (i >= nx) i -= nx;
-        if (j < 0) j += ny;
-        else if (j >= ny) j -= ny;
-        const int half = diag > 0 ? 1 : 0;
-        ++c.rays;
-        c.border_crossings += crossings;
-        return macro.region ? surface_.facet_index(i, j, half)
-                            : 2 * (static_cast<std::size_t>(j) * nx + i) + half;
-      }
-      long i, j;
-      int half;
-      Vec3 cr;
-      std::size_t facet;
-      bool backface;
-      if (grid_facet_guess(rh.hit.u, rh.hit.v, ng, i, j, half, cr)) {
-        // Back face: m.dir > 0 for the unit normal m = cr / |cr|. Unless the unnormalised dot
-        // is within rounding of zero its sign is that of the normalised one (no square root).
-        const double dc = cr.dot(dir);
-        const double scale = std::abs(cr.x() * dir.x()) + std::abs(cr.y() * dir.y()) +
-                             std::abs(cr.z() * dir.z());
-        backface = std::abs(dc) > 1e-12 * scale ? dc > 0 : cr.normalized().dot(dir) > 0;
-        const long wi = wrap_index(i, nx), wj = wrap_index(j, ny);
-        facet = macro.region ? surface_.facet_index(wi, wj, half)
-                             : 2 * (static_cast<std::size_t>(wj) * nx + wi) + half;
-      } else {
-        Vec3 m;
-        facet = facet_of_hit(rh.hit.primID, rh.hit.u, rh.hit.v, ng, &m);
-        backface = m.dot(dir) > 0;
-      }
-      if (backface) {
-        // Grazed a convex edge closer than float spacing: first_hit traces the segment again
-        // with wrong-side hits rejected. Rare; it is taken from the start with its own counts.
-        const TraceHit h = first_hit(org, dir, nullptr, c);
-        return h.hit && !h.backface ? h.facet : DownwardRays::kNone;
-      }
-      ++c.rays;
-      c.border_crossings += crossings;
-      return facet;
-    }
-    if (slab_first || t_slab <= t_exit) break;  // left the slab downward inside the tile: lost
+  for (int segment = 0;;) {
+    if (seg.slab_first || seg.t_slab <= seg.t_exit) break;  // left the slab inside the tile: lost
     // Move to the border and re-enter through the opposite side (both at a corner).
-    o += t_exit * dir;
-    reenter_opposite_side(o, dir, macro);
+    o += seg.t_exit * rays.dir;
+    reenter_opposite_side(o, rays.dir, macro);
     ++crossings;
-    if (segment + 1 == max_segments) {
+    if (++segment == max_segments) {
       ++c.rays;
       c.border_crossings += crossings;
       ++c.unresolved;
       return DownwardRays::kNone;
     }
+    if (!front_query(rays, o, rh, seg)) break;  // below the slab: lost
+    if (ray_log) ray_log->push_back(rh.ray);
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    rtcIntersect1(scene_, &ctx, &rh);
+    if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) return front_decode(rays, org, rh, crossings, c);
   }
-  ++c.rays;
-  c.border_crossings += crossings;
-  ++c.lost_below;
-  return DownwardRays::kNone;
+  return front_lost(c, crossings);
 }
 
 void Tracer::log_rays_on_this_thread(std::vector<RTCRay>* log) { ray_log = log; }

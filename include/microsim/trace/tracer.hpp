@@ -1,13 +1,17 @@
 // Ray tracing of a microsurface with Embree 3: first hits and occlusion, periodic wrap-around,
 // and self-intersection handled by rejecting the plane of the facet a ray leaves.
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
 #include <embree3/rtcore.h>
 
 #include "microsim/surface/microsurface.hpp"
+#include "microsim/trace/tile_border.hpp"
 
 namespace microsim {
 
@@ -92,6 +96,11 @@ struct DownwardRays {
   // aligned with Ng, the back face from the exact normal). exact_decode: always the checked one.
   double band = 0, graze = 0;
   bool exact_decode = false;
+  // The tile, read once here instead of from the surface on every ray: cells, the padding of
+  // Embree's grid, half sizes, the slab bottom; region: facets are numbered by a sample region.
+  long nx = 0, ny = 0, pad = 0;
+  double hx = 0, hy = 0, z_bottom = 0;
+  bool region = false;
 };
 
 class Tracer {
@@ -130,6 +139,16 @@ class Tracer {
   // The facet whose front face the ray from org along rays.dir meets first, or
   // DownwardRays::kNone (nothing met, or a back face first; counted as first_hit counts them).
   std::size_t front_facet(const DownwardRays& rays, const Vec3& org, TraceCounters& c) const;
+  // front_facet for n rays, traced a block of kBatch rays at a time: the block's origins are set
+  // up (origin(i), in order), then its Embree queries made one after the other, then its hits
+  // decoded, use(i, facet) called in order with what front_facet(rays, origin(i), counters(i))
+  // returns. The same queries and answers (one decoding, shared with front_facet), only the
+  // order of the queries of different rays changes (a ray's further segments are traced when
+  // its first one is decoded); each phase's loop is short. Not a periodic heightfield: ray by
+  // ray.
+  template <std::size_t kBatch = 32, class Origin, class Counters, class Use>
+  void front_facets(const DownwardRays& rays, std::size_t n, Origin&& origin, Counters&& counters,
+                    Use&& use) const;
   // A hint, no effect on any result: starts loading the grid vertices near where the ray from
   // org along rays.dir is expected to meet the surface (where it crosses the mean height), so
   // that a front_facet call a few rays later finds them in cache. On large tiles consecutive
@@ -153,6 +172,28 @@ class Tracer {
   // rounding at a cell border named a neighbour: facet_of_hit searches around).
   bool grid_facet_guess(float u, float v, const Vec3& ng, long& i, long& j, int& half,
                         Vec3& c) const;
+  // The lean path (front_facet) in pieces. front_query: the Embree query of a ray's segment
+  // from o (inside the tile), with its slab and border distances; false when o is below the
+  // slab (lost, no query).
+  struct FrontSegment {
+    double t_slab = 0, t_exit = 0;
+    bool slab_first = false;  // the segment certainly leaves the slab before the tile border
+  };
+  bool front_query(const DownwardRays& rays, const Vec3& o, RTCRayHit& rh, FrontSegment& seg) const;
+  // o of the ray from org: its copy inside the tile.
+  Vec3 front_origin(const DownwardRays& rays, const Vec3& org) const;
+  // The answer to a hit of the ray from org after `crossings` wrap-arounds: fast decoding from
+  // Embree's (u, v) and Ng, else front_checked.
+  std::size_t front_decode(const DownwardRays& rays, const Vec3& org, const RTCRayHit& rh,
+                           std::uint64_t crossings, TraceCounters& c) const;
+  // The rare cases, out of the hot loop: a hit near a cell's border or diagonal or grazing
+  // (checked decoding, back faces traced again by first_hit); a first segment that missed
+  // (the ray's further segments); a ray lost before its first query.
+  std::size_t front_checked(const DownwardRays& rays, const Vec3& org, const RTCRayHit& rh,
+                            std::uint64_t crossings, TraceCounters& c) const;
+  std::size_t front_after_miss(const DownwardRays& rays, const Vec3& org, TraceCounters& c) const;
+  static std::size_t front_lost(TraceCounters& c, std::uint64_t crossings);
+  static std::vector<RTCRay>* ray_log_of_this_thread();
   template <bool kOcclusion>
   bool trace(const Vec3& org, const Vec3& dir, const SourcePlane* source, TraceCounters& c,
              TraceHit* out, RaySide side = RaySide::Front) const;
@@ -174,5 +215,123 @@ class Tracer {
   double build_seconds_ = 0;
   double scale_ = 1;  // scene size, for relative tolerances (read by the filter)
 };
+
+// --- The lean path's hot pieces (inline: the loops of front_facets and measure_g1) ----------
+
+inline Vec3 Tracer::front_origin(const DownwardRays& rays, const Vec3& org) const {
+  Vec3 o = org;
+  const double sx = 2 * rays.hx, sy = 2 * rays.hy;
+  if (o.x() < -rays.hx || o.x() > rays.hx) o.x() -= sx * std::floor((o.x() + rays.hx) / sx);
+  if (o.y() < -rays.hy || o.y() > rays.hy) o.y() -= sy * std::floor((o.y() + rays.hy) / sy);
+  return o;
+}
+
+inline bool Tracer::front_query(const DownwardRays& rays, const Vec3& o, RTCRayHit& rh,
+                                FrontSegment& seg) const {
+  const Vec3& dir = rays.dir;
+  // From the window's height the slab distance is a constant of the direction (the same
+  // quotient); dir.z < 0.
+  seg.t_slab = o.z() == rays.z0 ? rays.t_slab0 : (rays.z_bottom - o.z()) / dir.z();
+  if (seg.t_slab < 0) return false;  // below the slab already: lost
+  // The border distance t_exit, first estimated with 1 / dir (within 1e-15 of the quotient):
+  // when the ray certainly leaves the slab first (t_exit >= t_slab), the segment ends at t_slab
+  // and a miss is lost, as with the quotient; else the quotients, as Tracer::trace.
+  const double inf = std::numeric_limits<double>::infinity();
+  double est = inf;
+  if (dir.x() > 0) est = (rays.hx - o.x()) * rays.inv_x;
+  else if (dir.x() < 0) est = (-rays.hx - o.x()) * rays.inv_x;
+  if (dir.y() > 0) est = std::min(est, (rays.hy - o.y()) * rays.inv_y);
+  else if (dir.y() < 0) est = std::min(est, (-rays.hy - o.y()) * rays.inv_y);
+  seg.slab_first = est * (1 - 1e-12) >= seg.t_slab;
+  seg.t_exit = inf;
+  double tfar = seg.t_slab;
+  if (!seg.slab_first) {
+    seg.t_exit = distance_to_tile_border(o, dir, rays.hx, rays.hy);
+    tfar = std::min(seg.t_exit + rays.margin, seg.t_slab);
+  }
+  rh.ray.org_x = static_cast<float>(o.x());
+  rh.ray.org_y = static_cast<float>(o.y());
+  rh.ray.org_z = static_cast<float>(o.z());
+  rh.ray.tnear = 0.0f;
+  rh.ray.dir_x = rays.fdir[0];
+  rh.ray.dir_y = rays.fdir[1];
+  rh.ray.dir_z = rays.fdir[2];
+  rh.ray.time = 0;
+  rh.ray.tfar = std::isfinite(tfar) ? static_cast<float>(tfar) : inf;
+  rh.ray.mask = 0xFFFFFFFFu;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  return true;
+}
+
+inline std::size_t Tracer::front_decode(const DownwardRays& rays, const Vec3& org,
+                                        const RTCRayHit& rh, std::uint64_t crossings,
+                                        TraceCounters& c) const {
+  // Fast decoding (DownwardRays::band, graze): away from the cell's borders and diagonal the
+  // grid coordinates name the triangle met, and unless the ray grazes it Ng's sign along dir
+  // is the exact normal's (a front face: Ng.dir < 0).
+  const double gu = static_cast<double>(rh.hit.u) * rays.cells_x;
+  const double gv = static_cast<double>(rh.hit.v) * rays.cells_y;
+  const long ci = static_cast<long>(gu), cj = static_cast<long>(gv);
+  const double fu = gu - static_cast<double>(ci), fv = gv - static_cast<double>(cj);
+  const double diag = fu + fv - 1, b = rays.band;
+  const double ngx = rh.hit.Ng_x, ngy = rh.hit.Ng_y, ngz = rh.hit.Ng_z;
+  const double d = ngx * rays.dir.x() + ngy * rays.dir.y() + ngz * rays.dir.z();
+  if (!(fu > b && fu < 1 - b && fv > b && fv < 1 - b && std::abs(diag) > b && d < 0 &&
+        d * d > rays.graze * (ngx * ngx + ngy * ngy + ngz * ngz) && !rays.exact_decode))
+    return front_checked(rays, org, rh, crossings, c);
+  long i = ci - rays.pad, j = cj - rays.pad;  // in [-pad, n + pad - 1] with pad <= 1: one wrap
+  if (i < 0) i += rays.nx;
+  else if (i >= rays.nx) i -= rays.nx;
+  if (j < 0) j += rays.ny;
+  else if (j >= rays.ny) j -= rays.ny;
+  const int half = diag > 0 ? 1 : 0;
+  ++c.rays;
+  c.border_crossings += crossings;
+  return rays.region ? surface_.facet_index(i, j, half)
+                     : 2 * (static_cast<std::size_t>(j) * rays.nx + i) + half;
+}
+
+template <std::size_t kBatch, class Origin, class Counters, class Use>
+void Tracer::front_facets(const DownwardRays& rays, std::size_t n, Origin&& origin,
+                          Counters&& counters, Use&& use) const {
+  static_assert(kBatch > 0 && kBatch <= 256, "a small block");
+  if (!rays.lean) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3 org = origin(i);
+      use(i, front_facet(rays, org, counters(i)));
+    }
+    return;
+  }
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  std::vector<RTCRay>* log = ray_log_of_this_thread();
+  Vec3 org[kBatch];
+  RTCRayHit rh[kBatch];
+  bool query[kBatch];
+  for (std::size_t i0 = 0; i0 < n; i0 += kBatch) {
+    const std::size_t m = std::min(kBatch, n - i0);
+    for (std::size_t i = 0; i < m; ++i) {  // set-up
+      org[i] = origin(i0 + i);
+      FrontSegment seg;
+      query[i] = front_query(rays, front_origin(rays, org[i]), rh[i], seg);
+    }
+    for (std::size_t i = 0; i < m; ++i) {  // the queries alone
+      if (!query[i]) continue;
+      if (log) log->push_back(rh[i].ray);
+      rtcIntersect1(scene_, &ctx, &rh[i]);
+    }
+    for (std::size_t i = 0; i < m; ++i) {  // decoding
+      TraceCounters& c = counters(i0 + i);
+      std::size_t k;
+      if (!query[i]) k = front_lost(c, 0);
+      else if (rh[i].hit.geomID != RTC_INVALID_GEOMETRY_ID) k = front_decode(rays, org[i], rh[i], 0, c);
+      else k = front_after_miss(rays, org[i], c);
+      use(i0 + i, k);
+    }
+  }
+}
 
 }  // namespace microsim
