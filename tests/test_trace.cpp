@@ -2,10 +2,13 @@
 // loses and double-counts no ray, self-intersection handling does not depend on offsets.
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/surface/generators.hpp"
 #include "microsim/surface/surface_io.hpp"
 #include "microsim/trace/facet_plane.hpp"
+#include "microsim/trace/tile_border.hpp"
 #include "microsim/trace/tracer.hpp"
 #include "test_helpers.hpp"
 
@@ -561,4 +564,200 @@ TEST(Tracer, PrefetchFrontNamesTheCellWhereTheRayCrossesTheMeanHeight) {
     EXPECT_GE(same, compared - 2) << "theta " << cs.theta;  // rounding exactly at a cell border
     EXPECT_LT(same_wrong, compared / 10) << "theta " << cs.theta;
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The walks' decisions without divisions and square roots (Tracer::trace, the filter): each
+// fast test implies the exact one on random and border inputs, and with its margin perturbed
+// it does not (the inputs reach the border closely enough to show the margin is needed).
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+// Offsets from a border: on it, a few ulps, and up to 1e-9 relative either side.
+std::vector<double> relative_offsets() {
+  std::vector<double> o = {0.0};
+  for (double e : {1e-16, 2.2e-16, 4.4e-16, 1e-15, 1e-14, 1e-13, 1e-12, 3e-12, 1e-11, 1e-9}) {
+    o.push_back(e);
+    o.push_back(-e);
+  }
+  return o;
+}
+}  // namespace
+
+TEST(Tracer, ReachesBeforeBorderOnlyWhenTheBorderQuotientSaysSo) {
+  std::mt19937_64 g(41);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const std::vector<double> off = relative_offsets();
+  long claimed = 0, wrong_perturbed = 0, far_claimed = 0, far = 0;
+  for (double hx : {0.5, 3.7, 1e-3})
+    for (int k = 0; k < 200000; ++k) {
+      const double hy = hx * (k % 3 == 0 ? 1.0 : 0.37);
+      Vec3 o(hx * u(g), hy * u(g), u(g));
+      if (k % 7 == 0) o.x() = hx;  // on the border
+      Vec3 d(u(g), u(g), u(g));
+      if (k % 5 == 0) d.x() = 0;
+      if (k % 11 == 0) d.y() = -0.0;
+      d.normalize();
+      const double exact = distance_to_tile_border(o, d, hx, hy);
+      // t at the border distance (and a few ulps to 1e-9 off it), or anywhere below.
+      const double t = k % 2 == 0 ? exact * (1 + off[k / 2 % off.size()]) : std::abs(u(g)) * exact;
+      if (!std::isfinite(t)) continue;
+      if (reaches_before_border(o, d, hx, hy, t)) {
+        ++claimed;
+        ASSERT_GE(exact, t) << o.transpose() << " | " << d.transpose();
+      }
+      if (reaches_before_border(o, d, hx, hy, t, -kBorderMargin) && !(exact >= t)) ++wrong_perturbed;
+      if (t < 0.99 * exact) {
+        ++far;
+        if (reaches_before_border(o, d, hx, hy, t)) ++far_claimed;
+      }
+    }
+  EXPECT_GT(claimed, 100000);
+  EXPECT_EQ(far_claimed, far);     // it decides every case not within the margin
+  EXPECT_GT(wrong_perturbed, 0);   // power: a reversed margin claims wrong ones
+}
+
+TEST(Tracer, NotParallelClearlyOnlyWhenTheQuotientSaysSo) {
+  // a = |ng.n| and len2 = |ng|^2 around the threshold a / |ng| = 1 - 1e-6, and the same for a
+  // normal within the slack: every clear answer must be the quotient's for every normal within
+  // the slack, i.e. hold with a raised by slack * |ng|.
+  std::mt19937_64 g(42);
+  std::uniform_real_distribution<double> u(0, 1);
+  const std::vector<double> off = relative_offsets();
+  long clear = 0, wrong_perturbed = 0, wrong_slack = 0;
+  for (int k = 0; k < 2000000; ++k) {
+    const double len2 = std::ldexp(0.5 + u(g), static_cast<int>(u(g) * 200) - 100);
+    const double len = std::sqrt(len2);
+    const double e = off[k % off.size()] + (k % 3 == 0 ? (u(g) - 0.5) * 1e-6 : 0.0);
+    const double a = (1 - 1e-6) * (1 + e) * len;
+    if (not_parallel_clearly(a, len2, 0.0)) {
+      ++clear;
+      ASSERT_TRUE(not_parallel_exactly(a, len2)) << a << " " << len2;
+    }
+    if (not_parallel_clearly(a, len2, kReportedNormalSlack))
+      ASSERT_TRUE(not_parallel_exactly(a + kReportedNormalSlack * len, len2));
+    if (not_parallel_clearly(a, len2, 0.0, -1e-9) && !not_parallel_exactly(a, len2)) ++wrong_perturbed;
+    if (not_parallel_clearly(a, len2, 0.0) && !not_parallel_exactly(a + kReportedNormalSlack * len, len2))
+      ++wrong_slack;
+  }
+  EXPECT_GT(clear, 100000);
+  EXPECT_GT(wrong_perturbed, 0);  // power: a reversed margin claims wrong ones
+  EXPECT_GT(wrong_slack, 0);      // and the reported normal's slack is needed
+  // Underflowing squares are never decided on.
+  EXPECT_FALSE(not_parallel_clearly(1e-170, 1e-300, 0.0));
+}
+
+TEST(Tracer, ReportedNormalIsWithinItsSlackOfThePlaneNormal) {
+  // TraceHit::normal (the cell sizes) against SourcePlane::of (the corners' coordinates) for
+  // the same facet, on square, anisotropic and very wide grids, a region and a window.
+  std::vector<Microsurface> surfaces;
+  surfaces.push_back(beckmann_tile(64, 51, 1.0));
+  std::mt19937_64 g(43);
+  std::normal_distribution<double> n;
+  {
+    const int nx = 16384, ny = 3;
+    std::vector<float> h(static_cast<std::size_t>(nx) * ny);
+    for (float& x : h) x = static_cast<float>(3e-4 * n(g));
+    surfaces.push_back(Microsurface::heightfield(nx, ny, 7.3, 0.0123, std::move(h)));
+  }
+  {
+    const int nx = 37, ny = 300;
+    std::vector<float> h(static_cast<std::size_t>(nx) * ny);
+    for (float& x : h) x = static_cast<float>(0.05 * n(g));
+    surfaces.push_back(Microsurface::heightfield(nx, ny, 1.1, 0.3, std::move(h)));
+  }
+  surfaces.push_back(beckmann_tile(32, 52));
+  surfaces.back().set_sample_region(3, 27, 5, 20, true);
+  surfaces.push_back(beckmann_tile(32, 53));
+  surfaces.back().set_sample_region(2, 29, 1, 30, false);
+  double worst = 0;
+  for (const Microsurface& s : surfaces) {
+    const Tracer tracer(s);
+    const FacetPlanes planes(tracer);
+    std::uniform_real_distribution<double> u(-0.5, 0.5);
+    int hits = 0;
+    for (int k = 0; k < 20000; ++k) {
+      const Vec3 o(u(g) * s.macro().size_x, u(g) * s.macro().size_y, tracer.z_top());
+      TraceCounters c;
+      const TraceHit h = tracer.first_hit(o, Vec3(0.05, -0.03, -1).normalized(), nullptr, c);
+      if (!h.hit) continue;
+      ++hits;
+      worst = std::max(worst, (h.normal - planes.plane(h.facet).normal).cwiseAbs().maxCoeff());
+    }
+    EXPECT_GT(hits, 5000);
+  }
+  EXPECT_LT(worst, kReportedNormalSlack / 100) << worst;
+  EXPECT_GT(worst, 0.0);  // power: the two normals differ, the slack is needed
+}
+
+TEST(Tracer, LeavingAFacetEqualsLeavingItsPlane) {
+  // first_hit with SourceFacet (the plane formed only near parallel) against first_hit with
+  // SourcePlane::of the facet: the same TraceHit and counters, bit for bit, for rays leaving
+  // hit facets by reflection, at random, grazing (n.dir from 1e-9 on) and into the solid
+  // (Back side). Power: with a normal tilted by 1e-2 (beyond the slack) the hits differ.
+  std::vector<Microsurface> surfaces;
+  surfaces.push_back(beckmann_tile(64, 61, 1.0));
+  surfaces.push_back(bumpy_heightfield(48, 0.02));
+  surfaces.push_back(vgroove_heightfield(8, 4, 0.6));
+  {  // an inclined plane (coplanar neighbours everywhere; a cliff at the tile border)
+    const int nn = 32;
+    std::vector<float> h(nn * nn);
+    for (int j = 0; j < nn; ++j)
+      for (int i = 0; i < nn; ++i) h[j * nn + i] = static_cast<float>(0.3 * i / nn + 0.1 * j / nn);
+    surfaces.push_back(Microsurface::heightfield(nn, nn, 1.0, 1.0, std::move(h)));
+  }
+  surfaces.push_back(beckmann_tile(32, 62));
+  surfaces.back().set_sample_region(2, 29, 1, 30, false);
+  std::mt19937_64 g(44);
+  std::uniform_real_distribution<double> u(0, 1);
+  long compared = 0, differ_tilted = 0;
+  for (const Microsurface& s : surfaces) {
+    const Tracer tracer(s);
+    for (int k = 0; k < 4000; ++k) {
+      const Vec3 o((u(g) - 0.5) * s.macro().size_x, (u(g) - 0.5) * s.macro().size_y, tracer.z_top());
+      TraceCounters c0;
+      const TraceHit h = tracer.first_hit(o, Vec3(0.2 * (u(g) - 0.5), 0.2 * (u(g) - 0.5), -1).normalized(),
+                                          nullptr, c0);
+      if (!h.hit || h.backface) continue;
+      const Vec3& m = h.normal;
+      const Vec3 t1 = (std::abs(m.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(m).normalized();
+      const Vec3 t2 = m.cross(t1);
+      const double psi = 2 * kPi * u(g);
+      const Vec3 along = std::cos(psi) * t1 + std::sin(psi) * t2;
+      for (int variant = 0; variant < 6; ++variant) {
+        double lift;  // n.dir
+        switch (variant) {
+          case 0: lift = 1e-9; break;
+          case 1: lift = 1e-7; break;
+          case 2: lift = 1e-5; break;
+          case 3: lift = 1e-3; break;
+          default: lift = u(g); break;
+        }
+        const bool back = variant == 5;
+        Vec3 dir = (std::sqrt(1 - lift * lift) * along + (back ? -lift : lift) * m).normalized();
+        const RaySide side = back ? RaySide::Back : RaySide::Front;
+        const SourcePlane plane = FacetPlanes(tracer).plane(h.facet);
+        TraceCounters c1, c2, c3;
+        const TraceHit a = tracer.first_hit(h.point, dir, &plane, c1, side);
+        const TraceHit b = tracer.first_hit(h.point, dir, SourceFacet{h.facet, h.normal}, c2, side);
+        ASSERT_EQ(a.hit, b.hit);
+        ASSERT_EQ(a.exit_below, b.exit_below);
+        ASSERT_EQ(a.point, b.point);
+        ASSERT_EQ(a.normal, b.normal);
+        ASSERT_EQ(a.facet, b.facet);
+        ASSERT_EQ(a.backface, b.backface);
+        ASSERT_EQ(c1.rays, c2.rays);
+        ASSERT_EQ(c1.border_crossings, c2.border_crossings);
+        ASSERT_EQ(c1.lost_below, c2.lost_below);
+        ASSERT_EQ(c1.backface_hits, c2.backface_hits);
+        ASSERT_EQ(c1.side_exits, c2.side_exits);
+        ++compared;
+        const Vec3 tilted = (h.normal + 1e-2 * along).normalized();
+        const TraceHit w = tracer.first_hit(h.point, dir, SourceFacet{h.facet, tilted}, c3, side);
+        if (w.hit != a.hit || w.facet != a.facet || w.point != a.point) ++differ_tilted;
+      }
+    }
+  }
+  EXPECT_GT(compared, 50000);
+  EXPECT_GT(differ_tilted, 0);
 }

@@ -34,7 +34,9 @@ double triangle_integral(const Vec2& p0, const Vec2& p1, const Vec2& p2) {
 
 }  // namespace
 
-HemisphereMap::HemisphereMap(int resolution) : res_(resolution) {
+HemisphereMap::HemisphereMap(int resolution)
+    : res_(resolution),
+      edge_margin_(16 * 0.5 * resolution * (4 / kPi * (kAzimuthError + 2e-15) + 4e-15)) {
   if (resolution < 1) throw UsageError("--resolution must be at least 1");
   cos_integral_.resize(static_cast<std::size_t>(res_) * res_);
   const double h = 2.0 / res_;
@@ -51,17 +53,56 @@ HemisphereMap::HemisphereMap(int resolution) : res_(resolution) {
     }
 }
 
+namespace {
+
+// The square coordinates at radius r > 0 and azimuth phi in [-pi/4, 7pi/4) (the concentric map
+// backwards), one expression per sector; its sector is sector_of(phi).
+int sector_of(double phi) {
+  return phi < 0.25 * kPi ? 0 : phi < 0.75 * kPi ? 1 : phi < 1.25 * kPi ? 2 : 3;
+}
+Vec2 square_of(double r, double phi) {
+  const double q = 4.0 / kPi;
+  switch (sector_of(phi)) {
+    case 0: return Vec2(r, r * phi * q);
+    case 1: return Vec2(r * (0.5 * kPi - phi) * q, r);
+    case 2: return Vec2(-r, -r * (phi - kPi) * q);
+    default: return Vec2(-r * (1.5 * kPi - phi) * q, -r);
+  }
+}
+
+// atan(k / 16), k = 0 .. 16 (azimuth_near).
+struct AtanTable {
+  double v[17];
+  AtanTable() {
+    for (int k = 0; k <= 16; ++k) v[k] = std::atan(k / 16.0);
+  }
+};
+const AtanTable kAtanOfSixteenths;
+
+}  // namespace
+
+double azimuth_near(double y, double x) {
+  const double ax = std::abs(x), ay = std::abs(y);
+  const bool steep = ay > ax;
+  const double num = steep ? ax : ay, den = steep ? ay : ax;
+  const int k = static_cast<int>(num / den * 16 + 0.5);
+  const double c = k * (1.0 / 16);
+  const double u = (num - c * den) / (den + c * num);
+  const double u2 = u * u;
+  double a = kAtanOfSixteenths.v[k] +
+             u * (1 - u2 * (1.0 / 3 - u2 * (1.0 / 5 - u2 * (1.0 / 7 - u2 * (1.0 / 9)))));
+  if (steep) a = 0.5 * kPi - a;
+  if (x < 0) a = kPi - a;
+  return std::signbit(y) ? -a : a;
+}
+
 Vec2 HemisphereMap::to_square(const Vec3& d) const {
   const double z = std::min(1.0, std::abs(d.z()) / d.norm());
   const double r = std::sqrt(std::max(0.0, 1.0 - z));
   if (r == 0.0) return Vec2(0.0, 0.0);
   double phi = std::atan2(d.y(), d.x());  // (-pi, pi]
   if (phi < -0.25 * kPi) phi += 2 * kPi;  // [-pi/4, 7pi/4)
-  const double q = 4.0 / kPi;
-  if (phi < 0.25 * kPi) return Vec2(r, r * phi * q);
-  if (phi < 0.75 * kPi) return Vec2(r * (0.5 * kPi - phi) * q, r);
-  if (phi < 1.25 * kPi) return Vec2(-r, -r * (phi - kPi) * q);
-  return Vec2(-r * (1.5 * kPi - phi) * q, -r);
+  return square_of(r, phi);
 }
 
 Vec3 HemisphereMap::from_square(double a, double b) const {
@@ -78,11 +119,39 @@ Vec3 HemisphereMap::from_square(double a, double b) const {
   return Vec3(s * std::cos(phi), s * std::sin(phi), 1.0 - r * r);
 }
 
-int HemisphereMap::pixel_of(const Vec3& d) const {
-  const Vec2 sq = to_square(d);
-  const int i = std::clamp(static_cast<int>(std::floor((sq.x() + 1.0) * 0.5 * res_)), 0, res_ - 1);
-  const int j = std::clamp(static_cast<int>(std::floor((sq.y() + 1.0) * 0.5 * res_)), 0, res_ - 1);
-  return j * res_ + i;
+namespace {
+int pixel_of_square(const Vec2& sq, int res) {
+  const int i = std::clamp(static_cast<int>(std::floor((sq.x() + 1.0) * 0.5 * res)), 0, res - 1);
+  const int j = std::clamp(static_cast<int>(std::floor((sq.y() + 1.0) * 0.5 * res)), 0, res - 1);
+  return j * res + i;
+}
+}  // namespace
+
+int HemisphereMap::pixel_of_exact(const Vec3& d) const { return pixel_of_square(to_square(d), res_); }
+
+int HemisphereMap::pixel_of(const Vec3& d, double edge_margin) const {
+  // As to_square, with the azimuth of azimuth_near: r is the same, and so is the sector unless
+  // the azimuth is within kSectorMargin of a sector border (then std::atan2's might be across).
+  // In its sector the radial coordinate is +-r (the same), the angular one moves by at most
+  // 4/pi |phi - phi'| plus rounding, i.e. less than edge_margin_ pixels: unless it is that near
+  // a pixel border, its pixel is to_square's.
+  const double z = std::min(1.0, std::abs(d.z()) / d.norm());
+  const double r = std::sqrt(std::max(0.0, 1.0 - z));
+  const double ax = std::abs(d.x()), ay = std::abs(d.y());
+  if (!(r > 0.0) || !(std::max(ax, ay) >= 1e-150 && std::max(ax, ay) <= 1e150)) return pixel_of_exact(d);
+  double phi = azimuth_near(d.y(), d.x());
+  const double m = kSectorMargin;
+  if (std::abs(phi + 0.25 * kPi) <= m) return pixel_of_exact(d);
+  if (phi < -0.25 * kPi) phi += 2 * kPi;
+  const int sector = sector_of(phi);
+  if (std::abs(phi - 0.25 * kPi) <= m || std::abs(phi - 0.75 * kPi) <= m ||
+      std::abs(phi - 1.25 * kPi) <= m)
+    return pixel_of_exact(d);
+  const Vec2 sq = square_of(r, phi);
+  const double x = ((sector % 2 == 0 ? sq.y() : sq.x()) + 1.0) * 0.5 * res_;
+  const double f = x - std::floor(x);
+  if (!(f >= edge_margin && f <= 1 - edge_margin)) return pixel_of_exact(d);
+  return pixel_of_square(sq, res_);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -96,7 +165,19 @@ InPlaneBins::InPlaneBins(double phi_i, int n_bins)
   p_ = Vec3::UnitZ().cross(s_);
 }
 
-int InPlaneBins::bin_of(const Vec3& d0) const {
+int InPlaneBins::bin_of(const Vec3& d0, double band_margin) const {
+  // |d.p| > sin(delta) for d = d0 / |d0|, on squares: where |d0.p| / |d0| exceeds
+  // sin(delta) + band_margin, bin_of_exact's |d.p| (d0 normalised, then the product: within a
+  // few 1e-16 of it) exceeds sin(delta). Squares only where they are normal numbers.
+  const double n2 = d0.squaredNorm();
+  if (n2 >= 1e-200 && n2 <= 1e200) {
+    const double sb0 = d0.dot(p_), lim = sin_delta_ + band_margin;
+    if (sb0 * sb0 > lim * lim * n2) return -1;
+  }
+  return bin_of_exact(d0);
+}
+
+int InPlaneBins::bin_of_exact(const Vec3& d0) const {
   const Vec3 d = d0.normalized();
   const double sb = d.dot(p_);
   if (std::abs(sb) > sin_delta_) return -1;

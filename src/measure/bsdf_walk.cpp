@@ -1,7 +1,5 @@
 #include "microsim/measure/bsdf_walk.hpp"
 
-#include "microsim/trace/facet_plane.hpp"
-
 namespace microsim {
 
 WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir0,
@@ -9,7 +7,6 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
                        TraceCounters& counters, std::uint64_t& events, const EscapeTest* escape) {
   using models::MaterialKind;
   const Microsurface& s = tracer.surface();
-  const FacetPlanes planes(tracer);
   WalkEnd e;
   Vec3 dir = dir0;
   RaySide side = RaySide::Front;
@@ -77,8 +74,9 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
       hit = escape->no_hit(hit.point, dir, counters, side);
       continue;
     }
-    const SourcePlane plane = planes.plane(hit.facet);
-    hit = tracer.first_hit(hit.point, dir, &plane, counters, side);
+    // The plane left is formed only if a candidate hit is nearly parallel to it (SourceFacet).
+    const SourceFacet left{hit.facet, hit.normal};
+    hit = tracer.first_hit(hit.point, dir, left, counters, side);
   }
 }
 

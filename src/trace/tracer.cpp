@@ -1,5 +1,6 @@
 #include "microsim/trace/tracer.hpp"
 #include "microsim/trace/tile_border.hpp"
+#include "microsim/trace/facet_plane.hpp"
 
 #include <sys/mman.h>
 
@@ -25,23 +26,27 @@ inline void set_ray_extent(RTCRay& ray, double tfar) {
 // Embree context extended with the plane the ray leaves (read by the filter functions).
 struct PlaneContext {
   RTCIntersectContext context;
-  const SourcePlane* source;  // may be null (Back-side rays without a source plane)
+  const SourcePlane* source;   // the plane left; null: none, or `leaving`'s not yet formed
+  const SourceFacet* leaving;  // the facet left, its plane formed on demand (may be null)
+  const Microsurface* surface;
+  const float* grid_vertices;  // the tracer's (FacetPlanes)
+  SourcePlane formed;          // leaving's plane, once formed
   double scale;
-  bool back_side;             // the ray travels below the surface (RaySide::Back)
+  bool back_side;              // the ray travels below the surface (RaySide::Back)
 };
 
 // For rays that leave a facet: rejects back-face hits and hits on the plane the ray leaves
 // (self-intersection). The 1 - cos tolerance allows for Embree's float normals; the plane
 // distance tolerance is relative to the scene scale.
 void reject_source_plane(const RTCFilterFunctionNArguments* args) {
-  const auto* ctx = reinterpret_cast<const PlaneContext*>(args->context);
+  auto* ctx = reinterpret_cast<PlaneContext*>(args->context);
   const double scale = ctx->scale;
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
     Vec3 ng(RTCHitN_Ng_x(args->hit, args->N, i), RTCHitN_Ng_y(args->hit, args->N, i),
             RTCHitN_Ng_z(args->hit, args->N, i));
-    double len = ng.norm();
-    if (len == 0) continue;
+    const double len2 = ng.squaredNorm();  // |ng| = 0 exactly when len2 = 0
+    if (len2 == 0) continue;
     Vec3 dir(RTCRayN_dir_x(args->ray, args->N, i), RTCRayN_dir_y(args->ray, args->N, i),
              RTCRayN_dir_z(args->ray, args->N, i));
     // A ray leaving the surface enters the solid through a front face first; a back face
@@ -51,7 +56,18 @@ void reject_source_plane(const RTCFilterFunctionNArguments* args) {
       args->valid[i] = 0;
       continue;
     }
-    if (!ctx->source || std::abs(ng.dot(ctx->source->normal)) / len < 1.0 - 1e-6) continue;
+    if (!ctx->source && !ctx->leaving) continue;
+    // Not parallel to the plane left (|ng.n| / |ng| < 1 - 1e-6): kept. Nearly every candidate
+    // is decided on squares (not_parallel_clearly), with the reported normal of the facet left
+    // when its plane is not formed; the rest by the quotient with the plane's own normal.
+    double a = std::abs(ng.dot(ctx->source ? ctx->source->normal : ctx->leaving->normal));
+    if (not_parallel_clearly(a, len2, ctx->source ? 0.0 : kReportedNormalSlack)) continue;
+    if (!ctx->source) {
+      ctx->formed = FacetPlanes(*ctx->surface, ctx->grid_vertices).plane(ctx->leaving->facet);
+      ctx->source = &ctx->formed;
+      a = std::abs(ng.dot(ctx->source->normal));
+    }
+    if (not_parallel_exactly(a, len2)) continue;
     float t = RTCRayN_tfar(args->ray, args->N, i);
     Vec3 p(RTCRayN_org_x(args->ray, args->N, i) + t * RTCRayN_dir_x(args->ray, args->N, i),
            RTCRayN_org_y(args->ray, args->N, i) + t * RTCRayN_dir_y(args->ray, args->N, i),
@@ -313,16 +329,19 @@ std::size_t Tracer::facet_of_hit(unsigned prim_id, float u, float v, const Vec3&
 
 template <bool kOcclusion>
 bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
-                   TraceCounters& c, TraceHit* out, RaySide side) const {
+                   const SourceFacet* leaving, TraceCounters& c, TraceHit* out, RaySide side) const {
   ++c.rays;
   const Macrosurface& macro = surface_.macro();
   const bool back = side == RaySide::Back;
   PlaneContext ctx;
   rtcInitIntersectContext(&ctx.context);
   ctx.source = source;
+  ctx.leaving = source ? nullptr : leaving;
+  ctx.surface = &surface_;
+  ctx.grid_vertices = grid_vertices_;
   ctx.scale = scale_;
   ctx.back_side = back;
-  if (source || back) ctx.context.filter = reject_source_plane;
+  if (source || leaving || back) ctx.context.filter = reject_source_plane;
 
   Vec3 o = org;
   const double hx = 0.5 * macro.size_x, hy = 0.5 * macro.size_y;
@@ -333,11 +352,18 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
   }
   // Beyond the tile border a ray may travel this far inside the padded copy before it is cut
   // (half a cell), so a hit exactly on the border is found inside the geometry.
-  double dxy = std::max(std::abs(dir.x()), std::abs(dir.y()));
-  double cell = surface_.kind() == Microsurface::Kind::Heightfield
-                    ? std::min(surface_.dx(), surface_.dy())
-                    : 0.02 * std::min(macro.size_x, macro.size_y);
-  const double margin = dxy > 0 ? 0.5 * cell / dxy : 0.0;
+  // (Formed when first needed: a segment that certainly leaves the slab first does not.)
+  double margin = -1;
+  auto border_margin = [&] {
+    if (margin < 0) {
+      double dxy = std::max(std::abs(dir.x()), std::abs(dir.y()));
+      double cell = surface_.kind() == Microsurface::Kind::Heightfield
+                        ? std::min(surface_.dx(), surface_.dy())
+                        : 0.02 * std::min(macro.size_x, macro.size_y);
+      margin = dxy > 0 ? 0.5 * cell / dxy : 0.0;
+    }
+    return margin;
+  };
   const int max_segments = 100000;
   // Window: distance along the ray to where it leaves the footprint (+inf if it never does).
   auto footprint_exit = [&](const Vec3& p) {
@@ -381,12 +407,6 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
   }
 
   for (int segment = 0; segment < max_segments; ++segment) {
-    double t_exit = std::numeric_limits<double>::infinity();
-    if (macro.periodic) {
-      t_exit = distance_to_tile_border(o, dir, hx, hy);
-    } else if (window_) {
-      t_exit = footprint_exit(o);
-    }
     // Distance to the slab face the ray is heading for.
     double t_slab = std::numeric_limits<double>::infinity();
     if (dir.z() > 0) t_slab = (z_top_ - o.z()) / dir.z();
@@ -399,7 +419,19 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
       }
       return false;
     }
-    double tfar = std::min(t_exit + (window_ ? 0.0 : margin), t_slab);
+    // On a periodic tile a segment that certainly leaves the slab before the tile border (most:
+    // the slab is a few cells thick) ends at t_slab whatever the border distance and margin
+    // are (t_exit >= t_slab): neither is formed (tile_border.hpp, reaches_before_border).
+    double t_exit = std::numeric_limits<double>::infinity();
+    double tfar = t_slab;
+    if (!(macro.periodic && reaches_before_border(o, dir, hx, hy, t_slab))) {
+      if (macro.periodic) {
+        t_exit = distance_to_tile_border(o, dir, hx, hy);
+      } else if (window_) {
+        t_exit = footprint_exit(o);
+      }
+      tfar = std::min(t_exit + (window_ ? 0.0 : border_margin()), t_slab);
+    }
 
     RTCRayHit rh;
     rh.ray.org_x = static_cast<float>(o.x());
@@ -661,13 +693,20 @@ void Tracer::log_rays_on_this_thread(std::vector<RTCRay>* log) { ray_log = log; 
 TraceHit Tracer::first_hit(const Vec3& org, const Vec3& dir, const SourcePlane* source,
                            TraceCounters& counters, RaySide side) const {
   TraceHit h;
-  trace<false>(org, dir, source, counters, &h, side);
+  trace<false>(org, dir, source, nullptr, counters, &h, side);
+  return h;
+}
+
+TraceHit Tracer::first_hit(const Vec3& org, const Vec3& dir, const SourceFacet& source,
+                           TraceCounters& counters, RaySide side) const {
+  TraceHit h;
+  trace<false>(org, dir, nullptr, &source, counters, &h, side);
   return h;
 }
 
 bool Tracer::occluded(const Vec3& org, const Vec3& dir, const SourcePlane* source,
                       TraceCounters& counters) const {
-  return trace<true>(org, dir, source, counters, nullptr);
+  return trace<true>(org, dir, source, nullptr, counters, nullptr);
 }
 
 }  // namespace microsim

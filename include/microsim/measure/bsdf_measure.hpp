@@ -40,8 +40,18 @@ class HemisphereMap {
   explicit HemisphereMap(int resolution = 64);
   int resolution() const { return res_; }
   int size() const { return res_ * res_; }
-  // Pixel of a direction (its |z| is used): j * R + i.
-  int pixel_of(const Vec3& d) const;
+  // Pixel of a direction (its |z| is used): j * R + i. Exactly the pixel of to_square(d), whose
+  // azimuth is std::atan2's; decided with azimuth_near (no atan2) where the square coordinate is
+  // further than `edge_margin` pixels from a pixel border and the azimuth further than
+  // kSectorMargin from a sector border of the concentric map, else by pixel_of_exact.
+  int pixel_of(const Vec3& d) const { return pixel_of(d, edge_margin_); }
+  int pixel_of(const Vec3& d, double edge_margin) const;
+  int pixel_of_exact(const Vec3& d) const;
+  // Bounds for pixel_of: |azimuth_near - std::atan2| (see azimuth_near), the azimuth's distance
+  // to a sector border, and (edge_margin_) a pixel border's distance in pixels:
+  // R/2 (4/pi (kAzimuthError + 2e-15) + 4e-15), R = resolution, times 16.
+  static constexpr double kAzimuthError = 1e-13;
+  static constexpr double kSectorMargin = 2 * kAzimuthError;
   // Square coordinates (a, b) of a direction and back (z >= 0 returned).
   Vec2 to_square(const Vec3& d) const;
   Vec3 from_square(double a, double b) const;
@@ -51,8 +61,17 @@ class HemisphereMap {
 
  private:
   int res_;
+  double edge_margin_;
   std::vector<double> cos_integral_;
 };
+
+// atan2(y, x) for finite (x, y) != (0, 0), within HemisphereMap::kAzimuthError of std::atan2
+// (which is within 1 ulp of the true angle), on the same branch ((-pi, pi], the sign of y's
+// sign bit): atan(t) = atan(c) + atan(u), t = min / max of |x|, |y|, c = round(16 t) / 16,
+// u = (t - c) / (1 + c t), |u| <= 1/32, atan(u) by its series to u^9 (remainder below
+// |u|^11 / 11 < 3e-18), atan(c) from a table of std::atan; the rounding of about a dozen
+// operations adds a few 1e-16. Two divisions, no libm call.
+double azimuth_near(double y, double x);
 
 // A narrow band around the plane of incidence, cut into bins of signed polar angle.
 // A direction d (either hemisphere; the lower one measured from -n) is written
@@ -65,7 +84,13 @@ class InPlaneBins {
  public:
   InPlaneBins(double phi_i, int n_bins);
   int size() const { return n_; }
-  int bin_of(const Vec3& d) const;  // -1 outside the band
+  // -1 outside the band. Exactly bin_of_exact(d): a direction clearly outside the band (by more
+  // than band_margin in sin(beta), far beyond the rounding of normalising d) is decided without
+  // normalising it; the others (inside the band: a few percent of directions) by bin_of_exact.
+  int bin_of(const Vec3& d) const { return bin_of(d, kBandMargin); }
+  int bin_of(const Vec3& d, double band_margin) const;
+  int bin_of_exact(const Vec3& d) const;
+  static constexpr double kBandMargin = 1e-12;
   double psi_lo(int b) const { return -0.5 * kPi + b * width_; }
   double psi_hi(int b) const { return -0.5 * kPi + (b + 1) * width_; }
   double psi_center(int b) const { return -0.5 * kPi + (b + 0.5) * width_; }

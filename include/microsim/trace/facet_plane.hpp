@@ -49,14 +49,20 @@ inline SourcePlane facet_plane(const Microsurface& s, std::size_t k) {
 // surface's height array is another 4 bytes per cell that a walk's hit misses in cache).
 class FacetPlanes {
  public:
-  explicit FacetPlanes(const Tracer& t) : s_(t.surface()) {
-    if (s_.kind() != Microsurface::Kind::Heightfield) return;
+  explicit FacetPlanes(const Tracer& t)
+      : FacetPlanes(t.surface(), t.surface().kind() == Microsurface::Kind::Heightfield
+                                     ? static_cast<const float*>(rtcGetGeometryBufferData(
+                                           rtcGetGeometry(t.scene(), 0), RTC_BUFFER_TYPE_VERTEX, 0))
+                                     : nullptr) {}
+  // The same from the tracer's vertex buffer given directly (its filter, which calls no Embree
+  // function); null: from the surface's heights.
+  FacetPlanes(const Microsurface& s, const float* grid_vertices) : s_(s) {
+    if (s_.kind() != Microsurface::Kind::Heightfield || !grid_vertices) return;
     // The grid of Tracer: one periodic copy of cells around a periodic tile, none around a
     // window; vertex (i + pad, j + pad) is grid_point(i, j), its z the float height.
     pad_ = s_.macro().periodic ? 1 : 0;
     width_ = static_cast<std::size_t>(s_.traced_cells_x()) + 1 + 2 * pad_;
-    vertices_ = static_cast<const float*>(
-        rtcGetGeometryBufferData(rtcGetGeometry(t.scene(), 0), RTC_BUFFER_TYPE_VERTEX, 0));
+    vertices_ = grid_vertices;
   }
   Triangle triangle(std::size_t k) const {
     if (!vertices_) return facet_triangle(s_, k);

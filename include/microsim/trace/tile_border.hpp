@@ -20,6 +20,24 @@ inline double distance_to_tile_border(const Vec3& o, const Vec3& dir, double hx,
   return std::max(t, 0.0);
 }
 
+// True only when distance_to_tile_border(o, dir, hx, hy) >= t (t >= 0 finite): on each axis
+// the ray moves along, the way to the border exceeds t |d| by the relative margin `rel`, far
+// beyond the rounding of the quotients (a few 1e-16), so the quotients need not be formed. False
+// also where that is too close to tell (the caller then forms them). No division.
+constexpr double kBorderMargin = 1e-12;
+inline bool reaches_before_border(const Vec3& o, const Vec3& dir, double hx, double hy, double t,
+                                  double rel = kBorderMargin) {
+  const double k = t * (1 + rel);
+  // (-h - p) / d = (h + p) / -d, and the rounding of both is symmetric.
+  auto clear = [k](double d, double p, double h) {
+    if (d > 0) return h - p >= k * d;
+    if (d < 0) return h + p >= k * -d;
+    return true;
+  };
+  return t >= 0 && t < std::numeric_limits<double>::infinity() && clear(dir.x(), o.x(), hx) &&
+         clear(dir.y(), o.y(), hy);
+}
+
 // `o`, on the border a ray along `dir` leaves through, moved to the opposite side (both sides
 // at a corner) of the periodic tile `macro`; the tolerance absorbs the rounding of o + t dir.
 inline void reenter_opposite_side(Vec3& o, const Vec3& dir, const Macrosurface& macro) {

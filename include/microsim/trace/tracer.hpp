@@ -26,6 +26,39 @@ struct SourcePlane {
   }
 };
 
+// The facet a ray leaves, for the walks: its index and its unit normal as the tracer reported it
+// (TraceHit::normal, within kReportedNormalSlack of SourcePlane::of's normal of the same facet).
+// The filter decides with that normal that a candidate hit is not parallel to the plane left
+// (nearly always) and forms the exact plane (FacetPlanes, trace/facet_plane.hpp) only for a
+// candidate too near parallel to tell: the same decisions as with the plane, without forming it
+// at every event.
+struct SourceFacet {
+  std::size_t facet;
+  Vec3 normal;
+};
+// Bound on |TraceHit::normal - SourcePlane::of(facet).normal| for the same facet: both normalise
+// the facet's cross product, the tracer's with the cell sizes dx, dy, the plane's with the
+// differences of the corners' x, y, which differ from dx, dy by the rounding of coordinates
+// (relative 2^-51 of the tile size: below 3e-11 of a cell for grids up to 65535 cells wide).
+// Checked on tiles in tests/test_trace.cpp.
+constexpr double kReportedNormalSlack = 1e-7;
+
+// The filter's test that a candidate with Embree normal ng is not parallel to the plane left
+// (normal n): |ng.n| / |ng| < 1 - 1e-6, with a = |ng.n| and len2 = |ng|^2 (exactly the
+// quotient's rounding). not_parallel_clearly(a, len2, slack) is true only where that holds for
+// every normal within `slack` of n (and the quotient's rounding): decided on squares, without
+// the square root and the division. Elsewhere (near parallel, or too near the threshold to
+// tell) the caller evaluates not_parallel_exactly with the exact normal.
+inline bool not_parallel_exactly(double a, double len2) { return a / std::sqrt(len2) < 1.0 - 1e-6; }
+inline bool not_parallel_clearly(double a, double len2, double slack, double margin = 1e-9) {
+  // a / |ng| < c - slack with c = (1 - 1e-6)(1 - margin): the exact a' = |ng.n'| is below
+  // c |ng| for |n' - n| <= slack, and c is 1e-9 below the threshold, far beyond the relative
+  // rounding (a few 1e-16) of the squares and of the quotient. Squares are compared only where
+  // they are normal numbers (len2 >= 1e-280).
+  const double c = (1.0 - 1e-6) * (1.0 - margin) - slack;
+  return len2 >= 1e-280 && a * a < c * c * len2;
+}
+
 // The side of the surface a ray travels on. Front: above the surface / outside a solid (every
 // ray of D, G1, and the BSDF of opaque materials); hits are expected on front faces. Back: below
 // the surface / inside a solid (light refracted into a dielectric); hits are expected on back
@@ -120,6 +153,10 @@ class Tracer {
   // lost. occluded() likewise: a ray leaving through a side wall is not occluded.
   TraceHit first_hit(const Vec3& org, const Vec3& dir, const SourcePlane* source,
                      TraceCounters& counters, RaySide side = RaySide::Front) const;
+  // The same for a ray leaving facet `source.facet` (SourceFacet): exactly first_hit with
+  // SourcePlane::of that facet (the same hits and counters, bit for bit).
+  TraceHit first_hit(const Vec3& org, const Vec3& dir, const SourceFacet& source,
+                     TraceCounters& counters, RaySide side = RaySide::Front) const;
   // True when anything blocks the ray before it leaves the surface's slab upward (or, for a
   // finite object, before infinity).
   bool occluded(const Vec3& org, const Vec3& dir, const SourcePlane* source,
@@ -195,8 +232,9 @@ class Tracer {
   static std::size_t front_lost(TraceCounters& c, std::uint64_t crossings);
   static std::vector<RTCRay>* ray_log_of_this_thread();
   template <bool kOcclusion>
-  bool trace(const Vec3& org, const Vec3& dir, const SourcePlane* source, TraceCounters& c,
-             TraceHit* out, RaySide side = RaySide::Front) const;
+  bool trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
+             const SourceFacet* leaving, TraceCounters& c, TraceHit* out,
+             RaySide side = RaySide::Front) const;
 
   const Microsurface& surface_;
   RTCDevice device_ = nullptr;
