@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <string>
 
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/surface/generators.hpp"
@@ -319,6 +320,38 @@ TEST(Tracer, FrontFacetEqualsFirstHitFacet) {
   }
 }
 
+namespace {
+// The origin of a ray along -v aimed where a hit's grid coordinates round across a border:
+// kind 0 a uniform point (the origin on the slab's top), 1 Embree's float vertex (i, j), 2 a
+// point of the x border from it, 3 of the y border, 4 of the cell's diagonal; a, b pick the
+// cell and t the point along the edge.
+Vec3 aimed_origin(const Microsurface& s, const Tracer& tracer, const Vec3& v, int kind, double a,
+                  double b, double t) {
+  auto fpoint = [&](long i, long j) {  // Embree's vertex (i, j): float x, y, z
+    const Vec3 p = s.grid_point(i, j);
+    return Vec3(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+  };
+  const long i = static_cast<long>(a * s.nx()), j = static_cast<long>(b * s.ny());
+  Vec3 p;
+  switch (kind) {
+    case 0: return Vec3(a - 0.5, b - 0.5, tracer.z_top());
+    case 1: p = fpoint(i, j); break;
+    case 2: p = fpoint(i, j) + t * (fpoint(i + 1, j) - fpoint(i, j)); break;
+    case 3: p = fpoint(i, j) + t * (fpoint(i, j + 1) - fpoint(i, j)); break;
+    default: p = fpoint(i + 1, j) + t * (fpoint(i, j + 1) - fpoint(i + 1, j)); break;
+  }
+  return p + ((tracer.z_top() - p.z()) / v.z()) * v;
+}
+
+// The counters front_facet and first_hit both keep must agree.
+void expect_same_counters(const TraceCounters& e, const TraceCounters& c, const std::string& where) {
+  for (auto [x, y] : {std::pair{e.rays, c.rays}, {e.border_crossings, c.border_crossings},
+                      {e.lost_below, c.lost_below}, {e.backface_hits, c.backface_hits},
+                      {e.unresolved, c.unresolved}})
+    ASSERT_EQ(x, y) << where;
+}
+}  // namespace
+
 TEST(Tracer, FrontFacetFastDecodingEqualsCheckedDecoding) {
   // front_facet names most hits from Embree's grid coordinates and the sign of its float normal
   // alone (DownwardRays::band, graze), and leaves hits near a cell's borders or diagonal, and
@@ -341,26 +374,14 @@ TEST(Tracer, FrontFacetFastDecodingEqualsCheckedDecoding) {
   for (std::size_t si = 0; si < surfaces.size(); ++si) {
     const Microsurface& s = surfaces[si];
     const Tracer tracer(s);
-    auto fpoint = [&](long i, long j) {  // Embree's vertex (i, j): float x, y, z
-      const Vec3 p = s.grid_point(i, j);
-      return Vec3(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
-    };
     for (double theta : {0.0, 30.0, 60.0, 85.0, 89.0})
       for (int k = 0; k < 4000; ++k) {
         CounterRng rng(31, 100 * si + static_cast<std::uint64_t>(theta), static_cast<std::uint64_t>(k));
         const double phi = 2 * kPi * rng.uniform();
         const Vec3 v = direction_from_angles(rad(theta), phi);
         const double a = rng.uniform(), b = rng.uniform(), t = rng.uniform();
-        const long i = static_cast<long>(a * s.nx()), j = static_cast<long>(b * s.ny());
         const int kind = k % 5;
-        Vec3 p;  // the point aimed at
-        if (kind == 0) p = Vec3(a - 0.5, b - 0.5, 0);  // uniform (origin at the top below)
-        else if (kind == 1) p = fpoint(i, j);           // a vertex
-        else if (kind == 2) p = fpoint(i, j) + t * (fpoint(i + 1, j) - fpoint(i, j));  // x border
-        else if (kind == 3) p = fpoint(i, j) + t * (fpoint(i, j + 1) - fpoint(i, j));  // y border
-        else p = fpoint(i + 1, j) + t * (fpoint(i, j + 1) - fpoint(i + 1, j));        // diagonal
-        const Vec3 o = kind == 0 ? Vec3(p.x(), p.y(), tracer.z_top())
-                                 : Vec3(p + ((tracer.z_top() - p.z()) / v.z()) * v);
+        const Vec3 o = aimed_origin(s, tracer, v, kind, a, b, t);
         DownwardRays fast(tracer, v), checked(tracer, v), naive(tracer, v);
         checked.exact_decode = true;
         naive.band = 0;
@@ -368,11 +389,11 @@ TEST(Tracer, FrontFacetFastDecodingEqualsCheckedDecoding) {
         TraceCounters c1, c2, c3;
         const std::size_t expected = tracer.front_facet(checked, o, c1);
         const std::size_t got = tracer.front_facet(fast, o, c2);
-        ASSERT_EQ(got, expected) << "surface " << si << " theta " << theta << " ray " << k;
-        for (auto [x, y] : {std::pair{c1.rays, c2.rays}, {c1.border_crossings, c2.border_crossings},
-                            {c1.lost_below, c2.lost_below}, {c1.backface_hits, c2.backface_hits},
-                            {c1.unresolved, c2.unresolved}})
-          ASSERT_EQ(x, y) << "surface " << si << " theta " << theta << " ray " << k;
+        const std::string where = "surface " + std::to_string(si) + " theta " + std::to_string(theta) +
+                                  " ray " + std::to_string(k);
+        ASSERT_EQ(got, expected) << where;
+        expect_same_counters(c1, c2, where);
+        if (HasFatalFailure()) return;
         const bool differ = tracer.front_facet(naive, o, c3) != expected;
         naive_differ += differ;
         naive_differ_uniform += differ && kind == 0;
@@ -402,10 +423,6 @@ TEST(Tracer, FrontFacetsInBlocksEqualFirstHit) {
   for (std::size_t si = 0; si < surfaces.size(); ++si) {
     const Microsurface& s = surfaces[si];
     const Tracer tracer(s);
-    auto fpoint = [&](long i, long j) {  // Embree's vertex (i, j): float x, y, z
-      const Vec3 p = s.grid_point(i, j);
-      return Vec3(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
-    };
     for (double theta : {0.0, 45.0, 70.0, 85.0, 89.0}) {
       const Vec3 v = direction_from_angles(rad(theta), 0.7 + si);
       const int n = 1500;
@@ -413,15 +430,8 @@ TEST(Tracer, FrontFacetsInBlocksEqualFirstHit) {
       for (int k = 0; k < n; ++k) {
         CounterRng rng(51, 100 * si + static_cast<std::uint64_t>(theta), static_cast<std::uint64_t>(k));
         const double a = rng.uniform(), b = rng.uniform(), t = rng.uniform();
-        const long i = static_cast<long>(a * s.nx()), j = static_cast<long>(b * s.ny());
-        Vec3 p;
-        switch (k % 4) {
-          case 0: p = Vec3(a - 0.5, b - 0.5, tracer.z_top()); break;  // uniform, from the top
-          case 1: p = fpoint(i, j); break;
-          case 2: p = fpoint(i, j) + t * (fpoint(i + 1, j) - fpoint(i, j)); break;
-          default: p = fpoint(i + 1, j) + t * (fpoint(i, j + 1) - fpoint(i + 1, j)); break;
-        }
-        orgs[k] = k % 4 == 0 ? p : Vec3(p + ((tracer.z_top() - p.z()) / v.z()) * v);
+        const int kind = k % 4 == 3 ? 4 : k % 4;  // uniform, vertex, x border, diagonal
+        orgs[k] = aimed_origin(s, tracer, v, kind, a, b, t);
       }
       std::vector<std::size_t> expected(n);
       std::vector<TraceCounters> c_expected(n);
@@ -450,12 +460,11 @@ TEST(Tracer, FrontFacetsInBlocksEqualFirstHit) {
         std::vector<TraceCounters> c;
         const std::vector<std::size_t> got = blocks(down, batch, c);
         for (int k = 0; k < n; ++k) {
-          ASSERT_EQ(got[k], expected[k]) << "surface " << si << " theta " << theta << " ray " << k;
-          const TraceCounters& e = c_expected[k];
-          for (auto [x, y] : {std::pair{e.rays, c[k].rays}, {e.border_crossings, c[k].border_crossings},
-                              {e.lost_below, c[k].lost_below}, {e.backface_hits, c[k].backface_hits},
-                              {e.unresolved, c[k].unresolved}})
-            ASSERT_EQ(x, y) << "surface " << si << " theta " << theta << " ray " << k;
+          const std::string where = "surface " + std::to_string(si) + " theta " +
+                                    std::to_string(theta) + " ray " + std::to_string(k);
+          ASSERT_EQ(got[k], expected[k]) << where;
+          expect_same_counters(c_expected[k], c[k], where);
+          if (HasFatalFailure()) return;
         }
       }
       DownwardRays naive(tracer, v);
@@ -634,8 +643,9 @@ TEST(Tracer, NotParallelClearlyOnlyWhenTheQuotientSaysSo) {
       ++clear;
       ASSERT_TRUE(not_parallel_exactly(a, len2)) << a << " " << len2;
     }
-    if (not_parallel_clearly(a, len2, kReportedNormalSlack))
+    if (not_parallel_clearly(a, len2, kReportedNormalSlack)) {
       ASSERT_TRUE(not_parallel_exactly(a + kReportedNormalSlack * len, len2));
+    }
     if (not_parallel_clearly(a, len2, 0.0, -1e-9) && !not_parallel_exactly(a, len2)) ++wrong_perturbed;
     if (not_parallel_clearly(a, len2, 0.0) && !not_parallel_exactly(a + kReportedNormalSlack * len, len2))
       ++wrong_slack;
