@@ -12,17 +12,6 @@
 
 namespace microsim {
 namespace {
-// The fields of an Embree ray after its origin and direction: [0, tfar] (infinite when tfar is
-// not finite), every geometry, no motion blur.
-inline void set_ray_extent(RTCRay& ray, double tfar) {
-  ray.tnear = 0.0f;
-  ray.tfar = std::isfinite(tfar) ? static_cast<float>(tfar) : std::numeric_limits<float>::infinity();
-  ray.mask = 0xFFFFFFFFu;
-  ray.flags = 0;
-  ray.time = 0;
-  ray.id = 0;
-}
-
 // Embree context extended with the plane the ray leaves (read by the filter functions).
 struct PlaneContext {
   RTCIntersectContext context;
@@ -521,8 +510,6 @@ DownwardRays::DownwardRays(const Tracer& tracer, const Vec3& v) {
   hx = 0.5 * s.macro().size_x;
   hy = 0.5 * s.macro().size_y;
   region = s.macro().region;
-  inv_x = dir.x() != 0 ? 1 / dir.x() : 0.0;
-  inv_y = dir.y() != 0 ? 1 / dir.y() : 0.0;
   cells_x = tracer.grid_width_ - 1;
   cells_y = tracer.grid_height_ - 1;
   // Embree reports a grid hit as u = fl(fl(s + a) r), s the quad's column, a in [0, 1] its

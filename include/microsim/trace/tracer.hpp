@@ -15,6 +15,17 @@
 
 namespace microsim {
 
+// The fields of an Embree ray after its origin and direction: [0, tfar] (infinite when tfar is
+// not finite), every geometry, no motion blur.
+inline void set_ray_extent(RTCRay& ray, double tfar) {
+  ray.tnear = 0.0f;
+  ray.tfar = std::isfinite(tfar) ? static_cast<float>(tfar) : std::numeric_limits<float>::infinity();
+  ray.mask = 0xFFFFFFFFu;
+  ray.flags = 0;
+  ray.time = 0;
+  ray.id = 0;
+}
+
 // A ray leaving a facet never meets that facet's plane again; hits on it are rounding
 // artefacts and are rejected by an Embree filter (DESIGN.md "Self-intersection").
 struct SourcePlane {
@@ -119,7 +130,6 @@ struct DownwardRays {
   // Constants of the lean path, so that a ray costs no division in the common case:
   double z0 = 0, t_slab0 = 0;   // the window's height (Tracer::z_top) and the distance from it
                                 // to the slab bottom along dir
-  double inv_x = 0, inv_y = 0;  // 1 / dir.x, 1 / dir.y (0 for a zero component)
   double cells_x = 0, cells_y = 0;  // cells of Embree's grid (its hit u, v run over them)
   // Decoding a hit (Tracer::front_facet). Grid coordinates u (cells_x) and v (cells_y) further
   // than `band` cells from their cell's borders and diagonal name the cell and the half directly
@@ -271,17 +281,11 @@ inline bool Tracer::front_query(const DownwardRays& rays, const Vec3& o, RTCRayH
   // quotient); dir.z < 0.
   seg.t_slab = o.z() == rays.z0 ? rays.t_slab0 : (rays.z_bottom - o.z()) / dir.z();
   if (seg.t_slab < 0) return false;  // below the slab already: lost
-  // The border distance t_exit, first estimated with 1 / dir (within 1e-15 of the quotient):
-  // when the ray certainly leaves the slab first (t_exit >= t_slab), the segment ends at t_slab
-  // and a miss is lost, as with the quotient; else the quotients, as Tracer::trace.
-  const double inf = std::numeric_limits<double>::infinity();
-  double est = inf;
-  if (dir.x() > 0) est = (rays.hx - o.x()) * rays.inv_x;
-  else if (dir.x() < 0) est = (-rays.hx - o.x()) * rays.inv_x;
-  if (dir.y() > 0) est = std::min(est, (rays.hy - o.y()) * rays.inv_y);
-  else if (dir.y() < 0) est = std::min(est, (-rays.hy - o.y()) * rays.inv_y);
-  seg.slab_first = est * (1 - 1e-12) >= seg.t_slab;
-  seg.t_exit = inf;
+  // When the ray certainly leaves the slab before the tile border (t_exit >= t_slab, decided
+  // without a division: reaches_before_border), the segment ends at t_slab and a miss is lost,
+  // as with the quotients; else the quotients, as Tracer::trace.
+  seg.slab_first = reaches_before_border(o, dir, rays.hx, rays.hy, seg.t_slab);
+  seg.t_exit = std::numeric_limits<double>::infinity();
   double tfar = seg.t_slab;
   if (!seg.slab_first) {
     seg.t_exit = distance_to_tile_border(o, dir, rays.hx, rays.hy);
@@ -290,15 +294,10 @@ inline bool Tracer::front_query(const DownwardRays& rays, const Vec3& o, RTCRayH
   rh.ray.org_x = static_cast<float>(o.x());
   rh.ray.org_y = static_cast<float>(o.y());
   rh.ray.org_z = static_cast<float>(o.z());
-  rh.ray.tnear = 0.0f;
   rh.ray.dir_x = rays.fdir[0];
   rh.ray.dir_y = rays.fdir[1];
   rh.ray.dir_z = rays.fdir[2];
-  rh.ray.time = 0;
-  rh.ray.tfar = std::isfinite(tfar) ? static_cast<float>(tfar) : inf;
-  rh.ray.mask = 0xFFFFFFFFu;
-  rh.ray.id = 0;
-  rh.ray.flags = 0;
+  set_ray_extent(rh.ray, tfar);
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   return true;
