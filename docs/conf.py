@@ -25,4 +25,3 @@ html_show_sourcelink = False
 
 # Code blocks: `sh` blocks are commands (run by the docs test), `text` blocks are output.
 highlight_language = "none"
-pygments_style = "sphinx"
