@@ -3,7 +3,7 @@
 //
 // A check is one function that appends rows (see `checks()`): d_identities, d_nominal, g1, g2,
 // vndf, bsdf_albedo; adding a quantity is adding one Check to the registry in
-// src/validate/validate.cpp.
+// src/validate/checks.cpp.
 //
 // Kinds of rows and verdict rules (also written into every JSON record, "verdict_rules"):
 //   identity       an exact identity measured by Monte Carlo (two estimators of the same quantity,
