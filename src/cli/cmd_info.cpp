@@ -163,7 +163,7 @@ int run_info(const std::string& path, const std::string& json_out, const GlobalO
                 << ", " << s.nominal->alpha_y << ")";
     std::cout << "\n000 eq. 1b   sum A_f m_f / A = " << c["eq_1b_sum_area_normal_over_A"].dump()
               << "  |error| " << c["eq_1b_error"].get<double>() << "\n"
-              << "000 eq. 1c   sum A_f (n.m_f) / A = " << c["eq_1c_sum_area_cos_over_A"].get<double>()
+              << "[GeomBSDF24, eq. 1c]   sum A_f (n.m_f) / A = " << c["eq_1c_sum_area_cos_over_A"].get<double>()
               << "  |error| " << c["eq_1c_error"].get<double>() << "\n"
               << "area ratio   sum A_f / A = " << c["total_area_over_A"].get<double>() << "\n";
     if (disc) print_discretization(j["discretization"]);
@@ -177,7 +177,7 @@ int run_info(const std::string& path, const std::string& json_out, const GlobalO
 
 void register_info(CLI::App& app, const GlobalOptions& g) {
   auto* info = app.add_subcommand(
-      "info", "Describe a surface: parameters, slope statistics, fitted alpha, 000 eq. 1b/1c");
+      "info", "Describe a surface: parameters, slope statistics, fitted alpha, [GeomBSDF24, eq. 1b/1c]");
   auto file = std::make_shared<std::string>(), json = std::make_shared<std::string>();
   info->add_option("surface", *file, "Surface file")->required();
   info->add_option("--json", *json, "Also write the description as JSON");
