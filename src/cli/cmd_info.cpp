@@ -52,7 +52,7 @@ void print_discretization(const Json& j) {
     std::cout << " (converged for every quantity of the study)\n";
     return;
   }
-  std::cout << "\n             coarser than the converged level (README \"Converged surfaces\") for:";
+  std::cout << "\n             coarser than the converged level (docs/theory/discretization.md) for:";
   for (const Json& q : c) {
     const auto l = converged_level(q.get<std::string>());
     std::cout << " " << q.get<std::string>() << " (" << sig(l->cells_per_correlation_length) << " cells per l, "
@@ -91,7 +91,7 @@ void print_metrology(const Metrology& m, const Microsurface& s) {
                     ? "  WARNING: well under 4 cells per l: D, G1 and the "
                       "multiple scattering of the triangles are far from the continuous surface's"
                     : m.cells_per_gaussian_length < 13  // 16 cells per l, less one tile's ~10% spread
-                          ? " (mirror orders 1-2 converge by 8, order 3 by 16 cells per l: README \"Converged surfaces\")"
+                          ? " (mirror orders 1-2 converge by 8, order 3 by 16 cells per l: docs/theory/discretization.md)"
                           : "")
             << "\n"
             << "fit chi2/dof heights vs Gaussian " << fmt(m.height_fit.chi2_per_dof(), 3)

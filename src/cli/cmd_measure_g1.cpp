@@ -76,7 +76,7 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
                      {"normal_bins", {{"theta", go.normal_theta_bins}, {"phi", go.normal_phi_bins}}}};
   j["definitions"] = {
       {"g1", "area sampling: fraction of points, drawn by projected area A_f max(0,v.m_f), "
-             "unoccluded toward v (estimator b of the G1 theory)"},
+             "unoccluded toward v (estimator b of docs/theory/masking.md)"},
       {"g1_raycast", "visible projected area of first hits along -v / sum_f A_f max(0,v.m_f) "
                      "(estimator a)"},
       {"visible_area_ratio", "visible projected area / ((v.n) A); visible_projected_area is the "

@@ -16,7 +16,7 @@ struct GaussianParams {
 };
 
 // The correlation length used when none is given: 16 cells per l, the grid on which the
-// discretization study (README "Converged surfaces") finds the mirror albedos of orders 1-3, D,
+// discretization study (docs/theory/discretization.md) finds the mirror albedos of orders 1-3, D,
 // G1 and the VNDF equal to 32 cells per l within their errors; but at least 16 correlation
 // lengths per tile (the study's smallest tile) and at least 4 cells per l. The default 1024^2
 // tile gets 16 cells per l and 64 l per tile, the study's recommended level; a 64^2 tile 4 cells.
