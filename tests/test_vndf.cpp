@@ -38,7 +38,7 @@ Microsurface ellipsoid(double ax, double ay, int rings = EllipsoidParams{}.rings
 // measured with 1e6 rays at normal incidence, chi2 998 on 287 dof at 256 x 1024 for alpha 0.5,
 // and 329 on 242 dof at 1024 x 1024 for alpha (0.4, 0.8) at 50 degrees).
 // Upper half of the ellipsoid with semi-axes (1/alpha_x, 1/alpha_y, 1): its normal
-// distribution is GGX(alpha_x, alpha_y) ([TSBlog24]). Tessellated on a grid in normal space: the
+// distribution is GGX(alpha_x, alpha_y) [TSBlog24]. Tessellated on a grid in normal space: the
 // vertex with normal m(theta_k, phi_j) is the ellipsoid point with that normal,
 // p = (a^2 m_x, b^2 m_y, c^2 m_z) / |(a m_x, b m_y, c m_z)|, theta_k = k 90/n_theta degrees,
 // phi_j = j 360/n_phi degrees, so that facets fall inside normal bins whose edges are on the

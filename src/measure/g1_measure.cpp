@@ -284,7 +284,7 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
     if (r.bins[b].mean_normal.norm() > 0) r.bins[b].mean_normal.normalize();
     r.total_area += bin[0];
   }
-  // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   ([Heitz14, App. A])
+  // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   [Heitz14, App. A]
   r.lambda_numeric = sums[width - 1] / (v.dot(s.macro().normal) * s.macro().area);
   // Estimator (b) draws facets by front-facing projected area A_f max(0, v.m_f).
   const auto weights = [&](std::size_t k0, std::size_t k1, double* w) {

@@ -206,7 +206,7 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
     r.front_area += bin[1];
     vcav_total += bin[6];
   }
-  // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   ([Heitz14, App. A])
+  // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   [Heitz14, App. A]
   const Vec3 n = s.macro().normal;
   r.lambda_o = sums[width - 2] / (o.dot(n) * s.macro().area);
   r.lambda_i = sums[width - 1] / (i.dot(n) * s.macro().area);

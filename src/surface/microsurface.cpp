@@ -197,7 +197,7 @@ double front_projected_area(const Microsurface& s, const Vec3& v) {
 }
 
 double lambda_from_facets(const Microsurface& s, const Vec3& v) {
-  // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   ([Heitz14, App. A])
+  // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   [Heitz14, App. A]
   double back = reduce_facets(s, 0.0, [&](const Triangle& t, double& a) {
     a += std::max(0.0, -0.5 * t.cross().dot(v));
   });

@@ -135,7 +135,7 @@ std::vector<SurfaceKind> make_kinds() {
                      "ParallelepipedParams::matrix (not with shear-x/shear-y)")}});
   const EllipsoidParams el;
   k.push_back({"ellipsoid",
-               "Upper half of (ax x)^2 + (ay y)^2 + z^2 = 1: its NDF is GGX(ax, ay) ([TSBlog24]); finite", kStructuredOutput,
+               "Upper half of (ax x)^2 + (ay y)^2 + z^2 = 1: its NDF is GGX(ax, ay) [TSBlog24]; finite", kStructuredOutput,
                kStructuredConfig,
                {number("alpha", positive(), "", "Isotropic alpha",
                        "EllipsoidParams::alpha_x and alpha_y (not with alpha-x/alpha-y)"),

@@ -110,7 +110,7 @@ std::vector<double> sum_over_facets(std::size_t num_facets, std::size_t width, B
 
 // v.n > 0: the surface seen from above. v.n < 0 (meshes only; UsageError for heightfields and
 // for v.n = 0): the undersurface, measured explicitly on undersurface(s) at mirror_z(v)
-// ([GeomBSDF24, "Inherent Assumptions"]); pass `under` (a Tracer of undersurface(s)) to reuse it across
+// [GeomBSDF24, "Inherent Assumptions"]; pass `under` (a Tracer of undersurface(s)) to reuse it across
 // directions. `table` (from build_facet_table with g1_normal_binning(options)) saves
 // recomputing the facets of the traced surface for every direction.
 G1Result measure_g1(const Tracer& tracer, const Vec3& v, const G1Options& options,
