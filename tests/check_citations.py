@@ -28,8 +28,9 @@ KEY = r"[A-Z][A-Za-z]*(?:\d{2}[a-z]?|Blog)"
 CITATION = re.compile(r"(?<![\w\]\)])\[(" + KEY + r")(?=[,\]])")
 DEFINITION = re.compile(r"^#{2,3}\s+(" + KEY + r")\s*$|^\((" + KEY + r")\)=\s*$")
 OUTSIDE = re.compile(r"\.\./shared|shared/references|DESIGN\.md|/work/")
-OLD_FORM = re.compile(r"(?<![\w.,/-])00[0-4] (?:eq|Eq|sec|Sec|App|Appendix|Table|Fig|after)\b"
-                      r"|(?<![\w.,/-])00[0-4] [\"'][A-Z]")
+# (also right after a C escape such as a newline inside a string)
+OLD_FORM = re.compile(r"(?:(?<![\w.,/-])|(?<=\\[nt]))00[0-4] (?:eq|Eq|sec|Sec|App|Appendix|Table|Fig|after)\b"
+                      r"|(?:(?<![\w.,/-])|(?<=\\[nt]))00[0-4] [\"'][A-Z]")
 
 
 def defined_keys(root):

@@ -161,7 +161,7 @@ int run_info(const std::string& path, const std::string& json_out, const GlobalO
     if (s.nominal)
       std::cout << "   (nominal " << models::to_string(s.nominal->kind) << " " << s.nominal->alpha_x
                 << ", " << s.nominal->alpha_y << ")";
-    std::cout << "\n000 eq. 1b   sum A_f m_f / A = " << c["eq_1b_sum_area_normal_over_A"].dump()
+    std::cout << "\n[GeomBSDF24, eq. 1b]   sum A_f m_f / A = " << c["eq_1b_sum_area_normal_over_A"].dump()
               << "  |error| " << c["eq_1b_error"].get<double>() << "\n"
               << "[GeomBSDF24, eq. 1c]   sum A_f (n.m_f) / A = " << c["eq_1c_sum_area_cos_over_A"].get<double>()
               << "  |error| " << c["eq_1c_error"].get<double>() << "\n"
