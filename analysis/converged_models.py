@@ -118,7 +118,7 @@ if j2 and j1:
     P1 = per_surface_rows(j1)
     P2 = [sum((per_surface_rows(j)[k] for j in j2), []) for k in range(len(j2[0]["per_surface"]))]
     K = len(P2)
-    print(f"## G2(o, o) against G1(o) (000 eq. 16), φ = 0, {K} tiles, independent ray seeds\n")
+    print(f"## G2(o, o) against G1(o) [GeomBSDF24, eq. 16], φ = 0, {K} tiles, independent ray seeds\n")
     print("| θ | G2(o, o) | G1(o) | G2 − G1, paired per tile | z (rays) |")
     print("|---|---|---|---|---|")
     for r2 in range(len(P2[0])):
@@ -152,13 +152,13 @@ if j:
         print(f"| {f} | {dd[0]:+.4f} ± {dd[1]:.4f} [rays {dd[2]:.4f}] | {sm[0]:.4f} ± {sm[1]:.4f} |")
     print()
 
-# --- 001 Table 4
+# --- [Heitz14, Table 4]
 names = sorted(glob.glob(os.path.join(out, f"b*_c{cells}_s*_t4.json")))
 alphas = sorted({os.path.basename(n).split("_")[0][1:] for n in names}, key=float)
 for a in alphas:
     js = [load(os.path.basename(n)) for n in names if os.path.basename(n).startswith(f"b{a}_c{cells}_")]
     K = len(js)
-    print(f"## 001 Table 4: mirror Beckmann α = {a}, θi = 1.5 rad, in-plane order-1 lobe, {K} tiles\n")
+    print(f"## [Heitz14, Table 4]: mirror Beckmann α = {a}, θi = 1.5 rad, in-plane order-1 lobe, {K} tiles\n")
     a1 = ens([j["albedo"]["reflected"]["order_1"] for j in js])
     print(f"order-1 albedo {a1[0]:.4f} ± {a1[1]:.4f}; Smith single scattering "
           f"{js[0]['albedo_models']['smith_single']['reflected']:.4f}; V-cavity "

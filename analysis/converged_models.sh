@@ -3,8 +3,8 @@
 # surfaces: generate gaussian's default grid (16 cells per correlation length, 64 per 1024^2
 # tile), ensembles of independent tiles (between-surface errors beside the ray-count ones).
 #   - G1 averaged (0-85 deg) and per normal bin at 80 deg against Smith and V-cavity, alpha 0.5;
-#   - G2 at o = i against G1 (000 eq. 16) and the G2 forms at 75/75 deg, opposite azimuths;
-#   - 001 Table 4: the in-plane order-1 lobe at theta_i = 1.5 rad against Smith's single
+#   - G2 at o = i against G1 [GeomBSDF24, eq. 16] and the G2 forms at 75/75 deg, opposite azimuths;
+#   - [Heitz14, Table 4]: the in-plane order-1 lobe at theta_i = 1.5 rad against Smith's single
 #     scattering, mirror Beckmann alpha = 1 (ALPHAS_T4 for more roughnesses).
 #
 #   analysis/converged_models.sh [BUILD_DIR] [OUT_DIR]

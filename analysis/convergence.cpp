@@ -2,7 +2,7 @@
 // every level, analysis/convergence.py makes the table and figures). A level is a grid
 // (cells per correlation length l / dx) and a tile (correlation lengths per tile L / l); it is
 // measured on an ensemble of K independent tiles, and every quantity is written per tile so
-// that the ensemble mean carries the between-surface error (DESIGN.md "Two kinds of error bar").
+// that the ensemble mean carries the between-surface error (docs/theory/error-bars.md).
 //
 // Per tile: fitted alpha and D per 5-degree ring (exact from the facets), averaged G1 and G1 per
 // normal bin at 80 deg, G2 at 70/70 deg with the two directions at the same and at opposite
@@ -274,7 +274,7 @@ Json measure_tile(const Args& a, std::uint64_t seed, int K) {
     t[dphi == 0 ? "g2_70_70_dphi0" : "g2_70_70_dphi180"] = est(r.g2());
   }
   // VNDF at 80 deg: chi-square per degree of freedom of the first-hit normals against the
-  // nominal D_v (001 eq. 13), 5-degree rings x 22.5-degree sectors.
+  // nominal D_v [Heitz14, eq. 13], 5-degree rings x 22.5-degree sectors.
   {
     VndfOptions o;
     o.rays = rg;

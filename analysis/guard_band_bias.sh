@@ -1,5 +1,5 @@
 #!/bin/sh
-# The guard band's bias table (README, "Measured surfaces: guard band"): a periodic Beckmann
+# The guard band's bias table (docs/theory/discretization.md): a periodic Beckmann
 # tile measured as a non-periodic window with guards of 0, 1, 2, 4, 8 correlation lengths,
 # against the periodic tile restricted to the same interior. Long (tens of CPU-minutes at
 # 1024^2 and 10^6 rays): runs at nice 10. Extra arguments go to the program, e.g.

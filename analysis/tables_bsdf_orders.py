@@ -28,7 +28,7 @@ def fmt_z(v):
 ORDERS = ["order_1", "order_2", "order_3", "order_4plus", "total"]
 
 # ---------------------------------------------------------------------------------------------
-print("== 1. Flat dielectric: albedos against Fresnel (000 eq. 7d, 10b); 1048576 rays each")
+print("== 1. Flat dielectric: albedos against Fresnel [GeomBSDF24, eq. 7d, 10b]; 1048576 rays each")
 print(f"{'eta':>7} {'theta':>6} {'R':>9} {'+-':>8} {'F':>9} {'z':>6} {'T':>9} {'+-':>8} {'1-F':>9} {'z':>6} {'R+T':>10} {'lost':>5}")
 for eta in ["1.5", "0.6666666666666666"]:
     for th in [0, 30, 60, 80]:
@@ -73,7 +73,7 @@ for (a, t), per_seed in sorted(runs.items()):
 if any(len(v) > 1 for v in runs.values()):
     print()
     print("Ensemble of tiles (seeds " + ", ".join(str(s) for s in sorted(next(iter(runs.values())))) +
-          "): mean over tiles, between-surface standard error (DESIGN.md: the error to use against a nominal model)")
+          "): mean over tiles, between-surface standard error (the error to use against a nominal model)")
     print(f"{'alpha':>5} {'theta':>5} {'order':>12} {'mean':>9} {'se_tiles':>8} {'se_rays':>8} {'smith_mult':>10} {'z':>7} "
           f"{'rel.dev':>8} {'smith_single':>12} {'z':>7} {'rel.dev':>8}")
     for (a, t), per_seed in sorted(runs.items()):
@@ -100,7 +100,7 @@ if any(len(v) > 1 for v in runs.values()):
 
 # ---------------------------------------------------------------------------------------------
 print()
-print("== 3. 001 Table 4: in-plane order-1 lobe, mirror Beckmann, theta_i = 1.5 rad (85.94 deg),")
+print("== 3. [Heitz14, Table 4]: in-plane order-1 lobe, mirror Beckmann, theta_i = 1.5 rad (85.94 deg),")
 print("   4194304 rays per tile, 32 bins of 5.625 deg, band +-2.8 deg; f = radiance BRDF. Mean over the")
 print("   ensemble of tiles; se_tiles = between-surface standard error (at grazing incidence a few")
 print("   lit facets dominate each bin: one tile differs from the next by far more than its ray error)")
@@ -224,7 +224,7 @@ def bin_row(j, side, theta):
 
 
 print()
-print("Reciprocity of the measured tables (000 eq. 4c): f(o <- i) / eta_o^2 = f(i <- o) / eta_i^2;")
+print("Reciprocity of the measured tables [GeomBSDF24, eq. 4c]: f(o <- i) / eta_o^2 = f(i <- o) / eta_i^2;")
 print("light from below = light from above on the flipped tile (heights negated) with the inverse index")
 print(f"{'path':>44} {'f(o<-i)':>10} {'+-':>8} {'f(i<-o)':>10} {'+-':>8} {'eta_o^2/eta_i^2':>15} {'z':>7}")
 checks = [

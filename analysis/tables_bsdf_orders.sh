@@ -35,7 +35,7 @@ surface() {  # surface FILE generate-args...
   [ -s "$f" ] || "$M" -q generate "$@" -o "$f"
 }
 
-# 1. Flat dielectric: Fresnel exactly (000 eq. 7d, 10b).
+# 1. Flat dielectric: Fresnel exactly [GeomBSDF24, eq. 7d, 10b].
 surface "$out/flat.exr" flat --resolution 16
 for eta in 1.5 0.6666666666666666; do
   for th in 0 30 60 80; do
@@ -58,7 +58,7 @@ for a in 0.5 1.0; do
   done
 done
 
-# 3. 001 Table 4: in-plane lobes at grazing incidence theta = 1.5 rad, on the same ensemble of
+# 3. [Heitz14, Table 4]: in-plane lobes at grazing incidence theta = 1.5 rad, on the same ensemble of
 #    tiles (at grazing incidence few facets are lit: one tile's lobe differs from the next by
 #    far more than the ray-count error, so the comparison uses the between-surface error).
 th15=$(/usr/bin/python3 -c "import math; print(repr(math.degrees(1.5)))")

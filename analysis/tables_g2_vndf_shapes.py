@@ -4,7 +4,7 @@
 
   square_wave OUT.obj [period top height periods]   periodic square wave, ridges along y
   ellipsoid   OUT.obj AX AY [n_theta n_phi]          upper half-ellipsoid, semi-axes (1/AX, 1/AY, 1):
-                                                      GGX(AX, AY) normals (002), finite object
+                                                      GGX(AX, AY) normals [TSBlog24], finite object
 """
 import json
 import math

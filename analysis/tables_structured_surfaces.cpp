@@ -28,7 +28,7 @@ G1Options opts(double rays, std::uint64_t seed = 1) {
   return o;
 }
 
-double vgroove_g1(double to, double tm) {  // 001 eq. (24) in the cross-section plane
+double vgroove_g1(double to, double tm) {  // [Heitz14, eq. 24] in the cross-section plane
   if (std::cos(to - tm) <= 0) return 0.0;
   return std::min(1.0, 2 * std::cos(tm) * std::cos(to) / std::cos(to - tm));
 }
@@ -76,7 +76,7 @@ void exact_cases() {
       std::printf("| %.0f | %.6f | %.2e | %.6f | %+.2f |\n", th, e.mean, e.stderr_, ex, z_of(e.mean, ex, e.stderr_));
     }
   }
-  heading("1b. V-groove (theta_m = 45 deg): G1 of the facet facing the viewer, cross-section plane, vs 001 eq. (24)");
+  heading("1b. V-groove (theta_m = 45 deg): G1 of the facet facing the viewer, cross-section plane, vs [Heitz14, eq. 24]");
   {
     VGrooveParams p;
     p.facet_angle_deg = 45;
@@ -193,7 +193,7 @@ void vcavity_vs_heightfield() {
   for (double t : thetas) views.push_back(direction_from_angles(rad(t), rad(10)));
   std::vector<G1Result> ens = measure_vcavity_g1(vc, views, opts(2e6));
   std::printf("Per normal bin (18 x 8 over the sphere) the measured G1(v, m) (area sampling) is compared "
-              "with the V-cavity model (001 eq. 24) and Smith (chi+(v.m)/(1+Lambda)), both on the "
+              "with the V-cavity model [Heitz14, eq. 24] and Smith (chi+(v.m)/(1+Lambda)), both on the "
               "surface's own facets. mad = sum_b w_b |G1_b - model_b|, w_b = front-facing projected "
               "area fraction; noise = the mad expected from the standard errors alone; chi^2/dof uses "
               "the binomial errors. Averaged G1 = visible / front-facing projected area.\n\n");
@@ -232,7 +232,7 @@ void vcavity_vs_heightfield() {
 }
 
 void parallelepipeds_and_undersurface() {
-  heading("4a. Parallelepiped: downward-facing facets and 000 eq. 1b / 1c / 2b");
+  heading("4a. Parallelepiped: downward-facing facets and [GeomBSDF24, eq. 1b / 1c / 2b]");
   std::printf("| map | area fraction with n.m < 0 | eq. 1b rel. error | eq. 1c rel. error | eq. 2b: visible ratio at theta = 0 | expected |\n"
               "|---|---|---|---|---|---|\n");
   struct Case {
@@ -277,7 +277,7 @@ void parallelepipeds_and_undersurface() {
                   e.stderr_, ea.mean, ea.stderr_);
     }
   }
-  heading("4b. Undersurface (theta > 90): explicit measurement vs the approximations of 000 'Inherent Assumptions'");
+  heading("4b. Undersurface (theta > 90): explicit measurement vs the approximations of [GeomBSDF24, 'Inherent Assumptions']");
   std::printf("Averaged G1, and G1 of the horizontal faces (normal -n on the undersurface, n for the "
               "approximations):\n\n"
               "| surface | theta | G1 undersurface (explicit) | reverse v | reflect v | exact | horizontal: explicit | reverse v | reflect v | exact |\n"

@@ -162,7 +162,7 @@ struct ClassStats {
 
 // After the k-th reflection (k = 1, 2, 3, 4+) of any path: how many rays leave upward, how many
 // of those meet the surface again, and how many Smith predicts for the same height and direction
-// (001 eq. 29-30 with Gaussian heights: G1(w, h) = C1(h)^Lambda(w), C1 the height CDF).
+// ([Heitz14, eq. 29-30] with Gaussian heights: G1(w, h) = C1(h)^Lambda(w), C1 the height CDF).
 struct Continuation {
   std::uint64_t up = 0, up_hit = 0, down = 0;
   double smith_up_hit = 0;

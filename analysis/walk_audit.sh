@@ -1,6 +1,6 @@
 #!/bin/sh
-# Audit of the mirror walk's orders >= 4 on converged Beckmann alpha = 1 tiles (README,
-# "Converged surfaces"): the library's tracer against an independent double-precision tracer on
+# Audit of the mirror walk's orders >= 4 on converged Beckmann alpha = 1 tiles
+# (docs/theory/discretization.md): the library's tracer against an independent double-precision tracer on
 # the same triangles and origins, and where the paths of order >= 4 go (segment lengths, facet
 # adjacency, edge distances, hit heights and curvature, continuation against Smith's masking).
 # Writes analysis/walk_audit_output.md. About 20 CPU-s per grid level at the defaults (nice 10).

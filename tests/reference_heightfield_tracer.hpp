@@ -116,7 +116,7 @@ class ReferenceHeightfieldTracer {
     bool lost = false;  // ended below the surface, on a back face, or past max_events
     std::vector<std::size_t> facets;
   };
-  // A mirror random walk (000 eq. 13a at every hit) from o along d.
+  // A mirror random walk ([GeomBSDF24, eq. 13a] at every hit) from o along d.
   Walk mirror_walk(Vec3 o, Vec3 d, int max_events) const {
     Walk w;
     long skip = -1;

@@ -1,5 +1,5 @@
 // Readers of the RGL tensor (.bsdf) and MERL (.binary) formats written from the format
-// descriptions (DESIGN.md "Outputs"; Dupuy and Jakob 2018), not from microsim's writers: they
+// descriptions (docs/theory/exports.md; [Dupuy18]), not from microsim's writers: they
 // parse the bytes, rebuild the bilinear interpolants and warps, and evaluate, sample and give
 // the density the way a renderer does.
 #pragma once

@@ -1,7 +1,7 @@
 // Tests of the BSDF random-walk estimator (measure/bsdf_measure.hpp) and of the tracer's
 // back-side rays it relies on: exact cases (flat plane: Fresnel; V-groove: orders by geometry),
 // conservation (no path lost, R + T = 1), the equal-area map and in-plane bins, thread-count
-// independence, and reciprocity of measured tables (000 eq. 4c, with eta^2 for transmission).
+// independence, and reciprocity of measured tables ([GeomBSDF24, eq. 4c], with eta^2 for transmission).
 #include <gtest/gtest.h>
 
 #include "microsim/validate/validate.hpp"
@@ -124,7 +124,7 @@ TEST(InPlaneBins, GeometryAndExactCosIntegral) {
 }
 
 TEST(BsdfMeasure, FlatDielectricIsFresnel) {
-  // 000 eq. 7d / 10b: a flat interface reflects F and transmits 1 - F, all in order 1.
+  // [GeomBSDF24, eq. 7d / 10b]: a flat interface reflects F and transmits 1 - F, all in order 1.
   Microsurface s = flat_heightfield(16);
   Tracer tracer(s);
   std::vector<double> zs;
@@ -145,7 +145,7 @@ TEST(BsdfMeasure, FlatDielectricIsFresnel) {
       zs.push_back((R.mean - F) / R.stderr_);
       sum_rf += R.mean * F / (R.stderr_ * R.stderr_);
       sum_ff += F * F / (R.stderr_ * R.stderr_);
-      // The transmitted rays leave in the refracted direction (000 eq. 15a), reflected specularly.
+      // The transmitted rays leave in the refracted direction [GeomBSDF24, eq. 15a], reflected specularly.
       Vec3 t;
       ASSERT_TRUE(mm::refract(r.wi, Vec3::UnitZ(), 1.0 / eta, &t));
       const int bt = r.plane.bin_of(t), br = r.plane.bin_of(Vec3(-r.wi.x(), -r.wi.y(), r.wi.z()));
@@ -384,7 +384,7 @@ TEST(BsdfMeasure, ReplicatesRunTogetherSumAsOneAfterTheOther) {
 }
 
 TEST(BsdfMeasure, MeasuredTablesAreReciprocal) {
-  // 000 eq. 4c on the explicit surface. Reflection: f(b <- a) = f(a <- b) with both angles at
+  // [GeomBSDF24, eq. 4c] on the explicit surface. Reflection: f(b <- a) = f(a <- b) with both angles at
   // in-plane bin centers. Transmission: light from below is light from above on the surface
   // seen from below (heights negated) with the inverse index; f_t(o <- i) / eta_o^2 =
   // f_t(i <- o) / eta_i^2.
@@ -436,8 +436,8 @@ TEST(BsdfMeasure, MeasuredTablesAreReciprocal) {
 
 TEST(BsdfMeasure, MirrorBoxAlbedoIsItsVisibleAreaRatio) {
   // A convex mirror object reflects every ray that hits it once; per unit of the flux on its
-  // macrosurface (000 eq. 4a with the base area A) the total albedo is its visible area ratio,
-  // 1 + (H/W) tan(theta) seen across a face (000 "Inherent Assumptions", Fig. 5).
+  // macrosurface ([GeomBSDF24, eq. 4a] with the base area A) the total albedo is its visible area ratio,
+  // 1 + (H/W) tan(theta) seen across a face [GeomBSDF24, "Inherent Assumptions", Fig. 5].
   BoxParams p;
   p.height = 0.5;
   Microsurface s = generate_box(p);
@@ -577,7 +577,7 @@ TEST(BsdfMeasure, VCavityInPlaneLobesEqualTheClosedFormOverItsGrooves) {
   // The closed form binned over the ensemble's own grooves is the exact expectation of the traced
   // in-plane lobe (every groove gets the same rays): z per bin and order with the traced error.
   // The nominal V-cavity model's order-1 lobe (grooves drawn from D, Monte Carlo) is, by an
-  // independent route, the V-cavity single-scattering BRDF (001 eq. (18) with the V-cavity G2 of
+  // independent route, the V-cavity single-scattering BRDF ([Heitz14, eq. 18] with the V-cavity G2 of
   // sec. 6: the lit part of a facet whose reflection escapes is the part seen from both sides).
   VCavityParams vp;
   vp.grooves = 256;

@@ -93,7 +93,7 @@ TEST(Fresnel, ReflectedPlusTransmittedIsOne) {
 }
 
 TEST(Fresnel, MatchesClosedFormsOfEq8b) {
-  // 000 eq. 8b/8c (labels as in the physics convention, see fresnel.hpp).
+  // [GeomBSDF24, eq. 8b/8c] (labels as in the physics convention, see fresnel.hpp).
   for (double n : {1.5, 1.0 / 1.33})
     for (double tdeg = 1.0; tdeg < 89.5; tdeg += 2.0) {
       const double tv = rad(tdeg);
@@ -114,7 +114,7 @@ TEST(Fresnel, MatchesClosedFormsOfEq8b) {
   const double tb = std::atan(n);
   EXPECT_NEAR(mm::fresnel_dielectric(std::cos(tb), n).Rp, 0.0, 1e-15);
   EXPECT_GT(mm::fresnel_dielectric(std::cos(tb), n).Rs, 0.1);
-  // Symmetry of the two sides (000 after eq. 8c): F(theta_v, n) = F(theta_t, 1/n).
+  // Symmetry of the two sides [GeomBSDF24, after eq. 8c]: F(theta_v, n) = F(theta_t, 1/n).
   for (double tdeg = 0; tdeg < 89; tdeg += 7) {
     const double ci = std::cos(rad(tdeg));
     const double ct = mm::fresnel_cos_transmitted(ci, n);
@@ -174,7 +174,7 @@ std::vector<std::pair<Vec3, Vec3>> view_normal_pairs() {
 TEST(MicrofacetVectors, ReflectionAndItsInverse) {
   for (const auto& [vb, m] : view_normal_pairs()) {
     const Vec3 v = vb;  // a lambda cannot capture a structured binding in C++17
-    const Vec3 r = mm::reflect(v, m);  // 000 eq. 13a
+    const Vec3 r = mm::reflect(v, m);  // [GeomBSDF24, eq. 13a]
     EXPECT_NEAR(r.norm(), 1.0, 1e-14);
     EXPECT_NEAR(r.dot(m), v.dot(m), 1e-14);
     EXPECT_LT((mm::half_vector_reflection(v, r) - m).norm(), 1e-12);  // 13b inverts 13a
@@ -192,7 +192,7 @@ TEST(MicrofacetVectors, RefractionAndItsInverse) {
       }
       EXPECT_NEAR(t.norm(), 1.0, 1e-13);
       EXPECT_LT(t.dot(m), 0.0);                                     // crosses the facet
-      EXPECT_NEAR(t.cross(m).norm(), e * v.cross(m).norm(), 1e-13);  // Snell (000 eq. 5a)
+      EXPECT_NEAR(t.cross(m).norm(), e * v.cross(m).norm(), 1e-13);  // Snell [GeomBSDF24, eq. 5a]
       EXPECT_NEAR(v.cross(m).normalized().dot(t.cross(m).normalized()), -1.0, 1e-9);  // coplanar, opposite
       EXPECT_LT((mm::half_vector_refraction(v, t, e) - m).norm(), 1e-11);  // 15b inverts 15a
     }
@@ -215,7 +215,7 @@ TEST(Jacobians, ReflectionMatchesFiniteDifferences) {
     const Vec3 v = vb;  // a lambda cannot capture a structured binding in C++17
     const Vec3 r = mm::reflect(v, m);
     const double numeric = numeric_jacobian([&](const Vec3& d) { return mm::half_vector_reflection(v, d); }, r);
-    const double exact = mm::jacobian_reflection(r, m);  // 000 eq. 19b
+    const double exact = mm::jacobian_reflection(r, m);  // [GeomBSDF24, eq. 19b]
     EXPECT_NEAR(numeric / exact, 1.0, 1e-6);
     EXPECT_NEAR(exact, r.dot(m) / (r + v).squaredNorm(), 1e-12 * exact);  // first form of 19b
   }
@@ -230,7 +230,7 @@ TEST(Jacobians, RefractionMatchesFiniteDifferences) {
       if (e * v.cross(m).norm() > 0.98) continue;  // too close to the critical angle for differences
       const double numeric =
           numeric_jacobian([&](const Vec3& d) { return mm::half_vector_refraction(v, d, e); }, t);
-      const double exact = mm::jacobian_refraction(v, t, m, e);  // 000 eq. 20b
+      const double exact = mm::jacobian_refraction(v, t, m, e);  // [GeomBSDF24, eq. 20b]
       EXPECT_NEAR(numeric / exact, 1.0, 1e-5);
       // The other two forms of 20b.
       const double ct = std::abs(t.dot(m)), cv = v.dot(m);
@@ -241,9 +241,9 @@ TEST(Jacobians, RefractionMatchesFiniteDifferences) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Microfacet sampling: visible normals (001 eq. 13) mapped to reflected or refracted directions
-// have the density D_v(h) |J(h, o)| (000 eq. 19b / 20b) at the half vector h of the direction
-// (000 eq. 13b / 15b), checked by the chi-square harness on the sphere; refused samples (total
+// Microfacet sampling: visible normals [Heitz14, eq. 13] mapped to reflected or refracted directions
+// have the density D_v(h) |J(h, o)| [GeomBSDF24, eq. 19b / 20b] at the half vector h of the direction
+// [GeomBSDF24, eq. 13b / 15b], checked by the chi-square harness on the sphere; refused samples (total
 // internal reflection) against the mass the density leaves out. Power: the density without
 // its Jacobian (reflection), or with a 5% wrong index ratio (refraction), renormalized.
 // ---------------------------------------------------------------------------------------------
@@ -307,7 +307,7 @@ INSTANTIATE_TEST_SUITE_P(
 // ---------------------------------------------------------------------------------------------
 
 TEST(MicrofacetBsdf, ReciprocityWithEtaSquared) {
-  // 000 eq. 4c: f(o, i) / f(i, o) = eta_o^2 / eta_i^2 (1 for reflection).
+  // [GeomBSDF24, eq. 4c]: f(o, i) / f(i, o) = eta_o^2 / eta_i^2 (1 for reflection).
   CounterRng rng(3, 2, 0);
   int transmissions = 0, reflections = 0;
   for (auto kind : {mm::Distribution::Beckmann, mm::Distribution::GGX})
@@ -335,7 +335,7 @@ TEST(MicrofacetBsdf, ReciprocityWithEtaSquared) {
 }
 
 TEST(MicrofacetBsdf, WeakWhiteFurnaceEq19) {
-  // 001 eq. (19): int G1(o, m) D(m) / (4 |o.n|) d omega_i = 1 (F = 1, masking only, i over the
+  // [Heitz14, eq. 19]: int G1(o, m) D(m) / (4 |o.n|) d omega_i = 1 (F = 1, masking only, i over the
   // whole sphere), here through MicrofacetBsdf::eval: int f(o, i) |i.n| d omega_i = 1.
   // (GGX only up to alpha = 0.6: its D does not vanish at the horizon of m, so at alpha = 1 the
   // integrand jumps across the curve m.z = 0 and this quadrature converges only to ~1e-3.)
@@ -351,7 +351,7 @@ TEST(MicrofacetBsdf, WeakWhiteFurnaceEq19) {
                                                  spec, alpha);
         EXPECT_NEAR(I, 1.0, 2e-4) << mm::to_string(kind) << " alpha=" << alpha << " theta=" << tdeg;
       }
-  // With shadowing (height-correlated G2) the single-scattering BRDF loses energy (001 Table 3c).
+  // With shadowing (height-correlated G2) the single-scattering BRDF loses energy [Heitz14, Table 3c].
   const MicrofacetBsdf hc{Ndf::beckmann(0.6, 0.6), Material::mirror(), Masking::SmithHeightCorrelated};
   const Vec3 o = dir(rad(60), 0.0);
   const double I = integrate_sphere_around([&](const Vec3& i) { return hc.eval(o, i) * std::abs(i.z()); },
@@ -377,7 +377,7 @@ TEST(MicrofacetBsdf, SmoothLimitGivesEq7dAndEq10b) {
             [&](const Vec3& l) { return l.z() * v.z() > 0 ? f.eval(v, l) * std::abs(l.z()) : 0.0; }, spec, alpha);
         EXPECT_NEAR(R, F, 2e-3) << "eta=" << eta << " above=" << v_above << " theta=" << tdeg;
         if (F >= 1.0) continue;
-        // refracted direction of v at the macro normal (000 eq. 15a with m = n)
+        // refracted direction of v at the macro normal ([GeomBSDF24, eq. 15a] with m = n)
         Vec3 t;
         ASSERT_TRUE(mm::refract(v, v_above ? Vec3::UnitZ() : Vec3(-Vec3::UnitZ()), eta_v / eta_t, &t));
         const double T = integrate_sphere_around(
@@ -599,7 +599,7 @@ INSTANTIATE_TEST_SUITE_P(
     [](const ::testing::TestParamInfo<WalkDirectionCase>& i) { return std::string(i.param.name); });
 
 TEST(SmithWalk, OrderOneRejectsTheWrongShadowing) {
-  // Power: the separable G2 (001 eq. 20) is far outside the walk's error at grazing incidence.
+  // Power: the separable G2 [Heitz14, eq. 20] is far outside the walk's error at grazing incidence.
   const Ndf ndf = Ndf::beckmann(1.0, 1.0);
   const Vec3 wi = dir(rad(70), 0.0);
   const auto a = mm::smith_walk_albedos(mm::SmithRandomWalk(ndf, Material::mirror()), wi, 100000, 4, rng_factory(5, 9));
@@ -644,7 +644,7 @@ std::pair<double, double> walk_f_in_cone(const mm::SmithRandomWalk& w, const Vec
 }
 
 TEST(SmithWalk, MultipleScatteringIsReciprocal) {
-  // 000 eq. 4c for the walk's orders >= 2 (mirror) and all orders of the transmission (light
+  // [GeomBSDF24, eq. 4c] for the walk's orders >= 2 (mirror) and all orders of the transmission (light
   // from below = the same Smith surface mirrored with the inverse index): an independent check
   // of the height and direction sampling beyond order 1.
   const Ndf ndf = Ndf::beckmann(1.0, 1.0);
@@ -726,7 +726,7 @@ TEST(SmithWalk, EnergyConservation) {
   const Vec3 wi = dir(rad(60), 0.0);
   for (double alpha : {0.3, 1.0}) {
     const Ndf ndf = Ndf::beckmann(alpha, alpha);
-    // Mirror: every walk leaves upward with weight 1 (white furnace, 001 sec. 4.3).
+    // Mirror: every walk leaves upward with weight 1 (white furnace, [Heitz14, Sec. 4.3]).
     const auto m = mm::smith_walk_albedos(mm::SmithRandomWalk(ndf, Material::mirror()), wi, n, 4, rng_factory(1, 1));
     EXPECT_EQ(m.lost, 0u);
     EXPECT_DOUBLE_EQ(m.mean(0, 4), 1.0);

@@ -1,4 +1,4 @@
-// Calibration of the reported standard errors (DESIGN.md: "over many seeds the spread of the
+// Calibration of the reported standard errors (docs/theory/error-bars.md: "over many seeds the spread of the
 // estimate equals the reported error", checked two-sided). For every estimator: one fixed
 // surface, 100 fixed ray seeds (the seed changes only the ray stream, so what is calibrated is
 // the ray-count error of one surface, not the spread between surfaces). The sample standard

@@ -194,7 +194,7 @@ TEST_F(Cli, EveryStructuredKindGeneratesAndMeasures) {
     EXPECT_TRUE(j["rows"][1].contains(k)) << k;
   {
     // A convex box seen across a face: visible area ratio 1 + (H/B) tan(theta) = 1 + tan(30)/2
-    // exactly (000 Fig. 5), within its own standard error; a 2% wrong value is outside it.
+    // exactly [GeomBSDF24, Fig. 5], within its own standard error; a 2% wrong value is outside it.
     const double ratio = j["rows"][0]["visible_area_ratio"].get<double>();
     const double se = j["rows"][0]["visible_area_ratio_stderr"].get<double>();
     const double exact = 1 + 0.5 * std::tan(std::acos(-1.0) / 6), zt = microsim::sidak_z(0.01, 1);
@@ -237,7 +237,7 @@ TEST_F(Cli, BadMeshesAndStructuredParametersAreRefused) {
 }
 
 // A V-cavity ensemble is measured groove by groove, each groove traced on its own as an infinite
-// periodic V-groove (001 Sec. 6.1), where the V-cavity model (001 eq. 24-25, and eq. 13 with it
+// periodic V-groove [Heitz14, Sec. 6.1], where the V-cavity model ([Heitz14, eq. 24-25], and eq. 13 with it
 // for the VNDF) is exact: measure g2 and measure vndf agree with it within their ray-count
 // errors, and give the library's groove-by-groove estimates. Power: the stored strips traced
 // together (grooves masking each other through the strips' open ends), at the same seed and

@@ -68,7 +68,7 @@ TEST(FacetTable, SampleRegionFacetsMatchTheTriangles) {
 }
 
 TEST(FacetTable, HeightfieldTableKeepsTheExactFacetIdentities) {
-  // 000 eq. 1b/1c from the derived normals and areas: sum A_f m_f = n A, sum A_f (n.m_f) = A,
+  // [GeomBSDF24, eq. 1b/1c] from the derived normals and areas: sum A_f m_f = n A, sum A_f (n.m_f) = A,
   // to rounding (a wrong cross product, e.g. dx and dy swapped on a non-square tile, is far off).
   const Microsurface s = vgroove_heightfield(8, 16, 0.6, 8);
   const FacetTable t = build_facet_table(s, DirectionBinning(18, 8, kPi));

@@ -1,5 +1,5 @@
-// Masking-shadowing G2 (000 eq. 16, 001 sec. 5): exact square-wave values, the properties of
-// 000 eq. 16b on explicit surfaces, the Smith forms, and the measure g2 command.
+// Masking-shadowing G2 ([GeomBSDF24, eq. 16], [Heitz14, Sec. 5]): exact square-wave values, the properties of
+// [GeomBSDF24, eq. 16b] on explicit surfaces, the Smith forms, and the measure g2 command.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
@@ -46,7 +46,7 @@ Microsurface square_wave_mesh(const SquareWave& w) {
   return generate_square_wave(p);
 }
 
-// Exact visibility on the square wave (000 after eq. 16c), for directions o, i (z > 0); only
+// Exact visibility on the square wave [GeomBSDF24, after eq. 16c], for directions o, i (z > 0); only
 // their x components matter. For direction d the shift s_d = h d_x / d_z is the horizontal run
 // of a ray rising over the wall height.
 struct SquareWaveExact {
@@ -105,7 +105,7 @@ TEST(G2Forms, LambdaFormsAgreeWithTheNdfForms) {
 }
 
 TEST(G2Forms, HotspotAndOppositeLimits) {
-  // o = i (phi = 0): van Ginneken lambda = 0, so eq. 22 and 23 reduce to G1 (000 eq. 16b).
+  // o = i (phi = 0): van Ginneken lambda = 0, so eq. 22 and 23 reduce to G1 [GeomBSDF24, eq. 16b].
   const double lo = 0.37;
   const models::G2Forms f = models::g2_forms_from_lambda(lo, lo, 0.0);
   EXPECT_DOUBLE_EQ(f.direction_correlated, 1 / (1 + lo));
@@ -129,7 +129,7 @@ TEST(G2Measure, FlatPlaneIsNeverOccluded) {
 }
 
 TEST(G2Measure, SquareWaveMatchesExactGeometryPerNormal) {
-  // 000 after eq. 16c: for the normal-n area at shallow angles G2 -> 1/2 while G1 G1 -> 1/4.
+  // [GeomBSDF24, after eq. 16c]: for the normal-n area at shallow angles G2 -> 1/2 while G1 G1 -> 1/4.
   // Every bin (n area, +x wall, -x wall) against its exact geometric value.
   SquareWave w;
   Microsurface s = square_wave_mesh(w);
@@ -163,7 +163,7 @@ TEST(G2Measure, SquareWaveMatchesExactGeometryPerNormal) {
     if (c.se == 0) EXPECT_NEAR(c.est, c.exact, 1e-12) << c.what;
     else EXPECT_LT(std::abs(c.est - c.exact) / c.se, zmax) << c.what << " est " << c.est << " exact " << c.exact;
   }
-  // The 000 example itself, with its numbers: shallow angles on both sides.
+  // The example of [GeomBSDF24, after eq. 16c] itself, with its numbers: shallow angles on both sides.
   const Vec3 o = dir(80, 0), i = dir(80, 180);
   G2Result r = measure_g2(tracer, o, i, opts(400000, 4));
   for (int b : sampled_bins(r))
@@ -189,7 +189,7 @@ TEST(G2Measure, SquareWaveTestHasPower) {
 }
 
 TEST(G2Properties, SymmetryHoldsSampleForSample) {
-  // 000 eq. 16b, directional symmetry: the points depend on the unordered pair {o, i}.
+  // [GeomBSDF24, eq. 16b], directional symmetry: the points depend on the unordered pair {o, i}.
   Microsurface s = beckmann_tile(128, 5);
   Tracer tracer(s);
   const Vec3 o = dir(70, 10), i = dir(55, 160);
@@ -222,7 +222,7 @@ TEST(G2Properties, SymmetryHoldsBetweenIndependentRuns) {
 }
 
 TEST(G2Properties, HeightCorrelationOnAHeightfieldIsExact) {
-  // 000 eq. 16b: G2(v, m, n) = G1(v, m) on heightfields: nothing above a point of a heightfield
+  // [GeomBSDF24, eq. 16b]: G2(v, m, n) = G1(v, m) on heightfields: nothing above a point of a heightfield
   // blocks the vertical ray, so every point visible from v is visible from both.
   Microsurface s = beckmann_tile(128, 8);
   Tracer tracer(s);
@@ -236,7 +236,7 @@ TEST(G2Properties, HeightCorrelationOnAHeightfieldIsExact) {
 }
 
 TEST(G2Properties, CoincidentDirectionsGiveTheIndependentlyMeasuredG1) {
-  // 000 eq. 16, G2(v, m, v) = G1(v, m), bin by bin and on average, against independent G1 runs
+  // [GeomBSDF24, eq. 16], G2(v, m, v) = G1(v, m), bin by bin and on average, against independent G1 runs
   // of measure_g1 on the same tile: its ray-casting estimator (first hits along -v, a different
   // route) per bin and its area-sampling estimator (other seed) on average. Tolerances from both
   // runs' replicate errors; power: G2(v, m, l) with l != v is not G1(v, m).
@@ -282,9 +282,9 @@ TEST(G2Properties, CoincidentDirectionsGiveTheIndependentlyMeasuredG1) {
 }
 
 TEST(G2Measure, WallsPressedAgainstANeighbourAreHiddenFromBothDirections) {
-  // Touching walls of tiled boxes (000 Fig. 6) and of leaning parallelepipeds (000 Fig. 3)
+  // Touching walls of tiled boxes [GeomBSDF24, Fig. 6] and of leaning parallelepipeds [GeomBSDF24, Fig. 3]
   // coincide with an opposite-facing twin: only the last column's walls facing +x are seen, so
-  // G2(o, m, i) = 1/N for that bin at o = i (= G1(v, m), 000 eq. 16) and for o != i on the
+  // G2(o, m, i) = 1/N for that bin at o = i (= G1(v, m), [GeomBSDF24, eq. 16]) and for o != i on the
   // same side. Tolerance from the replicate error; power: 10 % off 1/N, and the value 1 that
   // occlusion rays leaving a buried wall report, are rejected.
   BoxParams bp;
@@ -315,7 +315,7 @@ TEST(G2Measure, WallsPressedAgainstANeighbourAreHiddenFromBothDirections) {
 }
 
 TEST(G2Measure, BeckmannTileHeightCorrelatedBeatsSeparableAtOppositeAzimuths) {
-  // 001 sec. 5: with the directions on opposite sides the two visibilities of a point correlate
+  // [Heitz14, Sec. 5]: with the directions on opposite sides the two visibilities of a point correlate
   // through its height (eq. 21); the separable form (eq. 20) ignores it. The forms are built in
   // each normal bin from the bin's measured G1(o, m), G1(i, m), so that only the correlation
   // assumption is tested (Smith's G1 itself depends on m on a real surface, which would confound

@@ -1,7 +1,7 @@
 // Structured and non-heightfield microsurfaces: exact geometric cases measured by the
 // estimators (box, tiled boxes, V-groove, square wave, ellipsoid, undersurface, parallelepiped),
 // the explicit V-cavity ensemble against its model, mesh validation, and the generators'
-// identities (000 eq. 1b/1c). Every statistical test has a check that it can fail.
+// identities [GeomBSDF24, eq. 1b/1c]. Every statistical test has a check that it can fail.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
@@ -43,7 +43,7 @@ void write_file(const std::string& path, const std::string& text) {
   f << text;
 }
 
-// 001 eq. (24) in the cross-section plane: facet at signed angle tm, view at signed angle to.
+// [Heitz14, eq. 24] in the cross-section plane: facet at signed angle tm, view at signed angle to.
 double vgroove_g1(double to, double tm) {
   if (std::cos(to - tm) <= 0) return 0.0;
   return std::min(1.0, 2 * std::cos(tm) * std::cos(to) / std::cos(to - tm));
@@ -88,13 +88,13 @@ TEST(Generators, EveryKindSatisfiesEq1bAnd1cAndPassesMeshValidation) {
       {"vcavity", generate_vcavity(vc)}};
   for (const auto& [name, s] : all) {
     FacetSums f = facet_sums(s);
-    // 000 eq. 1b: sum_f A_f m_f = n A;  eq. 1c: sum_f (n.m_f) A_f = A.
+    // [GeomBSDF24, eq. 1b]: sum_f A_f m_f = n A;  eq. 1c: sum_f (n.m_f) A_f = A.
     EXPECT_LT((f.sum_area_normal / s.macro().area - Vec3::UnitZ()).norm(), 1e-9) << name;
     EXPECT_NEAR(f.sum_area_cos / s.macro().area, 1.0, 1e-9) << name;
     EXPECT_NO_THROW(check_mesh(s, name)) << name;
   }
   // The box's macro area is its base; the tiled boxes have the box's NDF (same facet areas per
-  // normal, 000 Fig. 6) and the ellipsoid's rim polygon tends to pi / (ax ay).
+  // normal, [GeomBSDF24, Fig. 6]) and the ellipsoid's rim polygon tends to pi / (ax ay).
   EXPECT_DOUBLE_EQ(all[0].second.macro().area, 1.0);
   EXPECT_NEAR(facet_sums(all[1].second).total_area, facet_sums(all[0].second).total_area, 1e-6);
   EXPECT_NEAR(all[7].second.macro().area, kPi / (0.5 * 0.3), 0.01 * kPi / 0.15);
@@ -111,7 +111,7 @@ TEST(Generators, ParallelepipedHasDownwardFacetsAndEq1bToRounding) {
   double down = 0;
   for (std::size_t k = 0; k < s.num_facets(); ++k)
     if (s.facet(k).normal().z() < -1e-3) down += s.facet(k).area();
-  EXPECT_GT(down, 0.1);  // n.m < 0 present (000 Fig. 3)
+  EXPECT_GT(down, 0.1);  // n.m < 0 present [GeomBSDF24, Fig. 3]
   FacetSums f = facet_sums(s);
   EXPECT_LT((f.sum_area_normal / s.macro().area - Vec3::UnitZ()).norm(), 1e-9);
   // The macro area is the mapped base: |det of the xy block| W D (up to float vertices).
@@ -149,7 +149,7 @@ TEST(Generators, BadParametersAreUsageErrors) {
 // ---------------------------------------------------------------------------------------------
 
 TEST(ExactCases, BoxVisibleAreaRatioAcrossAFace) {
-  // 000 "Inherent Assumptions", Fig. 5: seen across a face (phi = 0), the visible projected
+  // [GeomBSDF24, "Inherent Assumptions", Fig. 5]: seen across a face (phi = 0), the visible projected
   // area is W D cos(theta) + H D sin(theta): ratio 1 + (H/W) tan(theta).
   BoxParams p;
   p.width = 1.0;
@@ -171,7 +171,7 @@ TEST(ExactCases, BoxVisibleAreaRatioAcrossAFace) {
 }
 
 TEST(ExactCases, TiledBoxesVisibleAreaRatioTendsToOne) {
-  // 000 Fig. 6: N x N copies scaled by 1/N: ratio 1 + (H/(N W)) tan(theta). Of the walls facing
+  // [GeomBSDF24, Fig. 6]: N x N copies scaled by 1/N: ratio 1 + (H/(N W)) tan(theta). Of the walls facing
   // v (normal +x) only the last column's is visible: G1(v, +x) = 1/N, by both estimators (the
   // interior walls are pressed against their neighbours: buried twins).
   for (int n : {1, 4}) {
@@ -190,7 +190,7 @@ TEST(ExactCases, TiledBoxesVisibleAreaRatioTendsToOne) {
 }
 
 TEST(ExactCases, VGroovePerFacetG1IsEq24) {
-  // 001 eq. (24) is exact on periodic V-grooves, per facet, in the cross-section plane.
+  // [Heitz14, eq. 24] is exact on periodic V-grooves, per facet, in the cross-section plane.
   VGrooveParams p;
   p.facet_angle_deg = 45;
   Microsurface s = generate_vgroove(p);
@@ -245,7 +245,7 @@ TEST(ExactCases, SquareWaveG1OfTheNormalNArea) {
 }
 
 TEST(ExactCases, EllipsoidDIsGgxByChiSquare) {
-  // 002: the upper half ellipsoid's normals are GGX(ax, ay). Vertical rays sample its normals
+  // [TSBlog24]: the upper half ellipsoid's normals are GGX(ax, ay). Vertical rays sample its normals
   // with density (n.m) D(m) (a heightfield over its base: G1(n, m) = 1), so the first-hit
   // histogram is multinomial with cell probabilities (A/W) int_B (n.m) D(m) dm, and a miss
   // probability 1 - A/W. Pearson chi^2 against GGX; the same counts refuse a 3% wrong alpha.
@@ -286,7 +286,7 @@ TEST(ExactCases, EllipsoidNormalsAreGgxRingByRingAndBinnedDQuantizedByRings) {
   // The tessellation maps the u-rings theta_u = (pi/2) k / R of the unit hemisphere by
   // diag(1/a, 1/a, 1); on the smooth ellipsoid the normal there has tan(theta_m) = a tan(theta_u),
   // and the GGX mass of normals below theta_m, weighted by (n.m), is the CDF
-  // F = tan^2 / (a^2 + tan^2) = sin^2(theta_u) (002: the projected area of the cap over the base
+  // F = tan^2 / (a^2 + tan^2) = sin^2(theta_u) ([TSBlog24]: the projected area of the cap over the base
   // ellipse's). Every facet of band k has its normal inside [m_k, m_k+1) and the bands' projected
   // areas are those of the rim polygons, so per band sum A_f (n.m_f) / A = F(m_k+1) - F(m_k)
   // exactly, up to the float rounding of the stored vertices. Isotropic: all S facets of a band
@@ -361,7 +361,7 @@ TEST(ExactCases, EllipsoidNormalsAreGgxRingByRingAndBinnedDQuantizedByRings) {
 
 TEST(ExactCases, EllipsoidLambdaIsGgxLambda) {
   // A convex object masks none of its front faces: its visible projected area along v is the
-  // front-facing projected area, (v.n) A (1 + Lambda_GGX(v)) (002 "G1 from projected areas").
+  // front-facing projected area, (v.n) A (1 + Lambda_GGX(v)) [TSBlog24, "G1 from projected areas"].
   EllipsoidParams p;
   p.alpha_x = p.alpha_y = 0.6;
   p.rings = 64;
@@ -384,8 +384,8 @@ TEST(ExactCases, EllipsoidLambdaIsGgxLambda) {
 TEST(ExactCases, BoxUndersurfaceVersusReverseAndReflectApproximations) {
   // From below (theta > 90) the box's undersurface is the inside of a box-shaped cavity: its
   // visible projected area is the opening, W D |cos(theta)|, of a front-facing projected area
-  // W D |cos| + H D sin, so G1 = 1 / (1 + (H/W) tan(pi - theta)); both approximations of 000
-  // "Inherent Assumptions" use the box seen from above, where G1 = 1.
+  // W D |cos| + H D sin, so G1 = 1 / (1 + (H/W) tan(pi - theta)); both approximations of
+  // [GeomBSDF24, "Inherent Assumptions"] use the box seen from above, where G1 = 1.
   BoxParams p;
   p.height = 0.5;
   Microsurface s = generate_box(p);
@@ -464,7 +464,7 @@ TEST(VCavity, EnsembleMatchesTheVCavityModelPerNormalBinNotSmith) {
   }
 }
 
-// The grooves' normals are draws of the projected-area density (n.m) D(m) (001 Sec. 6.1): the
+// The grooves' normals are draws of the projected-area density (n.m) D(m) [Heitz14, Sec. 6.1]: the
 // chi-square harness on lobe-following cells, for both NDFs and an anisotropic roughness; a 5%
 // wrong roughness is refused by the same normals. (The generator stratifies the slope radius,
 // which can only lower chi2: the pass is conservative, the power check is not weakened.)
@@ -487,7 +487,7 @@ TEST(VCavity, GrooveNormalsFollowTheProjectedNdf) {
     ChiSquareTest t(ChiSquareDomain::hemisphere_slopes(std::sqrt(0.3 * 0.6)), normals,
                     [&](const Vec3& m) { return m.z() * nominal.D(m); }, o);
     EXPECT_TRUE(t.run().passed(0.01, 2)) << t.describe();
-    EXPECT_NEAR(t.pdf_integral(), 1.0, 1e-4) << "the projected area of D is 1 (000 eq. 1c)";
+    EXPECT_NEAR(t.pdf_integral(), 1.0, 1e-4) << "the projected area of D is 1 [GeomBSDF24, eq. 1c]";
     const ChiSquareResult w = t.run_against([&](const Vec3& m) { return m.z() * wrong.D(m); });
     EXPECT_LT(w.p_value, 1e-4) << w.summary();
     std::printf("[ info ] %s: %s\n[ info ] alpha x1.05: %s\n", ndf, t.result().summary().c_str(), w.summary().c_str());

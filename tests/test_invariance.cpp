@@ -1,4 +1,4 @@
-// Invariances of masking (001 sec. 3): stretching by diag(sx, sy, 1) (sec. 3.1) ray for ray,
+// Invariances of masking [Heitz14, Sec. 3]: stretching by diag(sx, sy, 1) (sec. 3.1) ray for ray,
 // vertical shearing with offset slopes and the mesonormal's projected area (sec. 3.4), and
 // anisotropic Gaussian tiles against Smith with the projected roughness alpha_o (eq. 11).
 #include <gtest/gtest.h>
@@ -49,7 +49,7 @@ struct RayForRay {
 }  // namespace
 
 TEST(Stretching, VisibilityIsTheSameRayForRay) {
-  // 001 sec. 3.1: stretching the configuration (surface and view) keeps occluded rays occluded
+  // [Heitz14, Sec. 3.1]: stretching the configuration (surface and view) keeps occluded rays occluded
   // and visible rays visible. Occlusion rays from the same surface points (mapped) and first
   // hits of the same parallel rays (mapped) on both surfaces: they agree up to float rounding.
   Microsurface s = gaussian(128, 3, 0.5, 0.5);
@@ -122,7 +122,7 @@ TEST(Stretching, WrongViewMappingIsDetected) {
 }
 
 TEST(Stretching, MaskingStatisticsAndModelsAreInvariant) {
-  // Lambda from the facets, the measured G1 and the nominal Smith G1 (001 eq. 11: alpha scales
+  // Lambda from the facets, the measured G1 and the nominal Smith G1 ([Heitz14, eq. 11]: alpha scales
   // by 1/s with the slopes) are the same for (S, v) and (stretched S, stretched v).
   Microsurface s = gaussian(128, 4, 0.4, 0.4);
   Microsurface s2 = stretch_surface(s, 1.6, 0.7);
@@ -141,8 +141,8 @@ TEST(Stretching, MaskingStatisticsAndModelsAreInvariant) {
   EXPECT_DOUBLE_EQ(s2.description["alpha_y"].get<double>(), 0.4 / 0.7);
 }
 
-TEST(Shearing, OffsetSlopeSmithMatchesTheAngleFormOf001) {
-  // 001 sec. 3.4: a = (cot theta_o - (cos phi_o xbar + sin phi_o ybar)) / alpha_o.
+TEST(Shearing, OffsetSlopeSmithMatchesTheAngleFormOfHeitz14) {
+  // [Heitz14, Sec. 3.4]: a = (cot theta_o - (cos phi_o xbar + sin phi_o ybar)) / alpha_o.
   for (auto ndf : {models::Ndf::beckmann(0.5, 0.5), models::Ndf::ggx(0.3, 0.6)})
     for (auto [t, p, xb, yb] : {std::tuple{60.0, 0.0, 0.2, 0.0}, std::tuple{75.0, 130.0, -0.3, 0.25},
                                 std::tuple{40.0, 250.0, 0.1, 0.4}}) {
@@ -160,7 +160,7 @@ TEST(Shearing, ShearedTileMasksLikeSmithWithOffsetSlopesAndMesonormalArea) {
   // A tile with non-centered slopes: the Gaussian tile sheared by z += kx x + ky y. Its masking
   // measured on the explicit sheared geometry (area sampling by projected area toward v', one
   // occlusion ray each) against Smith with offset slopes and the mesosurface's projected area:
-  // Lambda' = sum_f A'_f max(0, -v'.m'_f) / (A_tile (v'.(-kx, -ky, 1))) (001 sec. 3.4); and ray
+  // Lambda' = sum_f A'_f max(0, -v'.m'_f) / (A_tile (v'.(-kx, -ky, 1))) [Heitz14, Sec. 3.4]; and ray
   // for ray against the unsheared tile seen along the unsheared view.
   const double kx = 0.3, ky = -0.15;
   Microsurface s = gaussian(128, 7, 0.5, 0.5);
@@ -210,8 +210,8 @@ TEST(Shearing, ShearedTileMasksLikeSmithWithOffsetSlopesAndMesonormalArea) {
 }
 
 TEST(Anisotropy, GaussianTilesFollowSmithWithProjectedRoughness) {
-  // 001 eq. 11: an anisotropic tile masks like the isotropic one with alpha_o(phi). Ensemble of
-  // independent tiles, between-surface standard errors (DESIGN.md "Two kinds of error bar").
+  // [Heitz14, eq. 11]: an anisotropic tile masks like the isotropic one with alpha_o(phi). Ensemble of
+  // independent tiles, between-surface standard errors (docs/theory/error-bars.md).
   // The Gaussian generator realizes alpha_x exactly but its y slopes (correlation length
   // l alpha_x / alpha_y, here 4 cells) only in expectation "expected_slope_var_y" of its
   // description; the model uses alpha_y = sqrt(2 expected_slope_var_y).

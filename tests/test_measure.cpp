@@ -29,7 +29,7 @@ G1Options opts(std::uint64_t rays, std::uint64_t seed = 1) {
   return o;
 }
 
-// 001 eq. (24): V-cavity masking of facet m seen from v, both in the cross-section plane.
+// [Heitz14, eq. 24]: V-cavity masking of facet m seen from v, both in the cross-section plane.
 double vgroove_g1(double theta_o, double theta_m_signed) {
   if (std::cos(theta_o - theta_m_signed) <= 0) return 0.0;
   return std::min(1.0, 2 * std::cos(theta_m_signed) * std::cos(theta_o) /
@@ -97,7 +97,7 @@ TEST(G1Measure, FlatPlaneIsNeverMasked) {
 }
 
 TEST(G1Measure, VGroovePerFacetG1IsExact) {
-  // 001 eq. (24) is exact for a V-groove viewed in its cross-section plane; both estimators
+  // [Heitz14, eq. 24] is exact for a V-groove viewed in its cross-section plane; both estimators
   // must reproduce it per facet within 3 standard errors, with standard errors <= 1e-3.
   const double tm = rad(35);
   Microsurface s = vgroove_heightfield(16, 8, tm);
@@ -161,7 +161,7 @@ TEST(G1Measure, BeckmannTileEstimatorsAgreeAndMatchSmithFromFacets) {
 }
 
 TEST(G1Measure, PerNormalG1ShowsFacetsTiltedTowardTheViewerAreLessMasked) {
-  // Smith says G1(v, m) does not depend on m; on a real surface it does (DESIGN.md). Facets
+  // Smith says G1(v, m) does not depend on m; on a real surface it does (docs/theory/masking.md). Facets
   // tilted away from v (toward -x when v is at +x) are masked more.
   GaussianParams p;
   p.resolution = 256;

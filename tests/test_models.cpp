@@ -85,14 +85,14 @@ double integrate_hemisphere(const F& f, double scale, int nphi = 512) {
   return sum;
 }
 
-// 001 eq. (19) weak white furnace integral over the sphere of incident directions i:
+// [Heitz14, eq. 19] weak white furnace integral over the sphere of incident directions i:
 // int G1(o, h) D(h) / (4 |o.n|) dw_i, h = (o + i)/|o + i|. Integrated in theta_i over
 // [0, pi - theta_o] only: beyond, h.z <= 0 and D(h) = 0 (for GGX D jumps there, so the jump is
 // put on the domain boundary). Product Gauss-Legendre, with panels refined geometrically around
 // the mirror direction (theta_i = theta_o, phi_i = phi_o + pi) and around i = -o (theta_i =
 // pi - theta_o, same phi): near -o, h = (o+i)/|o+i| sweeps a whole great circle, so for a
 // grazing o the lobe of D is squeezed into a tiny neighbourhood of -o (the reason why the
-// uniform grid of 001 App. C needs small steps). Quadrature error measured < 3e-6.
+// uniform grid of [Heitz14, App. C] needs small steps). Quadrature error measured < 3e-6.
 template <class G1>
 double weak_white_furnace(const Ndf& ndf, const Vec3& o, const G1& g1) {
   const double to = std::acos(std::clamp(o.z(), -1.0, 1.0));
@@ -205,7 +205,7 @@ TEST(Ndf, EdgeCases) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// 001 eq. (2): int (n.m) D(m) dm = 1
+// [Heitz14, eq. 2]: int (n.m) D(m) dm = 1
 // ---------------------------------------------------------------------------------------------
 const std::vector<std::pair<double, double>> kAlphas = {
     {0.1, 0.1}, {0.3, 0.3}, {0.7, 0.7}, {1.5, 1.5}, {0.1, 0.4}, {0.6, 1.5}, {1.2, 0.25}};
@@ -224,7 +224,7 @@ TEST(Ndf, ProjectedAreaNormalization) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// 001 eq. (13)-(14): int D_v(m) dm = 1, and eq. (19) weak white furnace test
+// [Heitz14, eq. 13-14]: int D_v(m) dm = 1, and eq. (19) weak white furnace test
 // ---------------------------------------------------------------------------------------------
 TEST(Ndf, VisibleNormalsNormalized) {
   double worst = 0.0;
@@ -260,7 +260,7 @@ TEST(Ndf, WeakWhiteFurnaceEq19) {
   std::printf("[ info ] max |eq.(19) - 1| = %.2e\n", worst);
 }
 
-// 001 sec. 6.2: "The result of the integral is always 1" with the V-cavity G1 (eq. 24), for any
+// [Heitz14, Sec. 6.2]: "The result of the integral is always 1" with the V-cavity G1 (eq. 24), for any
 // symmetric D. (Pairing m with m' = (-mx, -my, mz): min(o.m, 2 mz oz) + min(o.m', 2 mz oz) = 2 mz oz.)
 TEST(VCavity, WeakWhiteFurnace) {
   double worst = 0.0;
@@ -279,7 +279,7 @@ TEST(VCavity, WeakWhiteFurnace) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Lambda: closed forms vs 001 App. A numerical integration
+// Lambda: closed forms vs [Heitz14, App. A] numerical integration
 // ---------------------------------------------------------------------------------------------
 TEST(Lambda, MarginalFormulaMatchesClosedForms) {
   for (double alpha : {0.1, 0.5, 1.3})
@@ -369,7 +369,7 @@ TEST(Lambda, BeckmannRationalApproximation) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// 001 eq. (11): projected roughness
+// [Heitz14, eq. 11]: projected roughness
 // ---------------------------------------------------------------------------------------------
 TEST(Lambda, ProjectedRoughnessAndStretching) {
   for (auto kind : {Distribution::Beckmann, Distribution::GGX}) {
@@ -383,7 +383,7 @@ TEST(Lambda, ProjectedRoughnessAndStretching) {
         // isotropic surface with the projected roughness
         const Ndf iso = make(kind, an.alpha_o(ph), an.alpha_o(ph));
         EXPECT_NEAR(an.Lambda(v), iso.Lambda(v), 1e-12 * std::max(1.0, iso.Lambda(v)));
-        // independent stretching (001 sec. 3.3): scale x by ax/ay -> isotropic roughness ay,
+        // independent stretching [Heitz14, Sec. 3.3]: scale x by ax/ay -> isotropic roughness ay,
         // stretched view (ax/ay vx, vy, vz); alpha_o = ay tan(theta') / tan(theta).
         const Vec3 vs(ax / ay * v.x(), v.y(), v.z());
         const double tan_s = std::hypot(vs.x(), vs.y()) / vs.z();
@@ -397,7 +397,7 @@ TEST(Lambda, ProjectedRoughnessAndStretching) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Smith Lambda from facets (DESIGN.md)
+// Smith Lambda from facets (docs/theory/masking.md)
 // ---------------------------------------------------------------------------------------------
 // Symmetric V-groove of facet angle t: normals (+-sin t, 0, cos t), each of area 1/(2 cos t) per
 // unit macro area. A facet is back-facing iff -v.m > 0; with v = (sin th cos ph, sin th sin ph,
@@ -410,7 +410,7 @@ TEST(Lambda, FromFacetsVGroove) {
     const double t = deg(t_deg);
     const std::vector<Vec3> n = {Vec3(std::sin(t), 0, std::cos(t)), Vec3(-std::sin(t), 0, std::cos(t))};
     const std::vector<double> A = {0.5 / std::cos(t), 0.5 / std::cos(t)};
-    // 000 eq. 1c: sum (n.m) A_f / A = 1
+    // [GeomBSDF24, eq. 1c]: sum (n.m) A_f / A = 1
     EXPECT_NEAR(n[0].z() * A[0] + n[1].z() * A[1], 1.0, 1e-15);
     for (double th : {0.0, 10.0, 30.0, 50.0, 65.0, 75.0, 85.0})
       for (double ph : {0.0, 0.4, 1.2, kPi / 2, kPi}) {
@@ -624,7 +624,7 @@ TEST_P(VndfSamplingChi2, MatchesDVisibleAndRejectsFivePercentWrongRoughness) {
 INSTANTIATE_TEST_SUITE_P(Cases, VndfSamplingChi2, ::testing::ValuesIn(kVndfCases), vndf_case_name);
 
 // ---------------------------------------------------------------------------------------------
-// 001 sec. 5: joint masking-shadowing forms
+// [Heitz14, Sec. 5]: joint masking-shadowing forms
 // ---------------------------------------------------------------------------------------------
 TEST(G2, IdentitiesAtCoincidentDirections) {
   for (auto kind : {Distribution::Beckmann, Distribution::GGX}) {

@@ -101,7 +101,7 @@ TEST(SpherePreview, LambertianSphereMatchesTheClosedForm) {
 }
 
 // The walk's point estimator: its first event alone is the single-scattering BRDF with the
-// height-correlated G2 (001 eq. 21); all events integrate over o to the walk's albedo.
+// height-correlated G2 [Heitz14, eq. 21]; all events integrate over o to the walk's albedo.
 TEST(SmithWalkEval, FirstEventIsTheSingleScatteringBrdf) {
   const std::vector<std::pair<Vec3, Vec3>> pairs = {
       {direction_from_angles(rad(30), 0), direction_from_angles(rad(40), rad(180))},

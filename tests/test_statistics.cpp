@@ -161,7 +161,7 @@ TEST(ChiSquareHarness, CorrectSamplersPass) {
                      },
                      [](const Vec3& p) { return p.x(); }, small(100000, 20, 10));
   EXPECT_TRUE(rect.run().passed(0.01, tests)) << rect.describe();
-  // GGX visible normals (001 eq. 13) at 60 degrees, anisotropic, on lobe-following cells.
+  // GGX visible normals [Heitz14, eq. 13] at 60 degrees, anisotropic, on lobe-following cells.
   const models::Ndf ggx = models::Ndf::ggx(0.3, 0.6);
   const Vec3 v = direction_from_angles(rad(60.0), 0.4);
   ChiSquareTest vndf(ChiSquareDomain::hemisphere_slopes(std::sqrt(0.3 * 0.6)),

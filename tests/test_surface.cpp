@@ -1,4 +1,4 @@
-// Surface layer: Gaussian generator statistics, 000 eq. 1b/1c, file round trips, bad input.
+// Surface layer: Gaussian generator statistics, [GeomBSDF24, eq. 1b/1c], file round trips, bad input.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -39,7 +39,7 @@ TEST(Gaussian, SameSeedSameHeightsOtherSeedOtherHeights) {
 }
 
 TEST(Gaussian, Eq1bAnd1cHoldExactlyOnPeriodicTile) {
-  // 000 eq. 1b: sum_f m_f A_f / A = n;  eq. 1c: sum_f (n.m_f) A_f / A = 1.
+  // [GeomBSDF24, eq. 1b]: sum_f m_f A_f / A = n;  eq. 1c: sum_f (n.m_f) A_f / A = 1.
   Microsurface s = generate_gaussian(small(0.8, 3));
   FacetSums f = facet_sums(s);
   EXPECT_NEAR(f.sum_area_normal.x(), 0.0, 1e-9);
@@ -50,7 +50,7 @@ TEST(Gaussian, Eq1bAnd1cHoldExactlyOnPeriodicTile) {
 }
 
 TEST(Gaussian, SlopeVarianceMatchesAlphaOverAnEnsemble) {
-  // E[slope variance] = alpha^2/2 per axis (001 Sec. 3.3 Beckmann); test the ensemble mean of
+  // E[slope variance] = alpha^2/2 per axis ([Heitz14, Sec. 3.3] Beckmann); test the ensemble mean of
   // 8 tiles against its own standard error, and that a wrong alpha would be detected.
   const double alpha = 0.6;
   std::vector<double> vx;

@@ -61,7 +61,7 @@ std::size_t count_rows(const mv::Result& r, const std::string& quantity, const s
 }
 
 // A periodic flat unit square (two triangles) whose macrosurface declares area `area`: with
-// area != 1, 000 eq. 1c and the visible area ratio are violated.
+// area != 1, [GeomBSDF24, eq. 1c] and the visible area ratio are violated.
 Microsurface flat_mesh(double area) {
   std::vector<Eigen::Vector3f> v = {{-0.5f, -0.5f, 0}, {0.5f, -0.5f, 0}, {0.5f, 0.5f, 0}, {-0.5f, 0.5f, 0}};
   std::vector<std::array<std::uint32_t, 3>> t = {{0, 1, 2}, {0, 2, 3}};
@@ -320,7 +320,7 @@ TEST(ValidateChecks, VCavityG1IsCheckedGrooveByGroove) {
   EXPECT_GT(std::abs(together.visible_area_ratio().mean - 1.0), 10 * together.visible_area_ratio().stderr_);
 }
 
-// A surface that violates 000 eq. 1c and the visible area ratio must FAIL (the test can fail).
+// A surface that violates [GeomBSDF24, eq. 1c] and the visible area ratio must FAIL (the test can fail).
 TEST(ValidateChecks, BrokenMacrosurfaceFails) {
   mv::Options o;
   o.theta_deg = {30};
@@ -436,7 +436,7 @@ TEST(ValidateCli, BeckmannTilePrintsTheTableAndWritesRows) {
 }
 
 TEST(ValidateCli, BrokenMacrosurfaceIsRefusedWhenLoaded) {
-  // A mesh whose declared area breaks 000 eq. 1b is refused by the loader (one line naming the
+  // A mesh whose declared area breaks [GeomBSDF24, eq. 1b] is refused by the loader (one line naming the
   // identity, exit 2, no record). The FAIL path of the checks themselves (exit 1) is covered in
   // the library by ValidateChecks.BrokenMacrosurfaceFails.
   std::string obj = tmp("badmacro.obj"), out = tmp("bad.json");
@@ -632,7 +632,7 @@ TEST(ValidateChecks, WrongVndfModelFailsTheSamplerIdentity) {
 namespace {
 
 // `s` with facet `f`'s third vertex replaced by a new, unshared vertex moved within the facet's
-// plane so that the facet's area grows by the fraction `rel`: a crack that breaks 000 eq. 1b
+// plane so that the facet's area grows by the fraction `rel`: a crack that breaks [GeomBSDF24, eq. 1b]
 // by rel A_f m_f / A.
 Microsurface with_facet_area_scaled(const Microsurface& s, std::size_t f, double rel) {
   std::vector<Eigen::Vector3f> v = s.vertices();
@@ -656,7 +656,7 @@ mv::Result d_identities(Microsurface s) {
 
 }  // namespace
 
-// 000 eq. 1b on the V-cavity's strips: a groove's two ends are translates only before their
+// [GeomBSDF24, eq. 1b] on the V-cavity's strips: a groove's two ends are translates only before their
 // vertices are rounded to float, so the sum is exact to the bound that rounding allows
 // (surface/rounding_bound.hpp), computed from the vertices; a closed or bit-exactly periodic
 // mesh keeps the double-rounding tolerance. Power: a crack that changes one facet's area fails.
@@ -702,7 +702,7 @@ TEST(ValidateChecks, Eq1bToleranceIsTheVertexRoundingBound) {
 }
 
 // A V-cavity ensemble's G2 and VNDF are checked groove by groove, as its G1: the V-cavity model
-// (001 eq. 24-25, averaged over the facets) is exact for separate infinite grooves, so the
+// ([Heitz14, eq. 24-25], averaged over the facets) is exact for separate infinite grooves, so the
 // measured G2 and VNDF agree with it within their ray-count errors. Power: the stored strips
 // traced together (grooves masking each other, rays leaving through the strips' open ends) are
 // told apart from the same model.

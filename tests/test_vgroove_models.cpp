@@ -185,7 +185,7 @@ TEST(VCavityMultiple, MirrorEnsembleConservesEnergy) {
 
 TEST(VCavityMultiple, QuadratureEqualsMonteCarloOverGrooves) {
   // Independent route: grooves from the Beckmann slope distribution (Gaussian slopes of
-  // variance alpha^2 / 2 per axis: P22(s) ds = (n.m) D(m) dm, 001 App. A), plain Monte Carlo.
+  // variance alpha^2 / 2 per axis: P22(s) ds = (n.m) D(m) dm, [Heitz14, App. A]), plain Monte Carlo.
   const mm::Ndf ndf = mm::Ndf::beckmann(0.5, 0.5);
   const Material mat = Material::conductor(0.2, 3.0);
   const int K = 4, M = 200000;

@@ -1,4 +1,4 @@
-// Distribution of visible normals (000 eq. 3b, 001 eq. 13): the VNDF sampler's chi-square test,
+// Distribution of visible normals ([GeomBSDF24, eq. 3b], [Heitz14, eq. 13]): the VNDF sampler's chi-square test,
 // the histogram of first-hit normals against the exact GGX of the ellipsoid, the Smith
 // independence assumption on a Beckmann tile, and the measure vndf command.
 #include <gtest/gtest.h>
@@ -22,7 +22,7 @@ using namespace microsim::testing;
 namespace {
 Vec3 dir(double theta_deg, double phi_deg) { return direction_from_angles(rad(theta_deg), rad(phi_deg)); }
 
-// The upper half-ellipsoid of surface/generators.hpp (normals GGX(ax, ay), 002).
+// The upper half-ellipsoid of surface/generators.hpp (normals GGX(ax, ay), [TSBlog24]).
 Microsurface ellipsoid(double ax, double ay, int rings = EllipsoidParams{}.rings,
                        int segments = EllipsoidParams{}.segments) {
   EllipsoidParams p;
@@ -38,12 +38,12 @@ Microsurface ellipsoid(double ax, double ay, int rings = EllipsoidParams{}.rings
 // measured with 1e6 rays at normal incidence, chi2 998 on 287 dof at 256 x 1024 for alpha 0.5,
 // and 329 on 242 dof at 1024 x 1024 for alpha (0.4, 0.8) at 50 degrees).
 // Upper half of the ellipsoid with semi-axes (1/alpha_x, 1/alpha_y, 1): its normal
-// distribution is GGX(alpha_x, alpha_y) (002). Tessellated on a grid in normal space: the
+// distribution is GGX(alpha_x, alpha_y) [TSBlog24]. Tessellated on a grid in normal space: the
 // vertex with normal m(theta_k, phi_j) is the ellipsoid point with that normal,
 // p = (a^2 m_x, b^2 m_y, c^2 m_z) / |(a m_x, b m_y, c m_z)|, theta_k = k 90/n_theta degrees,
 // phi_j = j 360/n_phi degrees, so that facets fall inside normal bins whose edges are on the
 // grid. A finite object (periodic = false) whose macro area is the projected area of the
-// tessellation (000 eq. 1c; it tends to pi a b), so that eq. 1b holds to rounding.
+// tessellation ([GeomBSDF24, eq. 1c]; it tends to pi a b), so that eq. 1b holds to rounding.
 Microsurface ellipsoid_on_bin_grid(double alpha_x, double alpha_y, int n_theta = 90,
                                    int n_phi = 144) {
   const double a = 1 / alpha_x, b = 1 / alpha_y, c = 1;
@@ -100,7 +100,7 @@ TEST(Stats, ChiSquareTailAndSidak) {
 }
 
 TEST(VndfModel, BinProbabilitiesAreNormalized) {
-  // 001 eq. 13: int D_v(m) dm = 1 for any view (the G1 normalization).
+  // [Heitz14, eq. 13]: int D_v(m) dm = 1 for any view (the G1 normalization).
   const DirectionBinning bins = vndf_binning(VndfOptions{});
   for (auto ndf : {models::Ndf::beckmann(0.5, 0.5), models::Ndf::ggx(0.3, 0.8), models::Ndf::beckmann(0.2, 0.6)})
     for (double t : {0.0, 45.0, 80.0}) {
@@ -185,7 +185,7 @@ TEST(VndfMeasure, FlatPlaneSeesOnlyTheNormal) {
 
 TEST(VndfMeasure, EllipsoidIsExactGgxPerBin) {
   // The upper half-ellipsoid with semi-axes (1/ax, 1/ay, 1) has the GGX NDF and no masking of
-  // its front faces (convex): the histogram of first-hit normals is GGX's D_v (001 eq. 13)
+  // its front faces (convex): the histogram of first-hit normals is GGX's D_v [Heitz14, eq. 13]
   // within 3 sigma per bin, Sidak-corrected over the bins (and by chi-square).
   // Tessellation: a flat facet's normal differs from the smooth normal at its centre by O(h)
   // when the curvature is anisotropic, so facets near a bin edge can fall in the neighbouring

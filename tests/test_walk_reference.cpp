@@ -1,7 +1,7 @@
 // Mirror random walks of the BSDF estimator (measure/bsdf_walk.cpp, Embree) against an
 // independent double-precision tracer over the same triangles (reference_heightfield_tracer.hpp):
 // the scattering order of every path, including the orders >= 4 that on rough Gaussian tiles far
-// exceed the Smith walk's (README "Converged surfaces"), belongs to the surface, not to the
+// exceed the Smith walk's (docs/theory/discretization.md), belongs to the surface, not to the
 // tracer's offsets, filters, ridge retrace or periodic seams.
 #include <gtest/gtest.h>
 

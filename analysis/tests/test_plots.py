@@ -36,7 +36,7 @@ class Models(unittest.TestCase):
         self.assertAlmostEqual(float(models.beckmann_lambda(1.0)), expect, places=12)
 
     def test_d_normalization(self):
-        # 000 eq. 1c: integral of D cos over the hemisphere is 1 (midpoint rule in theta).
+        # [GeomBSDF24, eq. 1c]: integral of D cos over the hemisphere is 1 (midpoint rule in theta).
         n = 200000
         h = math.pi / 2 / n
         t = (np.arange(n) + 0.5) * h

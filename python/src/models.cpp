@@ -86,7 +86,7 @@ void bind_models(py::module_& m) {
     return out;
   }, py::arg("theta"), py::arg("phi") = 0.0, "Unit direction(s) from zenith theta and azimuth phi (radians)");
 
-  py::class_<models::Ndf>(m, "NDF", "Beckmann or GGX microfacet distribution (001 sec. 3.3), anisotropic by eq. (11)")
+  py::class_<models::Ndf>(m, "NDF", "Beckmann or GGX microfacet distribution [Heitz14, Sec. 3.3], anisotropic by eq. (11)")
       .def(py::init(&make_ndf), py::arg("distribution"), py::arg("alpha_x"), py::arg("alpha_y") = py::none(),
            "NDF('beckmann' or 'ggx', alpha_x, alpha_y=alpha_x)")
       .def_property_readonly("distribution", [](const models::Ndf& n) { return models::to_string(n.kind); })
@@ -94,22 +94,22 @@ void bind_models(py::module_& m) {
       .def_readonly("alpha_y", &models::Ndf::alpha_y)
       .def("D", [](const models::Ndf& n, py::object mm) {
         return map_directions({mm}, [&](const Vec3* v) { return n.D(v[0]); });
-      }, py::arg("m"), "D(m), 001 App. A")
+      }, py::arg("m"), "D(m), [Heitz14, App. A]")
       .def("Lambda", [](const models::Ndf& n, py::object v) {
         return map_directions({v}, [&](const Vec3* d) { return n.Lambda(d[0]); });
-      }, py::arg("v"), "Smith Lambda(v), 001 sec. 3.2/3.3 (+inf at and below the horizon)")
+      }, py::arg("v"), "Smith Lambda(v), [Heitz14, Sec. 3.2/3.3] (+inf at and below the horizon)")
       .def("G1", [](const models::Ndf& n, py::object v, py::object mm) {
         if (mm.is_none())
           return map_directions({v}, [&](const Vec3* d) { return n.G1(d[0]); });
         return map_directions({v, mm}, [&](const Vec3* d) { return n.G1(d[0], d[1]); });
-      }, py::arg("v"), py::arg("m") = py::none(), "Smith G1(v) or G1(v, m), 001 eq. (10)")
+      }, py::arg("v"), py::arg("m") = py::none(), "Smith G1(v) or G1(v, m), [Heitz14, eq. 10]")
       .def("D_visible", [](const models::Ndf& n, py::object v, py::object mm) {
         return map_directions({v, mm}, [&](const Vec3* d) { return n.D_visible(d[0], d[1]); });
-      }, py::arg("v"), py::arg("m"), "Distribution of visible normals D_v(m), 001 eq. (13)")
+      }, py::arg("v"), py::arg("m"), "Distribution of visible normals D_v(m), [Heitz14, eq. 13]")
       .def("P22", py::vectorize([](models::Ndf n, double sx, double sy) { return n.P22(sx, sy); }),
-           py::arg("slope_x"), py::arg("slope_y"), "Slope distribution P22, 001 App. A")
+           py::arg("slope_x"), py::arg("slope_y"), "Slope distribution P22, [Heitz14, App. A]")
       .def("alpha_o", py::vectorize([](models::Ndf n, double phi) { return n.alpha_o(phi); }),
-           py::arg("phi"), "Projected roughness, 001 eq. (11)")
+           py::arg("phi"), "Projected roughness, [Heitz14, eq. 11]")
       .def("sample_visible_normal", [](const models::Ndf& n, py::array_t<double> v, py::array_t<double> u1,
                                        py::array_t<double> u2) {
         Array vv = Array::ensure(v);
@@ -134,9 +134,9 @@ void bind_models(py::module_& m) {
       });
 
   m.def("beckmann_lambda", py::vectorize(&models::beckmann_lambda), py::arg("a"),
-        "Beckmann Lambda(a), a = 1/(alpha tan theta), 001 sec. 3.3 (erf form)");
-  m.def("ggx_lambda", py::vectorize(&models::ggx_lambda), py::arg("a"), "GGX Lambda(a), 001 sec. 3.3");
-  // The joint masking-shadowing forms (001 sec. 5) and the V-cavity (001 sec. 6).
+        "Beckmann Lambda(a), a = 1/(alpha tan theta), [Heitz14, Sec. 3.3] (erf form)");
+  m.def("ggx_lambda", py::vectorize(&models::ggx_lambda), py::arg("a"), "GGX Lambda(a), [Heitz14, Sec. 3.3]");
+  // The joint masking-shadowing forms [Heitz14, Sec. 5] and the V-cavity [Heitz14, Sec. 6].
   const std::map<std::string, double (*)(const models::Ndf&, const Vec3&, const Vec3&, const Vec3&)> g2 = {
       {"separable", &models::G2_separable},
       {"height_correlated", &models::G2_height_correlated},
@@ -152,20 +152,20 @@ void bind_models(py::module_& m) {
     auto f = it->second;
     return map_directions({o, i, mm}, [&](const Vec3* d) { return f(n, d[0], d[1], d[2]); });
   }, py::arg("ndf"), py::arg("o"), py::arg("i"), py::arg("m"), py::arg("form") = "height_correlated",
-     "Smith G2(o, i, m): 001 eq. (20) separable, (21) height_correlated, (22) direction_correlated, "
-     "(23) height_direction_correlated; or the V-cavity (001 sec. 6)");
+     "Smith G2(o, i, m): [Heitz14, eq. 20] separable, (21) height_correlated, (22) direction_correlated, "
+     "(23) height_direction_correlated; or the V-cavity [Heitz14, Sec. 6]");
   m.def("g2_forms_from_lambda", [](double lo, double li, double phi) {
     const models::G2Forms f = models::g2_forms_from_lambda(lo, li, phi);
     return py::dict(py::arg("separable") = f.separable, py::arg("height_correlated") = f.height_correlated,
                     py::arg("direction_correlated") = f.direction_correlated,
                     py::arg("height_direction_correlated") = f.height_direction_correlated);
   }, py::arg("lambda_o"), py::arg("lambda_i"), py::arg("phi"),
-     "The four Smith G2 forms (001 eq. 20-23) from two Lambda values and the azimuth difference");
+     "The four Smith G2 forms [Heitz14, eq. 20-23] from two Lambda values and the azimuth difference");
   m.def("vcavity_G1", [](py::object v, py::object mm) {
     return map_directions({v, mm}, [](const Vec3* d) { return models::vcavity_G1(d[0], d[1]); });
-  }, py::arg("v"), py::arg("m"), "V-cavity G1(v, m), 001 eq. (24)");
+  }, py::arg("v"), py::arg("m"), "V-cavity G1(v, m), [Heitz14, eq. 24]");
 
-  // Fresnel (000 eq. 8): unpolarized reflectance, or (Rs, Rp).
+  // Fresnel [GeomBSDF24, eq. 8]: unpolarized reflectance, or (Rs, Rp).
   m.def("fresnel_dielectric", py::vectorize(&models::fresnel_dielectric_unpolarized), py::arg("cos_i"),
         py::arg("eta"), "Unpolarized dielectric reflectance (eta = far side / near side; 1 beyond the critical angle)");
   m.def("fresnel_dielectric_sp", [](double c, double eta) {
@@ -195,7 +195,7 @@ void bind_models(py::module_& m) {
       }), py::arg("cos_i"), py::arg("from_above") = true, "Unpolarized facet reflectance");
 
   py::class_<models::MicrofacetBsdf>(m, "MicrofacetBSDF",
-                                      "Single-scattering microfacet BRDF/BTDF (000 eq. 21d, 001 eq. 18, 003 eq. 6)")
+                                      "Single-scattering microfacet BRDF/BTDF ([GeomBSDF24, eq. 21d], [Heitz14, eq. 18], [RefractionBlog24, eq. 6])")
       .def(py::init([](const models::Ndf& n, const models::Material& mat, const std::string& masking) {
         return models::MicrofacetBsdf{n, mat, masking_of(masking)};
       }), py::arg("ndf"), py::arg("material") = models::Material::mirror(),

@@ -28,7 +28,7 @@ def test_lambda_against_closed_forms():
     ggx = [(-1 + math.sqrt(1 + 1 / (x * x))) / 2 for x in a]
     assert np.allclose(M.beckmann_lambda(a), beckmann, rtol=1e-10, atol=0)
     assert np.allclose(M.ggx_lambda(a), ggx, rtol=1e-12, atol=0)
-    # Lambda(v) of an anisotropic NDF through alpha_o (001 eq. 11): a = 1 / (alpha_o tan theta).
+    # Lambda(v) of an anisotropic NDF through alpha_o [Heitz14, eq. 11]: a = 1 / (alpha_o tan theta).
     ndf = M.NDF("beckmann", 0.3, 0.7)
     theta, phi = 1.1, 0.6
     a_v = 1 / (math.sqrt((0.3 * math.cos(phi)) ** 2 + (0.7 * math.sin(phi)) ** 2) * math.tan(theta))
@@ -40,9 +40,9 @@ def test_lambda_against_closed_forms():
 @pytest.mark.parametrize("ndf", NDFS, ids=repr)
 def test_distributions_are_normalized(ndf):
     m, w = sphere_grid()
-    # 000 eq. 1c: integral of D(m) (n.m) over the hemisphere is 1.
+    # [GeomBSDF24, eq. 1c]: integral of D(m) (n.m) over the hemisphere is 1.
     assert float((ndf.D(m) * m[..., 2] * w).sum()) == pytest.approx(1.0, abs=2e-4)
-    # 001 eq. 13: the visible normals of a view are a distribution (this ties Lambda to D).
+    # [Heitz14, eq. 13]: the visible normals of a view are a distribution (this ties Lambda to D).
     v = M.direction(1.4, 0.7)
     dv = ndf.D_visible(v, m)
     assert float((dv * w).sum()) == pytest.approx(1.0, abs=2e-4)
@@ -77,11 +77,11 @@ def test_g2_forms():
     lo, li = ndf.Lambda(o), ndf.Lambda(i)
     phi = 2.0
     forms = M.g2_forms_from_lambda(lo, li, phi)
-    assert M.G2(ndf, o, i, m, "height_correlated") == pytest.approx(1 / (1 + lo + li), rel=1e-14)  # 001 eq. 21
+    assert M.G2(ndf, o, i, m, "height_correlated") == pytest.approx(1 / (1 + lo + li), rel=1e-14)  # [Heitz14, eq. 21]
     assert M.G2(ndf, o, i, m, "separable") == pytest.approx(ndf.G1(o) * ndf.G1(i), rel=1e-14)  # eq. 20
     for name in ("separable", "height_correlated", "direction_correlated", "height_direction_correlated"):
         assert M.G2(ndf, o, i, m, name) == pytest.approx(forms[name], rel=1e-12)
-    # 000 eq. 16: G2(v, m, v) = G1(v, m) for the V-cavity, and a back-facing normal gives 0.
+    # [GeomBSDF24, eq. 16]: G2(v, m, v) = G1(v, m) for the V-cavity, and a back-facing normal gives 0.
     assert M.G2(ndf, o, o, m, "vcavity") == M.vcavity_G1(o, m)
     assert M.G2(ndf, o, i, -m, "height_correlated") == 0.0
     # Broadcasting: many o against one i.
@@ -94,7 +94,7 @@ def test_g2_forms():
 def test_fresnel():
     eta = 1.5
     c = np.linspace(0.01, 1.0, 50)
-    # Energy: R + T = 1 for a dielectric (000 eq. 8).
+    # Energy: R + T = 1 for a dielectric [GeomBSDF24, eq. 8].
     assert np.allclose(M.fresnel_dielectric(c, eta) + M.fresnel_dielectric_transmittance(c, eta), 1.0, atol=1e-12)
     assert M.fresnel_dielectric(1.0, eta) == pytest.approx(((eta - 1) / (eta + 1)) ** 2, rel=1e-12)
     # A conductor without absorption is the dielectric of the same index.
@@ -111,12 +111,12 @@ def test_microfacet_bsdf():
     for material in (M.Material.mirror(), M.Material.conductor(0.2, 3.0), M.Material.dielectric(1.5)):
         f = M.MicrofacetBSDF(ndf, material)
         assert f.eval(o, i) == pytest.approx(f.eval(i, o), rel=1e-14)  # reciprocity
-    # 001 eq. 18 by hand: F G2 D / (4 |o.n| |i.n|) at the half vector, mirror.
+    # [Heitz14, eq. 18] by hand: F G2 D / (4 |o.n| |i.n|) at the half vector, mirror.
     f = M.MicrofacetBSDF(ndf)
     h = (o + i) / np.linalg.norm(o + i)
     expect = M.G2(ndf, o, i, h) * ndf.D(h) / (4 * o[2] * i[2])
     assert f.eval(o, i) == pytest.approx(expect, rel=1e-12)
-    # Weak white furnace (001 eq. 19): with masking only, int f(o, i) |i.n| d omega_i = 1 over
+    # Weak white furnace [Heitz14, eq. 19]: with masking only, int f(o, i) |i.n| d omega_i = 1 over
     # the whole sphere, for every o; with the height-correlated G2 less (shadowing).
     i_all, w = sphere_grid(1200, 600, hemisphere=False)
     o = M.direction(1.0, 0.0)

@@ -52,7 +52,7 @@ void print_discretization(const Json& j) {
     std::cout << " (converged for every quantity of the study)\n";
     return;
   }
-  std::cout << "\n             coarser than the converged level (README \"Converged surfaces\") for:";
+  std::cout << "\n             coarser than the converged level (docs/theory/discretization.md) for:";
   for (const Json& q : c) {
     const auto l = converged_level(q.get<std::string>());
     std::cout << " " << q.get<std::string>() << " (" << sig(l->cells_per_correlation_length) << " cells per l, "
@@ -91,7 +91,7 @@ void print_metrology(const Metrology& m, const Microsurface& s) {
                     ? "  WARNING: well under 4 cells per l: D, G1 and the "
                       "multiple scattering of the triangles are far from the continuous surface's"
                     : m.cells_per_gaussian_length < 13  // 16 cells per l, less one tile's ~10% spread
-                          ? " (mirror orders 1-2 converge by 8, order 3 by 16 cells per l: README \"Converged surfaces\")"
+                          ? " (mirror orders 1-2 converge by 8, order 3 by 16 cells per l: docs/theory/discretization.md)"
                           : "")
             << "\n"
             << "fit chi2/dof heights vs Gaussian " << fmt(m.height_fit.chi2_per_dof(), 3)
@@ -161,9 +161,9 @@ int run_info(const std::string& path, const std::string& json_out, const GlobalO
     if (s.nominal)
       std::cout << "   (nominal " << models::to_string(s.nominal->kind) << " " << s.nominal->alpha_x
                 << ", " << s.nominal->alpha_y << ")";
-    std::cout << "\n000 eq. 1b   sum A_f m_f / A = " << c["eq_1b_sum_area_normal_over_A"].dump()
+    std::cout << "\n[GeomBSDF24, eq. 1b]   sum A_f m_f / A = " << c["eq_1b_sum_area_normal_over_A"].dump()
               << "  |error| " << c["eq_1b_error"].get<double>() << "\n"
-              << "000 eq. 1c   sum A_f (n.m_f) / A = " << c["eq_1c_sum_area_cos_over_A"].get<double>()
+              << "[GeomBSDF24, eq. 1c]   sum A_f (n.m_f) / A = " << c["eq_1c_sum_area_cos_over_A"].get<double>()
               << "  |error| " << c["eq_1c_error"].get<double>() << "\n"
               << "area ratio   sum A_f / A = " << c["total_area_over_A"].get<double>() << "\n";
     if (disc) print_discretization(j["discretization"]);
@@ -177,7 +177,7 @@ int run_info(const std::string& path, const std::string& json_out, const GlobalO
 
 void register_info(CLI::App& app, const GlobalOptions& g) {
   auto* info = app.add_subcommand(
-      "info", "Describe a surface: parameters, slope statistics, fitted alpha, 000 eq. 1b/1c");
+      "info", "Describe a surface: parameters, slope statistics, fitted alpha, [GeomBSDF24, eq. 1b/1c]");
   auto file = std::make_shared<std::string>(), json = std::make_shared<std::string>();
   info->add_option("surface", *file, "Surface file")->required();
   info->add_option("--json", *json, "Also write the description as JSON");

@@ -18,11 +18,11 @@ namespace microsim::cli {
 namespace {
 
 const char* const kVcavityDefinition =
-    "001 Sec. 6.1 made explicit: each groove of the ensemble (normals m, m' drawn from "
+    "[Heitz14, Sec. 6.1] made explicit: each groove of the ensemble (normals m, m' drawn from "
     "(n.m) D(m)) is traced on its own as an infinite periodic V-groove; ray casting uses the "
     "same number of rays per groove (equal macro areas), area sampling draws points over the "
     "whole ensemble by front-facing projected area; counts are pooled per normal bin. "
-    "vcavity_numeric is 001 eq. 24 on the same normals";
+    "vcavity_numeric is [Heitz14, eq. 24] on the same normals";
 
 void print_g1_table(const Json& rows, bool ensemble) {
   std::cout << std::setw(7) << "theta" << std::setw(6) << "phi" << std::setw(10) << "g1"
@@ -76,23 +76,23 @@ int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
                      {"normal_bins", {{"theta", go.normal_theta_bins}, {"phi", go.normal_phi_bins}}}};
   j["definitions"] = {
       {"g1", "area sampling: fraction of points, drawn by projected area A_f max(0,v.m_f), "
-             "unoccluded toward v (DESIGN.md estimator b)"},
+             "unoccluded toward v (estimator b of docs/theory/masking.md)"},
       {"g1_raycast", "visible projected area of first hits along -v / sum_f A_f max(0,v.m_f) "
                      "(estimator a)"},
       {"visible_area_ratio", "visible projected area / ((v.n) A); visible_projected_area is the "
                              "same in absolute units, macro_projected_area = |v.n| A"},
       {"smith_numeric", "1/(1+Lambda), Lambda = sum_f A_f max(0,-v.m_f) / ((v.n) A)"},
-      {"smith_nominal", "Smith G1 of the generator's nominal NDF (001 eq. 11 with alpha_o); "
+      {"smith_nominal", "Smith G1 of the generator's nominal NDF ([Heitz14, eq. 11] with alpha_o); "
                         "undersurface rows: at -v"},
       {"bins", "per normal bin: g1, g1_raycast, smith_numeric (1/(1+lambda_numeric) for "
-               "front-facing bins) and vcavity_numeric (001 eq. 24 averaged over the bin's facets "
+               "front-facing bins) and vcavity_numeric ([Heitz14, eq. 24] averaged over the bin's facets "
                "by front-facing projected area); bins_mad_* and bins_chi2_* summarise the "
                "deviation of g1 from each model over the bins"},
       {"undersurface", "theta > 90 (meshes): g1 is the explicit measurement of the undersurface "
                        "(the sheet with reversed normals seen from v); g1_reverse_v and "
                        "g1_reflect_v are the surface's own G1 at -v and at v reflected across the "
-                       "macrosurface, the two approximations of 000 'Inherent Assumptions'"},
-      {"eq_2b", "the visible_area_ratio at theta = 0 is 000 eq. 2b, int (n.m) G1(n,m) D(m) dm; "
+                       "macrosurface, the two approximations of [GeomBSDF24, 'Inherent Assumptions']"},
+      {"eq_2b", "the visible_area_ratio at theta = 0 is [GeomBSDF24, eq. 2b], int (n.m) G1(n,m) D(m) dm; "
                 "1 for a valid periodic microsurface"},
       {"z_numeric", "(g1 - smith_numeric) / the ray-count error (g1_stderr; ensembles: "
                     "g1_stderr_rays), since the model comes from each surface's own facets; "

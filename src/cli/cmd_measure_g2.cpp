@@ -1,5 +1,5 @@
 // microsim measure g2 FILE... : masking-shadowing by area sampling with two occlusion rays,
-// beside the four Smith forms (001 eq. 20-23) and the V-cavity model.
+// beside the four Smith forms [Heitz14, eq. 20-23] and the V-cavity model.
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -28,9 +28,9 @@ struct G2CliOptions {
 };
 
 const char* const kGrooveByGroove =
-    "true for a V-cavity ensemble: 001 Sec. 6.1 made explicit, each groove (normals m, m' drawn "
+    "true for a V-cavity ensemble: [Heitz14, Sec. 6.1] made explicit, each groove (normals m, m' drawn "
     "from (n.m) D(m)) traced on its own as an infinite periodic V-groove, the points drawn over "
-    "the whole ensemble with the weights w_f; `vcavity` (001 eq. 24-25) is then exact";
+    "the whole ensemble with the weights w_f; `vcavity` [Heitz14, eq. 24-25] is then exact";
 
 const char* kForms[] = {"separable", "height_correlated", "direction_correlated",
                         "height_direction_correlated"};
@@ -83,22 +83,22 @@ int run_measure_g2(const G2CliOptions& o, const GlobalOptions& g) {
   j["definitions"] = {
       {"g2", "fraction of the facets facing both o and i (o.m_f > 0, i.m_f > 0) unoccluded "
              "toward o and toward i, weighted by w_f = A_f (o.m_f + i.m_f) / 2 (points drawn "
-             "with that density, two occlusion rays per point; 000 eq. 16a, DESIGN.md): "
-             "symmetric in o and i, G1's projected-area weight at o = i (g2 = g1 there, 000 eq. "
-             "16) and the BRDF's A_f (i.m) at the half vector"},
+             "with that density, two occlusion rays per point; [GeomBSDF24, eq. 16a]): "
+             "symmetric in o and i, G1's projected-area weight at o = i (g2 = g1 there, [GeomBSDF24, "
+             "eq. 16]) and the BRDF's A_f (i.m) at the half vector"},
       {"g1_o", "fraction of the same points and weights unoccluded toward o (g1_i: toward i)"},
       {"g2_half", "g2 of the normal bin holding the half vector (o+i)/|o+i| (half_bin_*_range_deg): "
                   "the G2(o, h, i) of a specular microfacet BRDF, to compare with the Smith forms "
                   "as they are (null when the bin holds fewer than 100 samples)"},
       {"bins", "per normal bin, the same ratios over the bin's facets facing both; front_fraction = "
                "their area / the bin's area; weight_fraction = the bin's share of sum w_f"},
-      {"smith_*", "001 eq. 20 (separable), 21 (height correlated), 22 (direction correlated), 23 "
+      {"smith_*", "[Heitz14, eq. 20] (separable), 21 (height correlated), 22 (direction correlated), 23 "
                   "(height-direction correlated) with the van Ginneken lambda(phi) = 4.41 phi / "
                   "(4.41 phi + 1) and Lambda from the surface's facets, sum_f A_f max(0,-v.m_f) / "
                   "((v.n) A); they do not depend on m, so they equal their own area average"},
       {"smith_*_nominal", "the same with the closed-form Lambda of the surface's nominal NDF"},
       {"*_from_g1", "the four forms built in each normal bin from the bin's measured g1_o and g1_i "
-                    "(Lambda = 1/G1 - 1, 001 eq. 10), averaged over bins with the bins' weights "
+                    "(Lambda = 1/G1 - 1, [Heitz14, eq. 10]), averaged over bins with the bins' weights "
                     "sum w_f; *_from_g1_diff = average of (g2 - form), *_diff_stderr its standard "
                     "error (delete-one-replicate jackknife); they "
                     "test the correlation each form assumes, free of the m-dependence of G1"},
@@ -120,7 +120,7 @@ int run_measure_g2(const G2CliOptions& o, const GlobalOptions& g) {
   TraceCounters counters;
   double build_seconds = 0;
   std::vector<Table> per_surface = measure_over_surfaces(g, o.files, [&](const Microsurface& s, std::size_t k) {
-    // A V-cavity ensemble is measured groove by groove (001 Sec. 6.1), each groove an infinite
+    // A V-cavity ensemble is measured groove by groove [Heitz14, Sec. 6.1], each groove an infinite
     // periodic V-groove of its own; its stored strips traced together would mask each other.
     const bool grooves = is_vcavity(s);
     if (k == 0) {

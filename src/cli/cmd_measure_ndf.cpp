@@ -49,7 +49,7 @@ int run_measure_ndf(const MeasureOptions& o, const GlobalOptions& g) {
     Json c = surface_checks_json(r.sums, s);
     std::cout << "D of " << o.surface << " (phi-averaged rings; stderr from "
               << r.blocks * r.blocks << " spatial blocks)\n"
-              << "000 eq. 1b |error| " << c["eq_1b_error"].get<double>() << ", eq. 1c |error| "
+              << "[GeomBSDF24, eq. 1b] |error| " << c["eq_1b_error"].get<double>() << ", eq. 1c |error| "
               << c["eq_1c_error"].get<double>() << "\n"
               << std::setw(12) << "theta_deg" << std::setw(14) << "D" << std::setw(12) << "stderr"
               << std::setw(14) << "nominal" << std::setw(9) << "z" << "\n";

@@ -1,5 +1,5 @@
 // microsim measure vndf FILE... : histogram of first-hit normals of rays along -v against the
-// analytic distribution of visible normals (001 eq. 13), and a chi-square test of the VNDF
+// analytic distribution of visible normals [Heitz14, eq. 13], and a chi-square test of the VNDF
 // sampler of the surface's nominal NDF.
 #include <iomanip>
 #include <iostream>
@@ -31,12 +31,12 @@ struct VndfCliOptions {
 };
 
 const char* const kGrooveByGroove =
-    "true for a V-cavity ensemble: 001 Sec. 6.1 made explicit, every ray picks a groove uniformly "
+    "true for a V-cavity ensemble: [Heitz14, Sec. 6.1] made explicit, every ray picks a groove uniformly "
     "(equal macro areas) and a uniform origin on its tile and is traced on that groove alone, an "
     "infinite periodic V-groove";
 const char* const kChi2Vcavity =
     "*_vcavity: the chi-square test of the hit histogram against the V-cavity model's bin "
-    "probabilities over the ensemble's facets, sum_f A_f (v.m_f)+ G1_vcavity(v, m_f) (001 eq. 13 "
+    "probabilities over the ensemble's facets, sum_f A_f (v.m_f)+ G1_vcavity(v, m_f) ([Heitz14, eq. 13] "
     "with eq. 24), exact for separate grooves";
 
 void print_vndf_table(const Json& rows, bool ensemble) {
@@ -90,9 +90,9 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
                      {"family_alpha", vo.family_alpha}};
   j["definitions"] = {
       {"dv", "histogram of the normals of front-face first hits of parallel rays along -v: "
-             "(hits in bin / hits) / solid angle of the bin (000 eq. 3b, 001 eq. 13)"},
+             "(hits in bin / hits) / solid angle of the bin ([GeomBSDF24, eq. 3b], [Heitz14, eq. 13])"},
       {"dv_model", "bin average of the nominal NDF's D_v(m) = G1(v) max(0,v.m) D(m) / (v.n) "
-                   "(001 eq. 13), by quadrature"},
+                   "[Heitz14, eq. 13], by quadrature"},
       {"dv_smith_numeric", "Smith's D_v with the surface's own facets: sum_f in bin A_f "
                            "max(0,v.m_f) / sum_f A_f max(0,v.m_f) / solid angle"},
       {"z", "per bin (dv - dv_model) / stderr, the binomial stderr under the model (ensembles: "
@@ -117,7 +117,7 @@ int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
   TraceCounters counters;
   std::uint64_t lost = 0;
   std::vector<Table> per_surface = measure_over_surfaces(g, o.files, [&](const Microsurface& s, std::size_t k) {
-    // A V-cavity ensemble is measured groove by groove (001 Sec. 6.1), each groove an infinite
+    // A V-cavity ensemble is measured groove by groove [Heitz14, Sec. 6.1], each groove an infinite
     // periodic V-groove of its own; its stored strips traced together would mask each other.
     const bool grooves = is_vcavity(s);
     if (k == 0) {

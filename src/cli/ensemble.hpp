@@ -1,5 +1,5 @@
 // Measuring an ensemble of independent surfaces of the same statistics from the command line
-// (DESIGN.md "Two kinds of error bar"): one surface in memory at a time, one Table per surface,
+// (docs/theory/error-bars.md): one surface in memory at a time, one Table per surface,
 // merged by the library (measure/table.hpp) into rows with between-surface errors.
 #pragma once
 #include <functional>

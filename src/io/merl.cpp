@@ -49,7 +49,7 @@ std::vector<double> merl_cells(const BsdfTable& t) {
         // wi = R_y(theta_h) d: the difference vector seen from the half vector's frame.
         Vec3 wi(d.x() * ch + d.z() * sh, d.y(), -d.x() * sh + d.z() * ch);
         Vec3 wo = 2.0 * wi.dot(h) * h - wi;
-        // Reciprocity (000 eq. 4c): read the pair with the light at the smaller zenith angle,
+        // Reciprocity [GeomBSDF24, eq. 4c]: read the pair with the light at the smaller zenith angle,
         // which the measured incidences cover best.
         if (wo.z() > wi.z()) std::swap(wi, wo);
         cells[static_cast<std::size_t>(ip) + kMerlPhiD * (id + static_cast<std::size_t>(kMerlThetaD) * ih)] =

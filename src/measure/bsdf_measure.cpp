@@ -543,7 +543,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
   const Macrosurface& macro = s.macro();
   // Periodic tile: the tile at the top of the slab. Finite object: a window perpendicular to l
   // covering its projection; each ray carries W_perp / (A cos theta_i), so that the tallies are
-  // per unit of the flux falling on the macrosurface (000 eq. 4a with the declared area A) and
+  // per unit of the flux falling on the macrosurface ([GeomBSDF24, eq. 4a] with the declared area A) and
   // rays that miss the object add nothing.
   const bool finite = macro.finite_object();
   const RayWindow window = make_ray_window(tracer, wi);

@@ -53,7 +53,7 @@ Comparison smooth_interface_albedo() {
   return {"albedo", "smooth_interface", ModelKind::Nominal, "z_smooth_interface", "", "p_smooth_interface"};
 }
 
-// Fresnel reflectance (and transmittance) of a flat interface at cos theta_i = ci (000 eq. 7d, 10b).
+// Fresnel reflectance (and transmittance) of a flat interface at cos theta_i = ci [GeomBSDF24, eq. 7d, 10b].
 Json smooth_interface_json(const models::Material& mat, double ci) {
   using namespace microsim::models;
   if (mat.kind == MaterialKind::Mirror) return {{"reflected", 1.0}, {"transmitted", 0.0}};
@@ -426,14 +426,14 @@ void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Mi
       {"in_plane", "f = p / int_B |cos theta_o| d omega (exact), p the fraction of power leaving "
                    "through bin B: a band |beta| <= half width around the plane of incidence, "
                    "theta_o_deg signed, positive on the specular side (azimuth phi_i + 180); "
-                   "transmitted rows measure theta_o from -n; the radiance BSDF of 000 eq. 4a"},
-      {"smith_single", "single-scattering BRDF/BTDF of the nominal NDF, 000 eq. 21d / 001 eq. 18 "
-                       "with Fresnel and the height-correlated Smith G2 (001 eq. 21; "
+                   "transmitted rows measure theta_o from -n; the radiance BSDF of [GeomBSDF24, eq. 4a]"},
+      {"smith_single", "single-scattering BRDF/BTDF of the nominal NDF, [GeomBSDF24, eq. 21d] / [Heitz14, eq. 18] "
+                       "with Fresnel and the height-correlated Smith G2 ([Heitz14, eq. 21]; "
                        "transmission B(1+Lo, 1+Li)), averaged over the bin"},
-      {"vcavity_single", "the same with the V-cavity G2 (001 sec. 6)"},
+      {"vcavity_single", "the same with the V-cavity G2 [Heitz14, Sec. 6]"},
       {"smith_multiple", "all orders of the Smith random-walk model of the nominal NDF (Monte "
                          "Carlo, smith_multiple_walks walks, same bins)"},
-      {"smooth_interface", "Fresnel reflectance of a flat interface at theta_i (000 eq. 7d, 10b)"},
+      {"smooth_interface", "Fresnel reflectance of a flat interface at theta_i [GeomBSDF24, eq. 7d, 10b]"},
       {"z_smith_single", "null: smith_single, smith_multiple and vcavity_single are models of the "
                          "nominal NDF, a statistic of the generated surfaces; one surface's ray-count "
                          "error misses the surface-to-surface variation, so its z is no verdict on "
@@ -551,7 +551,7 @@ ExrTable bsdf_exr_table(const BsdfResult& r, const Json& attributes) {
   t.attributes["value"] =
       "f = p / int_pixel |cos theta_o| d omega (exact pixel integral): p = fraction of the incident "
       "power leaving through the pixel after the channel's scattering orders; the radiance BSDF of "
-      "000 eq. 4a; *_stderr its standard error";
+      "[GeomBSDF24, eq. 4a]; *_stderr its standard error";
   return t;
 }
 

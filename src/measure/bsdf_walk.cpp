@@ -46,10 +46,10 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
     const bool front = side == RaySide::Front;
     switch (mat.kind) {
       case MaterialKind::Mirror:
-        dir = models::reflect(v, m);  // 000 eq. 13a
+        dir = models::reflect(v, m);  // [GeomBSDF24, eq. 13a]
         break;
       case MaterialKind::Conductor:
-        e.weight *= mat.reflectance(vm, true);  // 000 eq. 8, complex index
+        e.weight *= mat.reflectance(vm, true);  // [GeomBSDF24, eq. 8], complex index
         dir = models::reflect(v, m);
         break;
       case MaterialKind::Dielectric: {
@@ -59,7 +59,7 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
         } else {
           const double n = front ? mat.eta : 1.0 / mat.eta;  // far side over near side
           Vec3 t_dir;
-          if (models::refract(v, m, 1.0 / n, &t_dir)) {  // 000 eq. 15a
+          if (models::refract(v, m, 1.0 / n, &t_dir)) {  // [GeomBSDF24, eq. 15a]
             dir = t_dir;
             side = front ? RaySide::Back : RaySide::Front;
           } else {

@@ -222,7 +222,7 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
     if (s.kind() == Microsurface::Kind::Heightfield)
       throw UsageError("--theta must be in [0, 90) degrees for a heightfield (theta in (90, 180], "
                        "the undersurface, is measured on meshes only)");
-    // 000 "Inherent Assumptions": the undersurface, explicitly. Traced on the mirrored,
+    // [GeomBSDF24, "Inherent Assumptions"]: the undersurface, explicitly. Traced on the mirrored,
     // reversed sheet at mirror_z(v); results relabelled to v and to the normals -m_f.
     std::unique_ptr<Microsurface> own_surface;
     std::unique_ptr<Tracer> own_tracer;
@@ -284,7 +284,7 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
     if (r.bins[b].mean_normal.norm() > 0) r.bins[b].mean_normal.normalize();
     r.total_area += bin[0];
   }
-  // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   (DESIGN.md, 001 App. A)
+  // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   [Heitz14, App. A]
   r.lambda_numeric = sums[width - 1] / (v.dot(s.macro().normal) * s.macro().area);
   // Estimator (b) draws facets by front-facing projected area A_f max(0, v.m_f).
   const auto weights = [&](std::size_t k0, std::size_t k1, double* w) {
@@ -491,7 +491,7 @@ Json& add_row(Table& t, const G1Result& r, const Microsurface& s) {
     row["visible_projected_area_stderr"] = p.stderr_ * r.window_area_perp;
     row["macro_projected_area"] = std::abs(r.v.z()) * r.macro_area;  // |v.n| A
   }
-  if (r.theta == 0.0) {  // 000 eq. 2b: int (n.m) G1(n, m) D(m) dm = visible area along n / A
+  if (r.theta == 0.0) {  // [GeomBSDF24, eq. 2b]: int (n.m) G1(n, m) D(m) dm = visible area along n / A
     row["eq_2b"] = var.mean;
     row["eq_2b_stderr"] = var.stderr_;
   }
@@ -500,7 +500,7 @@ Json& add_row(Table& t, const G1Result& r, const Microsurface& s) {
   row["smith_numeric"] = smith_numeric;
   row["z_numeric"] = z_json(g.mean, smith_numeric, g.stderr_);
   if (s.nominal) {
-    // Undersurface rows: the nominal model with v reversed (000 "Inherent Assumptions").
+    // Undersurface rows: the nominal model with v reversed [GeomBSDF24, "Inherent Assumptions"].
     double model = s.nominal->G1(r.undersurface ? Vec3(-r.v) : r.v);
     row["smith_nominal"] = model;
     row["rel_dev_nominal"] = (g.mean - model) / model;
@@ -553,8 +553,8 @@ Json& add_row(Table& t, const G1Result& r, const Microsurface& s) {
       const double z = z_score(eb.mean, ea.mean, std::hypot(eb.stderr_, ea.stderr_));
       jb["z_estimators"] = z_json(eb.mean, ea.mean, std::hypot(eb.stderr_, ea.stderr_));
       if (std::isfinite(z)) max_abs_z = std::max(max_abs_z, std::abs(z));
-      const double smith = 1.0 / (1.0 + r.lambda_numeric);     // 000 eq. 3Xc: W1, no m dependence
-      const double vcav = nb.vcavity_weighted / nb.front_projected;  // 001 eq. (24), bin average
+      const double smith = 1.0 / (1.0 + r.lambda_numeric);     // [GeomBSDF24, eq. 3Xc]: W1, no m dependence
+      const double vcav = nb.vcavity_weighted / nb.front_projected;  // [Heitz14, eq. 24], bin average
       jb["smith_numeric"] = smith;
       jb["vcavity_numeric"] = vcav;
       const double w = nb.front_projected / wsum;

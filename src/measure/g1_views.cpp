@@ -48,7 +48,7 @@ G1Views measure_g1_views(const Microsurface& s, const std::vector<Vec3>& views, 
     out.counters += r.counters;
     Json& row = add_row(out.table, r, s);
     ++done;
-    if (v.z() < 0) {  // the undersurface beside its two approximations (000 "Inherent Assumptions")
+    if (v.z() < 0) {  // the undersurface beside its two approximations [GeomBSDF24, "Inherent Assumptions"]
       const G1Result rev = measure_g1(tracer, -v, options, &table);
       const G1Result ref = measure_g1(tracer, mirror_z(v), options, &table);
       out.counters += rev.counters;

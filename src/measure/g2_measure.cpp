@@ -206,7 +206,7 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
     r.front_area += bin[1];
     vcav_total += bin[6];
   }
-  // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   (DESIGN.md, 001 App. A)
+  // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   [Heitz14, App. A]
   const Vec3 n = s.macro().normal;
   r.lambda_o = sums[width - 2] / (o.dot(n) * s.macro().area);
   r.lambda_i = sums[width - 1] / (i.dot(n) * s.macro().area);
@@ -237,7 +237,7 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
     const Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
     const SourcePlane plane = SourcePlane::of(f);
     const int b = ft.bin(k);
-    // A facet pressed against an opposite-facing twin (touching walls, 000 Fig. 6) is hidden
+    // A facet pressed against an opposite-facing twin (touching walls, [GeomBSDF24, Fig. 6]) is hidden
     // from every direction, as in measure_g1: its occlusion rays would start inside the
     // neighbour and skip the twin at distance zero.
     const bool buried = ft.buried(k);
@@ -350,7 +350,7 @@ Json& add_row(Table& t, const G2Result& r, const Microsurface& s) {
   row["g1_i"] = gi.mean;
   row["g1_i_stderr"] = gi.stderr_;
   // The bin holding the half vector h = (o + i)/|o + i|: the G2(o, h, i) that a specular
-  // microfacet BRDF uses (001 eq. 17 with G2), where the Smith forms apply as they are.
+  // microfacet BRDF uses ([Heitz14, eq. 17] with G2), where the Smith forms apply as they are.
   const int hb = r.binning.bin_of((r.o + r.i).normalized());
   const G2NormalBin& hbin = r.bins[hb];
   const int hit = hb / r.binning.n_phi(), hip = hb % r.binning.n_phi();

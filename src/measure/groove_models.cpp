@@ -48,7 +48,7 @@ void add_beams(PlaneLobes& p, const std::vector<models::GrooveBeam>& beams, cons
 }
 
 // The lobes of the model for this surface: a periodic V-groove's beams (exact), or Monte Carlo
-// over grooves of the nominal D (slopes drawn from P22: (n.m) D(m) dm, 001 App. A; stratified in
+// over grooves of the nominal D (slopes drawn from P22: (n.m) D(m) dm, [Heitz14, App. A]; stratified in
 // the slope radius).
 std::optional<PlaneLobes> groove_model_lobes(const Microsurface& s, const BsdfResult& r, const std::string& which) {
   const int K = r.options.orders, nb = r.plane.size();
@@ -207,7 +207,7 @@ void add_macro_normalization(Json& j, const BsdfResult& r, const Microsurface& s
     const int K = r.options.orders;
     for (int px = 0; px < r.map.size(); ++px) w_up += r.measured.pix[r.measured.p_index(0, K, px)];
     const double total = r.measured.albedo[r.measured.a_index(0, K)];
-    n["kind"] = "finite object: per unit of the flux falling on the macrosurface (000 eq. 4a with "
+    n["kind"] = "finite object: per unit of the flux falling on the macrosurface ([GeomBSDF24, eq. 4a] with "
                 "the declared area A); a convex mirror object's total albedo is its visible area "
                 "ratio. Divide by the visible area ratio for albedos per unit visible area.";
     n["reflected_below_base_plane"] = r.measured.paths ? (total - w_up) / r.measured.paths : 0.0;

@@ -107,7 +107,7 @@ Json surface_checks_json(const FacetSums& f, const Microsurface& s) {
   j["slope_var_y"] = f.slope_var_y;
   j["slope_cov_xy"] = f.slope_cov_xy;
   // Beckmann and GGX-with-finite-variance both parameterise slope variance as alpha^2/2 per
-  // axis for Beckmann (001 Sec. 3.3): the moment fit of alpha.
+  // axis for Beckmann [Heitz14, Sec. 3.3]: the moment fit of alpha.
   j["fitted_alpha_x"] = std::sqrt(2 * f.slope_var_x);
   j["fitted_alpha_y"] = std::sqrt(2 * f.slope_var_y);
   if (s.nominal) {

@@ -96,7 +96,7 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
     for (auto& nb : r.bins)
       if (nb.mean_normal.norm() > 0) nb.mean_normal.normalize();
     r.front_projected = cdf.back();
-    r.lambda_numeric = back / (r.v.z() * r.macro_area);  // DESIGN.md, 001 App. A
+    r.lambda_numeric = back / (r.v.z() * r.macro_area);  // [Heitz14, App. A]
     r.window_area_perp = r.v.z() * r.macro_area;          // K unit tiles seen along v
     r.replicates = R;
     r.raycast_rays = per_groove * K * R;
@@ -292,7 +292,7 @@ G2Result measure_vcavity_g2(const Microsurface& s, const Vec3& o_in, const Vec3&
       nb.front_area += a;
       nb.weight += w;
       nb.mean_normal += w * m;
-      const double v2 = w * models::vcavity_G2(o, i, m);  // 001 eq. (24)-(25)
+      const double v2 = w * models::vcavity_G2(o, i, m);  // [Heitz14, eq. 24-25]
       nb.vcavity_sum += v2;
       vcav_total += v2;
       r.front_area += a;
@@ -303,7 +303,7 @@ G2Result measure_vcavity_g2(const Microsurface& s, const Vec3& o_in, const Vec3&
   }
   for (auto& nb : r.bins)
     if (nb.mean_normal.norm() > 0) nb.mean_normal.normalize();
-  r.lambda_o = back_o / (o.z() * r.macro_area);  // DESIGN.md, 001 App. A
+  r.lambda_o = back_o / (o.z() * r.macro_area);  // [Heitz14, App. A]
   r.lambda_i = back_i / (i.z() * r.macro_area);
   r.weight = cdf.back();
   if (!(r.weight > 0)) throw RuntimeFailure("no facet faces both directions");
@@ -441,7 +441,7 @@ std::vector<double> vcavity_vndf_probabilities(const Microsurface& s, const Vec3
   double total = 0;
   for (std::size_t j = 0; j < 2 * g.K; ++j) {
     const Vec3& m = g.normal[j];
-    // Visible projected area of the side: A (v.m)+ G1 (000 eq. 2, 001 eq. 24).
+    // Visible projected area of the side: A (v.m)+ G1 ([GeomBSDF24, eq. 2], [Heitz14, eq. 24]).
     const double vis = g.area[j] * std::max(0.0, v.dot(m)) * models::vcavity_G1(v, m);
     const int b = binning.bin_of(m);
     if (b >= 0) p[b] += vis;

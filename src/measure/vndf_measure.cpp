@@ -204,7 +204,7 @@ SamplerTest test_vndf_sampler(const models::Ndf& ndf, const Vec3& v_in, std::uin
                    });
   t.counts.assign(counts.begin(), counts.begin() + bins.size());
   t.outside = counts[bins.size()];
-  t.probabilities = bin_integrals(bins, [&](const Vec3& m) { return ndf.D_visible(v, m); });  // 001 eq. (13)
+  t.probabilities = bin_integrals(bins, [&](const Vec3& m) { return ndf.D_visible(v, m); });  // [Heitz14, eq. 13]
   t.gof = histogram_gof(t.counts, n, t.probabilities, family_alpha);
   return t;
 }

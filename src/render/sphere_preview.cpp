@@ -50,7 +50,7 @@ double SingleScatteringPreview::eval_cos(const Vec3& v, const Vec3& l, CounterRn
   return bsdf_.eval(v, l) * l.z();
 }
 double SingleScatteringPreview::environment(const Vec3& v, CounterRng& rng) const {
-  // int f cos d l = E_{m ~ D_v}[F G2 / G1(v)] (the Jacobian 000 eq. 19b cancels D; 001 eq. 13).
+  // int f cos d l = E_{m ~ D_v}[F G2 / G1(v)] (the Jacobian [GeomBSDF24, eq. 19b] cancels D; [Heitz14, eq. 13]).
   const models::Ndf& ndf = bsdf_.ndf;
   const double u1 = rng.uniform(), u2 = rng.uniform();
   if (!(v.z() > 0)) return 0.0;

@@ -41,7 +41,7 @@ std::optional<Discretization> discretization_of(const Json& d) {
 // which the README points to 32 cells per l. Beckmann alpha = 0.2 and 0.5 and the GGX heightfield
 // (alpha = 0.5, at its preset's 64 l per tile) need the same grid: at 16 cells per l every
 // quantity of theirs is within its error or 1% of 32 but mirror order 4+ (1.5-3.5%) and, for
-// Beckmann 0.5, G2 at 70/70 deg (-0.1 to -0.3%). README "Converged surfaces".
+// Beckmann 0.5, G2 at 70/70 deg (-0.1 to -0.3%). docs/theory/discretization.md.
 const std::vector<ConvergedLevel>& converged_levels() {
   static const std::vector<ConvergedLevel> levels = {
       {"d_nominal", 8, 32, "fitted alpha and D per ring"},

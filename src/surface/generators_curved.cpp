@@ -24,7 +24,7 @@ Microsurface generate_ellipsoid(const EllipsoidParams& p) {
   if (2.0 * p.rings * p.segments > 5e7)
     throw UsageError("--rings x --segments must be at most 2.5e7 (about 5e7 triangles)");
   // p = A^-1 u for u on a latitude-longitude mesh of the unit upper hemisphere, A = diag(ax, ay,
-  // 1): p lies on (ax x)^2 + (ay y)^2 + z^2 = 1 (002, C = 1); facet normals map to A n_u.
+  // 1): p lies on (ax x)^2 + (ay y)^2 + z^2 = 1 ([TSBlog24], C = 1); facet normals map to A n_u.
   const int R = p.rings, S = p.segments;
   detail::MeshBuilder mb;
   auto at = [&](int i, int j) {
@@ -84,7 +84,7 @@ Microsurface generate_vcavity(const VCavityParams& p) {
   double area = 0;  // the strips' footprints, from their float vertices (eq. 1b to rounding)
   for (int k = 0; k < K; ++k) {
     // Slope drawn from P22 (density (n.m) D(m) over normals: every groove covers the same
-    // macro area, 001 Sec. 6.1); the radius is stratified over the ensemble.
+    // macro area, [Heitz14, Sec. 6.1]); the radius is stratified over the ensemble.
     CounterRng rng(p.seed, 0x7CA7, static_cast<std::uint64_t>(k));
     const double u1 = (k + rng.uniform()) / K, u2 = rng.uniform();
     const double r = p.ndf == "beckmann" ? std::sqrt(-std::log1p(-u1))  // P(r) = 2 r e^{-r^2}

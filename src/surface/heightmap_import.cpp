@@ -338,8 +338,8 @@ void record_guard_band(Microsurface& s, const HeightmapImportParams& p) {
   s.description["guard_band"] = region.description["guard_band"];
 }
 
-// How finely the map resolves the surface, in the terms of the discretization study (README
-// "Converged surfaces"): the Gaussian correlation length l = (ACF decay length to 0.2) /
+// How finely the map resolves the surface, in the terms of the discretization study
+// (docs/theory/discretization.md): the Gaussian correlation length l = (ACF decay length to 0.2) /
 // sqrt(ln 5), as metrology reports it; cells per the shortest l (of the coarser pixel side) and
 // the measured extent (the tile, or a window's interior) per the longest. A map whose ACF does
 // not decay states nothing.

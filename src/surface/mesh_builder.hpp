@@ -42,7 +42,7 @@ class MeshBuilder {
 };
 
 // Area of a polygon in the plane z = 0 from its (float-rounded) vertices, by the shoelace
-// formula in double: the exact macro area of the faceted object, so that 000 eq. 1b holds to
+// formula in double: the exact macro area of the faceted object, so that [GeomBSDF24, eq. 1b] holds to
 // rounding.
 inline double polygon_area_xy(const std::vector<Eigen::Vector3f>& v,
                               const std::vector<std::uint32_t>& loop) {

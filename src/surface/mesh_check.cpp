@@ -207,7 +207,7 @@ MeshCheckReport check_mesh(const Microsurface& s, const std::string& name, bool 
                          std::to_string(macro.size_x) + " x " + std::to_string(macro.size_y));
   }
 
-  // 000 eq. 1b: sum_f A_f m_f = A n.
+  // [GeomBSDF24, eq. 1b]: sum_f A_f m_f = A n.
   if (!check_eq_1b) return rep;
   if (!(macro.area > 0)) throw UsageError(name + ": the macrosurface area must be > 0");
   FacetSums f = facet_sums(s);
@@ -215,7 +215,7 @@ MeshCheckReport check_mesh(const Microsurface& s, const std::string& name, bool 
   rep.eq_1b_relative_error = (ratio - macro.normal).norm();
   if (!(rep.eq_1b_relative_error <= 1e-5)) {
     std::ostringstream os;
-    os << name << ": 000 eq. 1b fails: sum_f A_f m_f / A = (" << ratio.x() << ", " << ratio.y()
+    os << name << ": [GeomBSDF24, eq. 1b] fails: sum_f A_f m_f / A = (" << ratio.x() << ", " << ratio.y()
        << ", " << ratio.z() << "), not the macrosurface normal; the declared area/normal is wrong "
        << "or the mesh is inside-out";
     throw UsageError(os.str());
@@ -306,7 +306,7 @@ Microsurface import_mesh(const MeshImportParams& p) {
     }
     if (rim.isEmpty())
       throw UsageError(p.input + ": closed mesh: with no rim its signed projected area is zero "
-                       "(000 eq. 1a), so it cannot stand on a macrosurface; remove its base");
+                       "[GeomBSDF24, eq. 1a], so it cannot stand on a macrosurface; remove its base");
     const Vec3 shift(-rim.center().x(), -rim.center().y(), -zmin);
     for (auto& v : verts) v = (v.cast<double>() + shift).cast<float>();
     m.size_x = rim.sizes().x();
@@ -317,7 +317,7 @@ Microsurface import_mesh(const MeshImportParams& p) {
   Microsurface s = Microsurface::mesh(std::move(verts), std::move(tris), m);
   check_mesh(s, p.input, false);  // topology first: its errors are the more specific ones
   if (!p.periodic && p.area == 0) {
-    // 000 eq. 1c: A = sum_f A_f (n.m_f); eq. 1b then checks the tangential part.
+    // [GeomBSDF24, eq. 1c]: A = sum_f A_f (n.m_f); eq. 1b then checks the tangential part.
     const double a = facet_sums(s).sum_area_cos;
     if (!(a > 0))
       throw UsageError(p.input + ": the signed projected area along --normal is not positive "

@@ -237,7 +237,7 @@ SlopeStats slope_stats_of(const Src& src, int bins) {
   st.rms_x = std::sqrt(vx);
   st.rms_y = std::sqrt(vy);
   st.sdq = std::sqrt(sg2);
-  // Beckmann's slope variance per axis is alpha^2 / 2 (000 eq. 1b/1c fitted alpha).
+  // Beckmann's slope variance per axis is alpha^2 / 2 ([GeomBSDF24, eq. 1b/1c] fitted alpha).
   st.beckmann_alpha_x = std::sqrt(2.0) * st.rms_x;
   st.beckmann_alpha_y = std::sqrt(2.0) * st.rms_y;
   if (!(vx > 0) || !(vy > 0)) return st;  // a profile along one axis: no 2D slope model fits

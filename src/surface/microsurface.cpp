@@ -157,7 +157,7 @@ FacetSums facet_sums(const Microsurface& s) {
     a.v[3] += area * m.z();
     a.v[4] += area;
     // Slopes are weighted by projected area A_f (n.m_f): the slope distribution P22 is a
-    // density over the macrosurface (001 App. A).
+    // density over the macrosurface [Heitz14, App. A].
     if (m.z() > 0) {
       double w = area * m.z();
       double sx = -m.x() / m.z(), sy = -m.y() / m.z();
@@ -197,7 +197,7 @@ double front_projected_area(const Microsurface& s, const Vec3& v) {
 }
 
 double lambda_from_facets(const Microsurface& s, const Vec3& v) {
-  // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   (DESIGN.md; 001 App. A)
+  // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   [Heitz14, App. A]
   double back = reduce_facets(s, 0.0, [&](const Triangle& t, double& a) {
     a += std::max(0.0, -0.5 * t.cross().dot(v));
   });

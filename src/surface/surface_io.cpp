@@ -203,7 +203,7 @@ Microsurface load_mesh(const std::string& path) {
       throw UsageError(side + " is not a valid microsim sidecar (" + std::string(e.what()) + ")");
     }
   } else {
-    // No sidecar: a finite object standing on z = 0, window its xy bounds, A from 000 eq. 1c
+    // No sidecar: a finite object standing on z = 0, window its xy bounds, A from [GeomBSDF24, eq. 1c]
     // (sum_f A_f (n.m_f)); check_mesh then verifies the rim and eq. 1b.
     Eigen::AlignedBox3f box;
     for (const auto& v : verts) box.extend(v);

@@ -328,7 +328,7 @@ std::string structured_summary(const Microsurface& s, const std::string& path) {
   std::ostringstream os;
   os << "wrote " << path << ": " << s.description.value("kind", std::string("surface")) << ", " << s.num_facets()
      << " facets, " << (m.periodic ? "periodic tile " : "finite object, window ") << m.size_x << " x " << m.size_y
-     << ", A = " << m.area << "; 000 eq. 1b |error| " << e.norm() << "; area facing down (n.m < 0): "
+     << ", A = " << m.area << "; [GeomBSDF24, eq. 1b] |error| " << e.norm() << "; area facing down (n.m < 0): "
      << below / f.total_area * 100 << "%\n";
   return os.str();
 }

@@ -80,12 +80,12 @@ std::vector<SurfaceKind> make_kinds() {
                {integer("resolution", 1, 4096, shown(fl.resolution), "Grid cells per side", "FlatParams::resolution"),
                 number("size", closed(1e-6, 1e6), shown(fl.size), "Tile side length", "FlatParams::size")}});
   const BoxParams bx;
-  k.push_back({"box", "A box whose flipped bottom face is the macrosurface (000 Fig. 2); finite", kStructuredOutput,
+  k.push_back({"box", "A box whose flipped bottom face is the macrosurface [GeomBSDF24, Fig. 2]; finite", kStructuredOutput,
                kStructuredConfig,
                {number("width", positive(), shown(bx.width), "W, along x", "BoxParams::width"),
                 number("depth", positive(), shown(bx.depth), "D, along y", "BoxParams::depth"),
                 number("height", positive(), shown(bx.height), "H, along z", "BoxParams::height")}});
-  k.push_back({"tiled-boxes", "The box's macrosurface covered by N x N copies of the box scaled by 1/N (000 Fig. 6)",
+  k.push_back({"tiled-boxes", "The box's macrosurface covered by N x N copies of the box scaled by 1/N [GeomBSDF24, Fig. 6]",
                kStructuredOutput, kStructuredConfig,
                {integer("tiles", 1, 256, "4", "N", "BoxParams::tiles (default 4 here)"),
                 number("width", positive(), shown(bx.width), "W of the whole (macrosurface), along x", "BoxParams::width"),
@@ -110,7 +110,7 @@ std::vector<SurfaceKind> make_kinds() {
                 flag("2d", "Square pyramids (a mesh) instead of grooves (a heightfield)", "VGrooveParams::two_d")}});
   const VCavityParams vc;
   k.push_back({"vcavity",
-               "The V-cavity model made explicit (001 Sec. 6.1): separate V-grooves with normals drawn from D, "
+               "The V-cavity model made explicit [Heitz14, Sec. 6.1]: separate V-grooves with normals drawn from D, "
                "each traced on its own by measure g1",
                kStructuredOutput, kStructuredConfig,
                {text("ndf", vc.ndf, "beckmann or ggx", "VCavityParams::ndf"),
@@ -122,7 +122,7 @@ std::vector<SurfaceKind> make_kinds() {
                 seed("VCavityParams::seed")}});
   const ParallelepipedParams pp;
   k.push_back({"parallelepiped",
-               "A box under a linear map (000 Fig. 3); shears make walls face downward (n.m < 0)", kStructuredOutput,
+               "A box under a linear map [GeomBSDF24, Fig. 3]; shears make walls face downward (n.m < 0)", kStructuredOutput,
                kStructuredConfig,
                {number("width", positive(), shown(pp.width), "W of the box before the map", "ParallelepipedParams::width"),
                 number("depth", positive(), shown(pp.depth), "D", "ParallelepipedParams::depth"),
@@ -135,7 +135,7 @@ std::vector<SurfaceKind> make_kinds() {
                      "ParallelepipedParams::matrix (not with shear-x/shear-y)")}});
   const EllipsoidParams el;
   k.push_back({"ellipsoid",
-               "Upper half of (ax x)^2 + (ay y)^2 + z^2 = 1: its NDF is GGX(ax, ay) (002); finite", kStructuredOutput,
+               "Upper half of (ax x)^2 + (ay y)^2 + z^2 = 1: its NDF is GGX(ax, ay) [TSBlog24]; finite", kStructuredOutput,
                kStructuredConfig,
                {number("alpha", positive(), "", "Isotropic alpha",
                        "EllipsoidParams::alpha_x and alpha_y (not with alpha-x/alpha-y)"),
@@ -170,12 +170,12 @@ std::vector<SurfaceKind> make_kinds() {
                 seed("GaussianGgxParams::seed")}});
   k.push_back({"mesh",
                "Any PLY/OBJ/OFF mesh with a declared macrosurface (validated: manifold, not degenerate, closed but "
-               "for its rim, 000 eq. 1b)",
+               "for its rim, [GeomBSDF24, eq. 1b])",
                kStructuredOutput, kStructuredConfig,
                {text("input", "", "Input mesh (.ply, .obj, .off)", "MeshImportParams::input", true),
                 text("normal", "0,0,1", "Macrosurface normal x,y,z in the file's frame (rotated to +z)",
                      "MeshImportParams::normal"),
-                number("area", positive(), "", "Macrosurface area A (default: from 000 eq. 1c, or the tile's)",
+                number("area", positive(), "", "Macrosurface area A (default: from [GeomBSDF24, eq. 1c], or the tile's)",
                        "MeshImportParams::area"),
                 flag("periodic", "A periodic tile centered on the origin (else a finite object)",
                      "MeshImportParams::periodic"),

@@ -12,7 +12,7 @@ Microsurface undersurface(const Microsurface& s) {
   u.description = s.description;
   u.description["undersurface"] = true;
   // Beckmann and GGX are symmetric under (mx, my) -> (-mx, -my): reversing n and m keeps D
-  // (000 "Inherent Assumptions"), so the nominal NDF carries over.
+  // [GeomBSDF24, "Inherent Assumptions"], so the nominal NDF carries over.
   u.nominal = s.nominal;
   return u;
 }

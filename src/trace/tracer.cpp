@@ -84,7 +84,7 @@ Tracer::Tracer(const Microsurface& surface) : surface_(surface) {
   device_ = rtcNewDevice("hugepages=1");
   if (!device_) throw RuntimeFailure("cannot create an Embree device");
   scene_ = rtcNewScene(device_);
-  // ROBUST: without it a few rays per million slip through shared edges (DESIGN.md).
+  // ROBUST: without it a few rays per million slip through shared edges (docs/theory/numerics.md).
   // Context filter: only rays that leave a facet pay for the filter; primary rays run bare.
   // COMPACT (heightfields): the grid's BVH in about half the memory (5 instead of 10 bytes
   // per facet at 4096^2), for a few percent of speed.

@@ -20,7 +20,7 @@ std::optional<double> visible_area_ratio(const Microsurface& s, const Vec3& l, s
     const double W = s.description.at("width").get<double>(), D = s.description.at("depth").get<double>();
     const double H = s.description.at("height").get<double>();
     const int N = s.description.value("tiles", 1);
-    *how = "1 + (H/N) tan(theta) (|cos phi|/W + |sin phi|/D) (000 Fig. 5-6)";
+    *how = "1 + (H/N) tan(theta) (|cos phi|/W + |sin phi|/D) [GeomBSDF24, Fig. 5-6]";
     return 1.0 + (H / N) * (st / ct) * (cp / W + sp / D);
   }
   if (kind == "ellipsoid" || (kind == "parallelepiped" && s.description.value("tiles", 1) == 1)) {
@@ -77,7 +77,7 @@ void append_bsdf_object_rows(const BsdfResult& r, const Microsurface& s, const R
       {"vcavity_multiple_grooves", Kind::Identity,
        "models/vgroove_multiple.hpp over the ensemble's own grooves"},
       {"vcavity_multiple", Kind::Model,
-       "V-cavity multiple scattering of the nominal D (001 Sec. 6; Xie and Hanrahan 2018)"}};
+       "V-cavity multiple scattering of the nominal D ([Heitz14, Sec. 6]; Xie and Hanrahan 2018)"}};
   std::vector<double> groove_se;
   for (const Model& m : models) {
     const auto a = groove_model_albedo(s, r.options, m.name,

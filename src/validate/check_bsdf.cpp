@@ -96,7 +96,7 @@ void check_bsdf_albedo(const SurfaceSet& set, Progress& progress, CheckOutput& o
       ss.masking = models::Masking::SmithHeightCorrelated;
       const double single = models::single_scattering_albedo(ss, wi[ia]).reflected;
       Row m = make_row(set, "", "albedo_order_1", "single_scattering_smith", Kind::Model,
-                       "models/microfacet_bsdf.hpp single_scattering_albedo (001 eq. 21 G2)");
+                       "models/microfacet_bsdf.hpp single_scattering_albedo ([Heitz14, eq. 21] G2)");
       push_nominal(out, std::move(m), where, albedo[ia][0], single,
                    set.name + "/albedo_single_scattering", ang);
       Json mj = {{"single_scattering_model", single}, {"smith_walk_albedo", Json::array()},

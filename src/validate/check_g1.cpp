@@ -6,8 +6,8 @@
 namespace microsim::validation {
 
 // ---------------------------------------------------------------------------------------------
-// G1: the two estimators of DESIGN.md, visible area ratio, Smith from the facets, and per
-// normal bin Smith (m-independent) and the V-cavity model (001 eq. 24) averaged over the
+// G1: the two estimators of docs/theory/masking.md, visible area ratio, Smith from the facets, and per
+// normal bin Smith (m-independent) and the V-cavity model [Heitz14, eq. 24] averaged over the
 // bin's facets.
 
 // Per normal bin: sum_f A_f (v.m_f)+ G1_vcavity(v, m_f) / sum_f A_f (v.m_f)+ .
@@ -26,7 +26,7 @@ std::vector<double> vcavity_bin_model(const FacetTable& t, const Vec3& v, int nb
           const double w = area * std::max(0.0, v.dot(m));
           const int b = t.bin(k);
           if (w <= 0 || b < 0) continue;
-          a[2 * b] += w * models::vcavity_G1(v, m);  // 001 eq. (24)
+          a[2 * b] += w * models::vcavity_G1(v, m);  // [Heitz14, eq. 24]
           a[2 * b + 1] += w;
         }
         return a;
@@ -85,7 +85,7 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
       const Estimate ratio = floored(r.visible_area_ratio(), r.raycast_rays, ratio_scale);
       Row var = make_row(set, "", "visible_area_ratio", periodic ? "one" : "",
                          periodic ? Kind::Identity : Kind::Info,
-                         "DESIGN.md visible area ratio; 000 Inherent Assumptions");
+                         "visible area ratio; [GeomBSDF24, 'Inherent Assumptions']");
       var.condition += " " + where;
       var.measured = ratio.mean;
       var.stderr_ = ratio.stderr_;
@@ -103,19 +103,19 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
       const double scale_a = r.window_area_perp / r.front_projected;
       const Estimate ga = floored(r.g1_raycast(), r.raycast_rays, scale_a);
       Row est = make_row(set, "", "g1", "g1_raycast", periodic ? Kind::Info : Kind::Identity,
-                         periodic ? "DESIGN.md G1 estimators (a) = (b); on a periodic tile (a) "
+                         periodic ? "G1 estimators (a) = (b); on a periodic tile (a) "
                                     "is 1/(1+Lambda) identically (tested by g1 vs smith_numeric)"
-                                  : "DESIGN.md G1 estimators (a) = (b)");
+                                  : "G1 estimators (a) = (b)");
       push_measured(out, std::move(est), where, gb.mean, std::hypot(gb.stderr_, ga.stderr_),
                     ga.mean, "rays", set.name + "/g1_raycast/" + dir, ang);
 
       // Averaged G1 against 1/(1 + Lambda) from the facets: on a periodic tile the visible
-      // projected area is (v.n) A (000 eq. 2a-2b), so the projected-area average
-      // G1 = (v.n) A / sum_f A_f (v.m_f)+ = 1/(1+Lambda) exactly (000 eq. 3Xc-3Xd): an
+      // projected area is (v.n) A [GeomBSDF24, eq. 2a-2b], so the projected-area average
+      // G1 = (v.n) A / sum_f A_f (v.m_f)+ = 1/(1+Lambda) exactly [GeomBSDF24, eq. 3Xc-3Xd]: an
       // identity, not a test of Smith. On a finite object it is a model (the object is not
-      // infinitesimally thick, 000 "Inherent Assumptions").
+      // infinitesimally thick, [GeomBSDF24, "Inherent Assumptions"]).
       Row sn = make_row(set, "", "g1", "smith_numeric", periodic ? Kind::Identity : Kind::Model,
-                        "000 eq. 3Xc-3Xd (exact for the projected-area average on a periodic tile)");
+                        "[GeomBSDF24, eq. 3Xc-3Xd] (exact for the projected-area average on a periodic tile)");
       push_measured(out, std::move(sn), where, gb.mean,
                     gb.stderr_, smith_numeric, "rays",
                     set.name + "/smith_numeric/" + dir, ang);
@@ -134,18 +134,18 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         const double sa = r.window_area_perp / nb.front_projected;
         const Estimate ha = floored(r.bin_g1_raycast(b), r.raycast_rays, sa);
         Row a = make_row(set, "", "g1_bin", "g1_bin_raycast", Kind::Identity,
-                         "DESIGN.md G1(v,m) estimators (a) = (b)");
+                         "G1(v,m) estimators (a) = (b)");
         push_measured(out, std::move(a), bin_where, eb.mean,
                       std::hypot(eb.stderr_, ha.stderr_), ha.mean, "rays",
                       set.name + "/g1_bin_raycast/" + dir, bx);
-        // Smith: G1(v, m) = chi+(v.m) G1(v), independent of m (001 eq. 9-10).
+        // Smith: G1(v, m) = chi+(v.m) G1(v), independent of m [Heitz14, eq. 9-10].
         Row sm = make_row(set, "", "g1_bin", "smith_numeric", Kind::Model,
-                          "001 eq. (9)-(10): Smith G1(v,m) = chi+(v.m) G1(v)");
+                          "[Heitz14, eq. 9-10]: Smith G1(v,m) = chi+(v.m) G1(v)");
         push_measured(out, std::move(sm), bin_where, eb.mean,
                       eb.stderr_, smith_numeric, "rays",
                       set.name + "/g1_bin_smith/" + dir, bx);
         Row vc = make_row(set, "", "g1_bin", "vcavity", Kind::Model,
-                          "001 eq. (24), averaged over the bin's facets");
+                          "[Heitz14, eq. 24], averaged over the bin's facets");
         push_measured(out, std::move(vc), bin_where, eb.mean,
                       eb.stderr_, vcav[b], "rays",
                       set.name + "/g1_bin_vcavity/" + dir, bx);
@@ -169,7 +169,7 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
       g1_by_direction[{t, p}].push_back(gb);
     });
   });
-  // Averaged G1 against the Smith G1 of the nominal NDF (001 eq. 11 with alpha_o): a
+  // Averaged G1 against the Smith G1 of the nominal NDF ([Heitz14, eq. 11] with alpha_o): a
   // statistic of the generated surfaces, so it needs the between-surface error. One surface
   // gives the relative deviation only.
   const Microsurface& s0 = set.surfaces[0];
@@ -178,7 +178,7 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
       for (double t : o.theta_deg) {
         const Vec3 v = direction_from_angles(rad(t), rad(p));
         Row r = make_row(set, "", "g1", "smith_nominal", Kind::Model,
-                         "001 eq. (11) with alpha_o; Beckmann Lambda");
+                         "[Heitz14, eq. 11] with alpha_o; Beckmann Lambda");
         push_nominal(out, std::move(r), "theta " + angle(t) + " phi " + angle(p),
                      g1_by_direction[{t, p}], s0.nominal->G1(v), "",
                      {{"theta_deg", t}, {"phi_deg", p}});

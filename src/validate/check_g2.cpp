@@ -6,7 +6,7 @@
 namespace microsim::validation {
 
 // ---------------------------------------------------------------------------------------------
-// G2 (000 eq. 16, 001 eq. 20-23): the hotspot G2(v,m,v) = G1(v,m) as an identity against an
+// G2 ([GeomBSDF24, eq. 16], [Heitz14, eq. 20-23]): the hotspot G2(v,m,v) = G1(v,m) as an identity against an
 // independent `measure g1` run, per normal bin and on average; the four Smith forms with Lambda
 // from the facets and the V-cavity as approximate models (ray-count error), the four forms of
 // the nominal NDF over ensembles (between-surface error). The symmetry G2(o,m,i) = G2(i,m,o)
@@ -40,7 +40,7 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
   G2Options go = check_options<G2Options>(o, share_of_rays(o, 4));
   const DirectionBinning binning = g2_normal_binning(go);
   // A V-cavity ensemble is its grooves, each an infinite periodic groove traced on its own
-  // (001 Sec. 6.1, as measure g1 and check_g1 do), not the stored strips traced together.
+  // ([Heitz14, Sec. 6.1], as measure g1 and check_g1 do), not the stored strips traced together.
   auto measure = [&](const Tracer& tracer, const Vec3& a, const Vec3& b, const FacetTable& table) {
     const Microsurface& s = tracer.surface();
     G2Result r = measure_with_progress(progress, 2.0 * static_cast<double>(go.rays), go, [&](const G2Options& g) {
@@ -77,22 +77,22 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
                       set.name + "/g2_" + name, ang);
       };
       const models::G2Forms fn = a.smith_numeric();
-      model_row("separable_numeric", fn.separable, "001 eq. (20), Lambda from the facets");
-      model_row("height_correlated_numeric", fn.height_correlated, "001 eq. (21), Lambda from the facets");
-      model_row("direction_correlated_numeric", fn.direction_correlated, "001 eq. (22), Lambda from the facets");
+      model_row("separable_numeric", fn.separable, "[Heitz14, eq. 20], Lambda from the facets");
+      model_row("height_correlated_numeric", fn.height_correlated, "[Heitz14, eq. 21], Lambda from the facets");
+      model_row("direction_correlated_numeric", fn.direction_correlated, "[Heitz14, eq. 22], Lambda from the facets");
       model_row("height_direction_correlated_numeric", fn.height_direction_correlated,
-                "001 eq. (23), Lambda from the facets");
+                "[Heitz14, eq. 23], Lambda from the facets");
       model_row("vcavity", a.vcavity,
-                is_vcavity(s) ? "001 eq. (24)-(25), averaged over the facets facing both (exact for separate grooves)"
-                              : "001 eq. (24)-(25), averaged over the facets facing both");
+                is_vcavity(s) ? "[Heitz14, eq. 24-25], averaged over the facets facing both (exact for separate grooves)"
+                              : "[Heitz14, eq. 24-25], averaged over the facets facing both");
       Table g2_rows = g2_table();
       pass.rows().push_back(add_row(g2_rows, a, s));
     }
     Json hotspot = Json::array();
-    // Hotspot (000 eq. 16: G2(v,m,v) = G1(v,m)): G2 at o = i against `measure g1` run
+    // Hotspot ([GeomBSDF24, eq. 16]: G2(v,m,v) = G1(v,m)): G2 at o = i against `measure g1` run
     // independently (another seed: independent points and rays), estimator (b) with the same
     // weights A_f max(0, v.m_f), per normal bin and on average. Beside it, Smith's
-    // direction-correlated form (001 eq. 22), which is exactly G1 at o = i.
+    // direction-correlated form [Heitz14, eq. 22], which is exactly G1 at o = i.
     for (double t : g2_hotspot_theta()) {
       const Vec3 v = direction_from_angles(rad(t), 0.0);
       const G2Result h = measure(tracer, v, v, table);
@@ -112,11 +112,11 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
       const Json ang = {{"theta_deg", t}};
       const Estimate g2 = floored(h.g2(), h.samples), g1 = floored(g.g1_area_sampling(), g.sample_rays);
       Row r = make_row(set, "", "g2_hotspot", "g1_independent", Kind::Identity,
-                       "000 eq. 16: G2(v,m,v) = G1(v,m); G1 by an independent measure g1 run");
+                       "[GeomBSDF24, eq. 16]: G2(v,m,v) = G1(v,m); G1 by an independent measure g1 run");
       push_measured(out, std::move(r), where, g2.mean, std::hypot(g2.stderr_, g1.stderr_), g1.mean,
                     "rays", set.name + "/g2_hotspot", ang);
       Row dc = make_row(set, "", "g2_hotspot", "direction_correlated_numeric", Kind::Model,
-                        "001 eq. (22) at o = i: 1/(1 + Lambda), Lambda from the facets");
+                        "[Heitz14, eq. 22] at o = i: 1/(1 + Lambda), Lambda from the facets");
       push_measured(out, std::move(dc), where, g2.mean, g2.stderr_,
                     h.smith_numeric().direction_correlated, "rays",
                     set.name + "/g2_hotspot_direction_correlated", ang);
@@ -133,7 +133,7 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         const Estimate e1 = floored(g.bin_g1_area_sampling(b), gb.samples);
         const Json bx = bin.with(ang);
         Row rb = make_row(set, "", "g2_hotspot_bin", "g1_bin_independent", Kind::Identity,
-                          "000 eq. 16: G2(v,m,v) = G1(v,m) per normal bin");
+                          "[GeomBSDF24, eq. 16]: G2(v,m,v) = G1(v,m) per normal bin");
         push_measured(out, std::move(rb), where + ", " + bin.text(), e2.mean, std::hypot(e2.stderr_, e1.stderr_), e1.mean, "rays",
                       set.name + "/g2_hotspot_bin/theta " + angle(t), bx);
         hot["bins"].push_back({{"theta_m_range_deg", {bin.theta_lo, bin.theta_hi}},
@@ -144,7 +144,7 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
     }
     pass.entry["hotspot"] = hotspot;
   });
-  // The four Smith forms of the nominal NDF (001 eq. 20-23 with its Lambda): a statistic of
+  // The four Smith forms of the nominal NDF ([Heitz14, eq. 20-23] with its Lambda): a statistic of
   // the generated surfaces, compared over the ensemble.
   const Microsurface& s0 = set.surfaces[0];
   if (s0.nominal)
@@ -164,11 +164,11 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         Row r = make_row(set, "", "g2", name, Kind::Model, ref);
         push_nominal(out, std::move(r), dir, g2_by_pair[ip], value, set.name + "/g2_" + name, ang);
       };
-      nominal_row("separable_nominal", fm.separable, "001 eq. (20), nominal NDF");
-      nominal_row("height_correlated_nominal", fm.height_correlated, "001 eq. (21), nominal NDF");
-      nominal_row("direction_correlated_nominal", fm.direction_correlated, "001 eq. (22), nominal NDF");
+      nominal_row("separable_nominal", fm.separable, "[Heitz14, eq. 20], nominal NDF");
+      nominal_row("height_correlated_nominal", fm.height_correlated, "[Heitz14, eq. 21], nominal NDF");
+      nominal_row("direction_correlated_nominal", fm.direction_correlated, "[Heitz14, eq. 22], nominal NDF");
       nominal_row("height_direction_correlated_nominal", fm.height_direction_correlated,
-                  "001 eq. (23), nominal NDF");
+                  "[Heitz14, eq. 23], nominal NDF");
     }
   out.measurements = per_surface;
 }

@@ -1,11 +1,11 @@
-// Checks of D: the 000 eq. 1b/1c identities and D against the nominal NDF.
+// Checks of D: the [GeomBSDF24, eq. 1b/1c] identities and D against the nominal NDF.
 #include "checks_common.hpp"
 #include "microsim/surface/rounding_bound.hpp"
 
 namespace microsim::validation {
 
 // ---------------------------------------------------------------------------------------------
-// D identities: 000 eq. 1b (sum_f A_f m_f / A = n) and eq. 1c (sum_f A_f (n.m_f) / A = 1).
+// D identities: [GeomBSDF24, eq. 1b] (sum_f A_f m_f / A = n) and eq. 1c (sum_f A_f (n.m_f) / A = 1).
 void check_d_identities(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
   Json per_surface = Json::array();
   for (std::size_t k = 0; k < set.surfaces.size(); ++k) {
@@ -29,7 +29,7 @@ void check_d_identities(const SurfaceSet& set, Progress& progress, CheckOutput& 
       const bool open_region = m.region && !m.periodic && a < 2;
       Row r = make_row(set, surface_label(set, k), std::string("eq_1b_") + axis[a], "macro_normal",
                        open_region ? Kind::Info : Kind::Deterministic,
-                       open_region ? "000 eq. 1b (a window's interior: its mean slope, not an identity)" : "000 eq. 1b");
+                       open_region ? "[GeomBSDF24, eq. 1b] (a window's interior: its mean slope, not an identity)" : "[GeomBSDF24, eq. 1b]");
       r.measured = b[a];
       r.model = m.normal[a];
       r.tolerance = tol_axis[a];
@@ -38,7 +38,7 @@ void check_d_identities(const SurfaceSet& set, Progress& progress, CheckOutput& 
       r.condition += (r.condition.empty() ? "" : ", ") + std::string("sum A_f m_f.") + axis[a] + " / A";
       out.rows.push_back(r);
     }
-    Row c = make_row(set, surface_label(set, k), "eq_1c", "one", Kind::Deterministic, "000 eq. 1c");
+    Row c = make_row(set, surface_label(set, k), "eq_1c", "one", Kind::Deterministic, "[GeomBSDF24, eq. 1c]");
     c.measured = f.sum_area_cos / m.area;
     c.model = 1.0;
     c.tolerance = tol_axis.z();
@@ -117,7 +117,7 @@ void check_d_nominal(const SurfaceSet& set, Progress& progress, CheckOutput& out
     // macro area) are tested; the far tails hold too few facets for a normal z.
     if (model * bins.solid_angle_of_ring(it) < o.min_ring_mass) continue;
     Row r = make_row(set, K > 1 ? std::to_string(K) + " surfaces" : surface_label(set, 0), "d_ring",
-                     "nominal", Kind::Model, "DESIGN.md D; 001 Sec. 3.2 Beckmann D, bin-averaged");
+                     "nominal", Kind::Model, "[Heitz14, Sec. 3.2] Beckmann D, bin-averaged");
     r.condition += (K > 1 || !surface_label(set, 0).empty() ? ", " : " ") + std::string("theta_m ") +
                    angle(lo) + "-" + angle(hi);
     r.measured = d;
@@ -129,14 +129,14 @@ void check_d_nominal(const SurfaceSet& set, Progress& progress, CheckOutput& out
     r.extra = {{"theta_m_range_deg", {lo, hi}}};
     out.rows.push_back(r);
   }
-  // Moment fit of alpha (slope variance alpha^2/2 per axis, 001 Sec. 3.2, App. A) vs the nominal alpha.
+  // Moment fit of alpha (slope variance alpha^2/2 per axis, [Heitz14, Sec. 3.2, App. A]) vs the nominal alpha.
   for (int a = 0; a < 2; ++a) {
     std::vector<double> x;
     for (const auto& f : sums) x.push_back(std::sqrt(2 * (a == 0 ? f.slope_var_x : f.slope_var_y)));
     auto [mean, se] = mean_and_se(x);
     Row r = make_row(set, K > 1 ? std::to_string(K) + " surfaces" : surface_label(set, 0),
                      a == 0 ? "fitted_alpha_x" : "fitted_alpha_y", "nominal",
-                     K > 1 ? Kind::Model : Kind::Info, "001 Sec. 3.2 and App. A: P22 dslope = (n.m) D dm, Beckmann slope variance alpha^2/2 per axis");
+                     K > 1 ? Kind::Model : Kind::Info, "[Heitz14, Sec. 3.2 and App. A]: P22 dslope = (n.m) D dm, Beckmann slope variance alpha^2/2 per axis");
     r.measured = mean;
     if (K > 1) {
       r.stderr_ = se;

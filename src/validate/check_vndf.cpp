@@ -6,7 +6,7 @@
 namespace microsim::validation {
 
 // ---------------------------------------------------------------------------------------------
-// VNDF (000 eq. 3b, 001 eq. 13): the histogram of first-hit normals against the nominal D_v
+// VNDF ([GeomBSDF24, eq. 3b], [Heitz14, eq. 13]): the histogram of first-hit normals against the nominal D_v
 // (approximate model), and the nominal NDF's VNDF sampler against its own D_v (identity: the
 // sampler must reproduce its model; chi-square row: measured chi2/dof, model 1, stderr
 // sqrt(2/dof), the normal approximation of chi2/dof). The nominal D_v is a statistic of the
@@ -54,7 +54,7 @@ void check_vndf(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
       const double unit = static_cast<double>(vo.rays);
       const VndfResult r = measure_with_progress(
           progress, unit, vo, [&](const VndfOptions& opt) {
-            // A V-cavity ensemble: groove by groove (001 Sec. 6.1), as check_g1 measures it.
+            // A V-cavity ensemble: groove by groove [Heitz14, Sec. 6.1], as check_g1 measures it.
             return is_vcavity(s) ? measure_vcavity_vndf(s, v, opt) : measure_vndf(pass.tracer, v, opt, &pass.table);
           });
       const std::string where = (pass.label.empty() ? "" : pass.label + ", ") + "theta " + angle(t) + " phi " + angle(p);
@@ -66,7 +66,7 @@ void check_vndf(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         const GofResult g = histogram_gof(r.bin_hits, r.hits, vcavity_vndf_probabilities(s, r.v, r.binning),
                                           vo.family_alpha);
         Row m = chi2_row(set, "vcavity", Kind::Model,
-                         "001 eq. (13) with the V-cavity G1 (001 eq. 24) over the facets, bin sums", where, g,
+                         "[Heitz14, eq. 13] with the V-cavity G1 [Heitz14, eq. 24] over the facets, bin sums", where, g,
                          set.name + "/vndf_vcavity", ang);
         m.extra["max_abs_z"] = g.max_abs_z;
         out.rows.push_back(m);
@@ -75,7 +75,7 @@ void check_vndf(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         const std::vector<double> model =
             bin_integrals(r.binning, [&](const Vec3& m) { return s.nominal->D_visible(r.v, m); });
         const GofResult g = histogram_gof(r.bin_hits, r.hits, model, vo.family_alpha);
-        Row m = chi2_row(set, "nominal", Kind::Info, "001 eq. (13): D_v of the nominal NDF, bin integrals", where,
+        Row m = chi2_row(set, "nominal", Kind::Info, "[Heitz14, eq. 13]: D_v of the nominal NDF, bin integrals", where,
                          g, set.name + "/vndf_nominal", ang);
         m.error = "rays (one surface: surface-to-surface variation not included)";
         out.rows.push_back(m);
@@ -86,7 +86,7 @@ void check_vndf(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
         if (pass.k == 0) {
           sampler = test_vndf_sampler(*s.nominal, v, vo.rays, binning, o.seed ^ 0x5a5a5a5aULL);
           Row sr = make_row(set, "", "vndf_sampler_chi2_per_dof", "sampler_model", Kind::Identity,
-                            "models/ndf.hpp VNDF sampler vs its own D_v (001 eq. 13)");
+                            "models/ndf.hpp VNDF sampler vs its own D_v [Heitz14, eq. 13]");
           sr.condition = set.name + " nominal sampler, theta " + angle(t) + " phi " + angle(p);
           set_chi2(sr, sampler->gof.chi2, sampler->gof.dof);
           sr.error = "samples";
@@ -118,7 +118,7 @@ void check_vndf(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
           if (model[b] < kVndfMinBinMass) continue;
           const NormalBinRange bin = normal_bin_range(binning, b);
           Row r = make_row(set, "", "vndf_bin", "nominal", Kind::Model,
-                           "001 eq. (13): D_v of the nominal NDF, bin average");
+                           "[Heitz14, eq. 13]: D_v of the nominal NDF, bin average");
           push_nominal(out, std::move(r), dir + ", " + bin.text(), dv_by_direction[{t, p}][b],
                        model[b] / binning.solid_angle(b), set.name + "/vndf_nominal_bins/" + dir,
                        bin.with({{"theta_deg", t}, {"phi_deg", p}}));

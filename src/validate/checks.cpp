@@ -5,7 +5,7 @@ namespace microsim::validation {
 
 const std::vector<Check>& checks() {
   static const std::vector<Check> registry = {
-      {"d_identities", "000 eq. 1b and 1c from the facets (exact, to rounding)",
+      {"d_identities", "[GeomBSDF24, eq. 1b and 1c] from the facets (exact, to rounding)",
        [](const SurfaceSet&) { return true; },
        [](const SurfaceSet& s) {
          double w = 0;

@@ -141,7 +141,7 @@ std::uint64_t share_of_rays(const Options& o, std::uint64_t divisor) {
 }
 
 // An info row when the set's coarsest surface is coarser than the converged level of the study
-// for the quantities of `check` (README "Converged surfaces"): the rows then describe the
+// for the quantities of `check` (docs/theory/discretization.md): the rows then describe the
 // triangulated grid more than the continuous surface it stands for.
 std::optional<Row> discretization_row(const SurfaceSet& set, const std::string& check) {
   const auto level = converged_level(check);

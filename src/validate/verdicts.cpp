@@ -36,7 +36,7 @@ Row albedo_total_row(std::uint64_t paths, std::uint64_t lost, std::uint64_t unte
   e.quantity = "albedo_total";
   e.model_name = "one";
   e.kind = Kind::Deterministic;
-  e.reference = "energy conservation of a mirror (000 eq. 21d with F = 1): every path leaves";
+  e.reference = "energy conservation of a mirror ([GeomBSDF24, eq. 21d] with F = 1): every path leaves";
   e.measured = albedo_up + albedo_down;
   e.model = 1.0;
   // Every path of `paths` that does not leave moves the total by 1/paths. Accepted: the loss

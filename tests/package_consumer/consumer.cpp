@@ -1,7 +1,7 @@
 // Uses the installed library the way an outside project would: generate a small Beckmann tile,
-// check 000 eq. 1c on its facets, and measure G1 by ray casting. On a periodic heightfield every
+// check [GeomBSDF24, eq. 1c] on its facets, and measure G1 by ray casting. On a periodic heightfield every
 // ray cast from above hits exactly once, so the ray-casting G1 equals 1/(1+Lambda) from the
-// facets up to rounding of the float geometry (DESIGN.md "What is a real test and what is an identity"): a check that
+// facets up to rounding of the float geometry (docs/theory/masking.md): a check that
 // the installed tracer and estimator work, not of Smith's theory.
 #include <cmath>
 #include <cstdio>
@@ -19,7 +19,7 @@ int main() {
   validate(p);
   const Microsurface s = generate_gaussian(p);
   const FacetSums f = facet_sums(s);
-  const double eq_1c = std::abs(f.sum_area_cos / s.macro().area - 1.0);  // 000 eq. 1c
+  const double eq_1c = std::abs(f.sum_area_cos / s.macro().area - 1.0);  // [GeomBSDF24, eq. 1c]
 
   const Tracer tracer(s);
   G1Options o;

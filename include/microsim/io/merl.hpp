@@ -1,4 +1,4 @@
-// MERL isotropic BRDF files (.binary; DESIGN.md "Outputs"): three int32 (90, 90, 180), then the
+// MERL isotropic BRDF files (.binary; docs/theory/exports.md): three int32 (90, 90, 180), then the
 // R, G and B blocks of 90 * 90 * 180 doubles, cell (theta_h, theta_d, phi_d) at index
 // phi_d + 180 (theta_d + 90 theta_h); theta_h cell i covers u in [i/90, (i+1)/90) with theta_h =
 // u^2 pi/2, theta_d cell j covers [j, j+1) pi/180, phi_d cell k covers [k, k+1) pi/180. A reader
@@ -8,7 +8,7 @@
 // Filling: each cell's value is the measured f (reflected side, all orders) at the cell centre.
 // The centre's (theta_h, theta_d, phi_d) give the pair (wi, wo) with the half vector at azimuth 0
 // (wi = R_y(theta_h) d(theta_d, phi_d), wo its mirror about the half vector); by reciprocity
-// (000 eq. 4c) the direction nearer the normal is taken as the light's; the pair is turned
+// [GeomBSDF24, eq. 4c] the direction nearer the normal is taken as the light's; the pair is turned
 // about the normal so that wi has the measured azimuth, then f is read from the measured
 // hemisphere maps (interpolate_f) of the two measured incidences that bracket theta(wi) at the
 // same outgoing direction and interpolated linearly in theta_i (held constant outside the

@@ -1,5 +1,5 @@
-// RGL tensor files (.bsdf) of Dupuy and Jakob 2018, read by Mitsuba 3 `measured`, pbrt-v4
-// `MeasuredBxDF` and the authors' reader (DESIGN.md "Outputs" gives the byte layout).
+// RGL tensor files (.bsdf) of [Dupuy18], read by Mitsuba 3 `measured`, pbrt-v4
+// `MeasuredBxDF` and the authors' reader (docs/theory/exports.md gives the byte layout).
 //
 // How a reader evaluates the file, which fixes what we store (u-coordinates: theta = u^2 pi/2,
 // phi = (2u - 1) pi; every 2D table is bilinear between its vertices on [0, 1]^2, the last

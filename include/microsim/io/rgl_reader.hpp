@@ -1,5 +1,5 @@
 // Evaluation of an RGL tensor file (.bsdf) at any pair of directions, the way Mitsuba 3's
-// `measured` plugin evaluates it (format and writer: io/rgl_bsdf.hpp, DESIGN.md "Outputs"):
+// `measured` plugin evaluates it (format and writer: io/rgl_bsdf.hpp, docs/theory/exports.md):
 //   theta_i = elevation(wi), phi_i = atan2(wi.y, wi.x); wm = normalize(wi + wo);
 //   u_m = (u(theta_m), u(phi_m - phi_i) [isotropic: phi_i has at most 2 values] or u(phi_m));
 //   s = inverse of the `vndf` warp at u_m, the warp interpolated linearly in (phi_i, theta_i)

@@ -1,7 +1,6 @@
-// The full BSDF of an explicit microsurface, per scattering order, by random walks (DESIGN.md
-// "BSDF"): light arrives from l; rays are traced along -l from stratified points of the periodic
-// tile; at each hit a mirror reflects, a conductor reflects with weight F (complex index, 000 eq.
-// 8), a dielectric reflects with probability F and otherwise refracts (000 eq. 15a; total internal
+// The full BSDF of an explicit microsurface, per scattering order, by random walks (docs/theory/bsdf.md): light arrives from l; rays are traced along -l from stratified points of the periodic
+// tile; at each hit a mirror reflects, a conductor reflects with weight F (complex index,
+// [GeomBSDF24, eq. 8]), a dielectric reflects with probability F and otherwise refracts ([GeomBSDF24, eq. 15a]; total internal
 // reflection; both sides of the interface). A ray that leaves upward is reflected, one that
 // leaves the slab downward (inside a dielectric) is transmitted. Light is unpolarized.
 //

@@ -9,9 +9,9 @@
 // Comparisons follow the rule of table.hpp: z = (measured - model) / error, null where there is
 // no error bar and the values differ. The models of the nominal NDF (smith_single,
 // smith_multiple, vcavity_single) are statistics of the generated surfaces; compared with one
-// surface, the ray-count error misses the surface-to-surface variation (DESIGN.md "Two kinds of
-// error bar"), so z_<model> is null and the distance in units of the ray-count error is kept as
-// z_<model>_rays. smooth_interface is exact (000 eq. 7d, 10b): its z is a verdict.
+// surface, the ray-count error misses the surface-to-surface variation (docs/theory/error-bars.md,
+// "Two kinds of error bar"), so z_<model> is null and the distance in units of the ray-count error is kept as
+// z_<model>_rays. smooth_interface is exact [GeomBSDF24, eq. 7d, 10b]: its z is a verdict.
 #pragma once
 #include <optional>
 #include <string>

@@ -1,7 +1,7 @@
-// One random walk of the BSDF estimator on an explicit microsurface (DESIGN.md "BSDF"): the ray
+// One random walk of the BSDF estimator on an explicit microsurface (docs/theory/bsdf.md): the ray
 // starts at `origin` along `dir`; at each hit a mirror reflects, a conductor reflects with weight
-// F (complex index, 000 eq. 8), a dielectric reflects with probability F and otherwise refracts
-// (000 eq. 15a; total internal reflection; both sides of the interface). Shared by the periodic
+// F (complex index, [GeomBSDF24, eq. 8]), a dielectric reflects with probability F and otherwise refracts
+// ([GeomBSDF24, eq. 15a]; total internal reflection; both sides of the interface). Shared by the periodic
 // tile, finite objects and the V-cavity ensemble (each groove traced on its own).
 #pragma once
 #include <cstdint>
@@ -24,7 +24,7 @@ struct WalkEnd {
 
 // `finite`: the surface is a finite object. Its rays that miss it at once are Missed, and a ray
 // that leaves it outside after at least one event is reflected whatever its direction (walls send
-// light below the base plane: 000 "Inherent Assumptions", the visible area exceeds the
+// light below the base plane: [GeomBSDF24, "Inherent Assumptions"], the visible area exceeds the
 // macrosurface's). On a periodic tile a reflected ray leaves upward, a transmitted one downward
 // from inside the slab; anything else is Lost. `events` counts the scattering events.
 // `escape` (optional, trace/escape_test.hpp): rays it proves to leave the surface are not traced

@@ -102,7 +102,7 @@ class FacetTable {
   const std::uint16_t* bins16() const { return bin16_.empty() ? nullptr : bin16_.data(); }
   const int* bins32() const { return bin32_.empty() ? nullptr : bin32_.data(); }
   // Meshes: facets pressed against an opposite-facing twin with the same three vertex
-  // positions (walls of touching boxes, 000 Fig. 6): no ray can reach them, so area sampling
+  // positions (walls of touching boxes, [GeomBSDF24, Fig. 6]): no ray can reach them, so area sampling
   // counts them occluded without tracing (an occlusion ray leaving one starts inside the
   // neighbour).
   bool buried(std::size_t k) const { return !buried_.empty() && buried_[k]; }

@@ -1,4 +1,4 @@
-// Masking G1 measured on an explicit microsurface by the two estimators of DESIGN.md:
+// Masking G1 measured on an explicit microsurface by the two estimators of docs/theory/masking.md:
 //  (a) ray casting: parallel rays along -v, first-hit normals binned: visible projected area
 //      per normal bin over the bin's front-facing projected area sum_f A_f max(0, v.m_f);
 //  (b) area sampling: points drawn with density proportional to projected area A_f max(0,v.m_f),
@@ -39,7 +39,7 @@ struct G1NormalBin {
   Vec3 mean_normal = Vec3::Zero();  // projected-area-weighted mean unit normal
   double area = 0;                  // sum_f A_f in the bin
   double front_projected = 0;       // sum_f A_f max(0, v.m_f)
-  double vcavity_weighted = 0;      // sum_f A_f max(0, v.m_f) G1_vcavity(v, m_f) (001 eq. 24)
+  double vcavity_weighted = 0;      // sum_f A_f max(0, v.m_f) G1_vcavity(v, m_f) [Heitz14, eq. 24]
   std::uint64_t raycast_hits = 0;   // estimator (a)
   std::uint64_t samples = 0;        // estimator (b)
   std::uint64_t visible = 0;
@@ -109,8 +109,8 @@ std::vector<double> sum_over_facets(std::size_t num_facets, std::size_t width, B
 }
 
 // v.n > 0: the surface seen from above. v.n < 0 (meshes only; UsageError for heightfields and
-// for v.n = 0): the undersurface, measured explicitly on undersurface(s) at mirror_z(v) (000
-// "Inherent Assumptions"); pass `under` (a Tracer of undersurface(s)) to reuse it across
+// for v.n = 0): the undersurface, measured explicitly on undersurface(s) at mirror_z(v)
+// [GeomBSDF24, "Inherent Assumptions"]; pass `under` (a Tracer of undersurface(s)) to reuse it across
 // directions. `table` (from build_facet_table with g1_normal_binning(options)) saves
 // recomputing the facets of the traced surface for every direction.
 G1Result measure_g1(const Tracer& tracer, const Vec3& v, const G1Options& options,
@@ -121,13 +121,13 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v, const G1Options& option
 Table g1_table();
 // Appends the row of one direction and returns it. Per normal bin: g1 (area sampling) and g1_raycast with standard errors, and the
 // two models evaluated on the bin's own facets: smith_numeric = chi+(v.m)/(1 + Lambda_facets(v))
-// and vcavity_numeric = sum A_f (v.m_f)+ G1_vcavity(v, m_f) / sum A_f (v.m_f)+ (001 eq. 24).
+// and vcavity_numeric = sum A_f (v.m_f)+ G1_vcavity(v, m_f) / sum A_f (v.m_f)+ [Heitz14, eq. 24].
 // Row summaries over the bins with samples, weighted by front-facing projected area w_b:
 // bins_mad_* = sum_b w_b |g1_b - model_b| (noise floor bins_mad_noise = sum_b w_b se_b sqrt(2/pi))
 // and bins_chi2_* = sum_b ((g1_b - model_b) / se_b)^2 over bins_dof bins.
 Json& add_row(Table& t, const G1Result& r, const Microsurface& s);
 
-// 000 "Inherent Assumptions": the undersurface (a row of `under`, v.n < 0) approximated by the
+// [GeomBSDF24, "Inherent Assumptions"]: the undersurface (a row of `under`, v.n < 0) approximated by the
 // surface's own G1 with v reversed or reflected across the macrosurface; adds g1_reverse_v,
 // g1_reflect_v with errors, and their z and rel_dev against the explicit measurement.
 void add_undersurface_approximations(Json& row, const G1Result& under, const G1Result& reverse_v,

@@ -1,5 +1,5 @@
 // The normal distribution D of a microsurface, measured exactly from its facets
-// (DESIGN.md "D"), with a between-region standard error from spatial blocks.
+// (docs/theory/ndf.md), with a between-region standard error from spatial blocks.
 #pragma once
 #include <nlohmann/json.hpp>
 
@@ -35,7 +35,7 @@ NdfResult measure_ndf(const Microsurface& s, const NdfOptions& options);
 Table ndf_table(const NdfResult& r, const Microsurface& s);
 ExrTable ndf_to_exr(const NdfResult& r, const Microsurface& s);
 
-// Summary of the 000 eq. 1b/1c identities and of the slope statistics ("fitted alpha").
+// Summary of the [GeomBSDF24, eq. 1b/1c] identities and of the slope statistics ("fitted alpha").
 Json surface_checks_json(const FacetSums& f, const Microsurface& s);
 
 }  // namespace microsim

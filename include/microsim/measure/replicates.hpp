@@ -1,5 +1,5 @@
-// Calibrated standard errors from independent randomized replicates (DESIGN.md, "Every estimate
-// carries its standard error"): the rays of a measurement are split into R replicates, each a
+// Calibrated standard errors from independent randomized replicates (docs/theory/error-bars.md,
+// "Every estimate carries its standard error"): the rays of a measurement are split into R replicates, each a
 // full stratified, Morton-ordered pass with its own random stream (CounterRng keyed by the
 // replicate index), so the R replicate estimates are independent and identically distributed.
 // The reported value is the mean of the replicate means and its error the standard error of

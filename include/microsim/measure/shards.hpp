@@ -1,4 +1,4 @@
-// One measurement split over processes (DESIGN.md "Beyond one machine"): MPI ranks, or shards
+// One measurement split over processes (docs/theory/numerics.md): MPI ranks, or shards
 // run one at a time (`--shard K/N`, job arrays, resuming a killed run) and merged afterwards.
 //
 // Why the split is exact: every ray draws its numbers from CounterRng(seed, stream, index), so a

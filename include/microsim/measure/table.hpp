@@ -1,7 +1,7 @@
 // The result table of every estimator: named columns (a value NAME with its standard error
 // NAME_stderr beside it), the models beside the measurements, a per-bin sub-table ("bins") in
 // every row, and the rules by which K tables of independent surfaces merge into the table of
-// the ensemble (DESIGN.md "Two kinds of error bar"). One rule for every quantity:
+// the ensemble (docs/theory/error-bars.md). One rule for every quantity:
 //  - a measured column becomes the mean over surfaces with the between-surface standard error
 //    sd / sqrt(K) (ErrorKind::Surfaces); the ray-count error of that mean, sqrt(sum se_k^2) / K,
 //    is kept as NAME_stderr_rays;

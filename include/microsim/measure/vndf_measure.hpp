@@ -1,10 +1,10 @@
-// Distribution of visible normals (000 eq. 3b, 001 eq. 13) measured on an explicit surface:
+// Distribution of visible normals ([GeomBSDF24, eq. 3b], [Heitz14, eq. 13]) measured on an explicit surface:
 // parallel rays along -v from the ray window, the first-hit normals histogrammed over
 // direction bins of m. The estimate of the bin average of D_v is
 //   D_v(B) = (hits in B / front-face hits) / solid_angle(B),
 // a probability density over visible normals (normalized by the hits, which for a periodic
 // heightfield are all the rays; for a finite object such as the ellipsoid the normalization
-// is that of 001 eq. 13 by construction).
+// is that of [Heitz14, eq. 13] by construction).
 //
 // Beside it: the analytic D_v of the surface's nominal NDF (bin integrals by quadrature), and
 // Smith's D_v with the surface's own facets, (v.m)+ D_facets / int (v.m)+ D_facets (visibility

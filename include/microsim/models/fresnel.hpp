@@ -1,4 +1,4 @@
-// Fresnel reflectance of a smooth interface (000 eq. 8): dielectric (real relative index, total
+// Fresnel reflectance of a smooth interface [GeomBSDF24, eq. 8]: dielectric (real relative index, total
 // internal reflection included) and conductor (complex index eta + i k), for s- and p-polarized
 // and unpolarized light.
 //
@@ -6,14 +6,14 @@
 //
 // Conventions:
 //   cos_i  = |cos| of the angle between the propagation direction and the interface normal, on
-//            the side the light comes from (000: theta_v; Fresnel is symmetric in the two sides,
-//            000 after eq. 8c).
+//            the side the light comes from ([GeomBSDF24]: theta_v; Fresnel is symmetric in the two sides,
+//            [GeomBSDF24, after eq. 8c]).
 //   n      = relative index of the far side over the near side (eta_t / eta_v in the notation of
-//            000 eq. 8; 000 writes F(theta_v, eta_v / eta_t), i.e. the argument is 1 / n).
+//            [GeomBSDF24, eq. 8]; [GeomBSDF24] writes F(theta_v, eta_v / eta_t), i.e. the argument is 1 / n).
 //            Conductors: n = eta + i k relative to the medium the light comes from.
 //   s / p  = polarization perpendicular / parallel to the plane of incidence (the physics
 //            convention: R_p vanishes at Brewster's angle tan(theta_B) = n, R_s never does).
-//            Note: 000 eq. 8b prints the two closed forms under swapped labels; its "R_p"
+//            Note: [GeomBSDF24, eq. 8b] prints the two closed forms under swapped labels; its "R_p"
 //            |sin(tv - tt) / sin(tv + tt)|^2 is the s-reflectance here, and its "R_s"
 //            |(sin 2tv - sin 2tt) / (sin 2tv + sin 2tt)|^2 = |tan(tv - tt) / tan(tv + tt)|^2 is the
 //            p-reflectance (the one with a Brewster zero). The unpolarized average is unaffected.
@@ -28,12 +28,12 @@ namespace microsim::models {
 struct FresnelReflectance {
   double Rs = 1.0;  // s-polarized (perpendicular) power reflectance
   double Rp = 1.0;  // p-polarized (parallel) power reflectance
-  // 000 eq. 8a: F = (1 - a) R_s + a R_p, a = 0 s-polarized, 1 p-polarized, 1/2 unpolarized.
+  // [GeomBSDF24, eq. 8a]: F = (1 - a) R_s + a R_p, a = 0 s-polarized, 1 p-polarized, 1/2 unpolarized.
   double polarized(double a) const { return (1.0 - a) * Rs + a * Rp; }
   double unpolarized() const { return 0.5 * (Rs + Rp); }
 };
 
-// Cosine of the refraction angle (000 eq. 8c: sin_t = sin_i / n), or -1 under total internal
+// Cosine of the refraction angle ([GeomBSDF24, eq. 8c]: sin_t = sin_i / n), or -1 under total internal
 // reflection (sin_t > 1).
 inline double fresnel_cos_transmitted(double cos_i, double n) {
   cos_i = std::clamp(std::abs(cos_i), 0.0, 1.0);
@@ -42,7 +42,7 @@ inline double fresnel_cos_transmitted(double cos_i, double n) {
   return std::sqrt(1.0 - sin2_t);
 }
 
-// Dielectric interface, real n > 0 (000 eq. 8b in the amplitude form
+// Dielectric interface, real n > 0 ([GeomBSDF24, eq. 8b] in the amplitude form
 // r_s = (cos_i - n cos_t) / (cos_i + n cos_t), r_p = (n cos_i - cos_t) / (n cos_i + cos_t),
 // algebraically identical to 8b by Snell's law 8c and finite at normal incidence, where 8b's
 // ratios of sines are 0/0). Total internal reflection: R_s = R_p = 1.
@@ -55,7 +55,7 @@ inline FresnelReflectance fresnel_dielectric(double cos_i, double n) {
   return {rs * rs, rp * rp};
 }
 
-// Unpolarized dielectric reflectance (the walk's Fresnel: light is unpolarized, 000 eq. 8a, a = 1/2).
+// Unpolarized dielectric reflectance (the walk's Fresnel: light is unpolarized, [GeomBSDF24, eq. 8a], a = 1/2).
 inline double fresnel_dielectric_unpolarized(double cos_i, double n) {
   return fresnel_dielectric(cos_i, n).unpolarized();
 }

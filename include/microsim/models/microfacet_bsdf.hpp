@@ -1,6 +1,6 @@
-// The single-scattering microfacet BSDF (000 eq. 21d, 001 eq. 18; BTDF with the eta factors of
-// 000 eq. 9c and 003 eq. 6), its pieces (reflection and refraction vectors and their inverse
-// maps, 000 eq. 13a/13b/15a/15b; Jacobians, 000 eq. 19b/20b) and the materials of a random walk
+// The single-scattering microfacet BSDF ([GeomBSDF24, eq. 21d], [Heitz14, eq. 18]; BTDF with the eta factors of
+// [GeomBSDF24, eq. 9c] and [RefractionBlog24, eq. 6]), its pieces (reflection and refraction vectors and their inverse
+// maps, [GeomBSDF24, eq. 13a/13b/15a/15b]; Jacobians, [GeomBSDF24, eq. 19b/20b]) and the materials of a random walk
 // (mirror, conductor with complex index, dielectric).
 //
 // Header-only, depends on Eigen and the other model headers only.
@@ -9,28 +9,28 @@
 // surface, radians. The medium above the surface (z > 0) has index 1, the material below index
 // eta (dielectrics only; `eta` is the index of the material relative to the medium above, so
 // eta = 1/1.5 is a less dense material below). Facet normals m point up (m.z > 0), out of the
-// material. f(o, i) is the radiance BSDF of 000 eq. 4a: outgoing radiance toward o over incident
-// irradiance from i (i = the light direction l of 000, o = the view direction v).
+// material. f(o, i) is the radiance BSDF of [GeomBSDF24, eq. 4a]: outgoing radiance toward o over incident
+// irradiance from i (i = the light direction l of [GeomBSDF24], o = the view direction v).
 //
-// eta factor of the BTDF: the radiance BTDF carries eta_o^2 / eta_i^2 (000 eq. 9c; 003 eq. 4 and 6;
-// Walter et al. 2007 eq. 21): with m the refraction half vector,
+// eta factor of the BTDF: the radiance BTDF carries eta_o^2 / eta_i^2 ([GeomBSDF24, eq. 9c]; [RefractionBlog24, eq. 4 and 6];
+// [Walter07, eq. 21]): with m the refraction half vector,
 //   f_t(o, i) = |o.m| |i.m| / (|o.n| |i.n|) * eta_o^2 (1 - F) G2 D(m) / (eta_i (i.m) + eta_o (o.m))^2.
-// In 000's notation this is (eta_v^2 / eta_l^2) (v.m)(l.m) / ((eta_v/eta_l) v + l)^2 ... ; the
-// prefactor printed in 000 eq. 14/21d (eta_l^2 / eta_v^2) is the inverse and contradicts 000's
+// In [GeomBSDF24]'s notation this is (eta_v^2 / eta_l^2) (v.m)(l.m) / ((eta_v/eta_l) v + l)^2 ... ; the
+// prefactor printed in [GeomBSDF24, eq. 14/21d] (eta_l^2 / eta_v^2) is the inverse and contradicts [GeomBSDF24]'s
 // own eq. 9c, 10b and the reciprocity 4c (f(v,l) / f(l,v) = eta_v^2 / eta_l^2); the form above
 // satisfies all three (tests/test_bsdf_models.cpp checks reciprocity and eq. 10b numerically).
 //
 // Masking-shadowing:
-//   SmithHeightCorrelated: reflection 001 eq. (21), 1 / (1 + Lambda(o) + Lambda(i)). Transmission:
+//   SmithHeightCorrelated: reflection [Heitz14, eq. 21], 1 / (1 + Lambda(o) + Lambda(i)). Transmission:
 //     the same height-correlated Smith model for directions on opposite sides. A facet at height
 //     quantile u = C1(h) is visible from above with probability u^Lambda(o) and from below with
 //     (1 - u)^Lambda(i'), i' = i mirrored to the upper side (the surface seen from below is the
 //     same Smith surface with heights -h), so G2 = int_0^1 u^Lo (1-u)^Li du = B(1 + Lo, 1 + Li)
-//     (Euler's beta function). (000 eq. 18a's G2(v, m, -t) = 1/(1 + Lo + Li) would treat both
+//     (Euler's beta function). ([GeomBSDF24, eq. 18a]'s G2(v, m, -t) = 1/(1 + Lo + Li) would treat both
 //     directions as seen from above and correlate them the wrong way.) This is exactly the
 //     order-1 term of the Smith random walk (models/smith_random_walk.hpp).
-//   VCavity: 001 sec. 6, min(G1_vc(o, m), G1_vc(i, m)); for transmission with i reflected to the
-//     upper side (000 eq. 18a: G2(v, m, -t)).
+//   VCavity: [Heitz14, Sec. 6], min(G1_vc(o, m), G1_vc(i, m)); for transmission with i reflected to the
+//     upper side ([GeomBSDF24, eq. 18a]: G2(v, m, -t)).
 #pragma once
 
 #include <Eigen/Core>
@@ -101,10 +101,10 @@ struct Material {
 // Reflection and refraction vectors, inverse maps, Jacobians
 // ---------------------------------------------------------------------------------------------
 
-// 000 eq. 13a: r = -v + 2 (v.m) m.
+// [GeomBSDF24, eq. 13a]: r = -v + 2 (v.m) m.
 inline Vec3 reflect(const Vec3& v, const Vec3& m) { return -v + 2.0 * v.dot(m) * m; }
 
-// 000 eq. 15a with eta_ratio = eta_v / eta_t (index on v's side over the far side):
+// [GeomBSDF24, eq. 15a] with eta_ratio = eta_v / eta_t (index on v's side over the far side):
 // t = -e v + (e (v.m) - sgn(v.m) sqrt(1 - e^2 |v x m|^2)) m. Returns false under total internal
 // reflection (negative radicand); *t is then left unchanged.
 inline bool refract(const Vec3& v, const Vec3& m, double eta_ratio, Vec3* t) {
@@ -117,20 +117,20 @@ inline bool refract(const Vec3& v, const Vec3& m, double eta_ratio, Vec3* t) {
   return true;
 }
 
-// 000 eq. 13b: m = (r + v) / |r + v| (requires v.m > 0).
+// [GeomBSDF24, eq. 13b]: m = (r + v) / |r + v| (requires v.m > 0).
 inline Vec3 half_vector_reflection(const Vec3& v, const Vec3& r) { return (r + v).normalized(); }
 
-// 000 eq. 15b: m = sgn(e + v.t) (e v + t) / |e v + t|, e = eta_v / eta_t; v.m > 0 by the sign.
+// [GeomBSDF24, eq. 15b]: m = sgn(e + v.t) (e v + t) / |e v + t|, e = eta_v / eta_t; v.m > 0 by the sign.
 inline Vec3 half_vector_refraction(const Vec3& v, const Vec3& t, double eta_ratio) {
   const Vec3 h = eta_ratio * v + t;
   const double sgn = (eta_ratio + v.dot(t)) >= 0.0 ? 1.0 : -1.0;
   return sgn * h.normalized();
 }
 
-// 000 eq. 19b: |J(m, r)| = dOmega(m) / dOmega(r) = 1 / (4 |r.m|).
+// [GeomBSDF24, eq. 19b]: |J(m, r)| = dOmega(m) / dOmega(r) = 1 / (4 |r.m|).
 inline double jacobian_reflection(const Vec3& r, const Vec3& m) { return 1.0 / (4.0 * std::abs(r.dot(m))); }
 
-// 000 eq. 20b (first form): |J(m, t)| = |t.m| / |e v + t|^2, e = eta_v / eta_t.
+// [GeomBSDF24, eq. 20b] (first form): |J(m, t)| = |t.m| / |e v + t|^2, e = eta_v / eta_t.
 inline double jacobian_refraction(const Vec3& v, const Vec3& t, const Vec3& m, double eta_ratio) {
   return std::abs(t.dot(m)) / (eta_ratio * v + t).squaredNorm();
 }
@@ -139,9 +139,9 @@ inline double jacobian_refraction(const Vec3& v, const Vec3& t, const Vec3& m, d
 // Masking-shadowing for the BSDF
 // ---------------------------------------------------------------------------------------------
 
-// SmithMaskingOnly: the BRDF of the weak white furnace test (001 eq. 19): G2 replaced by the
+// SmithMaskingOnly: the BRDF of the weak white furnace test [Heitz14, eq. 19]: G2 replaced by the
 // Smith masking G1(o, m), no shadowing; for an opaque material the reflection is then defined
-// for light from the whole sphere (|i.n| in the denominator), as in 001 App. C, and
+// for light from the whole sphere (|i.n| in the denominator), as in [Heitz14, App. C], and
 // int f(o, i) |i.n| d omega_i = 1 for every o with F = 1. Dielectrics: G1 of o on its own side.
 enum class Masking { SmithHeightCorrelated, VCavity, SmithMaskingOnly };
 
@@ -179,14 +179,14 @@ struct MicrofacetBsdf {
   Material material;
   Masking masking = Masking::SmithHeightCorrelated;
 
-  // f(o, i), 000 eq. 21d. Both directions unit. Reflection when o and i are on the same side
-  // (below: the surface seen from below is the same Smith surface mirrored, 000 "Inherent
-  // Assumptions"; only dielectrics have a lower side), transmission (dielectrics) otherwise.
+  // f(o, i), [GeomBSDF24, eq. 21d]. Both directions unit. Reflection when o and i are on the same side
+  // (below: the surface seen from below is the same Smith surface mirrored, [GeomBSDF24,
+  // "Inherent Assumptions"]; only dielectrics have a lower side), transmission (dielectrics) otherwise.
   double eval(const Vec3& o, const Vec3& i) const {
     if (o.z() == 0.0 || i.z() == 0.0) return 0.0;
     const bool o_above = o.z() > 0.0, i_above = i.z() > 0.0;
     if (masking == Masking::SmithMaskingOnly && !material.transmits()) {
-      // 001 eq. 19 integrand: G1(o, m) D(m) F / (4 |o.n| |i.n|), i anywhere on the sphere.
+      // [Heitz14, eq. 19] integrand: G1(o, m) D(m) F / (4 |o.n| |i.n|), i anywhere on the sphere.
       if (!o_above) return 0.0;
       const Vec3 m = half_vector_reflection(o, i);
       if (!(m.z() > 0.0) || !(o.dot(m) > 0.0)) return 0.0;
@@ -197,22 +197,22 @@ struct MicrofacetBsdf {
       if (!o_above && !material.transmits()) return 0.0;
       // Work in the frame where both are above.
       const Vec3 oo = o_above ? o : mirror_z(o), ii = i_above ? i : mirror_z(i);
-      const Vec3 m = half_vector_reflection(oo, ii);  // 000 eq. 13b
+      const Vec3 m = half_vector_reflection(oo, ii);  // [GeomBSDF24, eq. 13b]
       if (!(m.z() > 0.0)) return 0.0;
       const double om = oo.dot(m), im = ii.dot(m);
       if (!(om > 0.0) || !(im > 0.0)) return 0.0;
       // o.m = i.m (13b); their average keeps f(o, i) = f(i, o) to the last bit
       const double F = material.reflectance(0.5 * (om + im), i_above);
       double G2 = 0.0;
-      if (masking == Masking::SmithHeightCorrelated) G2 = G2_height_correlated(ndf, oo, ii, m);  // 001 eq. 21
+      if (masking == Masking::SmithHeightCorrelated) G2 = G2_height_correlated(ndf, oo, ii, m);  // [Heitz14, eq. 21]
       else if (masking == Masking::VCavity) G2 = vcavity_G2(oo, ii, m);
-      else G2 = ndf.G1(oo);  // 001 eq. 19 (weak white furnace)
-      // 000 eq. 21d / 001 eq. 18
+      else G2 = ndf.G1(oo);  // [Heitz14, eq. 19] (weak white furnace)
+      // [GeomBSDF24, eq. 21d] / [Heitz14, eq. 18]
       return F * G2 * ndf.D(m) / (4.0 * oo.z() * ii.z());
     }
     if (!material.transmits()) return 0.0;
     const double eta_o = material.index(o_above), eta_i = material.index(i_above);
-    // Refraction half vector (000 eq. 15b, 003 h = -(eta_i i + eta_o o)), oriented up.
+    // Refraction half vector ([GeomBSDF24, eq. 15b]; in [RefractionBlog24] h = -(eta_i i + eta_o o)), oriented up.
     Vec3 h = eta_o * o + eta_i * i;
     const double hn = h.norm();
     if (!(hn > 0.0)) return 0.0;
@@ -224,7 +224,7 @@ struct MicrofacetBsdf {
     if (!(om * o.z() > 0.0) || !(im * i.z() > 0.0)) return 0.0;
     // Upper-side representatives of the two directions.
     const Vec3 up = o_above ? o : i, down = o_above ? i : o;
-    // Fresnel is the same from either side (000 after eq. 8c); from the upper side, so that the
+    // Fresnel is the same from either side [GeomBSDF24, after eq. 8c]; from the upper side, so that the
     // value does not depend on which direction is the light (reciprocity to the last bit).
     const double F = material.reflectance(std::abs(up.dot(m)), true);
     if (F >= 1.0) return 0.0;
@@ -232,11 +232,11 @@ struct MicrofacetBsdf {
     if (masking == Masking::SmithHeightCorrelated)
       G2 = G2_height_correlated_transmission(ndf, up, mirror_z(down));
     else if (masking == Masking::VCavity)
-      G2 = std::min(vcavity_G1(up, m), vcavity_G1(-down, m));  // 000 eq. 18a: G2(v, m, -t)
+      G2 = std::min(vcavity_G1(up, m), vcavity_G1(-down, m));  // [GeomBSDF24, eq. 18a]: G2(v, m, -t)
     else
       G2 = ndf.G1(o_above ? o : mirror_z(o));
     const double denom = eta_i * im + eta_o * om;
-    // 003 eq. 6 / 000 eq. 9c eta factor (see header)
+    // [RefractionBlog24, eq. 6] / [GeomBSDF24, eq. 9c] eta factor (see header)
     return std::abs(om) * std::abs(im) / (std::abs(o.z()) * std::abs(i.z())) * eta_o * eta_o *
            (1.0 - F) * G2 * ndf.D(m) / (denom * denom);
   }
@@ -253,7 +253,7 @@ struct SingleScatteringAlbedo {
 
 // Albedo of the single-scattering BSDF for light arriving from i (i.z > 0):
 // int f(o, i) |o.z| d omega_o over each hemisphere. By the Jacobians 19b/20b this equals the
-// expectation over visible normals m ~ D_i (001 eq. 13) of F G2 / G1(i) (reflection, o = 13a)
+// expectation over visible normals m ~ D_i [Heitz14, eq. 13] of F G2 / G1(i) (reflection, o = 13a)
 // and (1 - F) G2 / G1(i) (transmission, o = 15a), each 0 when o leaves on the wrong side.
 // Computed by the midpoint rule on the unit square of the exact VNDF sampler's (u1, u2)
 // (n x n points; deterministic). The integrand has kinks (horizon, critical angle) and the

@@ -6,12 +6,11 @@
 // Header-only, depends on Eigen only.
 //
 // Conventions: macrosurface normal n = +z; all directions point away from the surface; radians.
-// Slopes follow 001 App. A: the slope of a normal m is (-mx/mz, -my/mz), and
+// Slopes follow [Heitz14, App. A]: the slope of a normal m is (-mx/mz, -my/mz), and
 // m(s) = (-sx, -sy, 1) / sqrt(1 + sx^2 + sy^2).
 //
-// References (/work/shared/references/):
-//   001 = Heitz, "Understanding the Masking-Shadowing Function in Microfacet-Based BRDFs"
-//   002 = "Microfacet Theory and Torrance-Sparrow BRDF" (GGX as an ellipsoid, VNDF sampling)
+// Sources (keys of docs/theory/bibliography.md): [Heitz14] for D, Lambda, G1, the G2 forms and the
+// V-cavity; [TSBlog24] for GGX as the normal distribution of an ellipsoid and VNDF sampling.
 //
 // Edge cases (below the horizon, grazing, normal incidence):
 //   * Lambda(v) = 0 at normal incidence and grows without bound toward grazing. For v.z <= 0 the
@@ -176,7 +175,7 @@ inline void require_alpha(double ax, double ay) {
 }
 
 // Beckmann visible slope along the (stretched, alpha = 1) view azimuth: density proportional to
-// (mu - x) exp(-x^2) / sqrt(pi) on x < mu, mu = cot(theta') (001 App. A integrand with
+// (mu - x) exp(-x^2) / sqrt(pi) on x < mu, mu = cot(theta') ([Heitz14, App. A] integrand with
 // P2(x) = exp(-x^2)/sqrt(pi)). Its CDF in closed form:
 //   C(x) = [mu erfc(-x)/2 + exp(-x^2)/(2 sqrt(pi))] / N,  N = C-numerator at x = mu = mu (1 + Lambda).
 // mu = +inf (normal incidence) gives the plain Gaussian CDF erfc(-x)/2.
@@ -222,7 +221,7 @@ inline double beckmann_visible_slope_quantile(double mu, double u) {
 // 1D Smith Lambda functions of a = 1 / (alpha_o tan(theta_o))
 // ---------------------------------------------------------------------------------------------
 
-// 001 sec. 3.2 (Beckmann): Lambda(a) = (erf(a) - 1)/2 + exp(-a^2) / (2 a sqrt(pi)).
+// [Heitz14, Sec. 3.2] (Beckmann): Lambda(a) = (erf(a) - 1)/2 + exp(-a^2) / (2 a sqrt(pi)).
 // erf(a) - 1 is computed as -erfc(a) to avoid cancellation at large a; the remaining difference
 // of two terms of size ~exp(-a^2)/a has relative error ~ 4 a^2 * eps, i.e. < 1e-12 wherever
 // the result does not underflow.
@@ -234,7 +233,7 @@ inline double beckmann_lambda(double a) {
   return std::max(r, 0.0);
 }
 
-// 001 sec. 3.2: Walter et al. 2007 rational approximation,
+// [Heitz14, Sec. 3.2]: the rational approximation of [Walter07],
 // Lambda ~ (1 - 1.259 a + 0.396 a^2) / (3.535 a + 2.181 a^2) for a < 1.6, else 0.
 // Note: the numerator has roots at a ~ 1.548 and a ~ 1.631, so the value is slightly negative
 // (down to -6.1e-5) on [1.548, 1.6); it is returned as is (it is the published formula), and
@@ -246,7 +245,7 @@ inline double beckmann_lambda_rational(double a) {
   return (1.0 - 1.259 * a + 0.396 * a * a) / (3.535 * a + 2.181 * a * a);
 }
 
-// 001 sec. 3.2 (GGX): Lambda(a) = (-1 + sqrt(1 + 1/a^2)) / 2, evaluated as
+// [Heitz14, Sec. 3.2] (GGX): Lambda(a) = (-1 + sqrt(1 + 1/a^2)) / 2, evaluated as
 // (1/a^2) / (2 (1 + sqrt(1 + 1/a^2))) (algebraically identical, no cancellation at large a).
 inline double ggx_lambda(double a) {
   if (std::isnan(a)) return a;
@@ -277,10 +276,10 @@ struct Ndf {
 
   bool isotropic() const { return alpha_x == alpha_y; }
 
-  // Slope distribution P22, normalized over R^2 (001 App. A: P22(s) ds = (m.n) D(m) dm).
-  //   Beckmann (001 sec. 3.3): exp(-(sx^2/ax^2 + sy^2/ay^2)) / (pi ax ay), a Gaussian with
+  // Slope distribution P22, normalized over R^2 ([Heitz14, App. A]: P22(s) ds = (m.n) D(m) dm).
+  //   Beckmann [Heitz14, Sec. 3.3]: exp(-(sx^2/ax^2 + sy^2/ay^2)) / (pi ax ay), a Gaussian with
   //     per-axis variance alpha^2 / 2.
-  //   GGX (001 sec. 3.3): 1 / (pi ax ay (1 + sx^2/ax^2 + sy^2/ay^2)^2).
+  //   GGX [Heitz14, Sec. 3.3]: 1 / (pi ax ay (1 + sx^2/ax^2 + sy^2/ay^2)^2).
   double P22(double slope_x, double slope_y) const {
     const double ex = slope_x / alpha_x, ey = slope_y / alpha_y;
     const double r2 = ex * ex + ey * ey;
@@ -290,7 +289,7 @@ struct Ndf {
     return c / (d * d);
   }
 
-  // D(m) = chi+(m.n) P22(-mx/mz, -my/mz) / mz^4 (001 App. A, footnote 4; sec. 3.3 anisotropic
+  // D(m) = chi+(m.n) P22(-mx/mz, -my/mz) / mz^4 ([Heitz14, App. A], footnote 4; sec. 3.3 anisotropic
   // forms). Written directly in m so that it stays finite for mz -> 0:
   //   Beckmann: exp(-(mx^2/ax^2 + my^2/ay^2) / mz^2) / (pi ax ay mz^4)
   //   GGX:      1 / (pi ax ay (mz^2 + mx^2/ax^2 + my^2/ay^2)^2)
@@ -310,13 +309,13 @@ struct Ndf {
     return c / (d * d);
   }
 
-  // 001 eq. (11): projected roughness alpha_o = sqrt(cos^2(phi) ax^2 + sin^2(phi) ay^2).
+  // [Heitz14, eq. 11]: projected roughness alpha_o = sqrt(cos^2(phi) ax^2 + sin^2(phi) ay^2).
   double alpha_o(double phi) const {
     const double c = std::cos(phi), s = std::sin(phi);
     return std::sqrt(c * c * alpha_x * alpha_x + s * s * alpha_y * alpha_y);
   }
 
-  // a = 1 / (alpha_o tan(theta)) (001 sec. 3.3), computed without angles:
+  // a = 1 / (alpha_o tan(theta)) [Heitz14, Sec. 3.3], computed without angles:
   // alpha_o^2 tan^2(theta) = (ax^2 vx^2 + ay^2 vy^2) / vz^2, so a = vz / |(ax vx, ay vy)|.
   // Scale-invariant in v. +inf at normal incidence; requires v.z > 0.
   double a_of(const Vec3& v) const {
@@ -326,7 +325,7 @@ struct Ndf {
     return v.z() / den;
   }
 
-  // Smith Lambda (001 sec. 3.2/3.3, closed forms; anisotropy by eq. (11)). Exact erf form for
+  // Smith Lambda ([Heitz14, Sec. 3.2/3.3], closed forms; anisotropy by eq. (11)). Exact erf form for
   // Beckmann. 0 at normal incidence, +inf for v.z <= 0 (see header comment).
   double Lambda(const Vec3& v) const {
     if (!(v.z() > 0.0)) return detail::kInf;
@@ -334,16 +333,16 @@ struct Ndf {
     return kind == Distribution::Beckmann ? beckmann_lambda(a) : ggx_lambda(a);
   }
 
-  // 001 eq. (10): Smith G1(v) = 1 / (1 + Lambda(v)); 0 for v.z <= 0.
+  // [Heitz14, eq. 10]: Smith G1(v) = 1 / (1 + Lambda(v)); 0 for v.z <= 0.
   double G1(const Vec3& v) const {
     const double l = Lambda(v);
     return std::isinf(l) ? 0.0 : 1.0 / (1.0 + l);
   }
 
-  // 001 eq. (10): G1(v, m) = chi+(v.m) / (1 + Lambda(v)).
+  // [Heitz14, eq. 10]: G1(v, m) = chi+(v.m) / (1 + Lambda(v)).
   double G1(const Vec3& v, const Vec3& m) const { return v.dot(m) > 0.0 ? G1(v) : 0.0; }
 
-  // 001 eq. (13): D_v(m) = G1(v, m) max(0, v.m) D(m) / v.z; 0 for v.z <= 0.
+  // [Heitz14, eq. 13]: D_v(m) = G1(v, m) max(0, v.m) D(m) / v.z; 0 for v.z <= 0.
   double D_visible(const Vec3& v, const Vec3& m) const {
     if (!(v.z() > 0.0)) return 0.0;
     const double vm = v.dot(m);
@@ -352,15 +351,15 @@ struct Ndf {
   }
 
   // Exact sampling of D_visible(v, .) (density w.r.t. solid angle of m), for u1, u2 in [0, 1].
-  // Both distributions are stretch invariant (001 sec. 3.3): with A = diag(ax, ay, 1), sample
+  // Both distributions are stretch invariant [Heitz14, Sec. 3.3]: with A = diag(ax, ay, 1), sample
   // the isotropic alpha = 1 problem for the stretched view A v, then map back (slopes scale by
   // (ax, ay); normals by A^T, i.e. m ~ (ax n'x, ay n'y, n'z)).
-  //   GGX: 002 "GGX importance sampling" - alpha = 1 GGX is the normal distribution of the upper
+  //   GGX: [TSBlog24, "GGX importance sampling"] - alpha = 1 GGX is the normal distribution of the upper
   //     half of a unit sphere; visible normals are uniform over the projection of the visible
   //     part onto the plane normal to the view: a half disk plus a half ellipse compressed by
   //     cos(theta'). Sample a unit disk, compress that half, lift onto the hemisphere.
   //   Beckmann: visible slope sampling - in the frame of the stretched view azimuth the visible
-  //     slope density is (mu - x) P2(x) P2(y) on x < mu (001 App. A integrand), x by inversion of
+  //     slope density is (mu - x) P2(x) P2(y) on x < mu ([Heitz14, App. A] integrand), x by inversion of
   //     its closed-form CDF (Newton, see detail::beckmann_visible_slope_quantile), y Gaussian.
   Vec3 sample_visible_normal(const Vec3& v, double u1, double u2) const {
     if (!(std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z())) || v.z() < 0.0 ||
@@ -407,7 +406,7 @@ struct Ndf {
 // Numerical Smith Lambda
 // ---------------------------------------------------------------------------------------------
 
-// 001 App. A: Lambda = (1/mu) * int_mu^inf (q - mu) P2(q) dq, mu = cot(theta), P2 the 1D marginal
+// [Heitz14, App. A]: Lambda = (1/mu) * int_mu^inf (q - mu) P2(q) dq, mu = cot(theta), P2 the 1D marginal
 // slope density along the view azimuth. Adaptive Gauss-Legendre (relative accuracy ~1e-11 for
 // smooth P2). mu = +inf -> 0; mu <= 0 -> +inf (grazing or below: Lambda diverges like 1/mu).
 inline double lambda_from_slope_marginal(const std::function<double(double)>& P2, double mu) {
@@ -418,7 +417,7 @@ inline double lambda_from_slope_marginal(const std::function<double(double)>& P2
   return detail::integrate_halfline(f, mu) / mu;
 }
 
-// 001 App. A from a 2D slope density: project onto the view azimuth phi,
+// [Heitz14, App. A] from a 2D slope density: project onto the view azimuth phi,
 // P2(q) = int P22(q cos(phi) - p sin(phi), q sin(phi) + p cos(phi)) dp, then the 1D formula with
 // mu = v.z / |v_xy|. Lambda = 0 at normal incidence, +inf for v.z <= 0.
 inline double lambda_from_slope_distribution(const std::function<double(double, double)>& P22,
@@ -436,7 +435,7 @@ inline double lambda_from_slope_distribution(const std::function<double(double, 
   return lambda_from_slope_marginal(P2, mu);
 }
 
-// DESIGN.md "Smith from the surface's own facets" (001 App. A with the facets' own slopes):
+// docs/theory/masking.md ([Heitz14, App. A] with the facets' own slopes):
 // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A). Scale-invariant in v; normals must be unit.
 // +inf for v.z <= 0. Throws std::invalid_argument if sizes differ or macro_area <= 0.
 inline double lambda_from_facets(const std::vector<Vec3>& normals, const std::vector<double>& areas,
@@ -454,7 +453,7 @@ inline double lambda_from_facets(const std::vector<Vec3>& normals, const std::ve
 // V-cavity
 // ---------------------------------------------------------------------------------------------
 
-// 001 eq. (24) with chi+(v.m): G1 = min(1, 2 (m.n)(v.n) / (v.m)); 0 if v.m <= 0, v.z <= 0 or
+// [Heitz14, eq. 24] with chi+(v.m): G1 = min(1, 2 (m.n)(v.n) / (v.m)); 0 if v.m <= 0, v.z <= 0 or
 // m.z <= 0 (V-cavity facets face up).
 inline double vcavity_G1(const Vec3& v, const Vec3& m) {
   const double vm = v.dot(m);
@@ -462,14 +461,14 @@ inline double vcavity_G1(const Vec3& v, const Vec3& m) {
   return std::min(1.0, 2.0 * m.z() * v.z() / vm);
 }
 
-// V-cavity masking-shadowing (the Cook-Torrance form, 001 sec. 6): min(1, 2(n.m)(n.o)/(o.m),
+// V-cavity masking-shadowing (the Cook-Torrance form, [Heitz14, Sec. 6]): min(1, 2(n.m)(n.o)/(o.m),
 // 2(n.m)(n.i)/(i.m)) with chi+(o.m) chi+(i.m) = min(vcavity_G1(o, m), vcavity_G1(i, m)).
 inline double vcavity_G2(const Vec3& o, const Vec3& i, const Vec3& m) {
   return std::min(vcavity_G1(o, m), vcavity_G1(i, m));
 }
 
 // ---------------------------------------------------------------------------------------------
-// Smith joint masking-shadowing (001 sec. 5). o = outgoing/view, i = incoming/light, m normal.
+// Smith joint masking-shadowing [Heitz14, Sec. 5]. o = outgoing/view, i = incoming/light, m normal.
 // Each form includes chi+(o.m) chi+(i.m); 0 if o.z <= 0 or i.z <= 0.
 // ---------------------------------------------------------------------------------------------
 
@@ -480,7 +479,7 @@ inline double azimuth_difference(const Vec3& o, const Vec3& i) {
   return std::atan2(std::abs(cross), dot);
 }
 
-// 001 sec. 5, van Ginneken et al. empirical factor: lambda(phi) = 4.41 phi / (4.41 phi + 1).
+// [Heitz14, Sec. 5], van Ginneken et al. empirical factor: lambda(phi) = 4.41 phi / (4.41 phi + 1).
 inline double van_ginneken_lambda(double phi) { return 4.41 * phi / (4.41 * phi + 1.0); }
 
 namespace detail {
@@ -489,19 +488,19 @@ inline bool g2_front(const Vec3& o, const Vec3& i, const Vec3& m) {
 }
 }  // namespace detail
 
-// 001 eq. (20): G1(o, m) G1(i, m).
+// [Heitz14, eq. 20]: G1(o, m) G1(i, m).
 inline double G2_separable(const Ndf& ndf, const Vec3& o, const Vec3& i, const Vec3& m) {
   if (!detail::g2_front(o, i, m)) return 0.0;
   return ndf.G1(o) * ndf.G1(i);
 }
 
-// 001 eq. (21): chi+ chi+ / (1 + Lambda(o) + Lambda(i)).
+// [Heitz14, eq. 21]: chi+ chi+ / (1 + Lambda(o) + Lambda(i)).
 inline double G2_height_correlated(const Ndf& ndf, const Vec3& o, const Vec3& i, const Vec3& m) {
   if (!detail::g2_front(o, i, m)) return 0.0;
   return 1.0 / (1.0 + ndf.Lambda(o) + ndf.Lambda(i));
 }
 
-// 001 eq. (22): lambda(phi) G1(o,m) G1(i,m) + (1 - lambda(phi)) min(G1(o,m), G1(i,m)),
+// [Heitz14, eq. 22]: lambda(phi) G1(o,m) G1(i,m) + (1 - lambda(phi)) min(G1(o,m), G1(i,m)),
 // with the van Ginneken lambda(phi) and phi the azimuth difference of o and i.
 inline double G2_direction_correlated(const Ndf& ndf, const Vec3& o, const Vec3& i, const Vec3& m) {
   if (!detail::g2_front(o, i, m)) return 0.0;
@@ -510,7 +509,7 @@ inline double G2_direction_correlated(const Ndf& ndf, const Vec3& o, const Vec3&
   return l * go * gi + (1.0 - l) * std::min(go, gi);
 }
 
-// 001 eq. (23): chi+ chi+ / (1 + max(Lo, Li) + lambda(phi) min(Lo, Li)), van Ginneken lambda.
+// [Heitz14, eq. 23]: chi+ chi+ / (1 + max(Lo, Li) + lambda(phi) min(Lo, Li)), van Ginneken lambda.
 inline double G2_height_direction_correlated(const Ndf& ndf, const Vec3& o, const Vec3& i,
                                              const Vec3& m) {
   if (!detail::g2_front(o, i, m)) return 0.0;

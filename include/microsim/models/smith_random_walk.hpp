@@ -1,8 +1,8 @@
-// The Smith random-walk multiple-scattering model: a stochastic walk on the Smith microsurface
-// (normals and heights independent, 001 sec. 2.3 and App. A), which gives every scattering order
-// of the BSDF that the single-scattering model (microfacet_bsdf.hpp) leaves out (001 sec. 4.3 and
-// 7: rho = rho_1 + rho_2+). Conductors (weight multiplied by the unpolarized Fresnel reflectance)
-// and dielectrics (reflection with probability F, else refraction by 000 eq. 15a; total internal
+// The Smith random-walk multiple-scattering model [Heitz16]: a stochastic walk on the Smith microsurface
+// (normals and heights independent, [Heitz14, Sec. 2.3 and App. A]), which gives every scattering order
+// of the BSDF that the single-scattering model (microfacet_bsdf.hpp) leaves out ([Heitz14, Sec. 4.3
+// and 7]: rho = rho_1 + rho_2+). Conductors (weight multiplied by the unpolarized Fresnel reflectance)
+// and dielectrics (reflection with probability F, else refraction by [GeomBSDF24, eq. 15a]; total internal
 // reflection; both sides of the interface).
 //
 // Header-only, depends on Eigen and the other model headers only. Randomness comes from the
@@ -11,23 +11,23 @@
 // The walk, derived from the Smith assumption:
 //   * Heights. Let C1 be the CDF of the height distribution. Seen along an upward direction w
 //     (w.z > 0) a point at height h is unoccluded with probability G1(w, h) = C1(h)^Lambda(w)
-//     (001 App. A: masking of the Smith surface conditioned on height; its average over the
+//     ([Heitz14, App. A]: masking of the Smith surface conditioned on height; its average over the
 //     visible heights is 1/(1 + Lambda)). Hence a ray travelling upward from height h passes
 //     height h' > h without meeting the surface with probability (C1(h)/C1(h'))^Lambda(w); it
 //     escapes with probability C1(h)^Lambda(w), otherwise its next intersection is at
 //     C1(h') = C1(h) U^(-1/Lambda(w)) for U uniform in (G1, 1]. A ray travelling downward
 //     (w.z < 0) meets the surface at the rate of the front-facing projected area, 1 + Lambda(-w)
-//     per unit of crossed signed area (000 eq. 3Xc), so it passes h' < h with probability
+//     per unit of crossed signed area [GeomBSDF24, eq. 3Xc], so it passes h' < h with probability
 //     (C1(h')/C1(h))^(1 + Lambda(-w)): the next intersection is at C1(h') = C1(h) U^(1/(1 + Lambda(-w))).
 //     A ray arriving from outside starts at h = +inf (C1 = 1).
 //   * Normals. At an intersection the facet normal is distributed as the visible normals of the
-//     direction the ray came from, D_{-w}(m) ~ max(0, -w.m) D(m) (001 eq. 13); for an upward ray
+//     direction the ray came from, D_{-w}(m) ~ max(0, -w.m) D(m) [Heitz14, eq. 13]; for an upward ray
 //     -w points below the horizon (sample_visible_normal_any extends the exact samplers of
 //     ndf.hpp to that case).
-//   * Scattering. Mirror: reflect (000 eq. 13a). Conductor: reflect, weight *= F (complex index).
-//     Dielectric: reflect with probability F, else refract (000 eq. 15a) into the other medium.
+//   * Scattering. Mirror: reflect [GeomBSDF24, eq. 13a]. Conductor: reflect, weight *= F (complex index).
+//     Dielectric: reflect with probability F, else refract [GeomBSDF24, eq. 15a] into the other medium.
 //     The medium below is the same Smith surface seen from below (heights -h, normals mirrored,
-//     000 "Inherent Assumptions"), so the walk continues in a mirrored frame: z -> -z, h -> -h.
+//     [GeomBSDF24, "Inherent Assumptions"]), so the walk continues in a mirrored frame: z -> -z, h -> -h.
 //     In every frame "up" is away from the interface: escaping up in the frame of the medium
 //     above is reflection, in the frame of the medium below transmission.
 //   * Under Smith the walk depends on the heights only through C1(h): any continuous height
@@ -217,7 +217,7 @@ class SmithRandomWalk {
         out.order = order;
         return out;
       }
-      // --- facet normal: visible normals of the direction the ray came from (001 eq. 13)
+      // --- facet normal: visible normals of the direction the ray came from [Heitz14, eq. 13]
       const Vec3 v = -w;  // toward where the ray came from
       Vec3 m;
       double vm = 0.0;
@@ -236,7 +236,7 @@ class SmithRandomWalk {
       // --- scattering
       switch (material_.kind) {
         case MaterialKind::Mirror:
-          w = reflect(v, m);  // 000 eq. 13a
+          w = reflect(v, m);  // [GeomBSDF24, eq. 13a]
           break;
         case MaterialKind::Conductor:
           out.weight *= material_.reflectance(vm, true);
@@ -252,7 +252,7 @@ class SmithRandomWalk {
             if (!refract(v, m, 1.0 / n, &t)) {  // cannot happen when F < 1 (TIR gives F = 1)
               w = reflect(v, m);
             } else {
-              // 000 eq. 15a, then continue in the other medium's mirrored frame
+              // [GeomBSDF24, eq. 15a], then continue in the other medium's mirrored frame
               w = mirror_z(t).normalized();
               h = -h;
               above = !above;

@@ -1,21 +1,20 @@
 // Point evaluation of the Smith random-walk BSDF (models/smith_random_walk.hpp): an unbiased
 // estimator of f(o, i) cos(theta_o) at a given pair of directions (the stochastic evaluation of
-// Heitz, Hanika, d'Eon and Dachsbacher 2016, "Multiple-Scattering Microfacet BSDFs with the
-// Smith Model"): walk from i; at every scattering event add the density that the event sends the path toward
+// [Heitz16]): walk from i; at every scattering event add the density that the event sends the path toward
 // o times the probability that it then leaves the surface unoccluded. The walk's exit
 // directions have the density f cos(theta_o) (the walk tallies flux), so
 //   f(o, i) cos(theta_o) = E[ sum_events  weight * p_event(v -> o) * C1(h')^Lambda(o) ],
 // with p_event the phase function of the event:
 //   reflection (mirror, conductor, dielectric from its own side):
-//     F(v.m) D_v(m) / (4 v.m),                 m = normalize(v + o)      (000 eq. 13b, 19b)
+//     F(v.m) D_v(m) / (4 v.m),                 m = normalize(v + o)      [GeomBSDF24, eq. 13b, 19b]
 //   refraction from the medium below out to o (dielectrics):
 //     (1 - F(v.m)) D_v(m) eta_o^2 |t.m| / (eta_i v.m + eta_o t.m)^2,  t = o seen from the lower
-//     frame, m the refraction half vector (000 eq. 15b, 20b; Walter et al. 2007 eq. 17),
+//     frame, m the refraction half vector ([GeomBSDF24, eq. 15b, 20b]; [Walter07, eq. 17]),
 // where D_v(m) = max(0, v.m) D(m) / proj(v) is the density of the facet normals that the
-// arriving ray meets (001 eq. 13), proj(v) = v.z (1 + Lambda(v)) for v.z > 0 and |v.z| Lambda(-v)
+// arriving ray meets [Heitz14, eq. 13], proj(v) = v.z (1 + Lambda(v)) for v.z > 0 and |v.z| Lambda(-v)
 // below the horizon, and h' the height in the frame of the medium o lies in. For the mirror this
 // counts every order; the first event alone gives D G2 / (4 i.z) with the height-correlated G2
-// (001 eq. 21), the single-scattering BRDF (tests check both).
+// [Heitz14, eq. 21], the single-scattering BRDF (tests check both).
 #pragma once
 
 #include <cmath>

@@ -1,8 +1,8 @@
 // Closed-form multiple scattering of a symmetric specular V-groove, per scattering order, and its
-// average over a distribution of grooves: the V-cavity construction of 001 Sec. 6 (grooves whose
+// average over a distribution of grooves: the V-cavity construction of [Heitz14, Sec. 6] (grooves whose
 // facet normals m, m' = (-mx, -my, mz) are drawn with weight (n.m) D(m), every groove covering the
-// same macro area) with every interreflection inside the groove kept, as in Xie and Hanrahan
-// 2018, "Multiple scattering from distributions of specular V-grooves". Header-only.
+// same macro area) with every interreflection inside the groove kept, as in
+// [Xie18]. Header-only.
 //
 // Groove frame: x across the groove, y along its ridge, z = n. The groove's walls have normals
 // (+-sin tf, 0, cos tf) (tf = facet angle); its aperture is the segment between two ridges.
@@ -134,7 +134,7 @@ struct GrooveFrame {
 };
 
 // Calls f(weight, m) over a midpoint quadrature of the hemisphere of groove normals with
-// weight (n.m) D(m) dm (sums to ~1: 001 eq. (2)); grooves m and m' are the same groove, both
+// weight (n.m) D(m) dm (sums to ~1: [Heitz14, eq. 2]); grooves m and m' are the same groove, both
 // are visited. Per-order albedos are continuous in m (kinks only), so the error is O(h^2).
 template <class F>
 void vcavity_quadrature(const Ndf& ndf, int n_theta, int n_phi, F&& f) {

@@ -18,12 +18,12 @@
 // Estimators (per pixel, from a counter-based generator keyed by (seed, stream, pixel): the
 // image does not depend on the thread count):
 //   measured table: eval exact; environment by one-sample multiple importance sampling: l from
-//     a mixture, 80 % reflected about the visible normals of v of the models' NDF (001 eq. 13;
-//     density D_v(m) / (4 v.m), 000 eq. 19b), 20 % cosine-weighted (density cos(theta_l) / pi,
+//     a mixture, 80 % reflected about the visible normals of v of the models' NDF ([Heitz14, eq. 13];
+//     density D_v(m) / (4 v.m), [GeomBSDF24, eq. 19b]), 20 % cosine-weighted (density cos(theta_l) / pi,
 //     which covers every direction the table can send light to), weight eval / mixture density
 //     (unbiased for any table; the table's own sampling is not used);
-//   single scattering (000 eq. 21d with the height-correlated Smith G2, 001 eq. 21): eval exact;
-//     environment by sampling the visible normals of v (001 eq. 13), weight F G2 / G1(v);
+//   single scattering ([GeomBSDF24, eq. 21d] with the height-correlated Smith G2, [Heitz14, eq. 21]): eval exact;
+//     environment by sampling the visible normals of v [Heitz14, eq. 13], weight F G2 / G1(v);
 //   Smith random walk (models/smith_random_walk.hpp): the directional light by the walk's point
 //     estimator (models/smith_walk_eval.hpp, started from v), the environment by walks from v
 //     (the weight of the walks that leave upward).

@@ -1,6 +1,6 @@
 // How finely a random heightfield resolves the continuous surface it stands for: cells per
 // correlation length (l / dx) and correlation lengths per tile (L / l), and the levels at which
-// the discretization study (analysis/convergence.sh, README "Converged surfaces") found each
+// the discretization study (analysis/convergence.sh, docs/theory/discretization.md) found each
 // reported quantity equal to the finest level within its error bar.
 #pragma once
 #include <optional>

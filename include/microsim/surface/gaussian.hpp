@@ -16,7 +16,7 @@ struct GaussianParams {
 };
 
 // The correlation length used when none is given: 16 cells per l, the grid on which the
-// discretization study (README "Converged surfaces") finds the mirror albedos of orders 1-3, D,
+// discretization study (docs/theory/discretization.md) finds the mirror albedos of orders 1-3, D,
 // G1 and the VNDF equal to 32 cells per l within their errors; but at least 16 correlation
 // lengths per tile (the study's smallest tile) and at least 4 cells per l. The default 1024^2
 // tile gets 16 cells per l and 64 l per tile, the study's recommended level; a 64^2 tile 4 cells.
@@ -34,8 +34,8 @@ double gaussian_ggx_memory_estimate(int resolution);
 // Heights h = F^-1[ sqrt(S(k)) F[w] ], w white Gaussian noise, S the spectrum of the Gaussian
 // autocorrelation. The tile is exactly periodic. Heights are scaled so that the *expected*
 // variance of the triangle slopes (finite differences, as traced) is alpha^2/2 per axis, so
-// the nominal NDF is Beckmann(alpha_x, alpha_y) (001 Sec. 3.3); one tile's realised variance
-// fluctuates around it, which is the between-surface error DESIGN.md asks to report.
+// the nominal NDF is Beckmann(alpha_x, alpha_y) [Heitz14, Sec. 3.3]; one tile's realised variance
+// fluctuates around it, which is the between-surface error of docs/theory/error-bars.md.
 Microsurface generate_gaussian(const GaussianParams& p);
 
 // gaussian-ggx: a periodic heightfield whose pooled NDF is GGX(alpha), from the identity

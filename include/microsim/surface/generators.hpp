@@ -1,6 +1,6 @@
 // Generators of structured microsurfaces: the exact references of the estimators and the
-// surfaces on which microfacet theory shows its limits (000 "Distribution of Normals",
-// "Inherent Assumptions", Fig. 2, 3, 5, 6; 001 Sec. 6; 002 "GGX as an ellipsoid").
+// surfaces on which microfacet theory shows its limits ([GeomBSDF24, "Distribution of Normals",
+// "Inherent Assumptions", Fig. 2, 3, 5, 6]; [Heitz14, Sec. 6]; [TSBlog24, "GGX as an ellipsoid"]).
 //
 // Axes: x to the right, y into the page, z = the macrosurface normal n. Finite objects stand on
 // the plane z = 0, centered on the origin; their macrosurface is their base (periodic = false).
@@ -22,11 +22,11 @@ struct FlatParams {
 };
 Microsurface generate_flat(const FlatParams& p);
 
-// box: the box of 000 Fig. 2. Top and four walls (outward normals); the flipped bottom face is
+// box: the box of [GeomBSDF24, Fig. 2]. Top and four walls (outward normals); the flipped bottom face is
 // the macrosurface: n = +z, A = W D, finite. Seen across a face at theta, its visible area ratio
-// is 1 + (H/W) tan(theta) (000 "Inherent Assumptions", Fig. 5).
-// tiled-boxes: the same macrosurface covered by N x N copies of the box scaled by 1/N (000
-// Fig. 6): the same D, but the visible area ratio 1 + (H/(N W)) tan(theta) tends to 1. Copies
+// is 1 + (H/W) tan(theta) [GeomBSDF24, "Inherent Assumptions", Fig. 5].
+// tiled-boxes: the same macrosurface covered by N x N copies of the box scaled by 1/N
+// [GeomBSDF24, Fig. 6]: the same D, but the visible area ratio 1 + (H/(N W)) tan(theta) tends to 1. Copies
 // are separate closed-but-for-the-base components; touching walls coincide.
 struct BoxParams {
   double width = 1.0;   // W, along x
@@ -37,7 +37,7 @@ struct BoxParams {
 Microsurface generate_box(const BoxParams& p);
 Microsurface generate_tiled_boxes(const BoxParams& p);
 
-// parallelepiped: boxes under a linear map p -> L p (000 Fig. 3). L keeps the base plane:
+// parallelepiped: boxes under a linear map p -> L p [GeomBSDF24, Fig. 3]. L keeps the base plane:
 // its third row must be (0, 0, l33) with l33 > 0, so the macrosurface stays z = 0 with normal
 // +z; A is the mapped base's area. Shears (l13, l23 != 0) tilt the walls; one of each pair then
 // faces downward (n.m < 0). tiles > 1 maps N x N tiled boxes (sheared walls of neighbours
@@ -61,7 +61,7 @@ struct SquareWaveParams {
 Microsurface generate_square_wave(const SquareWaveParams& p);
 
 // vgroove: periodic V-grooves running along y with facet normals (+-sin tm, 0, cos tm), the
-// surface on which 001 eq. (24) is exact; a heightfield with one period per tile (2 x 2 cells,
+// surface on which [Heitz14, eq. 24] is exact; a heightfield with one period per tile (2 x 2 cells,
 // each facet planar). --2d: square pyramids (faces (+-sin tm, 0, cos tm), (0, +-sin tm, cos tm)),
 // a periodic mesh.
 struct VGrooveParams {
@@ -74,9 +74,9 @@ Microsurface generate_vgroove(const VGrooveParams& p);
 // ellipsoid: the upper half of (ax x)^2 + (ay y)^2 + z^2 = 1 (semi-axes 1/ax, 1/ay, 1), a
 // finite object on its base ellipse (n = +z, A = the base polygon's area ~ pi / (ax ay)).
 // Its normal distribution is GGX(ax, ay) and its front-facing projected areas give GGX's
-// Lambda (002 "GGX", ellipsoid p^T A^T A p = C^2 with A = diag(ax, ay, 1)). Tessellated as the
+// Lambda ([TSBlog24, "GGX"], ellipsoid p^T A^T A p = C^2 with A = diag(ax, ay, 1)). Tessellated as the
 // image p = A^-1 u of a latitude-longitude mesh of the unit hemisphere u (facet normals are
-// then A n_u, exactly the map of normals of 002).
+// then A n_u, exactly the map of normals of [TSBlog24]).
 struct EllipsoidParams {
   double alpha_x = 0.5, alpha_y = 0.5;
   // Each band between two rings holds exactly GGX's mass of normals; an isotropic band's facets
@@ -88,7 +88,7 @@ struct EllipsoidParams {
 };
 Microsurface generate_ellipsoid(const EllipsoidParams& p);
 
-// vcavity: the V-cavity model made explicit (001 Sec. 6.1): K separate V-grooves whose normal
+// vcavity: the V-cavity model made explicit [Heitz14, Sec. 6.1]: K separate V-grooves whose normal
 // pairs (m, m' = (-mx, -my, mz)) are drawn from D (Beckmann or GGX) weighted by projected area
 // (n.m) D(m), i.e. each groove covers the same macro area. The surface is stored as K separate
 // strips (one period of each groove, unit period and length, laid out on a grid, description

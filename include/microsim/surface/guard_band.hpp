@@ -4,7 +4,7 @@
 // near the interior's border is by real geometry. Rays that reach the patch's side walls end
 // there (Tracer::first_hit): upward they count as escaped, downward as lost. Both sides of
 // that rule are biases the guard keeps small; their size against the guard width is measured
-// by analysis/guard_band_bias.cpp (README, "Measured surfaces: guard band").
+// by analysis/guard_band_bias.cpp (docs/theory/discretization.md).
 #pragma once
 #include <string>
 

@@ -6,7 +6,7 @@
 //    opposite directions, and the triangles around a vertex form a single fan;
 //  - it is closed wherever it must be: a boundary edge may only lie on the macrosurface's rim,
 //    i.e. on the base plane z = 0 for a finite object, on a tile border for a periodic tile;
-//  - 000 eq. 1b holds: sum_f A_f m_f = A n (the declared area and normal agree with the
+//  - [GeomBSDF24, eq. 1b] holds: sum_f A_f m_f = A n (the declared area and normal agree with the
 //    signed projected area; this also catches an inside-out mesh).
 // The vcavity ensemble (separate strips standing for periods of infinite grooves) is exempt
 // from the rim rule only.
@@ -38,7 +38,7 @@ void read_mesh_file(const std::string& path, std::vector<Eigen::Vector3f>& verti
 struct MeshImportParams {
   std::string input;
   Vec3 normal{0, 0, 1};  // macrosurface normal n in the file's frame; the mesh is rotated n -> +z
-  double area = 0;       // A; 0 = from 000 eq. 1c, A = sum_f A_f (n.m_f)
+  double area = 0;       // A; 0 = from [GeomBSDF24, eq. 1c], A = sum_f A_f (n.m_f)
   bool periodic = false;
   double tile_x = 0, tile_y = 0;  // periodic tile size (centered on the origin after rotation)
 };

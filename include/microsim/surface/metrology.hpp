@@ -1,6 +1,6 @@
 // Areal surface-texture parameters of a heightfield, as a metrologist reads them (ISO 25178-2
 // style: Sq, Sa, Sdq, Sal, Str), beside the microfacet view: slope moments (the Beckmann alpha of
-// 000 eq. 1b/1c's slope variances), the maximum-likelihood GGX alpha of the facet slopes, and
+// [GeomBSDF24, eq. 1b/1c]'s slope variances), the maximum-likelihood GGX alpha of the facet slopes, and
 // histograms of heights and slopes against Gaussian, Beckmann and GGX with a chi^2 per degree of
 // freedom.
 //
@@ -50,7 +50,7 @@ struct SlopeStats {
   int ggx_iterations = 0;
   HistogramFit beckmann_fit, ggx_fit;                 // of the normalized slope radius
 };
-// GGX slope density (D mapped to slope space, P(s) = D(m) cos^4 theta_m, 001 Appendix A):
+// GGX slope density (D mapped to slope space, P(s) = D(m) cos^4 theta_m, [Heitz14, App. A]):
 // P(s) = 1 / (pi ax ay (1 + q^2)^2),
 // q^2 = (sx/ax)^2 + (sy/ay)^2. Its maximum-likelihood (ax, ay) solve ax^2 = (4/n) sum sx^2/(1+q^2)
 // (a bivariate Student t with 2 degrees of freedom; the fixed point is its EM iteration).

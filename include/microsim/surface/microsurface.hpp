@@ -1,4 +1,4 @@
-// The explicit microgeometry and its macrosurface (000 "microsurface/macrosurface").
+// The explicit microgeometry and its macrosurface [GeomBSDF24, "microsurface/macrosurface"].
 #pragma once
 #include <array>
 #include <optional>
@@ -13,7 +13,7 @@
 
 namespace microsim {
 
-// The macrosurface: normal n, area A, and how rays cover it (DESIGN.md "Macrosurface").
+// The macrosurface: normal n, area A, and how rays cover it (docs/theory/microsurface.md).
 struct Macrosurface {
   Vec3 normal{0, 0, 1};
   double area = 1.0;      // A
@@ -106,10 +106,10 @@ class Microsurface {
   std::vector<std::array<std::uint32_t, 3>> triangles_;
 };
 
-// Area-weighted facet statistics that every check and model needs (000 eq. 1b/1c, DESIGN.md).
+// Area-weighted facet statistics that every check and model needs ([GeomBSDF24, eq. 1b/1c], docs/theory/ndf.md).
 struct FacetSums {
-  Vec3 sum_area_normal = Vec3::Zero();  // sum_f A_f m_f        (000 eq. 1b: equals n A)
-  double sum_area_cos = 0.0;            // sum_f A_f (n.m_f)    (000 eq. 1c: equals A)
+  Vec3 sum_area_normal = Vec3::Zero();  // sum_f A_f m_f        ([GeomBSDF24, eq. 1b]: equals n A)
+  double sum_area_cos = 0.0;            // sum_f A_f (n.m_f)    ([GeomBSDF24, eq. 1c]: equals A)
   double total_area = 0.0;              // sum_f A_f
   double slope_var_x = 0.0;             // projected-area-weighted variance of slopes -m_x/m_z
   double slope_var_y = 0.0;
@@ -118,9 +118,9 @@ struct FacetSums {
 };
 FacetSums facet_sums(const Microsurface& s);
 
-// sum_f A_f max(0, v.m_f): front-facing projected area (DESIGN.md G1 denominator).
+// sum_f A_f max(0, v.m_f): front-facing projected area (the G1 denominator, docs/theory/masking.md).
 double front_projected_area(const Microsurface& s, const Vec3& v);
-// Smith Lambda from the surface's own facets (DESIGN.md, 000 eq. 3Xd, 001 App. A).
+// Smith Lambda from the surface's own facets ([GeomBSDF24, eq. 3Xd], [Heitz14, App. A]).
 double lambda_from_facets(const Microsurface& s, const Vec3& v);
 
 }  // namespace microsim

@@ -1,4 +1,4 @@
-// How far float vertex rounding can move the facet sums of 000 eq. 1b/1c on a mesh.
+// How far float vertex rounding can move the facet sums of [GeomBSDF24, eq. 1b/1c] on a mesh.
 //
 // sum_f A_f m_f = 1/2 sum_f (a x b + b x c + c x a) over the triangles (a, b, c): a half-edge
 // shared with its reverse cancels, so the sum is 1/2 sum of a x b over the boundary half-edges,

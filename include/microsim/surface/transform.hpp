@@ -1,8 +1,8 @@
-// Linear maps of a microsurface for the invariance checks of 001 sec. 3: stretching by
+// Linear maps of a microsurface for the invariance checks of [Heitz14, Sec. 3]: stretching by
 // diag(s_x, s_y, 1) (sec. 3.1) and vertical shearing z -> z + k_x x + k_y y (sec. 3.4). Both
 // map straight lines to straight lines, so a ray (p, d) on the original surface and the ray
 // (M p, M d) on the mapped one meet the same facets in the same order: occluded rays stay
-// occluded and visible ones stay visible (001 sec. 3.1, Fig. 2 and 4).
+// occluded and visible ones stay visible [Heitz14, Sec. 3.1, Fig. 2 and 4].
 #pragma once
 #include "microsim/surface/microsurface.hpp"
 
@@ -22,7 +22,7 @@ inline Vec3 unshear_vector(const Vec3& d, double kx, double ky) {
 // The surface mapped by diag(sx, sy, 1): a heightfield stays a heightfield (tile sizes scaled,
 // heights unchanged), a mesh has its vertices and macrosurface scaled. Facet k of the result is
 // the image of facet k. Slopes scale by 1/sx, 1/sy, so a nominal Beckmann/GGX(ax, ay) becomes
-// (ax/sx, ay/sy) (shape invariance, 001 sec. 3.2-3.3). sx, sy > 0 (UsageError otherwise).
+// (ax/sx, ay/sy) (shape invariance, [Heitz14, Sec. 3.2-3.3]). sx, sy > 0 (UsageError otherwise).
 Microsurface stretch_surface(const Microsurface& s, double sx, double sy);
 
 // A vertically sheared copy of a periodic tile. The sheared surface is still periodic, but along

@@ -1,4 +1,4 @@
-// The undersurface of a mesh microsurface (000 "Inherent Assumptions": for v.n < 0 "we must
+// The undersurface of a mesh microsurface ([GeomBSDF24, "Inherent Assumptions"]: for v.n < 0 "we must
 // recompute the statistics for the undersurface").
 #pragma once
 #include "microsim/surface/microsurface.hpp"

@@ -27,7 +27,7 @@ inline void set_ray_extent(RTCRay& ray, double tfar) {
 }
 
 // A ray leaving a facet never meets that facet's plane again; hits on it are rounding
-// artefacts and are rejected by an Embree filter (DESIGN.md "Self-intersection").
+// artefacts and are rejected by an Embree filter (docs/theory/numerics.md).
 struct SourcePlane {
   Vec3 normal;    // unit
   double offset;  // normal . p for p on the plane
@@ -86,7 +86,7 @@ struct TraceHit {
   bool backface = false;  // the ray met the facet from behind (rounding at silhouettes)
 };
 
-// Events that a careful reader wants counted (DESIGN.md "Numerical hygiene").
+// Events that a careful reader wants counted (docs/theory/numerics.md).
 struct TraceCounters {
   std::uint64_t rays = 0;
   std::uint64_t border_crossings = 0;  // periodic wrap-arounds

@@ -3,7 +3,7 @@
 //  * finite objects, mirror: the total albedo per unit of the flux on the macrosurface against
 //    the visible area ratio (identity: every ray that hits a mirror object leaves it). Box and
 //    tiled boxes: 1 + (H/N) tan(theta) (|cos phi|/W + |sin phi|/D) (only the outer walls are
-//    seen, 000 "Inherent Assumptions", Fig. 5-6); convex objects (ellipsoid, a single
+//    seen, [GeomBSDF24, "Inherent Assumptions", Fig. 5-6]); convex objects (ellipsoid, a single
 //    parallelepiped): the front-facing projected area of the facets over A cos(theta).
 //  * periodic V-grooves (not --2d): every order against the closed form of the groove
 //    (models/vgroove_multiple.hpp; identity for the exact geometry).

@@ -14,7 +14,7 @@
 //                  whose error is the spread of K surfaces (`dof` = K - 1) use the Student t
 //                  quantile with K - 1 degrees of freedom at the same per-row rate, the others
 //                  the normal quantile.
-//   deterministic  an exact identity computed without sampling (000 eq. 1b, 1c from the facets):
+//   deterministic  an exact identity computed without sampling ([GeomBSDF24, eq. 1b, 1c] from the facets):
 //                  "pass" when |measured - model| <= tolerance (a bound on double rounding of the
 //                  facet sums), "FAIL" otherwise; z is null.
 //   model          an approximate model (Smith, V-cavity, the nominal NDF the generator aimed
@@ -49,7 +49,7 @@ struct Row {
   std::string condition;   // human readable: "beckmann-0.5 seed 2, theta 60 deg"
   std::string entry;       // suite entry (or file) the row belongs to
   std::string group;       // rows of one group are collapsed into one line of the printed table
-  std::string reference;   // where the identity or model comes from: "000 eq. 1b"
+  std::string reference;   // where the identity or model comes from: "[GeomBSDF24, eq. 1b]"
   std::string error;       // kind of standard error: rays, surfaces, blocks, rounding
   Kind kind = Kind::Info;
   double measured = 0;
@@ -106,7 +106,7 @@ struct Options {
 
 // One entry of a validation: a surface, or several independent surfaces with the same
 // statistics (seeds of one generator), compared with nominal models by the between-surface
-// standard error (DESIGN.md "Two kinds of error bar").
+// standard error (docs/theory/error-bars.md).
 struct SurfaceSet {
   std::string name;
   std::vector<std::string> labels;  // one per surface ("seed 3", a file name)
