@@ -458,17 +458,31 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
 Table g1_table() {
   Table t;
   t.error = ErrorKind::Replicates;
-  t.spec.columns = {{"theta_deg", Merge::Copy},          {"phi_deg", Merge::Copy},
-                    {"surfaces", Merge::Count},          {"replicates", Merge::Copy},
-                    {"g1", Merge::Measured},             {"g1_raycast", Merge::Measured},
-                    {"visible_area_ratio", Merge::Measured}, {"smith_numeric", Merge::Spread},
-                    {"smith_nominal", Merge::Copy}};
+  const ErrorKind R = ErrorKind::Replicates, N = ErrorKind::None;
+  t.spec.columns = {
+      {"theta_deg", Merge::Copy, N, "deg", "view zenith angle, from the macrosurface normal (> 90: the undersurface of a mesh)"},
+      {"phi_deg", Merge::Copy, N, "deg", "view azimuth"},
+      {"surfaces", Merge::Count, N, "count", "number of surfaces averaged (ensembles only)"},
+      {"replicates", Merge::Copy, N, "count", "independent randomized replicates the rays are split into"},
+      {"g1", Merge::Measured, R, "1",
+       "G1 by area sampling: fraction of points, drawn by projected area A_f max(0, v.m_f), unoccluded toward v"},
+      {"g1_raycast", Merge::Measured, R, "1",
+       "G1 by ray casting: visible projected area of the first hits along -v / sum_f A_f max(0, v.m_f)"},
+      {"visible_area_ratio", Merge::Measured, R, "1",
+       "visible projected area / ((v.n) A), A the macrosurface area; 1 at theta = 0 for a valid periodic surface"},
+      {"smith_numeric", Merge::Spread, N, "1",
+       "Smith G1 = 1 / (1 + Lambda) with Lambda from the surface's own facets, sum_f A_f max(0, -v.m_f) / ((v.n) A)"},
+      {"smith_nominal", Merge::Copy, N, "1", "Smith G1 of the generator's nominal NDF (null without one)"}};
   t.spec.comparisons = {
       {"g1", "smith_nominal", ModelKind::Nominal, "z_nominal", "rel_dev_nominal", "p_nominal"},
       {"g1", "smith_numeric", ModelKind::Facets, "z_numeric", "", ""}};
-  t.spec.bin_columns = {{"theta_m_range_deg", Merge::Key}, {"phi_m_range_deg", Merge::Key},
-                        {"m", Merge::Direction},           {"area_fraction", Merge::Mean},
-                        {"g1", Merge::Spread},             {"g1_raycast", Merge::Spread}};
+  t.spec.bin_columns = {
+      {"theta_m_range_deg", Merge::Key, N, "deg", "zenith range [lo, hi] of the normal bin"},
+      {"phi_m_range_deg", Merge::Key, N, "deg", "azimuth range [lo, hi] of the normal bin"},
+      {"m", Merge::Direction, N, "1", "mean unit normal [x, y, z] of the bin's facets"},
+      {"area_fraction", Merge::Mean, N, "1", "the bin's share of the surface's facet area"},
+      {"g1", Merge::Spread, R, "1", "G1 of the bin's facets by area sampling (0 where they all face away from v)"},
+      {"g1_raycast", Merge::Spread, R, "1", "G1 of the bin's facets by ray casting"}};
   return t;
 }
 

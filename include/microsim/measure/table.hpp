@@ -34,6 +34,8 @@ enum class ErrorKind {
   Rounding,    // resolution of a finite count or of floating-point sums
 };
 const char* error_kind_name(ErrorKind kind);
+// One sentence saying what the standard error of that kind measures (for the reference pages).
+const char* error_kind_meaning(ErrorKind kind);
 
 // How a column of one surface's table becomes the column of the ensemble's table.
 enum class Merge {
@@ -46,9 +48,18 @@ enum class Merge {
   Direction,  // a 3-vector: the sum over surfaces, normalized
 };
 
+const char* merge_name(Merge merge);
+// One sentence saying what the merge writes into the ensemble's row (for the reference pages).
+const char* merge_meaning(Merge merge);
+
+// A column of the table: its name and merge rule, and what the reference pages say of it.
 struct Column {
   std::string name;
   Merge merge = Merge::Copy;
+  // The kind of NAME_stderr in one surface's row (None: the row has no NAME_stderr).
+  ErrorKind error = ErrorKind::None;
+  std::string unit = {};     // "1": a number without unit; "deg", "1/sr", ...; empty: not a number
+  std::string meaning = {};  // what the value is, in one sentence
 };
 
 // Which model a comparison is made with, which decides the error of the comparison.
