@@ -4,6 +4,7 @@
 // (measure/table.hpp). Hidden from --help: it is for the documentation's maintainers.
 #include <iostream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -150,7 +151,10 @@ std::vector<RecordTable> record_tables() {
       {"measure ndf", "rows", "One row per ring of normal bins (D averaged over azimuth).", false, ndf_table_spec()},
       {"measure g1", "rows", "One row per view direction v (every --phi for every --theta).", true, g1_table()},
       {"measure g2", "rows", "One row per pair of directions (o, i).", true, g2_table()},
-      {"measure vndf", "rows", "One row per view direction v.", true, vndf_table(VndfOptions{}.family_alpha)},
+      {"measure vndf", "rows",
+       "One row per view direction v. An ensemble's rows end with bins_tested, max_abs_z, sidak_z and pass "
+       "of its merged bins (Student t with K - 1 degrees of freedom).",
+       true, vndf_table(VndfOptions{}.family_alpha)},
       {"measure bsdf", "rows", "Albedo rows of one incidence: side x slot of scattering orders.", false,
        bsdf_albedo_spec()},
       {"measure bsdf", "in_plane",
@@ -160,19 +164,25 @@ std::vector<RecordTable> record_tables() {
   };
 }
 
+// The kind of the column's NAME_stderr on one surface, and in an ensemble's rows.
 std::string error_cell(const Column& c, const RecordTable& t) {
-  std::string s = c.error == ErrorKind::None ? "" : code(c.name + "_stderr") + ": " + error_kind_name(c.error);
-  if (!t.ensembles) return s;
-  std::string e;
-  if (c.merge == Merge::Measured || c.merge == Merge::Spread) e = "ensembles: " + code(c.name + "_stderr") + ": surfaces";
-  if (c.merge == Merge::Measured) e += ", " + code(c.name + "_stderr_rays");
-  return s.empty() ? e : e.empty() ? s : s + "; " + e;
+  std::string s = c.error == ErrorKind::None ? "" : error_kind_name(c.error);
+  if (!t.ensembles || (c.merge != Merge::Measured && c.merge != Merge::Spread)) return s;
+  return (s.empty() ? "" : s + "; ") + "ensembles: surfaces" +
+         (c.merge == Merge::Measured ? " and " + code(c.name + "_stderr_rays") : "");
+}
+
+// Every column the reference lists says what it is: a specification without it is refused (the
+// test of the committed pages then fails).
+void require_meaning(const Column& c, const RecordTable& t) {
+  if (c.meaning.empty()) throw std::logic_error(t.command + " " + t.field + ": column " + c.name + " has no meaning");
 }
 
 void print_columns(std::ostream& os, const std::vector<Column>& columns, const RecordTable& t) {
-  os << "| Column | Meaning | Unit | Error | " << (t.ensembles ? "Merge |" : "") << "\n";
+  os << "| Column | Meaning | Unit | Error |" << (t.ensembles ? " Merge |" : "") << "\n";
   os << "|---|---|---|---|" << (t.ensembles ? "---|" : "") << "\n";
   for (const Column& c : columns) {
+    require_meaning(c, t);
     os << "| " << code(c.name) << " | " << escaped(c.meaning) << " | " << escaped(c.unit) << " | "
        << error_cell(c, t) << " |";
     if (t.ensembles) os << " " << merge_name(c.merge) << " |";
@@ -181,22 +191,20 @@ void print_columns(std::ostream& os, const std::vector<Column>& columns, const R
   os << "\n";
 }
 
-// The error a comparison divides by, in words.
+// The error a comparison divides by, in words: on one surface, or in an ensemble's rows.
 std::string comparison_error(const Comparison& c, bool ensembles) {
-  std::string e;
-  if (c.kind == ModelKind::Nominal)
-    e = code(c.measured + "_stderr") + (ensembles ? " (ensembles: between surfaces)" : "");
-  else
-    e = "the ray-count error " + code(c.measured + "_stderr") +
-        (ensembles ? " (ensembles: " + code(c.measured + "_stderr_rays") + ")" : "");
+  std::string e = code(c.measured + (ensembles && c.kind != ModelKind::Nominal ? "_stderr_rays" : "_stderr"));
+  if (ensembles) e += c.kind == ModelKind::Nominal ? " (between surfaces)" : " (ray count)";
   if (!c.model_error.empty()) e += " combined in quadrature with " + code(c.model_error);
   return e;
 }
 
 void print_comparisons(std::ostream& os, const std::vector<Comparison>& comparisons, bool ensembles) {
   if (comparisons.empty()) return;
-  os << "Comparisons with the models, written after the columns"
-     << (ensembles ? " of every ensemble row (one surface's rows carry those its command computes)" : "")
+  os << "Comparisons with the models"
+     << (ensembles ? " in an ensemble's rows (one surface's rows carry those their command computes, "
+                     "with that surface's error)"
+                   : "")
      << "; null where a value or its error is missing, or the error is 0:\n\n";
   os << "| Column | Meaning |\n|---|---|\n";
   for (const Comparison& c : comparisons) {
@@ -213,6 +221,21 @@ void print_comparisons(std::ostream& os, const std::vector<Comparison>& comparis
   os << "\n";
 }
 
+void print_fields(std::ostream& os, const std::vector<Column>& fields, const RecordTable& t) {
+  const bool ensembles = t.ensembles;
+  if (fields.empty()) return;
+  os << "Further fields" << (ensembles ? " of one surface's rows (an ensemble's rows do not carry them; "
+                                         "its " + code("per_surface") + " rows keep them)"
+                                       : "")
+     << ":\n\n| Field | Meaning | Unit | Error |\n|---|---|---|---|\n";
+  for (const Column& c : fields) {
+    require_meaning(c, t);
+    os << "| " << code(c.name) << " | " << escaped(c.meaning) << " | " << escaped(c.unit) << " | "
+       << (c.error == ErrorKind::None ? "" : error_kind_name(c.error)) << " |\n";
+  }
+  os << "\n";
+}
+
 void print_record_table(std::ostream& os, const RecordTable& t) {
   os << "## " << code(t.command) << ": " << code(t.field) << "\n\n" << escaped(t.about) << " ";
   os << (t.ensembles ? "Several surface files give the ensemble's rows, merged column by column."
@@ -220,10 +243,12 @@ void print_record_table(std::ostream& os, const RecordTable& t) {
      << "\n\n";
   print_columns(os, t.table.spec.columns, t);
   print_comparisons(os, t.table.spec.comparisons, t.ensembles);
+  print_fields(os, t.table.spec.row_fields, t);
   if (!t.table.spec.bin_columns.empty()) {
     os << "### " << code(t.command) << ": " << code("bins") << " of each row\n\n";
     print_columns(os, t.table.spec.bin_columns, t);
     print_comparisons(os, t.table.spec.bin_comparisons, t.ensembles);
+    print_fields(os, t.table.spec.bin_fields, t);
   }
 }
 
@@ -231,7 +256,7 @@ void print_records_reference(std::ostream& os) {
   os << "# Record columns\n\n" << generated_note("records");
   os << "The JSON record of a measurement holds its rows under the field named below (CSV output: "
         "the same rows, one per line). A value NAME with an error bar has its standard error "
-        "NAME_stderr beside it. Units: " << code("1") << " a number without unit, " << code("deg")
+        "NAME_stderr beside it; the Error column gives its kind. Units: " << code("1") << " a number without unit, " << code("deg")
      << " degrees, " << code("1/sr") << " per steradian; A is the macrosurface's area, v the "
         "view direction, m_f and A_f a facet's normal and area.\n\n";
   os << "## Error kinds\n\n";

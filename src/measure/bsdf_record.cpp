@@ -219,6 +219,9 @@ Table bsdf_in_plane_spec(int orders) {
   t.spec.columns.push_back({"smith_multiple", Merge::Copy, R, "1/sr",
                             "the Smith multiple-scattering random walk's BSDF, all orders, averaged like f"});
   t.spec.columns.push_back({"smith_multiple_stderr", Merge::Copy, N, "1/sr", "the Monte Carlo standard error of smith_multiple"});
+  for (int k = 0; k < K; ++k)
+    t.spec.row_fields.push_back({"smith_multiple_" + order_key(k, K), Merge::Copy, R, "1/sr",
+                                 "the Smith random walk's BSDF in the slot " + order_key(k, K) + ", averaged like f"});
   const std::string f1 = "f_" + order_key(0, K), f_total = "f_" + order_key(K, K);
   t.spec.comparisons = {
       {f1, "smith_single", ModelKind::Nominal, "z_smith_single", "", "p_smith_single"},

@@ -483,6 +483,36 @@ Table g1_table() {
       {"area_fraction", Merge::Mean, N, "1", "the bin's share of the surface's facet area"},
       {"g1", Merge::Spread, R, "1", "G1 of the bin's facets by area sampling (0 where they all face away from v)"},
       {"g1_raycast", Merge::Spread, R, "1", "G1 of the bin's facets by ray casting"}};
+  t.spec.row_fields = {
+      {"visible_projected_area", Merge::Copy, R, "length^2", "visible projected area, perpendicular to v, in the surface's units"},
+      {"macro_projected_area", Merge::Copy, N, "length^2", "|v.n| A"},
+      {"eq_2b", Merge::Copy, R, "1",
+       "theta = 0 only: visible_area_ratio, which is the integral of (n.m) G1(n, m) D(m) over the sphere (1 for a "
+       "valid periodic surface)"},
+      {"lambda_numeric", Merge::Copy, N, "1", "Smith Lambda(v) from the surface's own facets"},
+      {"rays", Merge::Copy, N, "count", "rays cast by the ray-casting estimator"},
+      {"area_samples", Merge::Copy, N, "count", "points drawn by the area-sampling estimator"},
+      {"border_crossings", Merge::Copy, N, "count", "periodic wrap-arounds of the rays"},
+      {"bins_dof", Merge::Copy, N, "count", "normal bins with area-sampling points (facing v)"},
+      {"bins_chi2_smith", Merge::Copy, N, "1",
+       "sum over those bins of ((g1 - smith_numeric) / error)^2, the error at least the resolution of the bin's points"},
+      {"bins_chi2_vcavity", Merge::Copy, N, "1", "the same against the bins' vcavity_numeric"},
+      {"bins_mad_smith", Merge::Copy, N, "1",
+       "mean |g1 - smith_numeric| over the bins, weighted by their projected area facing v"},
+      {"bins_mad_vcavity", Merge::Copy, N, "1", "the same against vcavity_numeric"},
+      {"bins_mad_noise", Merge::Copy, N, "1", "the same mean of the bins' errors times sqrt(2 / pi): what noise alone gives"},
+      {"max_abs_z_estimators", Merge::Copy, N, "1", "largest |z_estimators| over the bins"},
+      {"undersurface", Merge::Copy, N, "", "true on rows of the undersurface of a mesh (theta > 90)"},
+      {"g1_reverse_v", Merge::Copy, R, "1", "undersurface rows: the surface's own G1 at -v, an approximation of g1"},
+      {"g1_reflect_v", Merge::Copy, R, "1",
+       "undersurface rows: the surface's own G1 at v reflected across the macrosurface, the other approximation"},
+      {"z_reverse_v", Merge::Copy, N, "1", "(g1_reverse_v - g1) / their combined error (rel_dev_reverse_v: / g1)"},
+      {"z_reflect_v", Merge::Copy, N, "1", "(g1_reflect_v - g1) / their combined error (rel_dev_reflect_v: / g1)"}};
+  for (const Column& c : tracer_count_fields(true)) t.spec.row_fields.push_back(c);
+  t.spec.bin_fields = {
+      {"z_estimators", Merge::Copy, N, "1", "(g1 - g1_raycast) / their combined error"},
+      {"smith_numeric", Merge::Copy, N, "1", "the row's smith_numeric (Smith G1 does not depend on m)"},
+      {"vcavity_numeric", Merge::Copy, N, "1", "V-cavity G1 averaged over the bin's facets by projected area facing v"}};
   return t;
 }
 

@@ -350,6 +350,14 @@ Table g2_table() {
       {"g1_o", Merge::Spread, R, "1", "g1_o over the bin's facets"},
       {"g1_i", Merge::Spread, R, "1", "g1_i over the bin's facets"},
       {"vcavity", Merge::Mean, N, "1", "V-cavity G2 over the bin's facets, weighted like g2"}};
+  t.spec.row_fields = {{"area_samples", Merge::Copy, N, "count", "points drawn"},
+                       {"occlusion_rays", Merge::Copy, N, "count", "occlusion rays traced (two per point)"}};
+  for (const Column& f : tracer_count_fields(false)) t.spec.row_fields.push_back(f);
+  t.spec.bin_fields = {
+      {"weight_fraction", Merge::Copy, N, "1", "the bin's share of sum_f A_f (o.m_f + i.m_f) / 2"},
+      {"separable_from_g1", Merge::Copy, N, "1", "g1_o g1_i of the bin"},
+      {"height_correlated_from_g1", Merge::Copy, N, "1", "the height-correlated form built from the bin's g1_o and g1_i"},
+      {"samples", Merge::Copy, N, "count", "points drawn in the bin"}};
   return t;
 }
 

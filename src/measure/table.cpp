@@ -36,6 +36,22 @@ const char* error_kind_meaning(ErrorKind kind) {
   return "";
 }
 
+std::vector<Column> tracer_count_fields(bool windows) {
+  const ErrorKind N = ErrorKind::None;
+  std::vector<Column> f = {
+      {"lost_rays", Merge::Copy, N, "count",
+       "rays that found no first hit: still inside the surface's slab after the wrap limit, or (periodic "
+       "surfaces) leaving it downward"},
+      {"missed_rays", Merge::Copy, N, "count", "finite objects: rays of the window passing beside the object"},
+      {"backface_hits", Merge::Copy, N, "count", "first hits on the unexpected side of a facet"}};
+  if (windows) {
+    f.push_back({"side_exits", Merge::Copy, N, "count", "measured windows: rays leaving through a side wall"});
+    f.push_back({"side_entries", Merge::Copy, N, "count", "measured windows: rays entering through a side wall"});
+  }
+  f.push_back({"seconds", Merge::Copy, N, "s", "wall time of the row's measurement"});
+  return f;
+}
+
 const char* merge_name(Merge merge) {
   switch (merge) {
     case Merge::Copy: return "copy";

@@ -243,6 +243,24 @@ Table vndf_table(double family_alpha) {
       {"dv_model", Merge::Copy, N, "1/sr",
        "bin average of the nominal NDF's D_v(m) = G1(v) max(0, v.m) D(m) / (v.n) (null without one)"}};
   t.spec.bin_comparisons = {{"dv", "dv_model", ModelKind::Nominal, "z", "rel_dev", ""}};
+  t.spec.row_fields = {
+      {"replicates", Merge::Copy, N, "", "null: the ray origins are i.i.d. (no replicates; the binomial error is exact)"},
+      {"hits", Merge::Copy, N, "count", "rays whose first hit is a front face (the histogram's total)"},
+      {"hits_below_horizon", Merge::Copy, N, "count", "of which with a normal below the horizon (in no bin)"}};
+  for (const std::string model : {"", "_smith_numeric"}) {
+    const std::string against = model.empty() ? "the nominal D_v (null without one)" : "dv_smith_numeric";
+    if (model.empty())
+      t.spec.row_fields.push_back({"chi2", Merge::Copy, N, "1", "Pearson chi-square of the hit histogram against " + against});
+    t.spec.row_fields.insert(t.spec.row_fields.end(), {
+        {"dof" + model, Merge::Copy, N, "count", "degrees of freedom of chi2" + model},
+        {"p_value" + model, Merge::Copy, N, "1", "upper tail probability of chi2" + model},
+        {"max_abs_z" + model, Merge::Copy, N, "1", "largest per-bin |z| against " + against + " over the bins tested"},
+        {"bins_tested" + model, Merge::Copy, N, "count", "bins with at least 5 expected hits"},
+        {"sidak_z" + model, Merge::Copy, N, "1", "two-sided threshold of family_alpha, Sidak-corrected over the bins tested"},
+        {"pass" + model, Merge::Copy, N, "", "max_abs_z" + model + " < sidak_z" + model}});
+  }
+  for (const Column& f : tracer_count_fields(true)) t.spec.row_fields.push_back(f);
+  t.spec.bin_fields = {{"hits", Merge::Copy, N, "count", "hits whose normal is in the bin"}};
   t.spec.verdict = [family_alpha](Json& e, std::size_t surfaces) {
     const Json& bins = e["bins"];
     double max_abs_z = 0;

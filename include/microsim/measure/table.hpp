@@ -87,10 +87,19 @@ struct TableSpec {
   std::vector<Comparison> comparisons;    // appended after the columns
   std::vector<Column> bin_columns;        // the per-bin sub-table "bins" (empty: no bins)
   std::vector<Comparison> bin_comparisons;
+  // Further fields of one surface's rows and bins (bookkeeping, that surface's diagnostics),
+  // listed for the reference pages; the merge does not carry them into an ensemble's rows (its
+  // per_surface rows keep them). Their merge rule is unused.
+  std::vector<Column> row_fields = {};
+  std::vector<Column> bin_fields = {};
   // A verdict over the whole merged row (e.g. a Sidak-corrected test over its bins), run last
   // with the number of surfaces; "bins" is the last field when it runs.
   std::function<void(Json& row, std::size_t surfaces)> verdict;
 };
+
+// The tracer's counts that rows of ray estimators carry (lost_rays, backface_hits, ...), as
+// row_fields; `windows`: also the side walls of measured windows.
+std::vector<Column> tracer_count_fields(bool windows);
 
 struct Table {
   ErrorKind error = ErrorKind::Replicates;  // of the NAME_stderr columns
