@@ -145,6 +145,11 @@ struct RecordTable {
   Table table;          // the specification (no rows)
 };
 
+// table.hpp one_surface_nominal_z, as the bsdf record applies it.
+const std::string kOneSurfaceNominal =
+    "A comparison with a nominal model made on one surface is no verdict on the model: its z is null "
+    "and its value in units of the ray-count error is kept as z_..._rays at the end of the row.";
+
 std::vector<RecordTable> record_tables() {
   const int orders = BsdfOptions{}.orders;
   return {
@@ -155,11 +160,12 @@ std::vector<RecordTable> record_tables() {
        "One row per view direction v. An ensemble's rows end with bins_tested, max_abs_z, sidak_z and pass "
        "of its merged bins (Student t with K - 1 degrees of freedom).",
        true, vndf_table(VndfOptions{}.family_alpha)},
-      {"measure bsdf", "rows", "Albedo rows of one incidence: side x slot of scattering orders.", false,
+      {"measure bsdf", "rows",
+       "Albedo rows of one incidence: side x slot of scattering orders. " + kOneSurfaceNominal, false,
        bsdf_albedo_spec()},
       {"measure bsdf", "in_plane",
        "In-plane rows of one incidence: side x bin of outgoing angle in the plane of incidence (shown "
-       "for --orders " + std::to_string(orders) + "; the f_ columns follow the orders).",
+       "for --orders " + std::to_string(orders) + "; the f_ columns follow the orders). " + kOneSurfaceNominal,
        false, bsdf_in_plane_spec(orders)},
   };
 }
@@ -246,6 +252,7 @@ void print_record_table(std::ostream& os, const RecordTable& t) {
   print_fields(os, t.table.spec.row_fields, t);
   if (!t.table.spec.bin_columns.empty()) {
     os << "### " << code(t.command) << ": " << code("bins") << " of each row\n\n";
+    if (t.ensembles) os << "An ensemble's bins also hold " << code("surfaces") << ", the number of surfaces that have the bin.\n\n";
     print_columns(os, t.table.spec.bin_columns, t);
     print_comparisons(os, t.table.spec.bin_comparisons, t.ensembles);
     print_fields(os, t.table.spec.bin_fields, t);

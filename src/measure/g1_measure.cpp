@@ -462,7 +462,7 @@ Table g1_table() {
   t.spec.columns = {
       {"theta_deg", Merge::Copy, N, "deg", "view zenith angle, from the macrosurface normal (> 90: the undersurface of a mesh)"},
       {"phi_deg", Merge::Copy, N, "deg", "view azimuth"},
-      {"surfaces", Merge::Count, N, "count", "number of surfaces averaged (ensembles only)"},
+      {"surfaces", Merge::Count, N, "count", "number of surfaces K averaged (ensembles only), with t_dof = K - 1 after it"},
       {"replicates", Merge::Copy, N, "count", "independent randomized replicates the rays are split into"},
       {"g1", Merge::Measured, R, "1",
        "G1 by area sampling: fraction of points, drawn by projected area A_f max(0, v.m_f), unoccluded toward v"},

@@ -303,7 +303,7 @@ Table g2_table() {
        {"theta_i_deg", Merge::Copy, N, "deg", "light (incoming) zenith angle"},
        {"phi_i_deg", Merge::Copy, N, "deg", "light azimuth"},
        {"delta_phi_deg", Merge::Copy, N, "deg", "azimuth difference between o and i, in [0, 180]"},
-       {"surfaces", Merge::Count, N, "count", "number of surfaces averaged (ensembles only)"},
+       {"surfaces", Merge::Count, N, "count", "number of surfaces K averaged (ensembles only), with t_dof = K - 1 after it"},
        {"replicates", Merge::Copy, N, "count", "independent randomized replicates the points are split into"},
        {"g2", Merge::Measured, R, "1", "G2(o, i): fraction of the " + weight + " unoccluded toward o and toward i"},
        {"g1_o", Merge::Measured, R, "1", "fraction of the same points unoccluded toward o"},

@@ -220,7 +220,7 @@ Table vndf_table(double family_alpha) {
   t.spec.columns = {
       {"theta_deg", Merge::Copy, N, "deg", "view zenith angle"},
       {"phi_deg", Merge::Copy, N, "deg", "view azimuth"},
-      {"surfaces", Merge::Count, N, "count", "number of surfaces averaged (ensembles only)"},
+      {"surfaces", Merge::Count, N, "count", "number of surfaces K averaged (ensembles only), with t_dof = K - 1 after it"},
       {"rays", Merge::Mean, N, "count", "rays cast along -v from i.i.d. uniform origins"},
       {"visible_area_ratio", Merge::Spread, N, "1", "visible projected area / ((v.n) A), from the share of rays that hit"},
       {"tv_distance", Merge::Spread, N, "1",
