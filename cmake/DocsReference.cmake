@@ -35,7 +35,8 @@ foreach(page cli records)
   endif()
 endforeach()
 if(stale)
-  message(FATAL_ERROR "docs/reference: ${stale} differ from what the program prints "
+  list(JOIN stale " and " stale_pages)
+  message(FATAL_ERROR "docs/reference: ${stale_pages} differ from what the program prints "
                       "(`microsim reference PAGE`). Regenerate them with\n"
                       "  cmake --build build --target docs_reference\n"
                       "and commit the result.")
