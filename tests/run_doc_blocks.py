@@ -4,8 +4,9 @@ in README.md and docs/**/*.md.
 
 Each page runs in a fresh temporary folder, its blocks in order in one bash process (so that a
 block may use the files and variables of the blocks above it) under `set -euo pipefail`, with
-the build's `microsim` first on PATH, the build's Python module on PYTHONPATH and the
-repository's surfaces/ folder reachable as `surfaces/`. A page stops at its first failing block.
+the build's `microsim` first on PATH, then `python3` (the interpreter running this script), the
+build's Python module on PYTHONPATH and the repository's surfaces/ folder reachable as
+`surfaces/`. A page stops at its first failing block.
 
 Skipped: blocks containing `apt-get` (installing packages is not the documentation's to test)
 and blocks whose first line is `# long example`; with --long, the pages holding long examples
@@ -161,8 +162,11 @@ def main():
     args.root = args.root.resolve()
     if not (args.bin_dir / "microsim").exists():
         sys.exit(f"run_doc_blocks: no microsim in {args.bin_dir}")
+    # `python3` in a block is this interpreter (the one the build's module is made for).
+    python_dir = Path(tempfile.mkdtemp(prefix="doc-blocks-python-"))
+    (python_dir / "python3").symlink_to(sys.executable)
     env = dict(os.environ)
-    env["PATH"] = str(args.bin_dir.resolve()) + os.pathsep + env.get("PATH", "")
+    env["PATH"] = os.pathsep.join([str(args.bin_dir.resolve()), str(python_dir), env.get("PATH", "")])
     if args.pythonpath:
         env["PYTHONPATH"] = os.pathsep.join(p for p in (args.pythonpath, env.get("PYTHONPATH", "")) if p)
 
@@ -189,6 +193,7 @@ def main():
         for m in msg:
             print(m)
         sys.stdout.flush()
+    shutil.rmtree(python_dir, ignore_errors=True)
     print(f"{skipped} skipped")
     print(f"{passed} passed, {failed} failed")
     return 1 if failed else 0
