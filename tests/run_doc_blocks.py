@@ -83,16 +83,29 @@ def pages(root):
 
 def page_script(blocks, state):
     """One bash script running the blocks in order; before each block, its number and a fresh
-    stdout/stderr file in `state`, so that the failing block and its output are known."""
+    stdout/stderr file in `state`, so that the failing block and its output are known. Also
+    returns, for each line of the script, the line of the page it comes from (or None)."""
     parts = [
         "set -euo pipefail",
         f"trap 'echo \"$BASH_COMMAND\" > \"{state}/failed_command\"' ERR",
     ]
+    page_line = [None, None]
     for n, b in enumerate(blocks):
         parts.append(f'echo {n} > "{state}/block"; exec > "{state}/out.{n}" 2> "{state}/err.{n}"')
-        parts.append(b.text)
+        page_line.append(None)
+        parts.append(b.text.rstrip("\n"))
+        page_line += [b.line + 1 + k for k in range(len(b.text.rstrip("\n").splitlines()))]
     parts.append(f'echo done > "{state}/block"')
-    return "\n".join(parts) + "\n"
+    return "\n".join(parts) + "\n", page_line
+
+
+def page_lines(text, script, page_line, page):
+    """bash's `SCRIPT: line N:` in messages as the page's file and line."""
+    def to_page(m):
+        n = int(m.group(1))
+        line = page_line[n - 1] if 0 < n <= len(page_line) else None
+        return f"{page}: line {line}:" if line else m.group(0)
+    return re.sub(re.escape(str(script)) + r": line (\d+):", to_page, text)
 
 
 def read(path):
@@ -116,7 +129,8 @@ def run_page(page, blocks, args, env):
     try:
         (work / "surfaces").symlink_to(args.root / "surfaces")
         script = state / "page.sh"
-        script.write_text(page_script(blocks, state))
+        text, page_line = page_script(blocks, state)
+        script.write_text(text)
         proc = subprocess.Popen(["bash", str(script)], cwd=work, env=env, start_new_session=True,
                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
         timed_out = False
@@ -134,7 +148,7 @@ def run_page(page, blocks, args, env):
         why = f"timed out after {args.timeout} s" if timed_out else f"exit {proc.returncode}"
         command = read(state / "failed_command").strip() or b.text.strip().splitlines()[-1]
         msg = [f"  block {n + 1} (line {b.line}) failed ({why}): {command}"]
-        err = read(state / f"err.{n}") + bash_err.decode(errors="replace")
+        err = page_lines(read(state / f"err.{n}") + bash_err.decode(errors="replace"), script, page_line, page.name)
         if err.strip():
             msg.append("  stderr:\n" + indented(err))
         if n + 1 < len(blocks):
