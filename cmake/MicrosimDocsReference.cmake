@@ -24,6 +24,11 @@ if(MICROSIM_TESTS)
            COMMAND ${CMAKE_COMMAND} -DMICROSIM=$<TARGET_FILE:microsim>
                    -DDOCS=${CMAKE_SOURCE_DIR}/docs/reference -DMODE=check
                    -P ${CMAKE_SOURCE_DIR}/cmake/DocsReference.cmake)
+  # Every field the measurements write into their rows is on the records page (small runs).
+  add_test(NAME docs_records_complete
+           COMMAND ${Python3_EXECUTABLE} ${CMAKE_SOURCE_DIR}/tests/check_record_fields.py
+                   --microsim $<TARGET_FILE:microsim> --page ${CMAKE_SOURCE_DIR}/docs/reference/records.md)
+  set_tests_properties(docs_records_complete PROPERTIES TIMEOUT 120 LABELS python)
   # Every `sh` block of README.md and docs/ runs (page by page, in a fresh folder).
   add_test(NAME doc_blocks
            COMMAND ${Python3_EXECUTABLE} ${CMAKE_SOURCE_DIR}/tests/run_doc_blocks.py
