@@ -227,12 +227,12 @@ void print_comparisons(std::ostream& os, const std::vector<Comparison>& comparis
   os << "\n";
 }
 
-void print_fields(std::ostream& os, const std::vector<Column>& fields, const RecordTable& t) {
-  const bool ensembles = t.ensembles;
+// `what`: "rows" or "bins".
+void print_fields(std::ostream& os, const std::vector<Column>& fields, const RecordTable& t, const std::string& what) {
   if (fields.empty()) return;
-  os << "Further fields" << (ensembles ? " of one surface's rows (an ensemble's rows do not carry them; "
-                                         "its " + code("per_surface") + " rows keep them)"
-                                       : "")
+  os << "Further fields" << (t.ensembles ? " of one surface's " + what + " (an ensemble's " + what +
+                                               " do not carry them; its " + code("per_surface") + " rows keep them)"
+                                         : "")
      << ":\n\n| Field | Meaning | Unit | Error |\n|---|---|---|---|\n";
   for (const Column& c : fields) {
     require_meaning(c, t);
@@ -249,13 +249,13 @@ void print_record_table(std::ostream& os, const RecordTable& t) {
      << "\n\n";
   print_columns(os, t.table.spec.columns, t);
   print_comparisons(os, t.table.spec.comparisons, t.ensembles);
-  print_fields(os, t.table.spec.row_fields, t);
+  print_fields(os, t.table.spec.row_fields, t, "rows");
   if (!t.table.spec.bin_columns.empty()) {
     os << "### " << code(t.command) << ": " << code("bins") << " of each row\n\n";
     if (t.ensembles) os << "An ensemble's bins also hold " << code("surfaces") << ", the number of surfaces that have the bin.\n\n";
     print_columns(os, t.table.spec.bin_columns, t);
     print_comparisons(os, t.table.spec.bin_comparisons, t.ensembles);
-    print_fields(os, t.table.spec.bin_fields, t);
+    print_fields(os, t.table.spec.bin_fields, t, "bins");
   }
 }
 
