@@ -73,6 +73,7 @@ std::unique_ptr<MicrosimApp> build_app(GlobalOptions& g, TallyReplay* replay) {
   register_measure_bsdf(*measure, g);
   register_render(app, g);
   register_merge(app, g);
+  register_reference(app);
   return owned;
 }
 
@@ -84,7 +85,8 @@ std::string unknown_command(const CLI::App& app, const std::vector<std::string>&
     std::string names;
     const CLI::App* next = nullptr;
     for (const auto* sub : level->get_subcommands({})) {
-      names += (names.empty() ? "" : ", ") + sub->get_name();
+      if (!sub->get_group().empty())  // hidden commands (reference) are not offered
+        names += (names.empty() ? "" : ", ") + sub->get_name();
       if (sub->get_name() == args[k]) next = sub;
     }
     if (!next)

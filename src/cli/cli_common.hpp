@@ -88,5 +88,8 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g);
 void register_demo(CLI::App& app, const GlobalOptions& g);
 void register_validate(CLI::App& app, const GlobalOptions& g);
 void register_render(CLI::App& app, const GlobalOptions& g);
+// The documentation's reference pages, printed from the command tree `app` and the record
+// tables' specifications (hidden from --help).
+void register_reference(CLI::App& app);
 
 }  // namespace microsim::cli

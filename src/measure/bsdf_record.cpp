@@ -172,6 +172,65 @@ BsdfTableOptions bsdf_table_options(const BsdfRequest& o, const Microsurface& s,
 // ---------------------------------------------------------------------------------------------
 // Tables of one incidence
 
+Table bsdf_albedo_spec() {
+  Table t;
+  t.error = ErrorKind::Replicates;
+  const ErrorKind R = ErrorKind::Replicates, N = ErrorKind::None;
+  t.spec.columns = {
+      {"side", Merge::Key, N, "", "reflected, or transmitted (the second side of a dielectric)"},
+      {"order", Merge::Key, N, "",
+       "slot of scattering orders: order_1 .. order_{K-1} alone, order_Kplus (K and above), total"},
+      {"albedo", Merge::Measured, R, "1", "share of the incident power leaving on this side after the slot's orders"},
+      {"smith_multiple", Merge::Copy, R, "1",
+       "the same share for the Smith multiple-scattering random walk on the nominal NDF (null without one)"},
+      {"smith_multiple_stderr", Merge::Copy, N, "1", "the Monte Carlo standard error of smith_multiple"},
+      {"smith_single", Merge::Copy, N, "1",
+       "single-scattering albedo of the nominal NDF's BSDF with height-correlated Smith G2 (order_1 rows)"},
+      {"vcavity_single", Merge::Copy, N, "1",
+       "single-scattering albedo of the nominal NDF's BSDF with V-cavity G2 (order_1 rows)"},
+      {"smooth_interface", Merge::Copy, N, "1",
+       "Fresnel reflectance (transmittance) of a flat interface of the material at theta_i (total rows)"}};
+  t.spec.comparisons = {smith_multiple_albedo(), smith_single_albedo(), vcavity_single_albedo(),
+                        smooth_interface_albedo()};
+  return t;
+}
+
+Table bsdf_in_plane_spec(int orders) {
+  const int K = orders;
+  Table t;
+  t.error = ErrorKind::Replicates;
+  const ErrorKind R = ErrorKind::Replicates, N = ErrorKind::None;
+  t.spec.columns = {
+      {"side", Merge::Key, N, "", "reflected, or transmitted (the second side of a dielectric)"},
+      {"theta_o_deg", Merge::Key, N, "deg",
+       "centre of the bin: outgoing zenith angle in the plane of incidence, positive on the specular side"},
+      {"theta_o_range_deg", Merge::Copy, N, "deg", "[lo, hi] of the bin"}};
+  for (int k = 0; k <= K; ++k) {
+    const std::string slot = k == K       ? std::string("all orders")
+                             : k == K - 1 ? "orders " + std::to_string(K) + " and above"
+                                          : "order " + std::to_string(k + 1);
+    t.spec.columns.push_back({"f_" + order_key(k, K), Merge::Measured, R, "1/sr",
+                              "BSDF of " + slot + ", cosine-weighted average over the bin's band of directions"});
+  }
+  t.spec.columns.push_back({"smith_single", Merge::Copy, N, "1/sr",
+                            "the nominal NDF's single-scattering BSDF (height-correlated Smith G2) averaged "
+                            "like f (null without a nominal NDF)"});
+  t.spec.columns.push_back({"vcavity_single", Merge::Copy, N, "1/sr", "the same with V-cavity G2"});
+  t.spec.columns.push_back({"smith_multiple", Merge::Copy, R, "1/sr",
+                            "the Smith multiple-scattering random walk's BSDF, all orders, averaged like f"});
+  t.spec.columns.push_back({"smith_multiple_stderr", Merge::Copy, N, "1/sr", "the Monte Carlo standard error of smith_multiple"});
+  for (int k = 0; k < K; ++k)
+    t.spec.row_fields.push_back({"smith_multiple_" + order_key(k, K), Merge::Copy, R, "1/sr",
+                                 "the Smith random walk's BSDF in the slot " + order_key(k, K) + ", averaged like f"});
+  const std::string f1 = "f_" + order_key(0, K), f_total = "f_" + order_key(K, K);
+  t.spec.comparisons = {
+      {f1, "smith_single", ModelKind::Nominal, "z_smith_single", "", "p_smith_single"},
+      {f1, "vcavity_single", ModelKind::Nominal, "z_vcavity_single", "", "p_vcavity_single"},
+      {f_total, "smith_multiple", ModelKind::Nominal, "z_smith_multiple", "", "p_smith_multiple",
+       "smith_multiple_stderr"}};
+  return t;
+}
+
 namespace {
 // The albedo's single-scattering models of the nominal NDF and the flat interface's, computed
 // once for the table and the record.
@@ -193,14 +252,7 @@ AlbedoModels albedo_models(const BsdfResult& r) {
 Table albedo_table(const BsdfResult& r, const AlbedoModels& models) {
   const int K = r.options.orders;
   const bool transmits = r.options.material.transmits();
-  Table t;
-  t.error = ErrorKind::Replicates;
-  t.spec.columns = {{"side", Merge::Key},           {"order", Merge::Key},
-                    {"albedo", Merge::Measured},    {"smith_multiple", Merge::Copy},
-                    {"smith_multiple_stderr", Merge::Copy}, {"smith_single", Merge::Copy},
-                    {"vcavity_single", Merge::Copy}, {"smooth_interface", Merge::Copy}};
-  t.spec.comparisons = {smith_multiple_albedo(), smith_single_albedo(), vcavity_single_albedo(),
-                        smooth_interface_albedo()};
+  Table t = bsdf_albedo_spec();
   for (int sd = 0; sd < (transmits ? 2 : 1); ++sd)
     for (int k = 0; k <= K; ++k) {
       Json row;
@@ -237,18 +289,7 @@ Table bsdf_in_plane_table(const BsdfResult& r) {
   using namespace microsim::models;
   const int K = r.options.orders;
   const bool transmits = r.options.material.transmits();
-  const std::string f1 = "f_" + order_key(0, K), f_total = "f_" + order_key(K, K);
-  const Comparison smith_single{f1, "smith_single", ModelKind::Nominal, "z_smith_single", "", "p_smith_single"};
-  const Comparison vcavity_single{f1, "vcavity_single", ModelKind::Nominal, "z_vcavity_single", "", "p_vcavity_single"};
-  const Comparison smith_multiple{f_total, "smith_multiple", ModelKind::Nominal, "z_smith_multiple", "",
-                                  "p_smith_multiple", "smith_multiple_stderr"};
-  Table t;
-  t.error = ErrorKind::Replicates;
-  t.spec.columns = {{"side", Merge::Key}, {"theta_o_deg", Merge::Key}, {"theta_o_range_deg", Merge::Copy}};
-  for (int k = 0; k <= K; ++k) t.spec.columns.push_back({"f_" + order_key(k, K), Merge::Measured});
-  for (const char* m : {"smith_single", "vcavity_single", "smith_multiple", "smith_multiple_stderr"})
-    t.spec.columns.push_back({m, Merge::Copy});
-  t.spec.comparisons = {smith_single, vcavity_single, smith_multiple};
+  Table t = bsdf_in_plane_spec(K);
   for (int sd = 0; sd < (transmits ? 2 : 1); ++sd) {
     const bool above = sd == 0;
     for (int b = 0; b < r.plane.size(); ++b) {
@@ -268,8 +309,8 @@ Table bsdf_in_plane_table(const BsdfResult& r) {
         const Vec3 wi = r.wi;
         row["smith_single"] = r.plane.cos_weighted_average(b, above, [&](const Vec3& o) { return hcb.eval(o, wi); });
         row["vcavity_single"] = r.plane.cos_weighted_average(b, above, [&](const Vec3& o) { return vcb.eval(o, wi); });
-        compare_one(row, smith_single);
-        compare_one(row, vcavity_single);
+        compare_one(row, t.spec.comparisons[0]);
+        compare_one(row, t.spec.comparisons[1]);
       } else {
         row["smith_single"] = nullptr;
         row["vcavity_single"] = nullptr;
@@ -285,7 +326,7 @@ Table bsdf_in_plane_table(const BsdfResult& r) {
           row["smith_multiple_" + order_key(k, K)] = mk.mean;
           row["smith_multiple_" + order_key(k, K) + "_stderr"] = mk.stderr_;
         }
-        compare_one(row, smith_multiple);
+        compare_one(row, t.spec.comparisons[2]);
       } else {
         row["smith_multiple"] = nullptr;
       }

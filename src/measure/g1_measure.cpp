@@ -458,17 +458,61 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
 Table g1_table() {
   Table t;
   t.error = ErrorKind::Replicates;
-  t.spec.columns = {{"theta_deg", Merge::Copy},          {"phi_deg", Merge::Copy},
-                    {"surfaces", Merge::Count},          {"replicates", Merge::Copy},
-                    {"g1", Merge::Measured},             {"g1_raycast", Merge::Measured},
-                    {"visible_area_ratio", Merge::Measured}, {"smith_numeric", Merge::Spread},
-                    {"smith_nominal", Merge::Copy}};
+  const ErrorKind R = ErrorKind::Replicates, N = ErrorKind::None;
+  t.spec.columns = {
+      {"theta_deg", Merge::Copy, N, "deg", "view zenith angle, from the macrosurface normal (> 90: the undersurface of a mesh)"},
+      {"phi_deg", Merge::Copy, N, "deg", "view azimuth"},
+      {"surfaces", Merge::Count, N, "count", "number of surfaces K averaged (ensembles only), with t_dof = K - 1 after it"},
+      {"replicates", Merge::Copy, N, "count", "independent randomized replicates the rays are split into"},
+      {"g1", Merge::Measured, R, "1",
+       "G1 by area sampling: fraction of points, drawn by projected area A_f max(0, v.m_f), unoccluded toward v"},
+      {"g1_raycast", Merge::Measured, R, "1",
+       "G1 by ray casting: visible projected area of the first hits along -v / sum_f A_f max(0, v.m_f)"},
+      {"visible_area_ratio", Merge::Measured, R, "1",
+       "visible projected area / ((v.n) A), A the macrosurface area; 1 at theta = 0 for a valid periodic surface"},
+      {"smith_numeric", Merge::Spread, N, "1",
+       "Smith G1 = 1 / (1 + Lambda) with Lambda from the surface's own facets, sum_f A_f max(0, -v.m_f) / ((v.n) A)"},
+      {"smith_nominal", Merge::Copy, N, "1", "Smith G1 of the generator's nominal NDF (null without one)"}};
   t.spec.comparisons = {
       {"g1", "smith_nominal", ModelKind::Nominal, "z_nominal", "rel_dev_nominal", "p_nominal"},
       {"g1", "smith_numeric", ModelKind::Facets, "z_numeric", "", ""}};
-  t.spec.bin_columns = {{"theta_m_range_deg", Merge::Key}, {"phi_m_range_deg", Merge::Key},
-                        {"m", Merge::Direction},           {"area_fraction", Merge::Mean},
-                        {"g1", Merge::Spread},             {"g1_raycast", Merge::Spread}};
+  t.spec.bin_columns = {
+      {"theta_m_range_deg", Merge::Key, N, "deg", "zenith range [lo, hi] of the normal bin"},
+      {"phi_m_range_deg", Merge::Key, N, "deg", "azimuth range [lo, hi] of the normal bin"},
+      {"m", Merge::Direction, N, "1", "mean unit normal [x, y, z] of the bin's facets"},
+      {"area_fraction", Merge::Mean, N, "1", "the bin's share of the surface's facet area"},
+      {"g1", Merge::Spread, R, "1", "G1 of the bin's facets by area sampling (0 where they all face away from v)"},
+      {"g1_raycast", Merge::Spread, R, "1", "G1 of the bin's facets by ray casting"}};
+  t.spec.row_fields = {
+      {"visible_projected_area", Merge::Copy, R, "length^2", "visible projected area, perpendicular to v, in the surface's units"},
+      {"macro_projected_area", Merge::Copy, N, "length^2", "|v.n| A"},
+      {"eq_2b", Merge::Copy, R, "1",
+       "theta = 0 only: visible_area_ratio, which is the integral of (n.m) G1(n, m) D(m) over the sphere (1 for a "
+       "valid periodic surface)"},
+      {"lambda_numeric", Merge::Copy, N, "1", "Smith Lambda(v) from the surface's own facets"},
+      {"rays", Merge::Copy, N, "count", "rays cast by the ray-casting estimator"},
+      {"area_samples", Merge::Copy, N, "count", "points drawn by the area-sampling estimator"},
+      {"border_crossings", Merge::Copy, N, "count", "periodic wrap-arounds of the rays"},
+      {"bins_dof", Merge::Copy, N, "count", "normal bins with area-sampling points (facing v)"},
+      {"bins_chi2_smith", Merge::Copy, N, "1",
+       "sum over those bins of ((g1 - smith_numeric) / error)^2, the error at least the resolution of the bin's points"},
+      {"bins_chi2_vcavity", Merge::Copy, N, "1", "the same against the bins' vcavity_numeric"},
+      {"bins_mad_smith", Merge::Copy, N, "1",
+       "mean |g1 - smith_numeric| over the bins, weighted by their projected area facing v"},
+      {"bins_mad_vcavity", Merge::Copy, N, "1", "the same against vcavity_numeric"},
+      {"bins_mad_noise", Merge::Copy, N, "1", "the same mean of the bins' errors times sqrt(2 / pi): what noise alone gives"},
+      {"max_abs_z_estimators", Merge::Copy, N, "1", "largest |z_estimators| over the bins"},
+      {"undersurface", Merge::Copy, N, "", "true on rows of the undersurface of a mesh (theta > 90)"},
+      {"g1_reverse_v", Merge::Copy, R, "1", "undersurface rows: the surface's own G1 at -v, an approximation of g1"},
+      {"g1_reflect_v", Merge::Copy, R, "1",
+       "undersurface rows: the surface's own G1 at v reflected across the macrosurface, the other approximation"},
+      {"z_reverse_v", Merge::Copy, N, "1", "(g1_reverse_v - g1) / their combined error (rel_dev_reverse_v: / g1)"},
+      {"z_reflect_v", Merge::Copy, N, "1", "(g1_reflect_v - g1) / their combined error (rel_dev_reflect_v: / g1)"}};
+  for (const Column& c : tracer_count_fields(true)) t.spec.row_fields.push_back(c);
+  t.spec.bin_fields = {
+      {"z_estimators", Merge::Copy, N, "1", "(g1 - g1_raycast) / their combined error"},
+      {"smith_numeric", Merge::Copy, N, "1", "the row's smith_numeric (Smith G1 does not depend on m)"},
+      {"vcavity_numeric", Merge::Copy, N, "1", "V-cavity G1 averaged over the bin's facets by projected area facing v"}};
   return t;
 }
 

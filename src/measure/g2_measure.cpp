@@ -295,22 +295,41 @@ const char* const kForms[] = {"separable", "height_correlated", "direction_corre
 Table g2_table() {
   Table t;
   t.error = ErrorKind::Replicates;
+  const ErrorKind R = ErrorKind::Replicates, N = ErrorKind::None;
+  const std::string weight = "points drawn with density A_f (o.m_f + i.m_f) / 2 on the facets facing both o and i";
   auto& c = t.spec.columns;
-  c = {{"theta_o_deg", Merge::Copy}, {"phi_o_deg", Merge::Copy},
-       {"theta_i_deg", Merge::Copy}, {"phi_i_deg", Merge::Copy},
-       {"delta_phi_deg", Merge::Copy}, {"surfaces", Merge::Count},
-       {"replicates", Merge::Copy},
-       {"g2", Merge::Measured},        {"g1_o", Merge::Measured},
-       {"g1_i", Merge::Measured},      {"half_bin_theta_m_range_deg", Merge::Copy},
-       {"half_bin_phi_m_range_deg", Merge::Copy}, {"g2_half", Merge::Measured},
-       {"lambda_o_numeric", Merge::Spread},
-       {"lambda_i_numeric", Merge::Spread}};
-  for (const char* f : kForms) c.push_back({std::string("smith_") + f, Merge::Spread});
-  c.push_back({"vcavity", Merge::Spread});
-  for (const char* f : kForms) c.push_back({std::string("smith_") + f + "_nominal", Merge::Copy});
-  for (const char* f : kForms) {
-    c.push_back({std::string(f) + "_from_g1", Merge::Spread});
-    c.push_back({std::string(f) + "_from_g1_diff", Merge::Measured});
+  c = {{"theta_o_deg", Merge::Copy, N, "deg", "view (outgoing) zenith angle"},
+       {"phi_o_deg", Merge::Copy, N, "deg", "view azimuth"},
+       {"theta_i_deg", Merge::Copy, N, "deg", "light (incoming) zenith angle"},
+       {"phi_i_deg", Merge::Copy, N, "deg", "light azimuth"},
+       {"delta_phi_deg", Merge::Copy, N, "deg", "azimuth difference between o and i, in [0, 180]"},
+       {"surfaces", Merge::Count, N, "count", "number of surfaces K averaged (ensembles only), with t_dof = K - 1 after it"},
+       {"replicates", Merge::Copy, N, "count", "independent randomized replicates the points are split into"},
+       {"g2", Merge::Measured, R, "1", "G2(o, i): fraction of the " + weight + " unoccluded toward o and toward i"},
+       {"g1_o", Merge::Measured, R, "1", "fraction of the same points unoccluded toward o"},
+       {"g1_i", Merge::Measured, R, "1", "fraction of the same points unoccluded toward i"},
+       {"half_bin_theta_m_range_deg", Merge::Copy, N, "deg", "zenith range of the normal bin holding the half vector (o + i) / |o + i|"},
+       {"half_bin_phi_m_range_deg", Merge::Copy, N, "deg", "azimuth range of that bin"},
+       {"g2_half", Merge::Measured, R, "1",
+        "g2 of the half vector's bin, the G2(o, h, i) of a specular microfacet BRDF (null below 100 samples)"},
+       {"lambda_o_numeric", Merge::Spread, N, "1", "Smith Lambda(o) from the surface's own facets"},
+       {"lambda_i_numeric", Merge::Spread, N, "1", "Smith Lambda(i) from the surface's own facets"}};
+  const char* const form_meaning[] = {"separable", "height-correlated", "direction-correlated",
+                                      "height-direction-correlated"};
+  for (int k = 0; k < 4; ++k)
+    c.push_back({std::string("smith_") + kForms[k], Merge::Spread, N, "1",
+                 std::string("Smith G2, ") + form_meaning[k] + " form, with Lambda from the surface's own facets"});
+  c.push_back({"vcavity", Merge::Spread, N, "1",
+               "V-cavity G2 averaged over the surface's facets facing both o and i, weighted like g2"});
+  for (int k = 0; k < 4; ++k)
+    c.push_back({std::string("smith_") + kForms[k] + "_nominal", Merge::Copy, N, "1",
+                 std::string("Smith G2, ") + form_meaning[k] + " form, of the generator's nominal NDF (null without one)"});
+  for (int k = 0; k < 4; ++k) {
+    c.push_back({std::string(kForms[k]) + "_from_g1", Merge::Spread, N, "1",
+                 std::string("the ") + form_meaning[k] + " form built in each normal bin from the bin's measured "
+                 "g1_o and g1_i, averaged over the bins with the weights of g2"});
+    c.push_back({std::string(kForms[k]) + "_from_g1_diff", Merge::Measured, ErrorKind::Jackknife, "1",
+                 std::string("bin average of g2 - ") + kForms[k] + "_from_g1: the test of the correlation the form assumes"});
   }
   auto& z = t.spec.comparisons;
   for (const char* f : kForms)
@@ -321,15 +340,24 @@ Table g2_table() {
                  std::string("z_") + f + "_nominal", "", std::string("p_") + f + "_nominal"});
   for (const char* f : kForms)
     z.push_back({std::string(f) + "_from_g1_diff", "", ModelKind::Zero, std::string("z_") + f + "_from_g1", "", ""});
-  t.spec.bin_columns = {{"theta_m_range_deg", Merge::Key},
-                        {"phi_m_range_deg", Merge::Key},
-                        {"m", Merge::Direction},
-                        {"area_fraction", Merge::Mean},
-                        {"front_fraction", Merge::Mean},
-                        {"g2", Merge::Spread},
-                        {"g1_o", Merge::Spread},
-                        {"g1_i", Merge::Spread},
-                        {"vcavity", Merge::Mean}};
+  t.spec.bin_columns = {
+      {"theta_m_range_deg", Merge::Key, N, "deg", "zenith range [lo, hi] of the normal bin"},
+      {"phi_m_range_deg", Merge::Key, N, "deg", "azimuth range [lo, hi] of the normal bin"},
+      {"m", Merge::Direction, N, "1", "mean unit normal [x, y, z] of the bin's facets"},
+      {"area_fraction", Merge::Mean, N, "1", "the bin's share of the surface's facet area"},
+      {"front_fraction", Merge::Mean, N, "1", "share of the bin's area on facets facing both o and i"},
+      {"g2", Merge::Spread, R, "1", "g2 over the bin's facets (0 where none faces both)"},
+      {"g1_o", Merge::Spread, R, "1", "g1_o over the bin's facets"},
+      {"g1_i", Merge::Spread, R, "1", "g1_i over the bin's facets"},
+      {"vcavity", Merge::Mean, N, "1", "V-cavity G2 over the bin's facets, weighted like g2"}};
+  t.spec.row_fields = {{"area_samples", Merge::Copy, N, "count", "points drawn"},
+                       {"occlusion_rays", Merge::Copy, N, "count", "occlusion rays traced (two per point)"}};
+  for (const Column& f : tracer_count_fields(false)) t.spec.row_fields.push_back(f);
+  t.spec.bin_fields = {
+      {"weight_fraction", Merge::Copy, N, "1", "the bin's share of sum_f A_f (o.m_f + i.m_f) / 2"},
+      {"separable_from_g1", Merge::Copy, N, "1", "g1_o g1_i of the bin"},
+      {"height_correlated_from_g1", Merge::Copy, N, "1", "the height-correlated form built from the bin's g1_o and g1_i"},
+      {"samples", Merge::Copy, N, "count", "points drawn in the bin"}};
   return t;
 }
 

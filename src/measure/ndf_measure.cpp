@@ -117,9 +117,22 @@ Json surface_checks_json(const FacetSums& f, const Microsurface& s) {
   return j;
 }
 
-Table ndf_table(const NdfResult& r, const Microsurface& s) {
+Table ndf_table_spec() {
   Table t;
   t.error = ErrorKind::Blocks;
+  const ErrorKind N = ErrorKind::None;
+  t.spec.columns = {
+      {"theta_lo_deg", Merge::Key, N, "deg", "lower zenith edge of the ring of normal bins"},
+      {"theta_hi_deg", Merge::Key, N, "deg", "upper zenith edge of the ring"},
+      {"d", Merge::Measured, ErrorKind::Blocks, "1/sr",
+       "D averaged over the ring's azimuths: facet area with normal in the bin / (A * solid angle of the bin)"},
+      {"d_nominal", Merge::Copy, N, "1/sr", "the nominal NDF's D averaged over the same bins (null without one)"}};
+  t.spec.comparisons = {{"d", "d_nominal", ModelKind::Nominal, "z", "", ""}};
+  return t;
+}
+
+Table ndf_table(const NdfResult& r, const Microsurface& s) {
+  Table t = ndf_table_spec();
   for (int it = 0; it < r.bins.n_theta(); ++it) {
     Json row;
     row["theta_lo_deg"] = deg(r.bins.theta_lo(it));

@@ -20,6 +20,66 @@ const char* error_kind_name(ErrorKind kind) {
   return "none";
 }
 
+const char* error_kind_meaning(ErrorKind kind) {
+  switch (kind) {
+    case ErrorKind::None: return "no error bar (a parameter, an exact sum over facets, a model)";
+    case ErrorKind::Replicates:
+      return "spread of the R independent randomized replicates the rays are split into: "
+             "sqrt(var / R) of the replicate means";
+    case ErrorKind::Binomial: return "independent counts: sqrt(p (1 - p) / n), exact for multinomial bins";
+    case ErrorKind::Jackknife: return "delete-one-replicate jackknife of a nonlinear function of the replicates' tallies";
+    case ErrorKind::Surfaces:
+      return "spread of K independent surfaces: sd / sqrt(K), Student t with K - 1 degrees of freedom";
+    case ErrorKind::Blocks: return "spread of the estimate over blocks (regions) of one surface, divided by sqrt(blocks)";
+    case ErrorKind::Rounding: return "resolution of a finite count or of floating-point sums";
+  }
+  return "";
+}
+
+std::vector<Column> tracer_count_fields(bool windows) {
+  const ErrorKind N = ErrorKind::None;
+  std::vector<Column> f = {
+      {"lost_rays", Merge::Copy, N, "count",
+       "rays that found no first hit: still inside the surface's slab after the wrap limit, or (periodic "
+       "surfaces) leaving it downward"},
+      {"missed_rays", Merge::Copy, N, "count", "finite objects: rays of the window passing beside the object"},
+      {"backface_hits", Merge::Copy, N, "count", "first hits on the unexpected side of a facet"}};
+  if (windows) {
+    f.push_back({"side_exits", Merge::Copy, N, "count", "measured windows: rays leaving through a side wall"});
+    f.push_back({"side_entries", Merge::Copy, N, "count", "measured windows: rays entering through a side wall"});
+  }
+  f.push_back({"seconds", Merge::Copy, N, "s", "wall time of the row's measurement"});
+  return f;
+}
+
+const char* merge_name(Merge merge) {
+  switch (merge) {
+    case Merge::Copy: return "copy";
+    case Merge::Key: return "key";
+    case Merge::Count: return "count";
+    case Merge::Measured: return "measured";
+    case Merge::Spread: return "spread";
+    case Merge::Mean: return "mean";
+    case Merge::Direction: return "direction";
+  }
+  return "";
+}
+
+const char* merge_meaning(Merge merge) {
+  switch (merge) {
+    case Merge::Copy: return "the first surface's value (the same on every surface)";
+    case Merge::Key: return "copied; identifies the row or bin across surfaces (bins are matched on every key)";
+    case Merge::Count: return "the number of surfaces K, and t_dof = K - 1 beside it";
+    case Merge::Measured:
+      return "mean over surfaces; NAME_stderr becomes the between-surface error and NAME_stderr_rays "
+             "the ray-count error of the mean, sqrt(sum se_k^2) / K";
+    case Merge::Spread: return "mean over surfaces with the between-surface error NAME_stderr";
+    case Merge::Mean: return "mean over surfaces, no error";
+    case Merge::Direction: return "a unit 3-vector: the normalized sum over surfaces";
+  }
+  return "";
+}
+
 Json ensemble_p_value(const Json& z, std::size_t surfaces) {
   // No p-value without a z (a zero error: the comparison has no error bar).
   if (!z.is_number() || surfaces < 2) return nullptr;
@@ -42,7 +102,9 @@ std::vector<double> values(const std::vector<const Json*>& rows, const std::stri
 }
 
 void merge_columns(Json& out, const std::vector<const Json*>& rows, const std::vector<Column>& columns) {
-  for (const auto& [key, how] : columns) {
+  for (const Column& c : columns) {
+    const std::string& key = c.name;
+    const Merge how = c.merge;
     switch (how) {
       case Merge::Copy:
       case Merge::Key:
@@ -95,8 +157,8 @@ Json merge_bins(const std::vector<const Json*>& rows, const TableSpec& spec, std
     for (const Json* r : rows)
       for (const auto& b : (*r)["bins"]) {
         bool match = true;
-        for (const auto& [key, how] : spec.bin_columns)
-          if (how == Merge::Key && b[key] != b0[key]) match = false;
+        for (const Column& c : spec.bin_columns)
+          if (c.merge == Merge::Key && b[c.name] != b0[c.name]) match = false;
         if (match) same.push_back(&b);
       }
     Json eb;

@@ -216,25 +216,51 @@ SamplerTest test_vndf_sampler(const models::Ndf& ndf, const Vec3& v_in, std::uin
 Table vndf_table(double family_alpha) {
   Table t;
   t.error = ErrorKind::Binomial;  // i.i.d. origins: multinomial bin counts
-  t.spec.columns = {{"theta_deg", Merge::Copy},
-                    {"phi_deg", Merge::Copy},
-                    {"surfaces", Merge::Count},
-                    {"rays", Merge::Mean},
-                    {"visible_area_ratio", Merge::Spread},
-                    {"tv_distance", Merge::Spread},
-                    {"chi2_smith_numeric", Merge::Mean},
-                    {"sampler_samples", Merge::Copy},
-                    {"sampler_chi2", Merge::Copy},
-                    {"sampler_dof", Merge::Copy},
-                    {"sampler_p_value", Merge::Copy},
-                    {"sampler_max_abs_z", Merge::Copy},
-                    {"sampler_pass", Merge::Copy}};
-  t.spec.bin_columns = {{"theta_m_range_deg", Merge::Key},
-                        {"phi_m_range_deg", Merge::Key},
-                        {"dv", Merge::Spread},
-                        {"dv_smith_numeric", Merge::Spread},
-                        {"dv_model", Merge::Copy}};
+  const ErrorKind N = ErrorKind::None;
+  t.spec.columns = {
+      {"theta_deg", Merge::Copy, N, "deg", "view zenith angle"},
+      {"phi_deg", Merge::Copy, N, "deg", "view azimuth"},
+      {"surfaces", Merge::Count, N, "count", "number of surfaces K averaged (ensembles only), with t_dof = K - 1 after it"},
+      {"rays", Merge::Mean, N, "count", "rays cast along -v from i.i.d. uniform origins"},
+      {"visible_area_ratio", Merge::Spread, N, "1", "visible projected area / ((v.n) A), from the share of rays that hit"},
+      {"tv_distance", Merge::Spread, N, "1",
+       "total variation distance between the measured and the nominal bin probabilities (null without a nominal NDF)"},
+      {"chi2_smith_numeric", Merge::Mean, N, "1",
+       "Pearson chi-square of the hit histogram against Smith's D_v from the surface's own facets"},
+      {"sampler_samples", Merge::Copy, N, "count", "normals drawn by the nominal NDF's VNDF sampler (when tested)"},
+      {"sampler_chi2", Merge::Copy, N, "1", "Pearson chi-square of the sampler's histogram against the nominal D_v"},
+      {"sampler_dof", Merge::Copy, N, "count", "degrees of freedom of sampler_chi2"},
+      {"sampler_p_value", Merge::Copy, N, "1", "upper tail probability of sampler_chi2"},
+      {"sampler_max_abs_z", Merge::Copy, N, "1", "largest per-bin |z| of the sampler's histogram"},
+      {"sampler_pass", Merge::Copy, N, "", "true when the sampler's histogram passes the Sidak-corrected per-bin test"}};
+  t.spec.bin_columns = {
+      {"theta_m_range_deg", Merge::Key, N, "deg", "zenith range [lo, hi] of the normal bin"},
+      {"phi_m_range_deg", Merge::Key, N, "deg", "azimuth range [lo, hi] of the normal bin"},
+      {"dv", Merge::Spread, ErrorKind::Binomial, "1/sr",
+       "measured D_v: share of the front-face first hits whose normal is in the bin / solid angle of the bin"},
+      {"dv_smith_numeric", Merge::Spread, N, "1/sr",
+       "Smith's D_v from the surface's own facets: sum_f in bin A_f max(0, v.m_f) / sum_f A_f max(0, v.m_f) / solid angle"},
+      {"dv_model", Merge::Copy, N, "1/sr",
+       "bin average of the nominal NDF's D_v(m) = G1(v) max(0, v.m) D(m) / (v.n) (null without one)"}};
   t.spec.bin_comparisons = {{"dv", "dv_model", ModelKind::Nominal, "z", "rel_dev", ""}};
+  t.spec.row_fields = {
+      {"replicates", Merge::Copy, N, "", "null: the ray origins are i.i.d. (no replicates; the binomial error is exact)"},
+      {"hits", Merge::Copy, N, "count", "rays whose first hit is a front face (the histogram's total)"},
+      {"hits_below_horizon", Merge::Copy, N, "count", "of which with a normal below the horizon (in no bin)"}};
+  for (const std::string model : {"", "_smith_numeric"}) {
+    const std::string against = model.empty() ? "the nominal D_v (null without one)" : "dv_smith_numeric";
+    if (model.empty())
+      t.spec.row_fields.push_back({"chi2", Merge::Copy, N, "1", "Pearson chi-square of the hit histogram against " + against});
+    t.spec.row_fields.insert(t.spec.row_fields.end(), {
+        {"dof" + model, Merge::Copy, N, "count", "degrees of freedom of chi2" + model},
+        {"p_value" + model, Merge::Copy, N, "1", "upper tail probability of chi2" + model},
+        {"max_abs_z" + model, Merge::Copy, N, "1", "largest per-bin |z| against " + against + " over the bins tested"},
+        {"bins_tested" + model, Merge::Copy, N, "count", "bins with at least 5 expected hits"},
+        {"sidak_z" + model, Merge::Copy, N, "1", "two-sided threshold of family_alpha, Sidak-corrected over the bins tested"},
+        {"pass" + model, Merge::Copy, N, "", "max_abs_z" + model + " < sidak_z" + model}});
+  }
+  for (const Column& f : tracer_count_fields(true)) t.spec.row_fields.push_back(f);
+  t.spec.bin_fields = {{"hits", Merge::Copy, N, "count", "hits whose normal is in the bin"}};
   t.spec.verdict = [family_alpha](Json& e, std::size_t surfaces) {
     const Json& bins = e["bins"];
     double max_abs_z = 0;

@@ -52,6 +52,11 @@ BsdfTableOptions bsdf_table_options(const BsdfRequest& request, const Microsurfa
                                     TallySplit* split = nullptr);
 
 
+// The albedo and in-plane tables' columns and merge rules without rows (`orders`: K of the
+// request; the albedo table's columns do not depend on it).
+Table bsdf_albedo_spec();
+Table bsdf_in_plane_spec(int orders);
+
 // Albedo rows of one incidence: side (reflected, transmitted for a dielectric) x slot, with
 // albedo, albedo_stderr and beside them smith_multiple (its own Monte Carlo error combined in
 // z_smith_multiple), smith_single and vcavity_single (order 1) and smooth_interface (total).

@@ -33,6 +33,8 @@ NdfResult measure_ndf(const Microsurface& s, const NdfOptions& options);
 
 // One row per theta ring (D averaged over phi) with its block error, beside the nominal model.
 Table ndf_table(const NdfResult& r, const Microsurface& s);
+// Its columns (no rows); one surface at a time (no ensembles).
+Table ndf_table_spec();
 ExrTable ndf_to_exr(const NdfResult& r, const Microsurface& s);
 
 // Summary of the [GeomBSDF24, eq. 1b/1c] identities and of the slope statistics ("fitted alpha").

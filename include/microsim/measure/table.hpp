@@ -34,6 +34,8 @@ enum class ErrorKind {
   Rounding,    // resolution of a finite count or of floating-point sums
 };
 const char* error_kind_name(ErrorKind kind);
+// One sentence saying what the standard error of that kind measures (for the reference pages).
+const char* error_kind_meaning(ErrorKind kind);
 
 // How a column of one surface's table becomes the column of the ensemble's table.
 enum class Merge {
@@ -46,9 +48,18 @@ enum class Merge {
   Direction,  // a 3-vector: the sum over surfaces, normalized
 };
 
+const char* merge_name(Merge merge);
+// One sentence saying what the merge writes into the ensemble's row (for the reference pages).
+const char* merge_meaning(Merge merge);
+
+// A column of the table: its name and merge rule, and what the reference pages say of it.
 struct Column {
   std::string name;
   Merge merge = Merge::Copy;
+  // The kind of NAME_stderr in one surface's row (None: the row has no NAME_stderr).
+  ErrorKind error = ErrorKind::None;
+  std::string unit = {};     // "1": a number without unit; "deg", "1/sr", ...; empty: not a number
+  std::string meaning = {};  // what the value is, in one sentence
 };
 
 // Which model a comparison is made with, which decides the error of the comparison.
@@ -76,10 +87,19 @@ struct TableSpec {
   std::vector<Comparison> comparisons;    // appended after the columns
   std::vector<Column> bin_columns;        // the per-bin sub-table "bins" (empty: no bins)
   std::vector<Comparison> bin_comparisons;
+  // Further fields of one surface's rows and bins (bookkeeping, that surface's diagnostics),
+  // listed for the reference pages; the merge does not carry them into an ensemble's rows (its
+  // per_surface rows keep them). Their merge rule is unused.
+  std::vector<Column> row_fields = {};
+  std::vector<Column> bin_fields = {};
   // A verdict over the whole merged row (e.g. a Sidak-corrected test over its bins), run last
   // with the number of surfaces; "bins" is the last field when it runs.
   std::function<void(Json& row, std::size_t surfaces)> verdict;
 };
+
+// The tracer's counts that rows of ray estimators carry (lost_rays, backface_hits, ...), as
+// row_fields; `windows`: also the side walls of measured windows.
+std::vector<Column> tracer_count_fields(bool windows);
 
 struct Table {
   ErrorKind error = ErrorKind::Replicates;  // of the NAME_stderr columns
