@@ -189,6 +189,22 @@ class Inputs : public ::testing::Test {
     write_file(tmp("suite_alpha.json"),
                "{\"entries\": [{\"name\": \"g\", \"generate\": \"gaussian\", \"args\": "
                "{\"resolution\": 16, \"alpha\": -1}}]}");
+    // JSON nested 100,000 levels deep in every place a JSON document is read, and a suite
+    // larger than the size limit.
+    const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+    {
+      microsim::ExrTable t = good;
+      t.attributes["microsim_description"] = deep;
+      microsim::write_exr(tmp("deepdesc.exr"), t);
+      t = good;
+      t.attributes["microsim_macrosurface"] = deep;
+      microsim::write_exr(tmp("deepmacro.exr"), t);
+    }
+    with_sidecar("deep.ply", [&](nlohmann::json& j) { j["description"] = "x"; });
+    write_file(tmp("deep.ply") + ".json", "{\"macrosurface\": " + deep + "}");
+    write_file(tmp("suite_deep.json"), "{\"entries\": [" + flat + ", \"name\": \"a\", \"x\": " + deep + "}]}");
+    write_file(tmp("suite_large.json"), "{\"entries\": []" + std::string(17 << 20, ' ') + "}");
+    write_file(tmp("part_deep.json"), "{\"format\": " + deep + "}");
   }
   static std::string surface_, mesh_;
 };
@@ -455,6 +471,13 @@ const std::vector<Case>& cases() {
       {"validate --suite {T}suite_twice.json -o {o}", 2, "twice"},
       {"validate --suite {T}suite_alpha.json -o {o}", 2, "--alpha"},
       {"validate --suite {T}missing.json -o {o}", 2, "missing"},
+      // JSON nested too deep or too large: refused naming the file.
+      {"info {T}deepdesc.exr", 2, "deepdesc.exr header"},
+      {"measure ndf {T}deepmacro.exr -o {o}", 2, "deepmacro.exr header"},
+      {"measure ndf {T}deep.ply -o {o}", 2, "deep.ply.json"},
+      {"validate --suite {T}suite_deep.json -o {o}", 2, "suite_deep.json"},
+      {"validate --suite {T}suite_large.json -o {o}", 2, "suite_large.json"},
+      {"merge {T}part_deep.json -o {o}", 2, "part_deep.json"},
   };
   return c;
 }

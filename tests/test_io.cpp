@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "microsim/common.hpp"
+#include "microsim/io/json_input.hpp"
 #include "microsim/io/output.hpp"
 #include "cli_helpers.hpp"  // removes this program's temporary files at exit
 
@@ -127,4 +128,45 @@ TEST(Output, ExrAttributeLargerThanTheFileIsRefused) {
         << e.what();
   }
   std::remove(path.c_str());
+}
+
+namespace {
+// `levels` arrays (or objects) nested inside each other around a number.
+std::string nested(int levels, bool objects) {
+  std::string open, close;
+  for (int i = 0; i < levels; ++i) {
+    open += objects ? "{\"a\": " : "[";
+    close += objects ? "}" : "]";
+  }
+  return open + "1" + close;
+}
+}  // namespace
+
+TEST(JsonInput, AcceptsUpToTheDepthLimitAndRefusesOneLevelMore) {
+  const microsim::JsonLimits limits{8, 1 << 20, false};
+  for (bool objects : {false, true}) {
+    EXPECT_NO_THROW(microsim::parse_json_input(nested(8, objects), "doc", limits));
+    try {
+      microsim::parse_json_input(nested(9, objects), "doc.json", limits);
+      ADD_FAILURE() << "9 levels accepted with a limit of 8";
+    } catch (const microsim::UsageError& e) {
+      EXPECT_NE(std::string(e.what()).find("doc.json nests"), std::string::npos) << e.what();
+    }
+  }
+  // The default limit refuses a document 100,000 levels deep without exhausting the stack.
+  EXPECT_THROW(microsim::parse_json_input(nested(100000, false), "deep"), microsim::UsageError);
+  // The parsed document is the same as the unchecked parser's.
+  EXPECT_EQ(microsim::parse_json_input(nested(8, true), "doc", limits), microsim::Json::parse(nested(8, true)));
+}
+
+TEST(JsonInput, RefusesTextLargerThanTheSizeLimitFromAStringOrAStream) {
+  const microsim::JsonLimits limits{64, 100, false};
+  const std::string fits = "[" + std::string(98, ' ') + "]", over = fits + " ";
+  EXPECT_NO_THROW(microsim::parse_json_input(fits, "doc", limits));
+  EXPECT_THROW(microsim::parse_json_input(over, "doc", limits), microsim::UsageError);
+  std::istringstream in_fits(fits), in_over(over);
+  EXPECT_NO_THROW(microsim::parse_json_input(in_fits, "doc", limits));
+  EXPECT_THROW(microsim::parse_json_input(in_over, "doc", limits), microsim::UsageError);
+  // Malformed text is the parser's own error, for the caller's message.
+  EXPECT_THROW(microsim::parse_json_input("{\"a\": ", "doc", limits), microsim::Json::parse_error);
 }

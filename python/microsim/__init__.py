@@ -74,6 +74,11 @@ def _surfaces(surfaces):
 
 
 def _command(words, positional, by_name, options, default_output):
+    # A shard's tallies are a part of a run, meaningful only merged with the others: a record
+    # finalised from them would look whole and be wrong.
+    if options.get("shard") is not None:
+        raise UsageError("shard: a partial run is written by the command line (--shard K/N) and "
+                         "read back by its merge; Python measures whole runs")
     output = options.pop("output", None)
     args = list(words) + list(positional) + ["-o", output or default_output] + _options(options)
     record, generated, failure = _run(args, by_name, output is not None)

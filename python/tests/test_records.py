@@ -116,6 +116,35 @@ def test_errors_carry_the_program_message(tile, cli, tmp_path):
     assert not list(tmp_path.iterdir())  # nothing half-written
 
 
+def test_a_partial_run_is_refused(tile):
+    """A shard's tallies finalised alone would be a wrong record that looks whole."""
+    s, _ = tile
+    for measure in (microsim.measure_g1, microsim.measure_g2, microsim.measure_vndf, microsim.measure_bsdf):
+        with pytest.raises(microsim.UsageError, match="shard"):
+            measure(s, shard="1/2", rays=1000)
+    with pytest.raises(microsim.UsageError, match="shard"):
+        microsim.validate(s, shard="1/2")
+    # The whole run is accepted with the same options.
+    assert microsim.measure_g1(s, rays=1000, theta=60)["rows"]
+
+
+def test_deeply_nested_header_is_refused_by_load(tmp_path):
+    """A description nested far deeper than any record is refused, not a crashed interpreter."""
+    oiio = pytest.importorskip("OpenImageIO")
+    path = str(tmp_path / "deep.exr")
+    s = microsim.generate("gaussian", alpha=0.5, resolution=16, seed=1, output=path)
+    inp = oiio.ImageInput.open(path)
+    spec, pixels = inp.spec(), inp.read_image()
+    inp.close()
+    spec.attribute("microsim_description", "[" * 100000 + "]" * 100000)
+    out = oiio.ImageOutput.create(path)
+    out.open(path, spec)
+    out.write_image(pixels)
+    out.close()
+    with pytest.raises(microsim.UsageError, match="nests"):
+        microsim.load(path)
+
+
 def test_measurement_releases_the_gil(tile):
     s, _ = tile
     started, times = threading.Event(), {}

@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "scaleout.hpp"
+#include "microsim/io/json_input.hpp"
 #include "microsim/io/output.hpp"
 
 namespace microsim::cli {
@@ -32,7 +33,8 @@ Json read_part(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw UsageError("part " + path + " cannot be read");
   try {
-    return Json::parse(in);
+    // A part holds the tallies of every unit of its share: large, but bounded.
+    return parse_json_input(in, "part " + path, JsonLimits{64, std::size_t(1) << 30, false});
   } catch (const Json::exception&) {
     throw UsageError("part " + path + " is not JSON (expected a partial record written by --shard)");
   }

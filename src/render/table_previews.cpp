@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "microsim/io/checks.hpp"
+#include "microsim/io/json_input.hpp"
 #include "microsim/io/oiio_module.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/io/rgl_reader.hpp"
@@ -42,7 +43,12 @@ TableModel model_from_description(const std::string& d) {
     }
   }
   if (end != std::string::npos) {
-    const Json s = Json::parse(d.substr(open + 14, end - open - 13), nullptr, false);
+    Json s;
+    try {
+      s = parse_json_input(d.substr(open + 14, end - open - 13), "the table's description");
+    } catch (const Json::exception&) {
+      // Not JSON: no model parameters (the preview shows the table alone).
+    }
     if (s.is_object()) {
       if (s.contains("alpha_x") && s.contains("alpha_y") && s["alpha_x"].is_number() && s["alpha_y"].is_number()) {
         m.alpha_x = s["alpha_x"].get<double>();

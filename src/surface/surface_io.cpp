@@ -8,6 +8,7 @@
 
 #include "microsim/io/checks.hpp"
 #include "microsim/io/exr_pixels.hpp"
+#include "microsim/io/json_input.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/surface/heightmap_import.hpp"
 #include "microsim/surface/mesh_check.hpp"
@@ -127,7 +128,7 @@ Microsurface load_heightfield_exr(const std::string& path, bool allow_window) {
                        std::to_string(h.height) + " is outside [1, " + std::to_string(kMaxGrid) + "] per side");
     Json mj;
     try {
-      mj = Json::parse(h.attributes["microsim_macrosurface"].get<std::string>());
+      mj = parse_json_input(h.attributes["microsim_macrosurface"].get<std::string>(), path + " header");
     } catch (const Json::exception& e) {
       throw UsageError(path + " has a corrupt microsim header (" + std::string(e.what()) + ")");
     }
@@ -151,7 +152,7 @@ Microsurface load_heightfield_exr(const std::string& path, bool allow_window) {
     Microsurface s = Microsurface::heightfield(t.width, t.height, m.size_x, m.size_y,
                                                std::move(t.channels[it - t.channel_names.begin()]));
     if (t.attributes.contains("microsim_description") && t.attributes["microsim_description"].is_string())
-      s.description = Json::parse(t.attributes["microsim_description"].get<std::string>());
+      s.description = parse_json_input(t.attributes["microsim_description"].get<std::string>(), path + " header");
     restore_nominal(s, path);
     if (!m.periodic && !allow_window) apply_recorded_guard_band(s);
     return s;
@@ -194,7 +195,7 @@ Microsurface load_mesh(const std::string& path) {
   if (has_sidecar) {
     try {
       std::ifstream f(side);
-      auto j = Json::parse(f);
+      auto j = parse_json_input(f, side);
       if (!j.is_object() || !j.contains("macrosurface"))
         throw UsageError(side + ": not a microsim sidecar (no 'macrosurface' field)");
       macro = macro_from_json(j.at("macrosurface"), side);

@@ -3,6 +3,7 @@
 
 #include <set>
 
+#include "microsim/io/json_input.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/surface/surface_io.hpp"
 
@@ -61,7 +62,7 @@ Suite load_suite(const std::string& path) {
   if (!in) throw UsageError("--suite " + path + ": cannot read the file");
   Json j;
   try {
-    j = Json::parse(in, nullptr, true, /*ignore_comments=*/true);
+    j = parse_json_input(in, "--suite " + path, JsonLimits{64, std::size_t(16) << 20, true});
   } catch (const Json::exception& e) {
     suite_error(path, std::string("not valid JSON (") + e.what() + ")");
   }
