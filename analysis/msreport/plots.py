@@ -303,7 +303,7 @@ def g1_per_normal(path, entry):
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7, loc="lower left")
     n = len(per_surface)
-    fig.suptitle("%s: masking per normal bin (%d surface%s pooled, ray-count errors); dashed: V-cavity (001 eq. 24)"
+    fig.suptitle("%s: masking per normal bin (%d surface%s pooled, ray-count errors); dashed: V-cavity [Heitz14, eq. 24]"
                  % (entry.get("name"), n, "s" if n > 1 else ""), fontsize=10)
     return _save(fig, path)
 
@@ -312,10 +312,10 @@ def g1_per_normal(path, entry):
 # G2 (measure g2; fields documented in the README)
 
 G2_MODELS = [
-    ("smith_separable", "Smith separable (001 eq. 20)", "-"),
-    ("smith_height_correlated", "Smith height-correlated (eq. 21)", "--"),
-    ("smith_direction_correlated", "Smith direction-correlated (eq. 22)", ":"),
-    ("smith_height_direction_correlated", "Smith height-direction-correlated (eq. 23)", "-."),
+    ("smith_separable", "Smith separable [Heitz14, eq. 20]", "-"),
+    ("smith_height_correlated", "Smith height-correlated [Heitz14, eq. 21]", "--"),
+    ("smith_direction_correlated", "Smith direction-correlated [Heitz14, eq. 22]", ":"),
+    ("smith_height_direction_correlated", "Smith height-direction-correlated [Heitz14, eq. 23]", "-."),
     ("vcavity", "V-cavity", (0, (1, 1))),
 ]
 
@@ -348,7 +348,7 @@ def g2_curves(path, record, title=""):
                 ax.plot(ti, column(sel, key), ls=ls, lw=1.2, label=label)
         ax.set_title("theta_o = %g deg, delta phi = %g deg" % (to, dp), fontsize=10)
         ax.set_xlabel("theta_i (deg)")
-        ax.set_ylabel("G2 (area average)")
+        ax.set_ylabel("G2, weight A_f (max(0, o.m) + max(0, i.m)) / 2")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=6)
     for ax in list(axes.flat)[len(panels):]:
@@ -366,8 +366,8 @@ ORDER_KEYS = ["order_1", "order_2", "order_3", "order_4plus", "total"]
 
 def g2_hotspot(path, entry):
     """G2(v, v) of `validate`'s g2 check (per surface) against G1 of an independent `measure g1`
-    run with the same weights (000 eq. 16: G2(v, m, v) = G1(v, m)) and Smith's direction-correlated
-    form 1/(1 + Lambda) (001 eq. 22), with ray-count errors."""
+    run with the same weights ([GeomBSDF24, eq. 16]: G2(v, m, v) = G1(v, m)) and Smith's direction-correlated
+    form 1/(1 + Lambda) [Heitz14, eq. 22], with ray-count errors."""
     per_surface = entry.get("measurements", {}).get("g2")
     points = []
     for k, surface in enumerate(per_surface or []):
@@ -400,7 +400,7 @@ def g2_hotspot(path, entry):
     axd.set_xlabel("theta (deg)")
     axd.set_ylabel("z = (G2 - G1) / stderr")
     axd.grid(True, alpha=0.3)
-    fig.suptitle("%s: the hotspot G2(v, m, v) = G1(v, m) (000 eq. 16), %d surface%s"
+    fig.suptitle("%s: the hotspot G2(v, m, v) = G1(v, m) [GeomBSDF24, eq. 16], %d surface%s"
                  % (entry.get("name"), n, "s" if n > 1 else ""), fontsize=10)
     return _save(fig, path)
 
@@ -470,7 +470,7 @@ def bsdf_lobes(path, record, title=""):
 
 
 def table4(path, records):
-    """001 Table 4: in-plane single-scattering lobes at theta = 1.5 rad for several alphas."""
+    """[Heitz14, Table 4]: in-plane single-scattering lobes at theta = 1.5 rad for several alphas."""
     usable = [(a, r) for a, r in records if isinstance(r.get("in_plane"), list) and r["in_plane"]]
     if not usable:
         raise NoData("no BSDF record with in_plane rows")
@@ -479,7 +479,7 @@ def table4(path, records):
         _lobe(ax, rec["in_plane"], with_total=False)
         ax.set_title("alpha = %g" % alpha, fontsize=10)
     axes[0][0].legend(fontsize=6)
-    fig.suptitle("001 Table 4 reproduced: order-1 lobe at grazing theta = 1.5 rad (85.9 deg), Beckmann tiles, "
+    fig.suptitle("[Heitz14, Table 4] reproduced: order-1 lobe at grazing theta = 1.5 rad (85.9 deg), Beckmann tiles, "
                  "against Smith and V-cavity", fontsize=10)
     return _save(fig, path)
 
@@ -507,7 +507,7 @@ def tiled_boxes(path, points):
     ax.set_xscale("log", base=2)
     ax.set_xlabel("tiles per side N")
     ax.set_ylabel("visible projected area / ((v.n) A)")
-    ax.set_title("Tiled boxes (000 Fig. 6): the visible area ratio converges to 1 as N grows", fontsize=10)
+    ax.set_title("Tiled boxes [GeomBSDF24, Fig. 6]: the visible area ratio converges to 1 as N grows", fontsize=10)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     return _save(fig, path)
@@ -557,7 +557,7 @@ def box_albedo(path, record, h_over_w):
     axz.set_ylabel("z")
     axz.set_xlabel("theta_i (deg), across a face")
     axz.grid(True, alpha=0.3)
-    ax.set_title("Mirror box H/W = %g: total albedo = visible area ratio (000 Fig. 5)" % h_over_w, fontsize=10)
+    ax.set_title("Mirror box H/W = %g: total albedo = visible area ratio [GeomBSDF24, Fig. 5]" % h_over_w, fontsize=10)
     return _save(fig, path)
 
 
@@ -590,7 +590,7 @@ def tiled_boxes_albedo(path, points, h_over_w):
     axz.set_xscale("log", base=2)
     axz.set_xlabel("tiles per side N")
     ax.set_ylabel("total albedo per unit macro area")
-    ax.set_title("Tiled mirror boxes (000 Fig. 6): the albedo returns to 1 as N grows", fontsize=10)
+    ax.set_title("Tiled mirror boxes [GeomBSDF24, Fig. 6]: the albedo returns to 1 as N grows", fontsize=10)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7)
     return _save(fig, path)

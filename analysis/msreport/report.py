@@ -26,7 +26,10 @@ PROFILES = {
         "g1_max_phis": 2,
         "g2_rays": 200000,
         "bsdf_rays": 1000000,
-        "table4_resolution": 256,
+        # 8 cells per correlation length, 64 per tile: the grazing order-1 lobe is 19% low at 4
+        # cells per l and within its error of 32 cells at 8 (analysis/convergence_output.md).
+        "table4_resolution": 512,
+        "table4_cells_per_l": 8,
         "table4_rays": 1000000,
         "tiles": [1, 2, 4, 8, 16],
         "tiles_rays": 200000,
@@ -41,7 +44,10 @@ PROFILES = {
         "preview_size": 160,
         "preview_samples": 64,
         "preview_cases": [(0.5, "mirror"), (1.0, "mirror"), (0.5, "gold")],
-        "measured_resolution": 256,
+        # A 512^2 tile at 8 cells per correlation length l, cropped to 384^2 heights (48 l): the
+        # default guard band (8 l a side) leaves an interior of about 32 l.
+        "measured_resolution": 512,
+        "measured_cells_per_l": 8,
         "measured_rays": 200000,
     },
     "smoke": {
@@ -52,6 +58,7 @@ PROFILES = {
         "g2_rays": 10000,
         "bsdf_rays": 20000,
         "table4_resolution": 64,
+        "table4_cells_per_l": 4,
         "table4_rays": 20000,
         "tiles": [1, 2, 4],
         "tiles_rays": 10000,
@@ -73,7 +80,7 @@ PROFILES = {
 }
 
 TABLE4_ALPHAS = [0.1, 0.4, 0.7, 1.0, 1.3]
-TABLE4_THETA_DEG = 1.5 * 180.0 / 3.141592653589793  # 001 Table 4: theta = 1.5 rad
+TABLE4_THETA_DEG = 1.5 * 180.0 / 3.141592653589793  # [Heitz14, Table 4]: theta = 1.5 rad
 
 
 class Section:
@@ -164,7 +171,7 @@ def _nominal_entries(ctx):
 def section_validation(ctx):
     s = Section("validation", "Validation suite",
                 "`microsim validate --suite %s`: every applicable check of every surface of the suite. "
-                "Identities (two estimators of one quantity, geometric consequences, 000 eq. 1b/1c) must "
+                "Identities (two estimators of one quantity, geometric consequences, [GeomBSDF24, eq. 1b, 1c]) must "
                 "pass; approximate models (Smith per normal bin, V-cavity, the nominal NDF the generator "
                 "aimed at) are findings: their deviations are results, not errors. Nominal models are judged "
                 "only over ensembles of surfaces, with the between-surface error and Student t (K - 1 "
@@ -215,7 +222,7 @@ def section_g1(ctx):
     s = Section("g1", "Masking G1",
                 "Averaged G1 (projected-area average over front-facing facets) by area sampling and by ray "
                 "casting, against Smith with the surface's own facets (smith_numeric) and Smith with the "
-                "nominal NDF. Every model satisfying the weak white furnace test (Smith, V-cavity: 001 eq. 19) "
+                "nominal NDF. Every model satisfying the weak white furnace test (Smith, V-cavity: [Heitz14, eq. 19]) "
                 "has the same average G1 = 1/(1+Lambda); the models differ per normal, shown next.")
     entries = _nominal_entries(ctx)
     if not entries:
@@ -248,7 +255,7 @@ def section_g2(ctx):
     s = Section("g2", "Masking-shadowing G2",
                 "G2 averaged over the facets facing both directions with the weight A_f (max(0, o.m_f) + "
                 "max(0, i.m_f)) / 2 (G1's projected area at o = i, so that G2(v, v) = G1(v)), against the four "
-                "Smith forms of 001 sec. 5 (eq. 20-23) and the V-cavity model.")
+                "Smith forms of [Heitz14, sec. 5, eq. 20-23] and the V-cavity model.")
     if not ctx.has_command("measure", "g2"):
         return s.skip("`microsim measure g2` is not in this build")
     entries = [e for e in _nominal_entries(ctx) if ctx.surface_files(e["name"])]
@@ -274,7 +281,7 @@ def section_g2(ctx):
 def section_bsdf(ctx):
     s = Section("bsdf", "BSDF per scattering order",
                 "Random walks on the explicit surface (mirror facets): albedo and in-plane lobe per scattering "
-                "order, against the single-scattering models and the Smith random-walk model (001 sec. 4.3, 7).")
+                "order, against the single-scattering models and the Smith random-walk model ([Heitz14, sec. 4.3, 7]).")
     if not ctx.has_command("measure", "bsdf"):
         return s.skip("`microsim measure bsdf` is not in this build")
     entries = [e for e in _nominal_entries(ctx) if ctx.surface_files(e["name"])]
@@ -295,9 +302,9 @@ def section_bsdf(ctx):
 
 
 def section_table4(ctx):
-    s = Section("table4", "001 Table 4 reproduced",
+    s = Section("table4", "[Heitz14, Table 4] reproduced",
                 "Order-1 lobes of Beckmann tiles at grazing incidence theta = 1.5 rad for alpha = 0.1 ... 1.3 "
-                "(001 Table 4: Smith shifts the lobe toward the view direction as alpha grows, V-cavity does "
+                "([Heitz14, Table 4]: Smith shifts the lobe toward the view direction as alpha grows, V-cavity does "
                 "not; the explicit surface decides).")
     if not ctx.has_command("measure", "bsdf"):
         return s.skip("`microsim measure bsdf` is not in this build")
@@ -306,20 +313,21 @@ def section_table4(ctx):
         surf = os.path.join(ctx.surf_dir, "table4-alpha%g.exr" % a)
         res = ctx.profile["table4_resolution"]
         ctx.run(["generate", "gaussian", "--alpha", "%g" % a, "--resolution", str(res),
-                 "--correlation-length", "%g" % (4.0 / res), "--seed", "1", "-o", surf])
+                 "--correlation-length", "%g" % (ctx.profile["table4_cells_per_l"] / res), "--seed", "1",
+                 "-o", surf])
         out = ctx.data("table4_alpha%g.json" % a)
         ctx.run(["measure", "bsdf", surf, "--material", "mirror", "--theta-i", "%.6f" % TABLE4_THETA_DEG,
                  "--phi-i", "0", "--orders", "4", "--rays", str(ctx.profile["table4_rays"]), "-o", out])
         records.append((a, load_json(out)))
     s.figure(ctx, "table4.png", plots.table4,
-             "In-plane order-1 lobes at theta_i = 1.5 rad (by reciprocity the lobes of 001 Table 4, which fixes "
+             "In-plane order-1 lobes at theta_i = 1.5 rad (by reciprocity the lobes of [Heitz14, Table 4], which fixes "
              "the view), measured against Smith and V-cavity single scattering.", records)
     return s
 
 
 def section_tiled_boxes(ctx):
     s = Section("tiled_boxes", "Tiled boxes",
-                "000 Fig. 5-6: a box is visibly larger than its macrosurface at grazing angles; tiling it N x N "
+                "[GeomBSDF24, Fig. 5-6]: a box is visibly larger than its macrosurface at grazing angles; tiling it N x N "
                 "times (scaled by 1/N) makes the visible projected area converge to (v.n) A.")
     if not ctx.has_command("generate", "tiled-boxes"):
         return s.skip("`microsim generate tiled-boxes` is not in this build")
@@ -348,11 +356,11 @@ VCAVITY_LOBE_THETA = [0, 30, 60]
 def section_objects_grooves(ctx):
     s = Section("objects_grooves", "Multiple scattering of boxes, V-grooves and V-cavities",
                 "measure bsdf on surfaces that are not heightfields, mirror facets. A finite object's albedo is per "
-                "unit macro area (000 eq. 4a), so a mirror box reflects its visible area ratio 1 + (H/W) tan theta_i "
+                "unit macro area ([GeomBSDF24, eq. 4a]), so a mirror box reflects its visible area ratio 1 + (H/W) tan theta_i "
                 "and N x N tiled boxes return to 1 as 1 + (H/(N W)) tan theta_i. Periodic V-grooves and V-cavity "
                 "ensembles beside the closed-form multiple scattering of a mirror V-groove per order "
                 "(models/vgroove_multiple.hpp: 2D unfolding; Xie and Hanrahan 2018), averaged over grooves drawn from "
-                "D for the V-cavity model (001 sec. 6), and beside the Smith random walk.")
+                "D for the V-cavity model ([Heitz14, sec. 6]), and beside the Smith random walk.")
     if not ctx.has_command("measure", "bsdf") or not ctx.has_command("generate", "vcavity"):
         return s.skip("`microsim measure bsdf` or `generate vcavity` is not in this build")
     p = ctx.profile
@@ -548,7 +556,9 @@ def section_measured(ctx):
     import numpy as np
     res = ctx.profile["measured_resolution"]
     tile = os.path.join(ctx.surf_dir, "measured-source.exr")
-    ctx.run(["generate", "gaussian", "--alpha", "0.5", "--resolution", str(res), "--seed", "7", "-o", tile])
+    length = (["--correlation-length", "%.9g" % (ctx.profile["measured_cells_per_l"] / res)]
+              if "measured_cells_per_l" in ctx.profile else [])
+    ctx.run(["generate", "gaussian", "--alpha", "0.5", "--resolution", str(res), "--seed", "7", "-o", tile] + length)
     ch, _ = read_exr(tile)
     z = ch["Z"]
     n = (3 * res) // 4  # a crop: not periodic
@@ -601,6 +611,37 @@ def section_measured(ctx):
                                             (gb.get("interior") or {}).get("cells_x"),
                                             (gb.get("interior") or {}).get("cells_y"))))
     return s
+
+
+# The figures the findings pages of the documentation show (docs/findings/*.md), by their stable
+# names in the report (default profile and suite). `make_report.py --figures DIR` writes them there.
+FINDINGS_FIGURES = [
+    "g1_beckmann-0.5.png", "g1_bins_beckmann-0.5.png",
+    "g2_beckmann-0.5.png", "g2_hotspot_beckmann-0.5.png",
+    "bsdf_albedo_beckmann-0.5.png", "bsdf_lobe_beckmann-0.5.png", "table4.png",
+    "objects_box.png", "objects_tiled_boxes.png", "objects_vgroove_orders.png",
+    "objects_vcavity_albedo.png", "objects_vcavity_lobes.png",
+]
+
+
+def export_figures(ctx, folder, names=None):
+    """Copies the findings figures NAMES (default FINDINGS_FIGURES) of this report into FOLDER,
+    as palette PNGs (a few tens of kB each: they are committed with the documentation).
+    Returns the paths written; raises RuntimeError naming the figures this report did not draw."""
+    from PIL import Image
+    names = FINDINGS_FIGURES if names is None else names
+    missing = [n for n in names if not os.path.isfile(os.path.join(ctx.fig_dir, n))]
+    if missing:
+        raise RuntimeError("figures for %s not drawn by this report: %s" % (folder, ", ".join(missing)))
+    os.makedirs(folder, exist_ok=True)
+    written = []
+    for n in names:
+        with Image.open(os.path.join(ctx.fig_dir, n)) as im:
+            small = im.convert("RGB").quantize(colors=128, method=Image.Quantize.MEDIANCUT)
+            path = os.path.join(folder, n)
+            small.save(path, optimize=True)
+        written.append(path)
+    return written
 
 
 SECTIONS = [section_validation, section_ndf, section_g1, section_g2, section_bsdf, section_table4,
