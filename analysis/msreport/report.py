@@ -616,7 +616,7 @@ def section_measured(ctx):
 # The figures the findings pages of the documentation show (docs/findings/*.md), by their stable
 # names in the report (default profile and suite). `make_report.py --figures DIR` writes them there.
 FINDINGS_FIGURES = [
-    "g1_beckmann-0.5.png", "g1_bins_beckmann-0.5.png",
+    "validation_z.png", "g1_beckmann-0.5.png", "g1_bins_beckmann-0.5.png",
     "g2_beckmann-0.5.png", "g2_hotspot_beckmann-0.5.png",
     "bsdf_albedo_beckmann-0.5.png", "bsdf_lobe_beckmann-0.5.png", "table4.png",
     "objects_box.png", "objects_tiled_boxes.png", "objects_vgroove_orders.png",
