@@ -617,7 +617,7 @@ def section_measured(ctx):
 # names in the report (default profile and suite). `make_report.py --figures DIR` writes them there.
 FINDINGS_FIGURES = [
     "validation_z.png", "g1_beckmann-0.5.png", "g1_bins_beckmann-0.5.png",
-    "g2_beckmann-0.5.png", "g2_hotspot_beckmann-0.5.png",
+    "g2_beckmann-0.5.png", "g2_hotspot_beckmann-0.5-checks.png",
     "bsdf_albedo_beckmann-0.5.png", "bsdf_lobe_beckmann-0.5.png", "table4.png",
     "objects_box.png", "objects_tiled_boxes.png", "objects_vgroove_orders.png",
     "objects_vcavity_albedo.png", "objects_vcavity_lobes.png",
