@@ -4,6 +4,7 @@ measurements behind the figures, draws the figures (PNG) and writes OUT/index.ht
 
     analysis/make_report.py --out report/                 # the default report (<= 10 min, 2 cores)
     analysis/make_report.py --out /tmp/r --profile smoke  # seconds: the CTest smoke test
+    analysis/make_report.py --out report/ --figures docs/img/findings  # also the findings pages' figures
 
 Exit code: 0 when the report was built and every exact identity passed; 1 when an identity
 FAILED or a section's command failed (the page is still written, with the failing rows and
@@ -39,6 +40,9 @@ def main(argv=None):
     ap.add_argument("--profile", choices=sorted(report.PROFILES), default="default",
                     help="run sizes: default (the README's report) or smoke (seconds)")
     ap.add_argument("--threads", type=int, help="worker threads for microsim (default: all cores)")
+    ap.add_argument("--figures", metavar="DIR",
+                    help="also write the figures of the documentation's findings pages into DIR "
+                         "(stable names, palette PNGs; the default profile draws all of them)")
     ap.add_argument("--quiet", action="store_true", help="print only errors and the final line")
     args = ap.parse_args(argv)
 
@@ -70,6 +74,13 @@ def main(argv=None):
     skipped = [s.key for s in sections if s.skipped]
     print("wrote %s: %d figures in %.0f s%s" % (page, nfig, wall,
                                                 "; skipped: " + ", ".join(skipped) if skipped else ""))
+    if args.figures:
+        try:
+            written = report.export_figures(ctx, os.path.abspath(args.figures))
+        except RuntimeError as e:
+            print("make_report: failed: %s" % e, file=sys.stderr)
+            return 1
+        print("wrote %d figures into %s" % (len(written), args.figures))
     failed = [s.key for s in sections if s.failed]
     if failed:
         print("make_report: sections failed (see the page): %s" % ", ".join(failed), file=sys.stderr)

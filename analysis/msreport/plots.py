@@ -79,14 +79,15 @@ def validation_z(path, validation):
     for s in (-1, 1):
         ax.axvline(s, color="k", ls="--", lw=0.8)
     ax.set_xscale("symlog", linthresh=1.0)
+    ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda x, _: "%g" % x))  # not -10^0
     ax.set_yticks(range(len(cats)))
     ax.set_yticklabels(cats, fontsize=8)
     ax.invert_yaxis()
-    ax.set_xlabel("z / threshold, z = (measured - model) / stderr   (dashed: the threshold; Sidak over %d "
-                  "tests: |z| = %.2f, or Student t with K - 1 dof for ensemble rows)"
-                  % (int(num(validation.get("comparisons"), 0)), zt))
+    ax.set_xlabel("z / threshold, z = (measured - model) / stderr")
     ax.legend(fontsize=8, loc="lower right")
-    ax.set_title("Validation: z-scores by check (identities must pass; models may deviate)")
+    ax.set_title("Validation: z-scores by check (identities must pass; models may deviate)\n"
+                 "dashed: the threshold, |z| = %.2f (Sidak over %d tests), Student t with K - 1 dof "
+                 "for ensemble rows" % (zt, int(num(validation.get("comparisons"), 0))), fontsize=10)
     ax.grid(True, axis="x", alpha=0.3)
     return _save(fig, path)
 
@@ -271,7 +272,7 @@ def g1_per_normal(path, entry):
     if len(_pooled_bins(per_surface, *dirs[0])) < 3:
         raise NoData("fewer than 3 normal bins with enough samples (e.g. a flat plane)")
     fig, axes = plt.subplots(1, len(dirs), figsize=(4.8 * len(dirs), 4.2), squeeze=False)
-    for ax, (theta, phi) in zip(axes[0], dirs):
+    for col, (ax, (theta, phi)) in enumerate(zip(axes[0], dirs)):
         bins = _pooled_bins(per_surface, theta, phi)
         # Sectors by |phi_m - phi_v| folded to [0, 180]: 0 = facets tilted toward the viewer.
         sectors = {}
@@ -301,7 +302,8 @@ def g1_per_normal(path, entry):
         ax.set_ylabel("G1(v, m)")
         ax.set_ylim(0, 1.05)
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7, loc="lower left")
+        if col == 0:  # one legend: at grazing views the curves reach down to where it would sit
+            ax.legend(fontsize=7, loc="lower left")
     n = len(per_surface)
     fig.suptitle("%s: masking per normal bin (%d surface%s pooled, ray-count errors); dashed: V-cavity [Heitz14, eq. 24]"
                  % (entry.get("name"), n, "s" if n > 1 else ""), fontsize=10)
@@ -313,9 +315,9 @@ def g1_per_normal(path, entry):
 
 G2_MODELS = [
     ("smith_separable", "Smith separable [Heitz14, eq. 20]", "-"),
-    ("smith_height_correlated", "Smith height-correlated (eq. 21)", "--"),
-    ("smith_direction_correlated", "Smith direction-correlated (eq. 22)", ":"),
-    ("smith_height_direction_correlated", "Smith height-direction-correlated (eq. 23)", "-."),
+    ("smith_height_correlated", "Smith height-correlated [Heitz14, eq. 21]", "--"),
+    ("smith_direction_correlated", "Smith direction-correlated [Heitz14, eq. 22]", ":"),
+    ("smith_height_direction_correlated", "Smith height-direction-correlated [Heitz14, eq. 23]", "-."),
     ("vcavity", "V-cavity", (0, (1, 1))),
 ]
 
@@ -337,7 +339,7 @@ def g2_curves(path, record, title=""):
     ncol = min(3, len(panels))
     nrow = (len(panels) + ncol - 1) // ncol
     fig, axes = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 3.8 * nrow), squeeze=False)
-    for ax, (to, dp) in zip(axes.flat, panels):
+    for k, (ax, (to, dp)) in enumerate(zip(axes.flat, panels)):
         sel = sorted([r for r in rows if num(r.get("theta_o_deg")) == to and dphi(r) == dp],
                      key=lambda r: num(r.get("theta_i_deg")))
         ti = column(sel, "theta_i_deg")
@@ -348,13 +350,15 @@ def g2_curves(path, record, title=""):
                 ax.plot(ti, column(sel, key), ls=ls, lw=1.2, label=label)
         ax.set_title("theta_o = %g deg, delta phi = %g deg" % (to, dp), fontsize=10)
         ax.set_xlabel("theta_i (deg)")
-        ax.set_ylabel("G2 (area average)")
+        ax.set_ylabel("G2 (symmetric weight)")
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=6)
+        if k == 0:  # one legend, where the curves leave room at every roughness
+            ax.legend(fontsize=6, loc="lower left")
     for ax in list(axes.flat)[len(panels):]:
         ax.axis("off")
-    fig.suptitle((title + ": " if title else "") + "masking-shadowing G2 against the four Smith forms and V-cavity",
-                 fontsize=10)
+    fig.suptitle((title + ": " if title else "") + "masking-shadowing G2 against the four Smith forms and V-cavity\n"
+                 "G2 averaged over the facets facing both o and i with the symmetric weight "
+                 "A_f (max(0, o.m_f) + max(0, i.m_f)) / 2, so that G2(v, v) = G1(v)", fontsize=10)
     return _save(fig, path)
 
 
@@ -410,24 +414,39 @@ def bsdf_albedo(path, record, title=""):
     if not isinstance(alb, dict):
         raise NoData("no albedo in the BSDF record")
     fig, ax = plt.subplots(figsize=(7, 3.8))
-    width = 0.38
+    # Sides with light in them (a mirror transmits nothing); log scale: orders 3 and 4+ are small.
+    sides = [sd for sd in ("reflected", "transmitted")
+             if isinstance(alb.get(sd), dict) and any(num(alb[sd].get(o), 0.0) > 0 for o in ORDER_KEYS)]
+    if not sides:
+        raise NoData("no light in any order")
+    width = 0.8 / len(sides)
     x = np.arange(len(ORDER_KEYS))
-    for k, side in enumerate(("reflected", "transmitted")):
-        vals = alb.get(side)
-        if not isinstance(vals, dict):
-            continue
+    walk = (record.get("albedo_models") or {}).get("smith_multiple") or {}
+    positive = []
+    for k, side in enumerate(sides):
+        vals = alb[side]
         errs = record.get(side + "_stderr") or alb.get(side + "_stderr") or {}
         y = np.array([num(vals.get(o)) for o in ORDER_KEYS])
         e = np.array([num(errs.get(o), 0.0) for o in ORDER_KEYS])
-        ax.bar(x + (k - 0.5) * width, y, width, yerr=e, capsize=3, label=side)
-        for xi, yi, ei in zip(x, y, e):
-            if yi == yi:
-                ax.text(xi + (k - 0.5) * width, yi, "%.4f\n+-%.1g" % (yi, ei), ha="center", va="bottom", fontsize=6)
+        xs = x + (k - (len(sides) - 1) / 2) * width
+        ax.bar(xs, y, width * 0.9, yerr=e, capsize=3, color="C%d" % k, label="%s, measured" % side)
+        positive += [v for v in y if v > 0]
+        for xi, yi, ei in zip(xs, y, e):
+            if yi > 0:
+                ax.text(xi, yi * 1.15, "%.4g\n+-%.1g" % (yi, ei), ha="center", va="bottom", fontsize=6)
+        if isinstance(walk.get(side), dict):  # the Smith random walk of the nominal NDF, same material
+            wy = np.array([num(walk[side].get(o)) for o in ORDER_KEYS])
+            we = np.array([num((walk.get(side + "_stderr") or {}).get(o), 0.0) for o in ORDER_KEYS])
+            ax.errorbar(xs, wy, yerr=we, fmt="_", ms=18, mew=2, color="k", capsize=0,
+                        label="Smith random walk" if k == 0 else None)
+            positive += [v for v in wy if v > 0]
+    ax.set_yscale("log")
+    ax.set_ylim(min(positive) / 3, 4)
     ax.set_xticks(x)
     ax.set_xticklabels(["order 1", "order 2", "order 3", "order 4+", "total"])
     ax.set_ylabel("albedo")
     ax.set_title((title + ": " if title else "") + "albedo per scattering order", fontsize=10)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper center")
     ax.grid(True, axis="y", alpha=0.3)
     return _save(fig, path)
 
@@ -474,11 +493,20 @@ def table4(path, records):
     usable = [(a, r) for a, r in records if isinstance(r.get("in_plane"), list) and r["in_plane"]]
     if not usable:
         raise NoData("no BSDF record with in_plane rows")
-    fig, axes = plt.subplots(1, len(usable), figsize=(3.6 * len(usable), 3.6), squeeze=False)
-    for ax, (alpha, rec) in zip(axes[0], usable):
+    ncol = min(3, len(usable) + 1)  # one cell more for the legend
+    nrow = (len(usable) + 1 + ncol - 1) // ncol
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.0 * ncol, 3.3 * nrow), squeeze=False)
+    for ax, (alpha, rec) in zip(axes.flat, usable):
         _lobe(ax, rec["in_plane"], with_total=False)
+        # Log scale: V-cavity's grazing peak is 10x Smith's and hides the measured lobe on a linear one.
+        ax.set_yscale("log")
+        peak = max((num(r.get("f_order_1")) for r in rec["in_plane"] if num(r.get("f_order_1")) > 0), default=1.0)
+        ax.set_ylim(1e-3 * peak, 3 * peak)
         ax.set_title("alpha = %g" % alpha, fontsize=10)
-    axes[0][0].legend(fontsize=6)
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    for ax in list(axes.flat)[len(usable):]:
+        ax.axis("off")
+    list(axes.flat)[-1].legend(handles, labels, fontsize=8, loc="center")
     fig.suptitle("[Heitz14, Table 4] reproduced: order-1 lobe at grazing theta = 1.5 rad (85.9 deg), Beckmann tiles, "
                  "against Smith and V-cavity", fontsize=10)
     return _save(fig, path)
@@ -729,7 +757,7 @@ def measured_surface(path, heights, dx, dy, guard_band=None, title=""):
         from matplotlib.patches import Rectangle
         ax.add_patch(Rectangle((i["x0"], i["y0"]), i["x1"] - i["x0"], i["y1"] - i["y0"],
                                                   fill=False, ec="w", lw=1.2, ls="--"))
-        ax.set_title("%s%d x %d pixels; dashed: measured interior (guard %d x %d cells)"
+        ax.set_title("%s%d x %d pixels\ndashed: measured interior (guard %d x %d cells)"
                      % (title + ": " if title else "", nx, ny, guard_band.get("cells_x", 0),
                         guard_band.get("cells_y", 0)), fontsize=9)
     else:

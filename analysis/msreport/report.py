@@ -26,7 +26,10 @@ PROFILES = {
         "g1_max_phis": 2,
         "g2_rays": 200000,
         "bsdf_rays": 1000000,
-        "table4_resolution": 256,
+        # 8 cells per correlation length, 64 per tile: the grazing order-1 lobe is 19% low at 4
+        # cells per l and within its error of 32 cells at 8 (analysis/convergence_output.md).
+        "table4_resolution": 512,
+        "table4_cells_per_l": 8,
         "table4_rays": 1000000,
         "tiles": [1, 2, 4, 8, 16],
         "tiles_rays": 200000,
@@ -41,7 +44,10 @@ PROFILES = {
         "preview_size": 160,
         "preview_samples": 64,
         "preview_cases": [(0.5, "mirror"), (1.0, "mirror"), (0.5, "gold")],
-        "measured_resolution": 256,
+        # A 512^2 tile at 8 cells per correlation length l, cropped to 384^2 heights (48 l): the
+        # default guard band (8 l a side) leaves an interior of about 32 l.
+        "measured_resolution": 512,
+        "measured_cells_per_l": 8,
         "measured_rays": 200000,
     },
     "smoke": {
@@ -52,6 +58,7 @@ PROFILES = {
         "g2_rays": 10000,
         "bsdf_rays": 20000,
         "table4_resolution": 64,
+        "table4_cells_per_l": 4,
         "table4_rays": 20000,
         "tiles": [1, 2, 4],
         "tiles_rays": 10000,
@@ -306,7 +313,8 @@ def section_table4(ctx):
         surf = os.path.join(ctx.surf_dir, "table4-alpha%g.exr" % a)
         res = ctx.profile["table4_resolution"]
         ctx.run(["generate", "gaussian", "--alpha", "%g" % a, "--resolution", str(res),
-                 "--correlation-length", "%g" % (4.0 / res), "--seed", "1", "-o", surf])
+                 "--correlation-length", "%g" % (ctx.profile["table4_cells_per_l"] / res), "--seed", "1",
+                 "-o", surf])
         out = ctx.data("table4_alpha%g.json" % a)
         ctx.run(["measure", "bsdf", surf, "--material", "mirror", "--theta-i", "%.6f" % TABLE4_THETA_DEG,
                  "--phi-i", "0", "--orders", "4", "--rays", str(ctx.profile["table4_rays"]), "-o", out])
@@ -548,7 +556,9 @@ def section_measured(ctx):
     import numpy as np
     res = ctx.profile["measured_resolution"]
     tile = os.path.join(ctx.surf_dir, "measured-source.exr")
-    ctx.run(["generate", "gaussian", "--alpha", "0.5", "--resolution", str(res), "--seed", "7", "-o", tile])
+    length = (["--correlation-length", "%.9g" % (ctx.profile["measured_cells_per_l"] / res)]
+              if "measured_cells_per_l" in ctx.profile else [])
+    ctx.run(["generate", "gaussian", "--alpha", "0.5", "--resolution", str(res), "--seed", "7", "-o", tile] + length)
     ch, _ = read_exr(tile)
     z = ch["Z"]
     n = (3 * res) // 4  # a crop: not periodic
@@ -601,6 +611,37 @@ def section_measured(ctx):
                                             (gb.get("interior") or {}).get("cells_x"),
                                             (gb.get("interior") or {}).get("cells_y"))))
     return s
+
+
+# The figures the findings pages of the documentation show (docs/findings/*.md), by their stable
+# names in the report (default profile and suite). `make_report.py --figures DIR` writes them there.
+FINDINGS_FIGURES = [
+    "validation_z.png", "g1_beckmann-0.5.png", "g1_bins_beckmann-0.5.png",
+    "g2_beckmann-0.5.png", "g2_hotspot_beckmann-0.5-checks.png",
+    "bsdf_albedo_beckmann-0.5.png", "bsdf_lobe_beckmann-0.5.png", "table4.png",
+    "objects_box.png", "objects_tiled_boxes.png", "objects_vgroove_orders.png",
+    "objects_vcavity_albedo.png", "objects_vcavity_lobes.png",
+]
+
+
+def export_figures(ctx, folder, names=None):
+    """Copies the findings figures NAMES (default FINDINGS_FIGURES) of this report into FOLDER,
+    as palette PNGs (a few tens of kB each: they are committed with the documentation).
+    Returns the paths written; raises RuntimeError naming the figures this report did not draw."""
+    from PIL import Image
+    names = FINDINGS_FIGURES if names is None else names
+    missing = [n for n in names if not os.path.isfile(os.path.join(ctx.fig_dir, n))]
+    if missing:
+        raise RuntimeError("figures for %s not drawn by this report: %s" % (folder, ", ".join(missing)))
+    os.makedirs(folder, exist_ok=True)
+    written = []
+    for n in names:
+        with Image.open(os.path.join(ctx.fig_dir, n)) as im:
+            small = im.convert("RGB").quantize(colors=128, method=Image.Quantize.MEDIANCUT)
+            path = os.path.join(folder, n)
+            small.save(path, optimize=True)
+        written.append(path)
+    return written
 
 
 SECTIONS = [section_validation, section_ndf, section_g1, section_g2, section_bsdf, section_table4,
