@@ -58,10 +58,12 @@ def number(s):
 
 def parse_bench(out):
     """G1 rows per view, walk rows per (material, view), Smith walks per view, peak per tile."""
-    g1, walks, smith = {}, {}, {}
+    g1, walks, smith, peak = {}, {}, {}, {}
     for line in out.splitlines():
         t = line.split()
-        if len(t) == 16 and t[0].endswith("^2") and t[1].endswith("deg"):
+        if len(t) == 3 and t[0].endswith("^2"):  # the closing table: tile, peak MiB, B/facet
+            peak = dict(mib=number(t[1]), bytes_per_facet=number(t[2]))
+        elif len(t) == 16 and t[0].endswith("^2") and t[1].endswith("deg"):
             v = list(map(number, t[2:]))
             g1[int(t[1][:-3])] = dict(a=v[3], b=v[4], bare=v[5], ratio=v[6], lean=v[7],
                                       lean_ratio=v[8], peak=v[10], bytes_per_facet=v[11],
@@ -72,7 +74,7 @@ def parse_bench(out):
                                             bare=v[5], ratio=v[6], plain=v[7], vs_plain=v[10])
         elif t[:1] == ["smith-walk"]:
             smith[int(float(t[1]))] = number(t[2])
-    return g1, walks, smith
+    return g1, walks, smith, peak
 
 
 def parse_peak_memory(out):
@@ -93,7 +95,7 @@ def shown(path, source):
     return os.path.join(os.path.basename(os.path.dirname(os.path.abspath(path))), os.path.basename(path))
 
 
-def page(a, g1, walks, smith, memory, info):
+def page(a, g1, walks, smith, peak, memory, info):
     n = a.resolution
     L = []
     L.append("# Performance\n")
@@ -114,7 +116,7 @@ def page(a, g1, walks, smith, memory, info):
         L.append(c)
     L.append("```\n")
     L.append("Rates are per processor second (user + system time of all threads), the best of "
-             f"{a.repeat} runs with the estimator and its bare loop interleaved in one process. "
+             f"{a.repeat} run{'s' if a.repeat > 1 else ''} with the estimator and its bare loop interleaved in one process. "
              "When other work shares the cores (a load average above the core count) the absolute "
              "rates drop and scatter; the ratios to the bare loop, which lose the same share, are "
              "the numbers to compare between machines.\n")
@@ -147,11 +149,11 @@ def page(a, g1, walks, smith, memory, info):
             f"{smith[th] / 1e6:.2f} M walks/s at {th}°" for th in sorted(smith)) + ".\n")
 
     L.append("## Memory\n")
-    first = g1[min(g1)] if g1 else None
-    if first:
-        L.append(f"The benchmark process (generation, Embree scene, facet table, G1): peak "
-                 f"{first['peak']:.0f} MiB, {first['bytes_per_facet']:.0f} bytes per facet; "
-                 f"Embree scene build {first['build_s']:.2f} s.\n")
+    if peak:
+        L.append(f"The benchmark process (generation, Embree scene, facet table, G1 in both "
+                 f"estimators): peak resident memory {peak['mib']:.0f} MiB, "
+                 f"{peak['bytes_per_facet']:.0f} bytes per facet; Embree scene build "
+                 f"{g1[min(g1)]['build_s']:.2f} s.\n")
     L.append("Each command on its own (`bench/peak_memory.sh`, `/usr/bin/time -v`, whole process; "
              "bytes per facet include the program and its libraries, which dominate on small tiles):\n")
     L.append("| command | peak MiB | bytes/facet | processor s |")
@@ -195,11 +197,11 @@ def main():
     paths = (bench, program, peak)
     info["commands"] = [" ".join(shlex.quote(shown(c, source) if c in paths else c) for c in cmd)
                         for cmd in (bench_cmd, peak_cmd)]
-    g1, walks, smith = parse_bench(bench_out)
+    g1, walks, smith, peak = parse_bench(bench_out)
     memory = parse_peak_memory(peak_out)
-    if not g1 or not walks or not memory:
+    if not g1 or not walks or not peak or not memory:
         sys.exit("performance_page: could not read the benchmark's output (format changed?)")
-    text = page(a, g1, walks, smith, memory, info)
+    text = page(a, g1, walks, smith, peak, memory, info)
     with open(a.out, "w") as f:
         f.write(text)
     print(f"wrote {a.out} ({info['seconds']:.0f} s)")
