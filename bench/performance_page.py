@@ -6,13 +6,15 @@
 runs, on one tile (Beckmann alpha = 0.5, 4 cells per correlation length, default 1024^2):
 microsim_bench (G1 estimators (a) and (b) against a bare Embree loop over the same rays, the
 mirror and dielectric walks against a replay of their own Embree queries and against a plain walk
-tracer, the Smith random-walk model) and bench/peak_memory.sh (peak memory of each command), then
+tracer, the Smith random-walk model) and bench/peak_memory.sh (peak memory of each command, on
+1024^2 and 4096^2 tiles), then
 writes the page: the machine (cores, processor model, load average), the date, the commands, the
 tables. Rates are per processor second (user + system time of all threads), the best of --repeat
 runs; on a shared machine the ratios to the bare loop are the robust numbers.
 
     bench/performance_page.py --build BUILD --out docs/performance.md [--resolution N]
                               [--rays N] [--walks N] [--repeat K] [--threads T]
+                              [--memory-resolutions N,M]
 """
 import argparse
 import datetime
@@ -82,7 +84,7 @@ def parse_peak_memory(out):
     for line in out.splitlines():
         t = line.split()
         if len(t) == 6 and t[0].endswith("^2"):
-            rows.append(dict(command=t[1], peak=number(t[2]), bytes_per_facet=number(t[3]),
+            rows.append(dict(tile=t[0].replace("^2", "²"), command=t[1], peak=number(t[2]), bytes_per_facet=number(t[3]),
                              cpu=number(t[4]), wall=t[5]))
     return rows
 
@@ -155,11 +157,11 @@ def page(a, g1, walks, smith, peak, memory, info):
                  f"{peak['bytes_per_facet']:.0f} bytes per facet; Embree scene build "
                  f"{g1[min(g1)]['build_s']:.2f} s.\n")
     L.append("Each command on its own (`bench/peak_memory.sh`, `/usr/bin/time -v`, whole process; "
-             "bytes per facet include the program and its libraries, which dominate on small tiles):\n")
-    L.append("| command | peak MiB | bytes/facet | processor s |")
-    L.append("|---|---|---|---|")
+             "bytes per facet include the program and its libraries, about 30 MiB, which dominate on small tiles):\n")
+    L.append("| tile | command | peak MiB | bytes/facet | processor s |")
+    L.append("|---|---|---|---|---|")
     for r in memory:
-        L.append(f"| {r['command']} | {r['peak']:.0f} | {r['bytes_per_facet']:.0f} | {r['cpu']:.1f} |")
+        L.append(f"| {r['tile']} | {r['command']} | {r['peak']:.0f} | {r['bytes_per_facet']:.1f} | {r['cpu']:.1f} |")
     L.append("")
     return "\n".join(L)
 
@@ -171,7 +173,9 @@ def main():
     p.add_argument("--resolution", type=int, default=1024)
     p.add_argument("--rays", type=int, default=1000000)
     p.add_argument("--walks", type=int, default=200000)
-    p.add_argument("--repeat", type=int, default=2)
+    p.add_argument("--repeat", type=int, default=3)
+    p.add_argument("--memory-resolutions", default="1024,4096",
+                   help="tiles of bench/peak_memory.sh (comma-separated)")
     p.add_argument("--threads", type=int, default=2)
     a = p.parse_args()
     source = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -181,7 +185,7 @@ def main():
     # microsim_bench uses all cores TBB sees; --threads limits the commands of peak_memory.sh.
     bench_cmd = [bench, "--rays", str(a.rays), "--repeat", str(a.repeat), "--walks", str(a.walks),
                  str(a.resolution)]
-    peak_cmd = [peak, "-b", program, "-t", str(a.threads), str(a.resolution)]
+    peak_cmd = [peak, "-b", program, "-t", str(a.threads)] + a.memory_resolutions.split(",")
     model, cores, mem = machine()
     info = dict(model=model, cores=cores, mem=mem, load_before=load_average(),
                 date=datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"))
