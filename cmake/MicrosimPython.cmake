@@ -17,3 +17,17 @@ endif()
 find_package(Python3 REQUIRED COMPONENTS Interpreter OPTIONAL_COMPONENTS Development.Module NumPy)
 # Where the module is built (python/CMakeLists.txt): PYTHONPATH for the report and the tests.
 set(MICROSIM_PYTHON_DIR ${CMAKE_BINARY_DIR}/python)
+# Where `cmake --install` puts the Python package, relative to the prefix: the interpreter's own
+# folder for the prefix's platform-specific packages (Debian's python3: lib/python3.X/dist-packages,
+# which is on its sys.path for /usr/local and /usr), so that `import microsim` needs no PYTHONPATH
+# when the prefix is the interpreter's.
+if(NOT DEFINED MICROSIM_PYTHON_INSTALL_DIR)
+  execute_process(COMMAND ${Python3_EXECUTABLE} -c
+    "import os, sysconfig; print(os.path.relpath(sysconfig.get_path('platlib'), sysconfig.get_path('data')))"
+    OUTPUT_VARIABLE py_dir OUTPUT_STRIP_TRAILING_WHITESPACE RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0 OR py_dir STREQUAL "" OR py_dir MATCHES "^\\.\\.")
+    set(py_dir ${CMAKE_INSTALL_LIBDIR}/python3/dist-packages)
+  endif()
+  set(MICROSIM_PYTHON_INSTALL_DIR ${py_dir} CACHE PATH
+      "Install folder of the Python package, relative to the install prefix")
+endif()

@@ -8,9 +8,12 @@
 
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/surface/gaussian.hpp"
+#include "microsim/surface/heightmap_import.hpp"
 #include "microsim/trace/tracer.hpp"
 
-int main() {
+// With an image's path: also reads it through the library's image-reader module, which the
+// installed package must find from this program (outside microsim's trees).
+int main(int argc, char** argv) {
   using namespace microsim;
   GaussianParams p;
   p.resolution = 64;
@@ -37,6 +40,12 @@ int main() {
   const bool ok = s.num_facets() == 2u * 64 * 64 && eq_1c < 1e-9 &&
                   std::abs(raycast - smith) < 1e-6 && r.counters.lost_below + r.counters.unresolved == 0 &&
                   sampled.mean > 0 && sampled.mean < 1;
-  std::printf("%s\n", ok ? "ok" : "FAILED");
-  return ok ? 0 : 1;
+  bool image_ok = true;
+  if (argc > 1) {
+    const RawHeightGrid g = read_height_grid(argv[1]);
+    image_ok = g.nx > 0 && g.ny > 0 && g.z.size() == static_cast<std::size_t>(g.nx) * g.ny;
+    std::printf("%s: %s %dx%d, channel %s\n", argv[1], g.format.c_str(), g.nx, g.ny, g.channel.c_str());
+  }
+  std::printf("%s\n", ok && image_ok ? "ok" : "FAILED");
+  return ok && image_ok ? 0 : 1;
 }

@@ -1,6 +1,8 @@
-// The OpenImageIO module (plugins/oiio_reader.cpp): loaded on first use, from the executable's
-// folder, else from where the build put it; OpenImageIO's few hundred shared libraries are
-// thereby paid only by the commands that read or write images.
+// The OpenImageIO module (plugins/oiio_reader.cpp): loaded on first use, found from the file
+// that holds the library (next to it in the build tree; the install tree's lib/microsim from the
+// installed program or Python module), else through the RUNPATH, else where the build put it;
+// OpenImageIO's few hundred shared libraries are thereby paid only by the commands that read or
+// write images.
 #pragma once
 #include <string>
 #include <vector>
