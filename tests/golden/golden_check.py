@@ -17,7 +17,12 @@ Then every output file is compared:
 
 Every difference is printed with its path and the old and new values. Exit status: 0 when
 nothing differs (or only paths matching an --intended pattern, which are printed as intended),
-1 otherwise, 2 on a usage error.
+1 otherwise, 2 on a usage error. For example, the change that records every trace counter
+(merged and MPI records of a window keep `side_exits` and `side_entries`; partial records carry
+7 counters instead of 5) is accepted by
+
+    --intended '[.]trace_counters$' --intended '^(merged|mpi)_.*window.*[.]side_(exits|entries)$'
+    --intended '^shard_.*[.]tallies[[][0-9]+[]][.](counts|tail_counts|row_counts)'
 """
 import argparse
 import json
