@@ -22,7 +22,7 @@ nothing differs (or only paths matching an --intended pattern, which are printed
 7 counters instead of 5) is accepted by
 
     --intended '[.]trace_counters$' --intended '^(merged|mpi)_.*window.*[.]side_(exits|entries)$'
-    --intended '^shard_.*[.]tallies[[][0-9]+[]][.](counts|tail_counts|row_counts)'
+    --intended '^shard_.*[.]tallies\[[0-9]+\][.](counts|tail_counts|row_counts)'
 """
 import argparse
 import json
