@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Golden check: one fixed set of commands run with two microsim builds, every output compared.
+r"""Golden check: one fixed set of commands run with two microsim builds, every output compared.
 
     golden_check.py --old OLD_BINARY --new NEW_BINARY [--keep DIR] [--intended REGEX ...]
 
