@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -66,9 +67,10 @@ inline ::testing::Environment* const kRemoveTemporaries =
 // Runs `microsim ARGS`, capturing stdout and stderr in files named after the current test.
 // `prefix` goes before the binary in the shell command (e.g. "ulimit -v N; timeout 60").
 inline Result run_microsim(const std::string& args, const std::string& prefix = "") {
-  const std::string test = ::testing::UnitTest::GetInstance()->current_test_info()
-                               ? ::testing::UnitTest::GetInstance()->current_test_info()->name()
-                               : "setup";
+  std::string test = ::testing::UnitTest::GetInstance()->current_test_info()
+                         ? ::testing::UnitTest::GetInstance()->current_test_info()->name()
+                         : "setup";
+  std::replace(test.begin(), test.end(), '/', '_');  // parameterized tests: "Name/param"
   std::string out = temp_path("run", test + "_stdout.txt"),
               err = temp_path("run", test + "_stderr.txt");
   std::string cmd = prefix + " " + binary() + " " + args + " >" + out + " 2>" + err;

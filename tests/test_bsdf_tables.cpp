@@ -16,6 +16,7 @@
 
 #include "microsim/io/merl.hpp"
 #include "microsim/io/rgl_bsdf.hpp"
+#include "microsim/io/bsdf_files.hpp"
 #include "microsim/measure/bsdf_record.hpp"
 #include "microsim/measure/bsdf_table.hpp"
 #include "microsim/measure/stats.hpp"

@@ -8,6 +8,7 @@
 #include "cli_common.hpp"
 #include "option_checks.hpp"
 #include "microsim/io/output.hpp"
+#include "microsim/io/bsdf_files.hpp"
 #include "microsim/measure/bsdf_record.hpp"
 #include "microsim/surface/surface_io.hpp"
 #include "microsim/trace/tracer.hpp"

@@ -253,18 +253,12 @@ BsdfTally& BsdfTally::operator+=(const BsdfTally& o) {
   auto add = [](std::vector<double>& a, const std::vector<double>& b) {
     for (std::size_t k = 0; k < a.size(); ++k) a[k] += b[k];
   };
-  add(albedo, o.albedo);
-  add(albedo2, o.albedo2);
-  add(pix, o.pix);
-  add(pix2, o.pix2);
-  add(plane, o.plane);
-  add(plane2, o.plane2);
+  for_each_moment([&](const char*, auto sum, auto second) {
+    add(this->*sum, o.*sum);
+    add(this->*second, o.*second);
+  });
   both2 += o.both2;
-  paths += o.paths;
-  lost += o.lost;
-  unterminated += o.unterminated;
-  events += o.events;
-  counters += o.counters;
+  add_fields(*this, o);
   return *this;
 }
 
@@ -285,14 +279,8 @@ void BsdfTally::add_replicate(const BsdfTally& rep) {
   const double rt = rep.albedo[rep.a_index(0, orders)] + rep.albedo[rep.a_index(1, orders)];
   double rt_sum = albedo[a_index(0, orders)] + albedo[a_index(1, orders)];
   welford(rt_sum, both2, rt);
-  add(albedo, albedo2, rep.albedo);
-  add(pix, pix2, rep.pix);
-  add(plane, plane2, rep.plane);
-  paths += rep.paths;
-  lost += rep.lost;
-  unterminated += rep.unterminated;
-  events += rep.events;
-  counters += rep.counters;
+  for_each_moment([&](const char*, auto sum, auto second) { add(this->*sum, this->*second, rep.*sum); });
+  add_fields(*this, rep);
   ++replicates;
 }
 
@@ -472,38 +460,30 @@ void run_replicate_paths(int q0, int q1, std::uint64_t n, int K, int npix, int n
   }
 }
 
-// Tallies of path sums (replicates == 0) as rows (measure/shards.hpp): first moments, and the
-// second moments when `second`; counts: paths, lost, unterminated, events, trace counters.
-constexpr std::size_t kPathCounts = 4 + kCounterValues;
+// Tallies of path sums (replicates == 0) as rows (measure/shards.hpp): the counts, the first
+// moments, and the second moments when `second`, all as BsdfTally declares them.
+constexpr std::size_t kPathCounts = scalar_field_count<BsdfTally>();
 std::size_t path_reals(const BsdfTally& t, bool second) {
-  return (t.albedo.size() + t.pix.size() + t.plane.size()) * (second ? 2 : 1) + (second ? 1 : 0);
+  std::size_t n = second ? 1 : 0;  // both2
+  BsdfTally::for_each_moment([&](const char*, auto sum, auto) { n += (t.*sum).size() * (second ? 2 : 1); });
+  return n;
 }
 void pack_paths(const BsdfTally& t, bool second, std::uint64_t* c, double* x) {
-  c[0] = t.paths;
-  c[1] = t.lost;
-  c[2] = t.unterminated;
-  c[3] = t.events;
-  put_counters(t.counters, c + 4);
-  for (const auto* v : {&t.albedo, &t.pix, &t.plane}) x = std::copy(v->begin(), v->end(), x);
+  pack_fields(t, c);
+  BsdfTally::for_each_moment([&](const char*, auto sum, auto) { x = std::copy((t.*sum).begin(), (t.*sum).end(), x); });
   if (!second) return;
-  for (const auto* v : {&t.albedo2, &t.pix2, &t.plane2}) x = std::copy(v->begin(), v->end(), x);
+  BsdfTally::for_each_moment([&](const char*, auto, auto m2) { x = std::copy((t.*m2).begin(), (t.*m2).end(), x); });
   *x = t.both2;
 }
 void unpack_paths(BsdfTally& t, bool second, const std::uint64_t* c, const double* x) {
-  t.paths = c[0];
-  t.lost = c[1];
-  t.unterminated = c[2];
-  t.events = c[3];
-  t.counters = get_counters(c + 4);
-  for (auto* v : {&t.albedo, &t.pix, &t.plane}) {
-    std::copy(x, x + v->size(), v->begin());
-    x += v->size();
-  }
+  unpack_fields(t, c);
+  const auto read = [&](std::vector<double>& v) {
+    std::copy(x, x + v.size(), v.begin());
+    x += v.size();
+  };
+  BsdfTally::for_each_moment([&](const char*, auto sum, auto) { read(t.*sum); });
   if (!second) return;
-  for (auto* v : {&t.albedo2, &t.pix2, &t.plane2}) {
-    std::copy(x, x + v->size(), v->begin());
-    x += v->size();
-  }
+  BsdfTally::for_each_moment([&](const char*, auto, auto m2) { read(t.*m2); });
   t.both2 = *x;
 }
 // Completes per-unit path sums from the other processes.

@@ -33,41 +33,38 @@ ReplicatePlan plan_g2(G2Result& r, const G2Options& opt) {
   return plan;
 }
 
+namespace {
+// Calls fn(count, q, k * nb + b) for the per-replicate count k of bin b in replicate q, for
+// every count G2NormalBin declares (k in declaration order, nb bins).
+template <class Bins, class Fn>
+void each_g2_count(Bins& bins, int R, Fn&& fn) {
+  const std::size_t nb = bins.size();
+  std::size_t k = 0;
+  G2NormalBin::for_each_replicate_count([&](const char*, auto, auto per_replicate) {
+    for (int q = 0; q < R; ++q)
+      for (std::size_t b = 0; b < nb; ++b) fn((bins[b].*per_replicate)[q], q, k * nb + b);
+    ++k;
+  });
+}
+}  // namespace
+
 void finish_g2(G2Result& r, const G2Options& opt, UnitRange reps) {
   const int R = r.replicates;
   if (opt.split) {
     // Completes the replicates' counts from the other processes (measure/shards.hpp).
-    const std::size_t nb = r.bins.size();
-    Tallies t("g2", R, reps, 4 * nb, 0, kCounterValues, 0);
-    for (int q = 0; q < R; ++q)
-      for (std::size_t b = 0; b < nb; ++b) {
-        const G2NormalBin& bin = r.bins[b];
-        std::uint64_t* row = t.count_row(q);
-        row[b] = bin.samples_r[q];
-        row[nb + b] = bin.visible_o_r[q];
-        row[2 * nb + b] = bin.visible_i_r[q];
-        row[3 * nb + b] = bin.visible_both_r[q];
-      }
+    std::size_t fields = 0;
+    G2NormalBin::for_each_replicate_count([&](const char*, auto, auto) { ++fields; });
+    Tallies t("g2", R, reps, fields * r.bins.size(), 0, kCounterValues, 0);
+    each_g2_count(r.bins, R, [&](std::uint64_t c, int q, std::size_t at) { t.count_row(q)[at] = c; });
     put_counters(r.counters, t.tail_counts.data());
     opt.split->exchange(t);
-    for (int q = 0; q < R; ++q)
-      for (std::size_t b = 0; b < nb; ++b) {
-        G2NormalBin& bin = r.bins[b];
-        const std::uint64_t* row = t.count_row(q);
-        bin.samples_r[q] = row[b];
-        bin.visible_o_r[q] = row[nb + b];
-        bin.visible_i_r[q] = row[2 * nb + b];
-        bin.visible_both_r[q] = row[3 * nb + b];
-      }
+    each_g2_count(r.bins, R, [&](std::uint64_t& c, int q, std::size_t at) { c = t.count_row(q)[at]; });
     r.counters = get_counters(t.tail_counts.data());
   }
   for (G2NormalBin& nb : r.bins) {
-    for (int q = 0; q < R; ++q) {
-      nb.samples += nb.samples_r[q];
-      nb.visible_o += nb.visible_o_r[q];
-      nb.visible_i += nb.visible_i_r[q];
-      nb.visible_both += nb.visible_both_r[q];
-    }
+    G2NormalBin::for_each_replicate_count([&](const char*, auto total, auto per_replicate) {
+      for (int q = 0; q < R; ++q) nb.*total += (nb.*per_replicate)[q];
+    });
     r.visible_o += nb.visible_o;
     r.visible_i += nb.visible_i;
     r.visible_both += nb.visible_both;

@@ -23,10 +23,17 @@ namespace microsim {
 namespace {
 
 struct Tally {
-  std::vector<std::uint64_t> hits, samples, visible;
-  TraceCounters counters;
+  std::vector<std::uint64_t> hits, samples, visible;  // per normal bin
+  TraceCounters counters;     // summed into the call's total, not per replicate
   std::size_t draw_hint = 0;  // area sampling: block of the previous draw (a search start)
   explicit Tally(int nbins = 0) : hits(nbins), samples(nbins), visible(nbins) {}
+  // The per-replicate counts (tally_fields.hpp): summed over chunks and exchanged.
+  template <class F>
+  static constexpr void for_each_field(F&& f) {
+    f("hits", &Tally::hits);
+    f("samples", &Tally::samples);
+    f("visible", &Tally::visible);
+  }
 };
 
 constexpr std::uint64_t kChunk = 1 << 14;
@@ -64,12 +71,7 @@ std::vector<Tally> run_chunks(int R, std::uint64_t n, int nbins, TraceCounters& 
   for (std::uint64_t c = 0; c < nc; ++c)
     for (std::uint64_t q = 0; q < active; ++q) {
       const Tally& p = parts[c * active + q];
-      Tally& total = reps[first + q];
-      for (int b = 0; b < nbins; ++b) {
-        total.hits[b] += p.hits[b];
-        total.samples[b] += p.samples[b];
-        total.visible[b] += p.visible[b];
-      }
+      add_fields(reps[first + q], p);
       counters += p.counters;
     }
   return reps;
@@ -131,24 +133,23 @@ double process_cpu_seconds() {
 double per_replicate(std::uint64_t total, int R) { return static_cast<double>(total) / R; }
 
 // Completes the replicates' tallies from the other processes (measure/shards.hpp): per
-// replicate the ray-casting hits and the area samples and visible samples of every bin.
+// replicate the ray-casting hits and the area samples and visible samples of every bin. The
+// ray-casting pass counts only hits and the area-sampling pass only samples, so their sum is one
+// row holding both.
 void exchange_g1(TallySplit& split, UnitRange reps, std::vector<Tally>& ray_reps,
                  std::vector<Tally>& sample_reps, TraceCounters& counters, int nbins) {
-  const std::size_t R = ray_reps.size(), nb = static_cast<std::size_t>(nbins);
-  Tallies t("g1", R, reps, 3 * nb, 0, kCounterValues, 0);
+  const std::size_t R = ray_reps.size();
+  Tallies t("g1", R, reps, field_sizes(Tally(nbins)).counts, 0, kCounterValues, 0);
   for (std::size_t q = 0; q < R; ++q) {
-    std::uint64_t* row = t.count_row(q);
-    std::copy(ray_reps[q].hits.begin(), ray_reps[q].hits.end(), row);
-    std::copy(sample_reps[q].samples.begin(), sample_reps[q].samples.end(), row + nb);
-    std::copy(sample_reps[q].visible.begin(), sample_reps[q].visible.end(), row + 2 * nb);
+    Tally both = ray_reps[q];
+    add_fields(both, sample_reps[q]);
+    pack_fields(both, t.count_row(q));
   }
   put_counters(counters, t.tail_counts.data());
   split.exchange(t);
   for (std::size_t q = 0; q < R; ++q) {
-    const std::uint64_t* row = t.count_row(q);
-    std::copy(row, row + nb, ray_reps[q].hits.begin());
-    std::copy(row + nb, row + 2 * nb, sample_reps[q].samples.begin());
-    std::copy(row + 2 * nb, row + 3 * nb, sample_reps[q].visible.begin());
+    unpack_fields(ray_reps[q], t.count_row(q));
+    sample_reps[q] = ray_reps[q];
   }
   counters = get_counters(t.tail_counts.data());
 }
@@ -568,6 +569,7 @@ Json& add_row(Table& t, const G1Result& r, const Microsurface& s) {
   }
   row["backface_hits"] = r.counters.backface_hits;
   row["border_crossings"] = r.counters.border_crossings;
+  row["trace_counters"] = fields_json(r.counters);  // every counter, as TraceCounters declares them
   row["seconds"] = r.seconds;
   Json bins = Json::array();
   double max_abs_z = 0;

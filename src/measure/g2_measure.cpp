@@ -437,6 +437,7 @@ Json& add_row(Table& t, const G2Result& r, const Microsurface& s) {
   row["occlusion_rays"] = r.counters.rays;
   row["lost_rays"] = r.counters.lost_below + r.counters.unresolved;
   row["backface_hits"] = r.counters.backface_hits;
+  row["trace_counters"] = fields_json(r.counters);  // every counter, as TraceCounters declares them
   row["seconds"] = r.seconds;
   Json bins = Json::array();
   for (int b = 0; b < r.binning.size(); ++b) {

@@ -22,24 +22,6 @@ Tallies::Tallies(std::string kind_, std::uint64_t units_, UnitRange covered_, st
     : kind(std::move(kind_)), units(units_), covered(covered_), row_counts(rc), row_reals(rr),
       counts(units_ * rc, 0), reals(units_ * rr, 0.0), tail_counts(tc, 0), tail_reals(tr, 0.0) {}
 
-void put_counters(const TraceCounters& c, std::uint64_t* out) {
-  out[0] = c.rays;
-  out[1] = c.border_crossings;
-  out[2] = c.lost_below;
-  out[3] = c.backface_hits;
-  out[4] = c.unresolved;
-}
-
-TraceCounters get_counters(const std::uint64_t* in) {
-  TraceCounters c;
-  c.rays = in[0];
-  c.border_crossings = in[1];
-  c.lost_below = in[2];
-  c.backface_hits = in[3];
-  c.unresolved = in[4];
-  return c;
-}
-
 ShardRecorder::ShardRecorder(int k, int n) : k_(k), n_(n) {
   if (!(n >= 1 && k >= 1 && k <= n)) throw UsageError("--shard must be K/N with 1 <= K <= N");
 }

@@ -25,6 +25,13 @@ namespace {
 // Integer sums, added atomically groove by groove: exact, so identical for any thread count.
 struct Counts {
   std::atomic<std::uint64_t> hits{0}, samples{0}, visible{0};
+  // The counts exchanged per replicate, in measure_g1's order (its tally's for_each_field).
+  template <class F>
+  static constexpr void for_each_field(F&& f) {
+    f("hits", &Counts::hits);
+    f("samples", &Counts::samples);
+    f("visible", &Counts::visible);
+  }
 };
 
 std::uint64_t stream_of(std::uint64_t base, std::size_t view) { return base + 7919 * view; }
@@ -168,23 +175,22 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
   if (o.split)  // the other processes' replicates, view by view, in measure_g1's layout
     for (std::size_t iv = 0; iv < nv; ++iv) {
       const std::size_t nb = static_cast<std::size_t>(nbins);
-      Tallies t("g1", R, reps, 3 * nb, 0, kCounterValues, 0);
-      for (int q = 0; q < R; ++q)
-        for (int b = 0; b < nbins; ++b) {
-          std::uint64_t* row = t.count_row(q);
-          row[b] = at(iv, q, b).hits;
-          row[nb + b] = at(iv, q, b).samples;
-          row[2 * nb + b] = at(iv, q, b).visible;
-        }
+      // Field k of bin b at k * nb + b, as measure_g1 packs its per-bin vectors.
+      const auto each_count = [&](auto&& fn) {
+        std::size_t k = 0;
+        Counts::for_each_field([&](const char*, auto member) {
+          for (int q = 0; q < R; ++q)
+            for (int b = 0; b < nbins; ++b) fn(at(iv, q, b).*member, q, k * nb + b);
+          ++k;
+        });
+      };
+      std::size_t fields = 0;
+      Counts::for_each_field([&](const char*, auto) { ++fields; });
+      Tallies t("g1", R, reps, fields * nb, 0, kCounterValues, 0);
+      each_count([&](const std::atomic<std::uint64_t>& c, int q, std::size_t pos) { t.count_row(q)[pos] = c; });
       put_counters(results[iv].counters, t.tail_counts.data());
       o.split->exchange(t);
-      for (int q = 0; q < R; ++q)
-        for (int b = 0; b < nbins; ++b) {
-          const std::uint64_t* row = t.count_row(q);
-          at(iv, q, b).hits = row[b];
-          at(iv, q, b).samples = row[nb + b];
-          at(iv, q, b).visible = row[2 * nb + b];
-        }
+      each_count([&](std::atomic<std::uint64_t>& c, int q, std::size_t pos) { c = t.count_row(q)[pos]; });
       results[iv].counters = get_counters(t.tail_counts.data());
     }
 

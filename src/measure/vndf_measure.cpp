@@ -345,6 +345,7 @@ Json& add_row(Table& t, const VndfResult& r, const Microsurface& s, const VndfOp
     row["side_entries"] = r.counters.side_entries;
   }
   row["backface_hits"] = r.counters.backface_hits;
+  row["trace_counters"] = fields_json(r.counters);  // every counter, as TraceCounters declares them
   row["seconds"] = r.seconds;
   Json bins = Json::array();
   for (int b = 0; b < r.binning.size(); ++b) {

@@ -154,6 +154,24 @@ struct BsdfTally {
   std::uint64_t events = 0;             // scattering events, all paths
   TraceCounters counters;
 
+  // The counts, declared once (tally_fields.hpp): summed, exchanged between processes.
+  template <class F>
+  static constexpr void for_each_field(F&& f) {
+    f("paths", &BsdfTally::paths);
+    f("lost", &BsdfTally::lost);
+    f("unterminated", &BsdfTally::unterminated);
+    f("events", &BsdfTally::events);
+    f("counters", &BsdfTally::counters);
+  }
+  // The weight sums, each with its second moment (per path; between replicates, Welford's sum
+  // of squared deviations of the replicate means): f(name, sum, second moment). both2 apart.
+  template <class F>
+  static constexpr void for_each_moment(F&& f) {
+    f("albedo", &BsdfTally::albedo, &BsdfTally::albedo2);
+    f("pix", &BsdfTally::pix, &BsdfTally::pix2);
+    f("plane", &BsdfTally::plane, &BsdfTally::plane2);
+  }
+
   BsdfTally() = default;
   BsdfTally(int K, int npix, int nplane);
   int slots() const { return orders + 1; }

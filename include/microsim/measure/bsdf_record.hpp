@@ -4,7 +4,8 @@
 // by name, angles in degrees, the output format); it is checked here, so that every caller gets
 // the same limits and messages. Each incidence's result becomes two Tables (measure/table.hpp):
 // the albedo per side and scattering order with the models beside it, and the in-plane lobe per
-// bin; the JSON record, the EXR file and the renderer tables' descriptions only format them.
+// bin; the JSON record, the EXR file and the renderer tables' descriptions only format them
+// (the files: io/bsdf_files.hpp).
 //
 // Comparisons follow the rule of table.hpp: z = (measured - model) / error, null where there is
 // no error bar and the values differ. The models of the nominal NDF (smith_single,
@@ -17,7 +18,6 @@
 #include <string>
 #include <vector>
 
-#include "microsim/io/output.hpp"
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/bsdf_table.hpp"
 #include "microsim/measure/table.hpp"
@@ -77,20 +77,5 @@ Json bsdf_incidences_json(const BsdfTable& t, const Microsurface& s);
 // with one incidence its fields at the top level, and incidences.
 void put_bsdf_record(Json& record, const BsdfRequest& request, const BsdfTable& t,
                      const Microsurface& s, const std::string& file);
-
-// The EXR table of one incidence: per side and slot f and its standard error on the hemisphere
-// map, every parameter in the header (`attributes` are added to it).
-ExrTable bsdf_exr_table(const BsdfResult& r, const Json& attributes);
-// EXR of every incidence: channels "incidence_<k>.<side>.f_<order>" (and _stderr), k = p *
-// n_theta + t; the header lists the incidences (`incidences`: [[theta_deg, phi_deg], ...]) and
-// the layout. A single incidence keeps the single-incidence channel names.
-ExrTable bsdf_table_exr(const BsdfTable& t, const Json& attributes);
-// The header attributes of `measure bsdf`'s EXR (record: as put_bsdf_record wrote it).
-Json bsdf_exr_attributes(const Json& record, const std::string& json_path);
-
-// Writes the table in the request's format to `path` (exr, bsdf, binary; json: nothing) and
-// adds the record's "table" field for the renderer tables.
-void write_bsdf_tables(const std::string& path, const BsdfRequest& request, const BsdfTable& t,
-                       const Microsurface& s, Json& record, const std::string& json_path);
 
 }  // namespace microsim

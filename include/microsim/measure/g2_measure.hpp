@@ -55,6 +55,15 @@ struct G2NormalBin {
   std::uint64_t samples = 0, visible_o = 0, visible_i = 0, visible_both = 0;
   // The same counts per replicate (size G2Result::replicates).
   std::vector<std::uint64_t> samples_r, visible_o_r, visible_i_r, visible_both_r;
+  // Every count once, as (name, total, per replicate): the exchange between processes and the
+  // totals derive from this list (estimator_steps.cpp).
+  template <class F>
+  static constexpr void for_each_replicate_count(F&& f) {
+    f("samples", &G2NormalBin::samples, &G2NormalBin::samples_r);
+    f("visible_o", &G2NormalBin::visible_o, &G2NormalBin::visible_o_r);
+    f("visible_i", &G2NormalBin::visible_i, &G2NormalBin::visible_i_r);
+    f("visible_both", &G2NormalBin::visible_both, &G2NormalBin::visible_both_r);
+  }
 };
 
 struct G2Result {

@@ -58,10 +58,15 @@ struct Tallies {
   }
 };
 
-// TraceCounters as 5 integers (rays, border_crossings, lost_below, backface_hits, unresolved).
-constexpr std::size_t kCounterValues = 5;
-void put_counters(const TraceCounters& c, std::uint64_t* out);
-TraceCounters get_counters(const std::uint64_t* in);
+// TraceCounters as integers, one per declared field in declaration order (TraceCounters::
+// for_each_field, tally_fields.hpp).
+constexpr std::size_t kCounterValues = scalar_field_count<TraceCounters>();
+inline void put_counters(const TraceCounters& c, std::uint64_t* out) { pack_fields(c, out); }
+inline TraceCounters get_counters(const std::uint64_t* in) {
+  TraceCounters c;
+  unpack_fields(c, in);
+  return c;
+}
 
 // How an estimator shares its work with other processes. Estimators take a `TallySplit*` in
 // their options (nullptr: compute everything here).

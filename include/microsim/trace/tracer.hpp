@@ -11,6 +11,7 @@
 #include <embree3/rtcore.h>
 
 #include "microsim/surface/microsurface.hpp"
+#include "microsim/tally_fields.hpp"
 #include "microsim/trace/tile_border.hpp"
 
 namespace microsim {
@@ -99,17 +100,27 @@ struct TraceCounters {
   // above that enter the patch through a side wall.
   std::uint64_t side_exits = 0;
   std::uint64_t side_entries = 0;
+
+  // Every field, once: the sum below, the exchange between processes (measure/shards.hpp) and
+  // the records' `trace_counters` derive from this list (tally_fields.hpp).
+  template <class F>
+  static constexpr void for_each_field(F&& f) {
+    f("rays", &TraceCounters::rays);
+    f("border_crossings", &TraceCounters::border_crossings);
+    f("lost_below", &TraceCounters::lost_below);
+    f("backface_hits", &TraceCounters::backface_hits);
+    f("unresolved", &TraceCounters::unresolved);
+    f("side_exits", &TraceCounters::side_exits);
+    f("side_entries", &TraceCounters::side_entries);
+  }
   TraceCounters& operator+=(const TraceCounters& o) {
-    side_exits += o.side_exits;
-    side_entries += o.side_entries;
-    rays += o.rays;
-    border_crossings += o.border_crossings;
-    lost_below += o.lost_below;
-    backface_hits += o.backface_hits;
-    unresolved += o.unresolved;
+    add_fields(*this, o);
     return *this;
   }
 };
+// A field added above but not to the declaration would be neither summed nor exchanged.
+static_assert(scalar_field_count<TraceCounters>() * sizeof(std::uint64_t) == sizeof(TraceCounters),
+              "every field of TraceCounters is declared in TraceCounters::for_each_field");
 
 class Tracer;
 

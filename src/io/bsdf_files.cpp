@@ -1,0 +1,151 @@
+#include "microsim/io/bsdf_files.hpp"
+
+#include <chrono>
+#include <cstdio>
+
+#include "microsim/io/merl.hpp"
+#include "microsim/io/rgl_bsdf.hpp"
+
+namespace microsim {
+
+namespace {
+std::string fixed(double x, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, x);
+  return buf;
+}
+}  // namespace
+
+Json bsdf_exr_attributes(const Json& j, const std::string& json_path) {
+  Json attrs = {{"microsim_command", "measure bsdf"},
+                {"microsim_version", "0.1.0"},
+                {"file", j["file"]},
+                {"surface", j["surface"].dump()},
+                {"parameters", j["parameters"].dump()},
+                {"summary_json", json_path}};
+  if (j["incidences"].size() == 1) {
+    attrs["albedo"] = j["albedo"].dump();
+    attrs["reflected_stderr"] = j["reflected_stderr"].dump();
+    attrs["transmitted_stderr"] = j["transmitted_stderr"].dump();
+  }
+  return attrs;
+}
+
+namespace {
+std::string rgl_description(const BsdfRequest& o, const Microsurface& s, const BsdfTable& t) {
+  const auto f4 = [](double x) { return fixed(x, 4); };
+  std::string d = "microsim measured BSDF of an explicit microsurface (" + s.description.dump() +
+                  "), material " + o.material;
+  if (o.eta) d += " eta " + f4(*o.eta);
+  if (o.k) d += " k " + f4(*o.k);
+  d += "; reflection, all scattering orders; " + std::to_string(t.results[0].measured.paths) +
+       " random walks per incidence, seed " + std::to_string(o.seed);
+  if (o.material == "dielectric") d += "; the reflected part only (transmission is not in this table)";
+  return d;
+}
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+void write_bsdf_tables(const std::string& path, const BsdfRequest& o, const BsdfTable& t,
+                       const Microsurface& s, Json& j, const std::string& json_path) {
+  const auto tb = std::chrono::steady_clock::now();
+  if (o.format == "exr") {
+    write_exr(path, bsdf_table_exr(t, bsdf_exr_attributes(j, json_path)));
+  } else if (o.format == "bsdf") {
+    RglOptions ro;
+    ro.resolution = o.table_resolution;
+    ro.description = rgl_description(o, s, t);
+    const RglTable rgl = build_rgl_table(t, s, ro);
+    write_rgl_bsdf(path, rgl);
+    j["table"] = {{"format", "RGL tensor file (Dupuy and Jakob 2018)"},
+                  {"isotropic", rgl.isotropic},
+                  {"resolution", rgl.resolution},
+                  {"ndf_shape", {rgl.ndf_phi, rgl.ndf_theta}},
+                  {"sigma_shape", {rgl.sigma_phi, rgl.sigma_theta}},
+                  {"description", rgl.description},
+                  {"seconds", seconds_since(tb)}};
+  } else if (o.format == "binary") {
+    write_merl(path, t);
+    j["table"] = {{"format", "MERL isotropic BRDF (90 x 90 x 180 doubles per channel)"},
+                  {"filling", "measured f (reflected, all orders) at cell centres, bilinear on the "
+                              "hemisphere maps, linear in theta_i between measured incidences, held "
+                              "constant outside them; 0 below the horizon"},
+                  {"seconds", seconds_since(tb)}};
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// EXR
+
+ExrTable bsdf_exr_table(const BsdfResult& r, const Json& attributes) {
+  const int R = r.map.resolution(), K = r.options.orders;
+  ExrTable t;
+  t.width = R;
+  t.height = R;
+  const char* side_name[2] = {"reflected", "transmitted"};
+  const int sides = r.options.material.transmits() ? 2 : 1;
+  for (int sd = 0; sd < sides; ++sd)
+    for (int k = 0; k <= K; ++k) {
+      std::vector<float> f(static_cast<std::size_t>(R) * R), se(f.size());
+      for (int px = 0; px < R * R; ++px) {
+        const Estimate e = r.f_pixel(sd, k, px);
+        // EXR rows run top to bottom: row y holds square row j = R - 1 - y (b increases upward).
+        const int i = px % R, jrow = px / R;
+        const std::size_t out = static_cast<std::size_t>(R - 1 - jrow) * R + i;
+        f[out] = static_cast<float>(e.mean);
+        se[out] = static_cast<float>(e.stderr_);
+      }
+      const std::string base = std::string(side_name[sd]) + ".f_" + order_key(k, K);
+      t.channel_names.push_back(base);
+      t.channels.push_back(std::move(f));
+      t.channel_names.push_back(base + "_stderr");
+      t.channels.push_back(std::move(se));
+    }
+  t.attributes = attributes;
+  t.attributes["parameterization"] =
+      "equal-area hemisphere map: pixel (x, y) covers square coordinates a in [-1 + 2x/R, -1 + 2(x+1)/R], "
+      "b in [1 - 2(y+1)/R, 1 - 2y/R] (y = 0 is the top row, b = +1); (a, b) -> unit disk by the "
+      "Shirley-Chiu concentric map (r = max(|a|,|b|), phi = pi/4 b/a if |a| >= |b| else pi/2 - pi/4 "
+      "a/b), disk -> hemisphere by Lambert's equal-area map: |cos theta_o| = 1 - r^2, direction "
+      "(r sqrt(2 - r^2) cos phi, r sqrt(2 - r^2) sin phi, +-(1 - r^2)); phi = 0 is +x of the tile. "
+      "Every pixel subtends 2 pi / R^2 sr. Channels reflected.* are the upper hemisphere, "
+      "transmitted.* the lower one (z -> -z).";
+  t.attributes["value"] =
+      "f = p / int_pixel |cos theta_o| d omega (exact pixel integral): p = fraction of the incident "
+      "power leaving through the pixel after the channel's scattering orders; the radiance BSDF of "
+      "[GeomBSDF24, eq. 4a]; *_stderr its standard error";
+  return t;
+}
+
+
+ExrTable bsdf_table_exr(const BsdfTable& t, const Json& attributes) {
+  if (t.results.size() == 1) return bsdf_exr_table(t.results[0], attributes);
+  ExrTable out;
+  Json incidences = Json::array();
+  for (std::size_t k = 0; k < t.results.size(); ++k) {
+    const BsdfResult& r = t.results[k];
+    ExrTable one = bsdf_exr_table(r, Json::object());
+    if (k == 0) {
+      out = one;
+      out.channel_names.clear();
+      out.channels.clear();
+    }
+    for (std::size_t c = 0; c < one.channels.size(); ++c) {
+      out.channel_names.push_back("incidence_" + std::to_string(k) + "." + one.channel_names[c]);
+      out.channels.push_back(std::move(one.channels[c]));
+    }
+    incidences.push_back({deg(r.options.theta_i), deg(r.options.phi_i)});
+  }
+  for (auto it = attributes.begin(); it != attributes.end(); ++it) out.attributes[it.key()] = it.value();
+  out.attributes["incidences"] = incidences.dump();
+  out.attributes["incidence_layout"] =
+      "channel incidence_<k>.<side>.f_<order>[_stderr] holds incidence k = p * n_theta + t for "
+      "theta_i_deg[t], phi_i_deg[p] of the parameters; `incidences` lists [theta_i_deg, "
+      "phi_i_deg] per k; each incidence's table follows `parameterization` and `value`";
+  return out;
+}
+
+
+}  // namespace microsim

@@ -1,0 +1,204 @@
+// Every tally field survives a split run: for every estimator (G1 with both of its estimators,
+// G2, VNDF, BSDF) on every kind of scene (a periodic tile, a non-periodic heightmap window, a
+// finite object, a V-cavity), the record of `--shard 1/2` + `--shard 2/2` + `merge`, and of
+// `mpirun -n 2` when built with MPI, equals the single run's bit for bit apart from timings, and
+// every record carries every trace counter. The counters' names are listed here on their own,
+// not taken from the declaration (TraceCounters::for_each_field), so that a field dropped from
+// the declaration fails here.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "cli_helpers.hpp"
+#include "microsim/tally_fields.hpp"
+#include "microsim/trace/tracer.hpp"
+
+namespace {
+using namespace microsim::testing;
+using nlohmann::json;
+
+std::string tmp(const std::string& name) { return temp_path("tally", name); }
+
+// The trace counters every record carries (TraceCounters).
+const std::set<std::string> kCounters = {"rays",       "border_crossings", "lost_below",  "backface_hits",
+                                         "unresolved", "side_exits",       "side_entries"};
+
+// The record without its timing fields (seconds, rays per second) and the MPI ranks count.
+json science(json j) {
+  if (j.is_object()) {
+    json out = json::object();
+    for (auto it = j.begin(); it != j.end(); ++it) {
+      const std::string& k = it.key();
+      const bool timing = (k.size() >= 7 && k.compare(k.size() - 7, 7, "seconds") == 0) ||
+                          k.find("per_second") != std::string::npos;
+      if (!timing && k != "ranks") out[k] = science(it.value());
+    }
+    return out;
+  }
+  if (j.is_array())
+    for (auto& e : j) e = science(e);
+  return j;
+}
+
+json read(const std::string& path) { return json::parse(slurp(path)); }
+
+// The differences between two records as a JSON patch (paths and values), for failure messages.
+std::string differences(const json& from, const json& to) {
+  const std::string d = json::diff(from, to).dump();
+  return d.size() > 2000 ? d.substr(0, 2000) + "..." : d;
+}
+
+// Every `trace_counters` object in the record (rows of G1, G2, VNDF; the BSDF record itself).
+void collect_counters(const json& j, std::vector<json>& out) {
+  if (j.is_object()) {
+    for (auto it = j.begin(); it != j.end(); ++it) {
+      if (it.key() == "trace_counters") out.push_back(it.value());
+      else collect_counters(it.value(), out);
+    }
+  } else if (j.is_array()) {
+    for (const auto& e : j) collect_counters(e, out);
+  }
+}
+
+struct Case {
+  const char* estimator;
+  const char* scene;
+};
+std::ostream& operator<<(std::ostream& os, const Case& c) { return os << c.estimator << "_" << c.scene; }
+
+// Grazing directions, so that windows meet their side walls and tiles wrap around.
+std::string command(const std::string& estimator, const std::string& surface) {
+  if (estimator == "g1") return "measure g1 " + surface + " --theta 40,89 --rays 4000 --seed 3";
+  if (estimator == "g2")
+    return "measure g2 " + surface + " --theta-o 30,85 --theta-i 80 --phi-i 180 --rays 4000 --seed 3";
+  if (estimator == "vndf") return "measure vndf " + surface + " --theta 30,88 --rays 20001 --sampler-samples 0";
+  return "measure bsdf " + surface + " --material conductor --eta 0.2 --k 3 --theta-i 80 --rays 4000 " +
+         "--resolution 8 --seed 3";
+}
+
+class TallyFields : public ::testing::TestWithParam<Case> {
+ protected:
+  static void SetUpTestSuite() {
+    const auto run = [](const std::string& args) {
+      const Result r = run_microsim(args + " -q");
+      ASSERT_EQ(r.code, 0) << args << "\n" << r.err;
+    };
+    run("generate gaussian --resolution 32 --alpha 0.8 --seed 2 -o " + tmp("tile.exr"));
+    // A measured patch: the same kind of heights imported as a non-periodic window.
+    run("generate gaussian --resolution 32 --alpha 0.8 --seed 5 -o " + tmp("scan.exr"));
+    run("generate heightmap --input " + tmp("scan.exr") + " --pixel-size 0.03125 --guard 2 -o " + tmp("window.exr"));
+    run("generate tiled-boxes --tiles 2 -o " + tmp("boxes.ply"));
+    run("generate vcavity --grooves 32 -o " + tmp("vcavity.ply"));
+  }
+  static std::string surface(const std::string& scene) {
+    if (scene == "tile") return tmp("tile.exr");
+    if (scene == "window") return tmp("window.exr");
+    if (scene == "boxes") return tmp("boxes.ply");
+    return tmp("vcavity.ply");
+  }
+};
+
+TEST_P(TallyFields, ShardsMergedAndMpiRanksEqualOneRunWithEveryCounter) {
+  const Case c = GetParam();
+  const std::string name = std::string(c.estimator) + "_" + c.scene;
+  const std::string cmd = command(c.estimator, surface(c.scene));
+  const std::string one = tmp(name + "_one.json"), part = tmp(name + "_part.json"),
+                    merged = tmp(name + "_merged.json");
+  Result r = run_microsim(cmd + " --threads 1 -q -o " + one);
+  ASSERT_EQ(r.code, 0) << cmd << "\n" << r.err;
+  for (int k = 1; k <= 2; ++k) {
+    r = run_microsim(cmd + " --threads 2 -q --shard " + std::to_string(k) + "/2 -o " + part);
+    ASSERT_EQ(r.code, 0) << cmd << "\n" << r.err;
+  }
+  r = run_microsim("merge " + part + ".shard-1-of-2.json " + part + ".shard-2-of-2.json --threads 1 -q -o " +
+                   merged);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json single = read(one);
+
+  // Every record holds every counter, under its name.
+  std::vector<json> counters;
+  collect_counters(single, counters);
+  ASSERT_FALSE(counters.empty()) << cmd;
+  for (const json& tc : counters) {
+    std::set<std::string> keys;
+    for (auto it = tc.begin(); it != tc.end(); ++it) keys.insert(it.key());
+    EXPECT_EQ(keys, kCounters) << cmd << ": " << tc.dump();
+    EXPECT_GT(tc.value("rays", 0ull), 0u) << cmd;
+  }
+  // The counters that the scene makes non-zero are non-zero (a merge that dropped them would
+  // give zeros, and equal zeros would prove nothing).
+  std::uint64_t side_exits = 0, side_entries = 0, crossings = 0, below = 0;
+  for (const json& tc : counters) {
+    side_exits += tc.value("side_exits", 0ull);
+    side_entries += tc.value("side_entries", 0ull);
+    crossings += tc.value("border_crossings", 0ull);
+    below += tc.value("lost_below", 0ull);
+  }
+  const std::string scene = c.scene, estimator = c.estimator;
+  if (scene == "window" && estimator != "bsdf") {
+    EXPECT_GT(side_exits, 0u) << cmd;
+    if (estimator == "g1" || estimator == "vndf") {
+      EXPECT_GT(side_entries, 0u) << cmd;
+    }
+  }
+  if (scene == "tile") {
+    EXPECT_GT(crossings, 0u) << cmd;
+  }
+  if (scene == "boxes" && estimator != "g2") {
+    EXPECT_GT(below, 0u) << cmd;  // rays beside the object
+  }
+
+  const json a = science(single), b = science(read(merged));
+  EXPECT_TRUE(a == b) << cmd << "\nmerged shards differ from one run: " << differences(a, b);
+
+#ifdef MICROSIM_MPIEXEC
+  const std::string two = tmp(name + "_mpi.json");
+  r = run_microsim(cmd + " --threads 1 -q -o " + two, std::string(MICROSIM_MPIEXEC) +
+                                                          " -n 2 --allow-run-as-root --oversubscribe --bind-to none");
+  ASSERT_EQ(r.code, 0) << cmd << "\n" << r.err;
+  const json ranks = read(two);
+  EXPECT_EQ(ranks.value("ranks", 0), 2) << cmd;
+  const json m = science(ranks);
+  EXPECT_TRUE(a == m) << cmd << "\nmpirun -n 2 differs from one run: " << differences(a, m);
+#endif
+}
+
+std::vector<Case> all_cases() {
+  std::vector<Case> cases;
+  for (const char* e : {"g1", "g2", "vndf", "bsdf"})
+    for (const char* s : {"tile", "window", "boxes", "vcavity"}) cases.push_back({e, s});
+  return cases;
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryEstimatorAndScene, TallyFields, ::testing::ValuesIn(all_cases()),
+                         [](const ::testing::TestParamInfo<Case>& info) {
+                           return std::string(info.param.estimator) + "_" + info.param.scene;
+                         });
+
+// The declaration itself: the counters' sum, their packing for the exchange and their record
+// fields visit every field, in declaration order.
+TEST(TallyFieldsDeclaration, TraceCountersSumPackAndRecordEveryField) {
+  microsim::TraceCounters a;
+  std::uint64_t v = 1;
+  microsim::TraceCounters::for_each_field([&](const char*, auto m) { a.*m = v++; });
+  microsim::TraceCounters b = a;
+  b += a;
+  std::vector<std::uint64_t> packed(microsim::scalar_field_count<microsim::TraceCounters>());
+  EXPECT_EQ(packed.size(), kCounters.size());
+  microsim::pack_fields(b, packed.data());
+  for (std::size_t k = 0; k < packed.size(); ++k) EXPECT_EQ(packed[k], 2 * (k + 1));
+  microsim::TraceCounters c;
+  microsim::unpack_fields(c, packed.data());
+  const json j = json::parse(microsim::fields_json(c).dump());
+  EXPECT_EQ(j.size(), kCounters.size());
+  for (const std::string& k : kCounters) EXPECT_TRUE(j.contains(k)) << k;
+  EXPECT_EQ(j["side_entries"], 2 * kCounters.size());
+  EXPECT_EQ(j["rays"], 2u);
+}
+
+}  // namespace
