@@ -20,7 +20,7 @@ status=0
 # ASan and UBSan but without the leak check. Tests labelled python run the (uninstrumented)
 # interpreter, which cannot load the sanitized module next to the sanitized program's static
 # runtime: they run in the normal test pass only.
-mpi='^Shards\.Mpi'
+mpi='^Shards\.Mpi|^EveryEstimatorAndScene/TallyFields\.'
 ctest --test-dir "$build" --output-on-failure -LE python -E "$mpi" "$@" || status=$?
 ASAN_OPTIONS=${ASAN_OPTIONS/detect_leaks=1/detect_leaks=0} \
   ctest --test-dir "$build" --output-on-failure "$@" -R "$mpi" || status=$?
