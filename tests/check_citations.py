@@ -27,7 +27,7 @@ KEY = r"[A-Z][A-Za-z]*(?:\d{2}[a-z]?|Blog)"
 # bracket may be on the next line of a comment, so only the key is required here.
 CITATION = re.compile(r"(?<![\w\]\)])\[(" + KEY + r")(?=[,\]])")
 DEFINITION = re.compile(r"^#{2,3}\s+(" + KEY + r")\s*$|^\((" + KEY + r")\)=\s*$")
-OUTSIDE = re.compile(r"\.\./shared|shared/references|DESIGN\.md|/work/")
+OUTSIDE = re.compile(r"\.\./shared|shared[/]references|DESIGN\.md|[/]work[/]")
 # (also right after a C escape such as a newline inside a string)
 OLD_FORM = re.compile(r"(?:(?<![\w.,/-])|(?<=\\[nt]))00[0-4] (?:eq|Eq|sec|Sec|App|Appendix|Table|Fig|after)\b"
                       r"|(?:(?<![\w.,/-])|(?<=\\[nt]))00[0-4] [\"'][A-Z]")

@@ -131,7 +131,7 @@ def run_page(page, blocks, args, env):
         script = state / "page.sh"
         text, page_line = page_script(blocks, state)
         script.write_text(text)
-        proc = subprocess.Popen(["bash", str(script)], cwd=work, env=env, start_new_session=True,
+        proc = subprocess.Popen(["bash", str(script)], cwd=work, env=env, process_group=0,
                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
         timed_out = False
         try:
