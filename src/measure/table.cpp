@@ -48,6 +48,9 @@ std::vector<Column> tracer_count_fields(bool windows) {
     f.push_back({"side_exits", Merge::Copy, N, "count", "measured windows: rays leaving through a side wall"});
     f.push_back({"side_entries", Merge::Copy, N, "count", "measured windows: rays entering through a side wall"});
   }
+  f.push_back({"trace_counters", Merge::Copy, N, "count",
+               "every counter of the tracer, by name (rays, border_crossings, lost_below, "
+               "backface_hits, unresolved, side_exits, side_entries)"});
   f.push_back({"seconds", Merge::Copy, N, "s", "wall time of the row's measurement"});
   return f;
 }
