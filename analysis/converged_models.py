@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Tables of analysis/converged_models.sh: the README's model statements on an ensemble of tiles.
+"""Tables of analysis/converged_models.sh: the model statements of docs/findings on an ensemble of tiles.
 
 usage: converged_models.py OUT_DIR [CELLS_PER_L]
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's model statements of "What the explicit surfaces show", measured on converged
+# The model statements of docs/findings (masking, G2, grazing lobes), measured on converged
 # surfaces: generate gaussian's default grid (16 cells per correlation length, 64 per 1024^2
 # tile), ensembles of independent tiles (between-surface errors beside the ray-count ones).
 #   - G1 averaged (0-85 deg) and per normal bin at 80 deg against Smith and V-cavity, alpha 0.5;

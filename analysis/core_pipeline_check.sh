@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Reproduces the core-pipeline figures on the default preset at 4 cells per correlation length
-# (the grid the README's figures were made on; the preset itself now has 16):
+# (the grid the figures of docs/img were made on; the preset itself now has 16):
 # fitted alpha, averaged G1 vs smith_numeric (z, stderr <= 1e-3) and vs smith_nominal (1%),
 # per-bin agreement of the two G1 estimators, and a 5-seed ensemble against the nominal model.
 #   analysis/core_pipeline_check.sh [BUILD_DIR] [OUT_DIR]      (about 2-4 minutes on 2 cores)

@@ -38,7 +38,7 @@ def main(argv=None):
     ap.add_argument("--out", required=True, help="report folder (created; index.html, figures/, data/)")
     ap.add_argument("--microsim", help="the microsim binary (default: build/microsim, then PATH)")
     ap.add_argument("--profile", choices=sorted(report.PROFILES), default="default",
-                    help="run sizes: default (the README's report) or smoke (seconds)")
+                    help="run sizes: default (the full report) or smoke (seconds)")
     ap.add_argument("--threads", type=int, help="worker threads for microsim (default: all cores)")
     ap.add_argument("--figures", metavar="DIR",
                     help="also write the figures of the documentation's findings pages into DIR "

@@ -18,7 +18,7 @@ seeds="${SEEDS:-1 2 3 4}"
 scale="${RAYS_SCALE:-1}"
 rays() { /usr/bin/python3 -c "print(int($1 * $scale))"; }
 mkdir -p "$out"
-# The tables in the README were made on 4 cells per correlation length (CELLS_PER_L, default 4;
+# The tables of docs/findings/multiple-scattering.md were made on 4 cells per correlation length (CELLS_PER_L, default 4;
 # 16 is the converged grid, analysis/converged_models.sh re-measures the model statements there).
 ell=$(/usr/bin/python3 -c "print(repr(${CELLS_PER_L:-4} / 1024))")
 [ -x "$M" ] || { echo "no microsim binary in $build (cmake --build $build --target microsim)" >&2; exit 1; }

@@ -237,7 +237,7 @@ TEST_F(Cli, BadMeshesAndStructuredParametersAreRefused) {
 }
 
 // A V-cavity ensemble is measured groove by groove, each groove traced on its own as an infinite
-// periodic V-groove [Heitz14, Sec. 6.1], where the V-cavity model ([Heitz14, eq. 24-25], and eq. 13 with it
+// periodic V-groove [Heitz14, Sec. 6.1], where the V-cavity model ([Heitz14, eq. 24 and Sec. 6], and eq. 13 with it
 // for the VNDF) is exact: measure g2 and measure vndf agree with it within their ray-count
 // errors, and give the library's groove-by-groove estimates. Power: the stored strips traced
 // together (grooves masking each other through the strips' open ends), at the same seed and

@@ -352,8 +352,8 @@ TEST(ExactCases, EllipsoidNormalsAreGgxRingByRingAndBinnedDQuantizedByRings) {
     EXPECT_LE(std::abs(measured - model), cut + tol) << b;
     worst_rel = std::max(worst_rel, std::abs(measured / model - 1));
   }
-  // The limit is real: at 64 rings some 5 degree bin is off GGX by more than 30% (README
-  // "Surfaces": 8.5% at the default 256 rings, 1.9% at 1024).
+  // The limit is real: at 64 rings some 5 degree bin is off GGX by more than 30% (docs/theory/ndf.md:
+  // 8.5% at the default 256 rings, 1.9% at 1024).
   EXPECT_GT(worst_rel, 0.3);
   std::printf("[ info ] band-by-band |error| %.2e (alpha x1.001: %.2e, tolerance %.2e); 5 deg bins "
               "worst |D/GGX - 1| %.3f at 64 rings\n", ring_error(a), wrong, tol, worst_rel);

@@ -110,7 +110,7 @@ TEST(GuardBand, FlatWindowRaysFromAboveAllHitAndSideWallsEndRays) {
 TEST(GuardBand, DefaultGuardAgreesWithThePeriodicTileAtGrazingAngles) {
   // Default guard (kDefaultGuardCorrelationLengths l) on a 256^2 tile, Beckmann 1.0, G1 at 85
   // degrees by area sampling (the quantity most exposed to the missing surroundings): within
-  // 3 sigma of both errors plus an allowance of 0.002 for the bias (README table: +0.0007 at
+  // 3 sigma of both errors plus an allowance of 0.002 for the bias (docs/guide/heightmaps.md table: +0.0007 at
   // 8 l, +0.0019 at 4 l on a 512^2 tile).
   const Microsurface tile = tile256(1.0);
   const int gc = static_cast<int>(std::lround(kDefaultGuardCorrelationLengths * 8));
@@ -128,7 +128,7 @@ TEST(GuardBand, NoGuardOverestimatesG1AtGrazingAngles) {
   // Power check: without a guard, sample points near the border see past the missing
   // surroundings (their rays escape through the side wall), so G1 is too high at grazing
   // angles, by area sampling and by ray casting alike (the same rule): many sigma away
-  // (README bias table: +0.022 at 512^2, alpha 1, 85 degrees).
+  // (docs/guide/heightmaps.md bias table: +0.022 at 512^2, alpha 1, 85 degrees).
   const Microsurface tile = tile256(1.0);
   const Pair q = g1_pair(tile, 0, 85.0, false, 200000);
   EXPECT_GT(z_of(q), 5.0) << q.window.mean << " vs " << q.periodic.mean;

@@ -702,7 +702,7 @@ TEST(ValidateChecks, Eq1bToleranceIsTheVertexRoundingBound) {
 }
 
 // A V-cavity ensemble's G2 and VNDF are checked groove by groove, as its G1: the V-cavity model
-// ([Heitz14, eq. 24-25], averaged over the facets) is exact for separate infinite grooves, so the
+// ([Heitz14, eq. 24 and Sec. 6], averaged over the facets) is exact for separate infinite grooves, so the
 // measured G2 and VNDF agree with it within their ray-count errors. Power: the stored strips
 // traced together (grooves masking each other, rays leaving through the strips' open ends) are
 // told apart from the same model.

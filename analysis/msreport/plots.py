@@ -311,7 +311,7 @@ def g1_per_normal(path, entry):
 
 
 # ----------------------------------------------------------------------------------------------
-# G2 (measure g2; fields documented in the README)
+# G2 (measure g2; fields in docs/reference/records.md)
 
 G2_MODELS = [
     ("smith_separable", "Smith separable [Heitz14, eq. 20]", "-"),
@@ -363,7 +363,7 @@ def g2_curves(path, record, title=""):
 
 
 # ----------------------------------------------------------------------------------------------
-# BSDF (measure bsdf; fields documented in the README)
+# BSDF (measure bsdf; fields in docs/reference/records.md)
 
 ORDER_KEYS = ["order_1", "order_2", "order_3", "order_4plus", "total"]
 
@@ -513,7 +513,7 @@ def table4(path, records):
 
 
 # ----------------------------------------------------------------------------------------------
-# Tiled boxes (measure g1 on generate tiled-boxes; fields documented in the README)
+# Tiled boxes (measure g1 on generate tiled-boxes; fields in docs/reference/records.md)
 
 
 def tiled_boxes(path, points):

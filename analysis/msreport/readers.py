@@ -1,8 +1,8 @@
 """Reading microsim outputs: JSON records and EXR tables.
 
 Field access is tolerant: a record written by an older or newer microsim may lack a field, and
-the plots skip what is missing instead of failing. The field names are those documented in the
-README ("File formats"):
+the plots skip what is missing instead of failing. The field names are those documented in
+docs/reference/records.md and docs/reference/file-formats.md:
   measure g1     rows: theta_deg, phi_deg, g1, g1_stderr, g1_raycast, g1_raycast_stderr,
                  visible_area_ratio(_stderr), smith_numeric, smith_nominal, bins[...]
   measure ndf    .exr channels D, D_stderr, D_nominal; .json rows theta_lo_deg, theta_hi_deg,

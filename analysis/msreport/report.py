@@ -16,7 +16,7 @@ import time
 from . import plots
 from .readers import load_json, num, read_exr
 
-# Run sizes. "default": the report of the README (at most 10 minutes on 2 cores);
+# Run sizes. "default": the report of docs/guide/validate.md (at most 10 minutes on 2 cores);
 # "smoke": seconds, for the CTest smoke test (same code paths, tiny runs).
 PROFILES = {
     "default": {

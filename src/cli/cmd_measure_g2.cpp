@@ -30,7 +30,7 @@ struct G2CliOptions {
 const char* const kGrooveByGroove =
     "true for a V-cavity ensemble: [Heitz14, Sec. 6.1] made explicit, each groove (normals m, m' drawn "
     "from (n.m) D(m)) traced on its own as an infinite periodic V-groove, the points drawn over "
-    "the whole ensemble with the weights w_f; `vcavity` [Heitz14, eq. 24-25] is then exact";
+    "the whole ensemble with the weights w_f; `vcavity` [Heitz14, eq. 24 and Sec. 6] is then exact";
 
 const char* kForms[] = {"separable", "height_correlated", "direction_correlated",
                         "height_direction_correlated"};

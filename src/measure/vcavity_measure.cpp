@@ -298,7 +298,7 @@ G2Result measure_vcavity_g2(const Microsurface& s, const Vec3& o_in, const Vec3&
       nb.front_area += a;
       nb.weight += w;
       nb.mean_normal += w * m;
-      const double v2 = w * models::vcavity_G2(o, i, m);  // [Heitz14, eq. 24-25]
+      const double v2 = w * models::vcavity_G2(o, i, m);  // [Heitz14, eq. 24 and Sec. 6]
       nb.vcavity_sum += v2;
       vcav_total += v2;
       r.front_area += a;

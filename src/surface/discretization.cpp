@@ -38,7 +38,7 @@ std::optional<Discretization> discretization_of(const Json& d) {
 // 1024^2 tile): there mirror E2 and E3 at 0 and 60 deg, every order at 0-80 deg up to order 3 at
 // 60 deg and G2 at equal azimuths are converged; three quantities still move by a few percent
 // (G2 at opposite azimuths -0.7%, mirror order 3 at 80 deg +3%, order 4+ at 60 deg +4%), for
-// which the README points to 32 cells per l. Beckmann alpha = 0.2 and 0.5 and the GGX heightfield
+// which docs/findings/discretization.md points to 32 cells per l. Beckmann alpha = 0.2 and 0.5 and the GGX heightfield
 // (alpha = 0.5, at its preset's 64 l per tile) need the same grid: at 16 cells per l every
 // quantity of theirs is within its error or 1% of 32 but mirror order 4+ (1.5-3.5%) and, for
 // Beckmann 0.5, G2 at 70/70 deg (-0.1 to -0.3%). docs/theory/discretization.md.

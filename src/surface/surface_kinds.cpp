@@ -351,7 +351,7 @@ void heightmap_report(const SurfaceRequest& r, const Microsurface& s, const std:
     if (std::max(rx, ry) > 1.02)
       report.warnings.push_back("the wrap-around raises the RMS slope by " + fixed(100 * (rx - 1), 1) + "% (x), " +
                                 fixed(100 * (ry - 1), 1) + "% (y): " + input +
-                                " does not look periodic (see README, Measured surfaces)");
+                                " does not look periodic (docs/guide/heightmaps.md, Windows and the guard band)");
   }
   if (!with_summary) return;
   const std::string unit = r.options.count("length-unit") ? r.options.at("length-unit") : "";

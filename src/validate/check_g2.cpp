@@ -83,8 +83,8 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
       model_row("height_direction_correlated_numeric", fn.height_direction_correlated,
                 "[Heitz14, eq. 23], Lambda from the facets");
       model_row("vcavity", a.vcavity,
-                is_vcavity(s) ? "[Heitz14, eq. 24-25], averaged over the facets facing both (exact for separate grooves)"
-                              : "[Heitz14, eq. 24-25], averaged over the facets facing both");
+                is_vcavity(s) ? "[Heitz14, eq. 24 and Sec. 6], averaged over the facets facing both (exact for separate grooves)"
+                              : "[Heitz14, eq. 24 and Sec. 6], averaged over the facets facing both");
       Table g2_rows = g2_table();
       pass.rows().push_back(add_row(g2_rows, a, s));
     }

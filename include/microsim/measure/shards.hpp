@@ -145,7 +145,7 @@ std::string file_hash(const std::string& path, std::uint64_t* bytes = nullptr);
 // value of -o/--output by the placeholder, and hashes every word that names an existing file.
 RunIdentity identify_run(const std::vector<std::string>& args, const std::string& version);
 
-// The partial record of one shard (format documented in README "Shards and MPI").
+// The partial record of one shard (format in docs/reference/file-formats.md).
 Json partial_json(const RunIdentity& run, const ShardRecorder& shard, double seconds);
 
 // Merged parts: the run, the shard count, and the tallies of every estimator call complete.

@@ -19,7 +19,7 @@ namespace microsim {
 //  (b) area sampling: points drawn over the whole ensemble by front-facing projected area
 //      (stratified CDF over the 2K facets), one occlusion ray toward v each.
 // Per normal bin the G1Result holds the pooled counts and the exact facet sums of the stored
-// strips (area, front-facing projected area, V-cavity-weighted area), so g1_row_json reports
+// strips (area, front-facing projected area, V-cavity-weighted area), so the G1 record (cli/cmd_measure_g1.cpp) reports
 // the ensemble's G1 beside the V-cavity model (vcavity_numeric, [Heitz14, eq. 24]) and Smith.
 // Each groove's Embree scene is built once for all views.
 std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vector<Vec3>& views,
@@ -30,7 +30,7 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
 // facets facing both (a stratified CDF over the 2K facets per replicate, the stream depending
 // on the unordered pair {o, i}), each traced with two occlusion rays on its own groove, an
 // infinite periodic V-groove in the groove's frame. For such a groove the V-cavity G2
-// min(G1(o, m), G1(i, m)) [Heitz14, eq. 24-25] is exact per facet, so `vcavity` is the value the
+// min(G1(o, m), G1(i, m)) [Heitz14, eq. 24 and Sec. 6] is exact per facet, so `vcavity` is the value the
 // measurement must reproduce. Deterministic for any thread count.
 G2Result measure_vcavity_g2(const Microsurface& s, const Vec3& o, const Vec3& i, const G2Options& options);
 

@@ -81,7 +81,7 @@ struct EllipsoidParams {
   double alpha_x = 0.5, alpha_y = 0.5;
   // Each band between two rings holds exactly GGX's mass of normals; an isotropic band's facets
   // share one theta_m, so D over a fixed theta bin is off GGX by O(1/rings) (the two bands its
-  // edges cut; 8.5% over 5 degree bins at 256 rings, README "Surfaces"). 10 degree x 45 degree
+  // edges cut; 8.5% over 5 degree bins at 256 rings, docs/theory/ndf.md). 10 degree x 45 degree
   // bins at 192 x 768 pass a chi^2 with 3e6 vertical rays (tests/test_generators.cpp).
   int rings = 256;      // latitude steps of the hemisphere (0..90 deg)
   int segments = 1024;  // longitude steps

@@ -10,7 +10,7 @@ namespace microsim {
 
 // Tiles from this many cells on trace their primary rays ahead: below, the tile's vertices and
 // BVH stay in the caches between neighbouring rays and the set-up costs more than it hides
-// (measured: 0.75-0.82 of the bare loop with it at 1024^2, 0.81-0.87 without; README).
+// (measured: 0.75-0.82 of the bare loop with it at 1024^2, 0.81-0.87 without; bench/).
 constexpr double kAheadMinCells = 1536.0 * 1536.0;
 
 // Calls next() m times and use(state) m times, in the same order: use receives the state the
