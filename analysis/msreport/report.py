@@ -27,7 +27,7 @@ PROFILES = {
         "g2_rays": 200000,
         "bsdf_rays": 1000000,
         # 8 cells per correlation length, 64 per tile: the grazing order-1 lobe is 19% low at 4
-        # cells per l and within its error of 32 cells at 8 (analysis/convergence_output.md).
+        # cells per l and within its error of 32 cells at 8 (docs/findings/records/convergence.md).
         "table4_resolution": 512,
         "table4_cells_per_l": 8,
         "table4_rays": 1000000,
@@ -463,12 +463,12 @@ def section_convergence(ctx):
                 "2 ... 32 cells per l and 16 ... 256 l per tile, for Beckmann alpha = 0.2, 0.5, 1 and the GGX "
                 "heightfield (alpha = 0.5); shown: its recorded table and figures.")
     root = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
-    table = os.path.join(root, "analysis", "convergence_output.md")
+    table = os.path.join(root, "docs", "findings", "records", "convergence.md")
     img = os.path.join(root, "docs", "img")
     figs = sorted(f for f in os.listdir(img) if f.startswith("convergence_") and f.endswith(".png")) \
         if os.path.isdir(img) else []
     if not os.path.isfile(table) or not figs:
-        return s.skip("no recorded study (analysis/convergence_output.md, docs/img/convergence_*.png)")
+        return s.skip("no recorded study (docs/findings/records/convergence.md, docs/img/convergence_*.png)")
     import shutil
     captions = {"cells": "Difference from the finest grid (32 cells per l; paired: the same tiles on every grid) "
                          "against cells per correlation length; grey band: 1%. Beckmann at 32 l per tile, the GGX "
@@ -483,7 +483,7 @@ def section_convergence(ctx):
     with open(table) as fh:
         s.html = _markdown_tables_html(fh.read())
     # The model statements re-measured on the default (converged) grid, when recorded.
-    models = os.path.join(root, "analysis", "converged_models_output.md")
+    models = os.path.join(root, "docs", "findings", "records", "converged-models.md")
     if os.path.isfile(models):
         with open(models) as fh:
             s.html += _markdown_tables_html(fh.read())
