@@ -78,11 +78,9 @@ inline void print_walk_rows(const Tracer& tracer, std::uint64_t paths, int repea
   // million that ended neither reflected nor transmitted; bare_nonrob: the replay on the plain
   // tracer's (non-robust) scene.
   const PlainWalker plain(tracer.surface()), plain_robust(tracer.surface(), true);
-  std::printf("%-11s %6s %10s %10s %12s %12s %12s %7s %12s %11s %11s %9s %12s %9s %9s %11s %11s %12s %9s\n", "material", "theta",
+  std::printf("%-11s %6s %10s %10s %12s %12s %12s %7s %12s %11s %11s %9s %12s %9s %9s %11s %11s\n", "material", "theta",
               "paths/s", "segs/path", "Msegs/s", "queries/path", "bare_Mray/s", "ratio", "plain_path/s", "plain_segs",
-              "plain_Mseg/s", "vs_plain", "plainR_path/s", "lost/M", "lostR/M", "bare_nonrob", "wall_path/s", "esc_path/s", "esc/plain");
-  // Last columns: the walks with the escape test (BsdfOptions::escape_test), per processor
-  // second, and against the plain tracer.
+              "plain_Mseg/s", "vs_plain", "plainR_path/s", "lost/M", "lostR/M", "bare_nonrob", "wall_path/s");
   struct Case {
     const char* name;
     models::Material m;
@@ -99,7 +97,7 @@ inline void print_walk_rows(const Tracer& tracer, std::uint64_t paths, int repea
       const std::vector<RTCRay> log = log_walk_queries(tracer, o, std::min<std::uint64_t>(paths, 200000), &walked);
       const double queries_per_path = double(log.size()) / walked;
       double best = 0, segs_per_path = 0, plain_best = 0, plain_segs = 0, robust_best = 0;
-      double lost = 0, lost_robust = 0, wall_best = 0, noesc_best = 0;
+      double lost = 0, lost_robust = 0, wall_best = 0;
       Rate bare, bare_nonrobust;
       for (int k = 0; k < repeat; ++k) {
         const double c0 = cpu_seconds();
@@ -108,11 +106,6 @@ inline void print_walk_rows(const Tracer& tracer, std::uint64_t paths, int repea
         wall_best = std::max(wall_best, r.measured.paths / r.seconds);
         segs_per_path = double(r.measured.counters.rays) / r.measured.paths;
         bare.best_of(replay_rays_per_second(tracer, log));
-        BsdfOptions off = o;
-        off.escape_test = true;
-        const double c3 = cpu_seconds();
-        const BsdfResult r_off = measure_bsdf(tracer, off);
-        noesc_best = std::max(noesc_best, r_off.measured.paths / (cpu_seconds() - c3));
         const Vec3 wi = direction_from_angles(o.theta_i, o.phi_i);
         const double eta = c.m.kind == models::MaterialKind::Dielectric ? c.m.eta : 0.0;
         const double c1 = cpu_seconds();
@@ -126,11 +119,10 @@ inline void print_walk_rows(const Tracer& tracer, std::uint64_t paths, int repea
         lost_robust = 1e6 * double(pr.lost) / pr.paths;
         bare_nonrobust.best_of(replay_rays_per_second(plain.scene(), log));
       }
-      std::printf("%-11s %6.0f %10.3g %10.3f %12.2f %12.3f %12.2f %7.2f %12.3g %11.3f %11.2f %9.2f %12.3g %9.1f %9.1f %11.2f %11.3g %12.3g %9.2f\n",
+      std::printf("%-11s %6.0f %10.3g %10.3f %12.2f %12.3f %12.2f %7.2f %12.3g %11.3f %11.2f %9.2f %12.3g %9.1f %9.1f %11.2f %11.3g\n",
                   c.name, theta, best, segs_per_path, best * segs_per_path / 1e6, queries_per_path, bare.cpu / 1e6,
                   best * queries_per_path / bare.cpu, plain_best, plain_segs, plain_best * plain_segs / 1e6,
-                  best / plain_best, robust_best, lost, lost_robust, bare_nonrobust.cpu / 1e6, wall_best,
-                  noesc_best, noesc_best / plain_best);
+                  best / plain_best, robust_best, lost, lost_robust, bare_nonrobust.cpu / 1e6, wall_best);
       std::fflush(stdout);
     }
   // The Smith random-walk model alone (the measured part reduced to a token 1000 paths).

@@ -551,10 +551,6 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
     // With a split, the replicates of this process are kept until the others' arrive; the
     // replicates then enter add_replicate in order, as in one process.
     std::vector<BsdfTally> kept(o.split ? plan.replicates : 0, BsdfTally(K, npix, nplane));
-    // Rays leaving a facet that provably meet nothing are not traced (trace/escape_test.hpp).
-    std::optional<EscapeTest> escape_test;
-    if (o.escape_test) escape_test.emplace(tracer);
-    const EscapeTest* escape = escape_test ? &*escape_test : nullptr;
     auto keep = [&](int q, BsdfTally&& rep) {
       if (o.split) kept[q] = std::move(rep);
       else r.measured.add_replicate(rep);
@@ -570,7 +566,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
       ++t.paths;
       const Vec2 ab = plan.strata.point(i, rng);
       return walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2, -wi, mat,
-                            rng, o.max_events, finite, t.counters, t.events, escape);
+                            rng, o.max_events, finite, t.counters, t.events);
     };
     if (unit_weight)
       run_replicate_paths<ExitCounts<std::uint32_t>, ExitCounts<std::uint64_t>>(

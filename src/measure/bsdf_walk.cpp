@@ -4,7 +4,7 @@ namespace microsim {
 
 WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir0,
                        const models::Material& mat, CounterRng& rng, int max_events, bool finite,
-                       TraceCounters& counters, std::uint64_t& events, const EscapeTest* escape) {
+                       TraceCounters& counters, std::uint64_t& events) {
   using models::MaterialKind;
   const Microsurface& s = tracer.surface();
   WalkEnd e;
@@ -38,7 +38,6 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
       return e;
     }
     ++events;
-    if (escape) escape->prefetch(hit.facet, mat.kind == MaterialKind::Dielectric);
     // Normal on the side of the current medium; v toward where the ray came from.
     const Vec3 m = side == RaySide::Front ? hit.normal : Vec3(-hit.normal);
     const Vec3 v = -dir;
@@ -70,10 +69,6 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
       }
     }
     dir.normalize();
-    if (escape && escape->clear(hit.point, dir, hit.facet, side)) {
-      hit = escape->no_hit(hit.point, dir, counters, side);
-      continue;
-    }
     // The plane left is formed only if a candidate hit is nearly parallel to it (SourceFacet).
     const SourceFacet left{hit.facet, hit.normal};
     hit = tracer.first_hit(hit.point, dir, left, counters, side);

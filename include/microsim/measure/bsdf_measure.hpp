@@ -123,11 +123,6 @@ struct BsdfOptions {
   // Independent randomized replicates the explicit surface's rays are split into: standard
   // errors of the replicate means (measure/replicates.hpp).
   int replicates = 32;
-  // true: rays that provably leave the surface are not traced (trace/escape_test.hpp; the same
-  // results bit for bit). Off by default: on 2 cores it did not pay (bench/ measures
-  // it as esc_path/s): the test costs about what the query it saves costs at 1024^2, and
-  // building its pyramid costs O(cells) per call.
-  bool escape_test = false;
   // Called from the calling thread with the fraction of work done (progress display).
   std::function<void(double)> progress;
   // Other processes sharing the replicates and the model's batches (measure/shards.hpp);

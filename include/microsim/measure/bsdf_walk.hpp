@@ -9,7 +9,6 @@
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/exit_counts.hpp"
 #include "microsim/models/microfacet_bsdf.hpp"
-#include "microsim/trace/escape_test.hpp"
 #include "microsim/trace/tracer.hpp"
 
 namespace microsim {
@@ -27,11 +26,9 @@ struct WalkEnd {
 // light below the base plane: [GeomBSDF24, "Inherent Assumptions"], the visible area exceeds the
 // macrosurface's). On a periodic tile a reflected ray leaves upward, a transmitted one downward
 // from inside the slab; anything else is Lost. `events` counts the scattering events.
-// `escape` (optional, trace/escape_test.hpp): rays it proves to leave the surface are not traced
-// (the same WalkEnd and counters, bit for bit).
 WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir,
                        const models::Material& mat, CounterRng& rng, int max_events, bool finite,
-                       TraceCounters& counters, std::uint64_t& events, const EscapeTest* escape = nullptr);
+                       TraceCounters& counters, std::uint64_t& events);
 
 // Adds a walk's end to the tallies with the path's starting weight w0: exits with their order
 // and direction (binned when they point into their side's hemisphere: a finite object's

@@ -1,6 +1,6 @@
 // Crossing the border of a tile centred on the origin (half sizes hx, hy): how far a ray runs
 // before it leaves the tile, and where it re-enters a periodic tile. Shared by the tracer's
-// segment loops and the escape test, which must follow a ray across the border identically.
+// segment loops, which must follow a ray across the border identically.
 #pragma once
 #include <algorithm>
 #include <limits>
