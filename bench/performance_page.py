@@ -70,7 +70,7 @@ def parse_bench(out):
             g1[int(t[1][:-3])] = dict(a=v[3], b=v[4], bare=v[5], ratio=v[6], lean=v[7],
                                       lean_ratio=v[8], peak=v[10], bytes_per_facet=v[11],
                                       wall_a=v[12], wall_bare=v[13], build_s=v[1])
-        elif len(t) == 19 and t[0] in ("mirror", "dielectric"):
+        elif len(t) == 17 and t[0] in ("mirror", "dielectric"):
             v = list(map(number, t[1:]))
             walks[(t[0], int(v[0]))] = dict(paths=v[1], segs=v[2], msegs=v[3], queries=v[4],
                                             bare=v[5], ratio=v[6], plain=v[7], vs_plain=v[10])
