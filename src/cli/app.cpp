@@ -3,6 +3,7 @@
 #include <chrono>
 #include <iostream>
 
+#include "microsim/version.hpp"
 #include "microsim/io/output.hpp"
 
 namespace microsim::cli {
@@ -28,7 +29,7 @@ std::unique_ptr<MicrosimApp> build_app(GlobalOptions& g, TallyReplay* replay) {
   app.add_option("--shard", app.shard_text,
                  "K/N: compute shard K of N of a measure g1|g2|vndf|bsdf or validate run and write "
                  "its partial record to OUTPUT.shard-K-of-N.json (microsim merge joins them)");
-  app.set_version_flag("--version", "microsim 0.1.0");
+  app.set_version_flag("--version", std::string("microsim ") + version());
   // Runs before the subcommand callbacks.
   app.parse_complete_callback([&app, &g, &mpi, replay] {
     if (g.threads > 0)
@@ -130,7 +131,7 @@ int run_cli(const std::vector<std::string>& args, TallyReplay* replay) {
       if (!app->shard && root) command_outputs.commit();
     }
     if (app->shard) {
-      const RunIdentity run = identify_run(args, "0.1.0");
+      const RunIdentity run = identify_run(args, version());
       if (run.output.empty()) throw UsageError("--shard needs the command's -o");
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       write_json(shard_path(run.output, app->shard->index(), app->shard->count()),

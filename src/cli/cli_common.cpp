@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "microsim/version.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/surface/surface_io.hpp"
 
@@ -85,7 +86,8 @@ std::string cell(const Json& x, int precision, int width) {
 
 Json run_header(const std::string& command, const GlobalOptions& g) {
   Json j = {{"command", command},
-            {"microsim_version", "0.1.0"},
+            {"microsim_version", version()},
+            {"schema_version", kRecordSchemaVersion},
             {"threads", g.threads > 0 ? g.threads : tbb::this_task_arena::max_concurrency()}};
   if (g.ranks > 0) j["ranks"] = g.ranks;  // MPI processes that shared the work
   return j;

@@ -5,6 +5,7 @@
 
 #include "microsim/io/merl.hpp"
 #include "microsim/io/rgl_bsdf.hpp"
+#include "microsim/version.hpp"
 
 namespace microsim {
 
@@ -18,7 +19,7 @@ std::string fixed(double x, int digits) {
 
 Json bsdf_exr_attributes(const Json& j, const std::string& json_path) {
   Json attrs = {{"microsim_command", "measure bsdf"},
-                {"microsim_version", "0.1.0"},
+                {"microsim_version", version()},
                 {"file", j["file"]},
                 {"surface", j["surface"].dump()},
                 {"parameters", j["parameters"].dump()},

@@ -1,4 +1,5 @@
 #include "microsim/measure/shards.hpp"
+#include "microsim/version.hpp"
 
 #include <sys/stat.h>
 
@@ -221,6 +222,7 @@ Tallies tallies_of(const Json& j, const std::string& part) {
 Json partial_json(const RunIdentity& run, const ShardRecorder& shard, double seconds) {
   Json j;
   j["format"] = kPartialFormat;
+  j["schema_version"] = kRecordSchemaVersion;
   j["run"] = identity_json(run);
   j["shard"] = {{"index", shard.index()}, {"count", shard.count()}};
   j["seconds"] = seconds;
