@@ -119,6 +119,15 @@ std::vector<double> parse_angle_list(const std::string& text, const std::string&
   return out;
 }
 
+std::vector<double> parse_azimuth_list(const std::string& text, const std::string& option) {
+  std::vector<double> phis = parse_angle_list(text, option);
+  for (double p : phis)
+    if (!(std::abs(p) <= kMaxAzimuthDeg))
+      throw UsageError(option + " must be azimuths in [-" + fmt(kMaxAzimuthDeg, 0) + ", " + fmt(kMaxAzimuthDeg, 0) +
+                       "] degrees (got " + number_text(p) + ")");
+  return phis;
+}
+
 void require_above_horizon(const std::vector<double>& thetas, const std::string& option) {
   for (double t : thetas)
     if (!(t >= 0 && t < 90))

@@ -66,7 +66,7 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
   validation::Options cli_options;
   cli_options.theta_deg = parse_angle_list(o.theta, "--theta");
   require_above_horizon(cli_options.theta_deg, "--theta");
-  cli_options.phi_deg = parse_angle_list(o.phi, "--phi");
+  cli_options.phi_deg = parse_azimuth_list(o.phi, "--phi");
   cli_options.rays = static_cast<std::uint64_t>(o.rays);
   cli_options.seed = o.seed;
   // An empty --checks would run every check: a list given is a list of at least one check.

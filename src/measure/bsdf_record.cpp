@@ -110,14 +110,17 @@ void check_bsdf_request(BsdfRequest& o) {
   for (double p : phis)
     if (!std::isfinite(p) || std::abs(p) > 3600)
       throw UsageError("--phi-i must be finite angles in degrees, |phi| <= 3600");
-  if (o.orders < 1 || o.orders > 16)
-    throw UsageError("--orders must be in [1, 16] (got " + std::to_string(o.orders) + ")");
+  if (o.orders < 1 || o.orders > kMaxBsdfOrders)
+    throw UsageError("--orders must be in [1, " + std::to_string(kMaxBsdfOrders) + "] (got " +
+                     std::to_string(o.orders) + ")");
   if (o.rays <= 0 || o.rays > 1000000000000LL)
     throw UsageError("--rays must be in [1, 1e12] (got " + std::to_string(o.rays) + ")");
-  if (o.resolution < 1 || o.resolution > 1024)
-    throw UsageError("--resolution must be in [1, 1024] (got " + std::to_string(o.resolution) + ")");
-  if (o.table_resolution < 2 || o.table_resolution > 512)
-    throw UsageError("--table-resolution must be in [2, 512] (got " + std::to_string(o.table_resolution) + ")");
+  if (o.resolution < 1 || o.resolution > kMaxBsdfResolution)
+    throw UsageError("--resolution must be in [1, " + std::to_string(kMaxBsdfResolution) + "] (got " +
+                     std::to_string(o.resolution) + ")");
+  if (o.table_resolution < kMinTableResolution || o.table_resolution > kMaxTableResolution)
+    throw UsageError("--table-resolution must be in [" + std::to_string(kMinTableResolution) + ", " +
+                     std::to_string(kMaxTableResolution) + "] (got " + std::to_string(o.table_resolution) + ")");
   const std::size_t n_inc = o.theta_i_deg.size() * phis.size();
   if (n_inc > 100000) throw UsageError("--theta-i x --phi-i: more than 100000 incidences");
   if (ext == "binary" && phis.size() > 1)

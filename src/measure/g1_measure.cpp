@@ -1,4 +1,5 @@
 #include "microsim/measure/g1_measure.hpp"
+#include "microsim/io/checks.hpp"
 
 #include "microsim/measure/sampling.hpp"
 #include "microsim/measure/stats.hpp"
@@ -57,6 +58,11 @@ std::vector<Tally> run_chunks(int R, std::uint64_t n, int nbins, TraceCounters& 
   const std::uint64_t active = end > first ? end - first : 0;
   const std::uint64_t span = std::max<std::uint64_t>(1, kChunk / std::max<std::uint64_t>(1, active));
   const std::uint64_t nc = active ? (n + span - 1) / span : 0;
+  // Every chunk's tallies are kept until the merge: refused before the work when they would not
+  // fit in memory (rather than ending in std::bad_alloc).
+  require_memory(static_cast<double>(nc) * active * (sizeof(Tally) + 3.0 * nbins * sizeof(std::uint64_t)),
+                 "--rays " + std::to_string(static_cast<std::uint64_t>(R) * n) + " (tallies of " +
+                     std::to_string(nc * active) + " chunks of " + std::to_string(nbins) + " normal bins)");
   std::vector<Tally> reps(R, Tally(nbins));
   if (nc == 0) return reps;
   // parts[c * active + q]: chunk c, replicate first + q.

@@ -65,7 +65,7 @@ void read_options(const Json& j, Options& o, const std::string& file, const std:
   for (double t : o.theta_deg)
     if (!(t >= 0 && t < 90)) suite_error(file, where + ": theta_deg must be in [0, 90) degrees");
   for (double p : o.phi_deg)
-    if (!std::isfinite(p)) suite_error(file, where + ": phi_deg must be finite numbers");
+    if (!(std::abs(p) <= 3600)) suite_error(file, where + ": phi_deg must be azimuths in [-3600, 3600] degrees");
   if (o.theta_deg.empty() || o.phi_deg.empty()) suite_error(file, where + ": empty theta_deg or phi_deg");
   if (o.ndf_theta_bins > 3600 || o.ndf_phi_bins > 7200)
     suite_error(file, where + ": ndf_theta_bins in [1, 3600], ndf_phi_bins in [1, 7200]");
