@@ -589,6 +589,7 @@ const std::vector<Case>& cases() {
       {"merge {T}part_frac.json {T}sharded.json.shard-2-of-2.json -o {o}", 2, "counts[0]"},
       {"merge {T}part_huge.json {T}sharded.json.shard-2-of-2.json -o {o}", 2, "counts[0]"},
       {"merge {T}sharded.json.shard-1-of-2.json {T}sharded.json.shard-2-of-2.json -o {o}", 0, ""},
+      {"merge /dev/stdin {T}sharded.json.shard-2-of-2.json -o {o} < {T}sharded.json.shard-1-of-2.json", 0, ""},
       // Presets hold parameters, not the files of the run; a heightmap preset applies.
       {"generate gaussian --config {T}p_output.toml --resolution 16 -o {o}", 2, "'output'", "exr"},
       {"generate heightmap --config {T}p_input.toml --input {T}hm.csv --pixel-size 1 -o {o}", 2, "'input'", "exr"},

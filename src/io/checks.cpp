@@ -114,6 +114,8 @@ std::vector<std::string> split_items(const std::string& text, char sep, const st
 
 void require_regular_input(const std::string& path, const std::string& name) {
   namespace fs = std::filesystem;
+  // Standard input named on purpose (a pipe or a terminal) is the user's choice to read.
+  if (path == "-" || path == "/dev/stdin") return;
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);  // follows symbolic links
   if (ec || !fs::exists(st) || fs::is_regular_file(st)) return;

@@ -40,7 +40,8 @@ std::vector<std::string> split_items(const std::string& text, char sep, const st
 
 // UsageError "NAME PATH: not a regular file (a FIFO ...)" when `path` exists but is a FIFO, a
 // device, a socket or a folder: reading one could block forever or never end. Missing files
-// are left to the reader's own message; "-" and /dev/stdin are the caller's to allow.
+// are left to the reader's own message. "-" and /dev/stdin pass: standard input named on
+// purpose (e.g. `microsim merge /dev/stdin PART2 < PART1`) is read as before.
 void require_regular_input(const std::string& path, const std::string& name);
 
 // Bytes the process may use: the memory available now (MemAvailable), physical memory, or the
