@@ -666,6 +666,9 @@ TEST_F(Inputs, HelpRangesAreTheChecksRanges) {
     EXPECT_EQ(r.code, 2) << r.err;
     EXPECT_NE(r.err.find(option), std::string::npos) << r.err;
   }
+  // render's light stays above the horizon: the help's interval is half-open like the check.
+  const Result render = run_microsim("render --help");
+  EXPECT_NE(render.out.find("--light-theta FLOAT:in [0, 90)"), std::string::npos) << render.out;
 }
 
 TEST_F(Inputs, PresetsApplyWithNonDefaultValuesAndTheCommandLineWins) {
