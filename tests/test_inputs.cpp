@@ -247,14 +247,16 @@ class Inputs : public ::testing::Test {
     write_file(tmp("suite_thetastr.json"), "{\"entries\": [" + gauss + ", \"theta_deg\": [\"abc\"]}]}");
     write_file(tmp("suite_checksempty.json"), "{\"entries\": [" + gauss + ", \"checks\": []}]}");
     write_file(tmp("suite_phihuge.json"), "{\"entries\": [" + gauss + ", \"phi_deg\": [1e308]}]}");
-    // The two parts of a sharded run, and copies of the first with one count changed to a
-    // negative, a fractional and an overflowing value.
+    // The two parts of a sharded run, and copies of the first with one count (the ray-cast
+    // hits of the first bin of replicate 0) changed to a negative, a fractional and an
+    // overflowing value, and to more hits than the replicate has rays.
     const std::string shard = "measure g1 " + surface_ + " --theta 30 --rays 2000 -o " + tmp("sharded.json");
     ASSERT_EQ(run_microsim("--shard 1/2 " + shard).code, 0);
     ASSERT_EQ(run_microsim("--shard 2/2 " + shard).code, 0);
     const std::string part1 = tmp("sharded.json.shard-1-of-2.json");
     for (const auto& [name, value] : std::vector<std::pair<std::string, nlohmann::json>>{
-             {"part_neg.json", -5}, {"part_frac.json", 1.5}, {"part_huge.json", 1e30}}) {
+             {"part_neg.json", -5}, {"part_frac.json", 1.5}, {"part_huge.json", 1e30},
+             {"part_more.json", 1000000}}) {
       auto j = nlohmann::json::parse(slurp(part1));
       j["tallies"][0]["counts"][0] = value;
       write_file(tmp(name), j.dump());
@@ -588,6 +590,7 @@ const std::vector<Case>& cases() {
       {"merge {T}part_neg.json {T}sharded.json.shard-2-of-2.json -o {o}", 2, "counts[0]"},
       {"merge {T}part_frac.json {T}sharded.json.shard-2-of-2.json -o {o}", 2, "counts[0]"},
       {"merge {T}part_huge.json {T}sharded.json.shard-2-of-2.json -o {o}", 2, "counts[0]"},
+      {"merge {T}part_more.json {T}sharded.json.shard-2-of-2.json -o {o}", 2, "hits exceed"},
       {"merge {T}sharded.json.shard-1-of-2.json {T}sharded.json.shard-2-of-2.json -o {o}", 0, ""},
       {"merge /dev/stdin {T}sharded.json.shard-2-of-2.json -o {o} < {T}sharded.json.shard-1-of-2.json", 0, ""},
       // Presets hold parameters, not the files of the run; a heightmap preset applies.
