@@ -538,6 +538,8 @@ const std::vector<Case>& cases() {
       {"measure g1 {S} --rays 1000000000000 -o {o}", 2, "--rays"},
       {"measure g2 {S} --theta-o 30 --theta-i 30 --rays 1000000000000 -o {o}", 2, "--rays"},
       {"validate {S} --rays 1000000000000 -o {o}", 2, "--rays"},
+      {"measure bsdf {S} --material mirror --theta-i 0:89:0.001 --resolution 1 --table-resolution 512 "
+       "--rays 10 --no-models -o {o}", 2, "--table-resolution", "bsdf"},
       // Special files are refused before they are opened (a FIFO without a writer would block).
       {"info {T}fifo.exr", 2, "FIFO"},
       {"measure g1 {T}fifo.exr --rays 100 -o {o}", 2, "FIFO"},

@@ -1,4 +1,5 @@
 #include "microsim/measure/bsdf_record.hpp"
+#include "microsim/io/checks.hpp"
 
 #include <tbb/task_arena.h>
 #include <unistd.h>
@@ -129,6 +130,12 @@ void check_bsdf_request(BsdfRequest& o) {
   if (ext == "bsdf" && phis.size() > 1 && (std::abs(phis.front() + 180) > 1e-9 || std::abs(phis.back() - 180) > 1e-9))
     throw UsageError("--phi-i: an anisotropic .bsdf needs azimuths over the full circle from -180 to 180 "
                      "(e.g. --phi-i -180:180:30), or one azimuth for an isotropic table");
+  // -o .bsdf: the RGL tables hold vndf, luminance and two spectra values (floats) per vertex of
+  // the table_resolution^2 grid of every incidence.
+  if (ext == "bsdf")
+    require_memory(16.0 * static_cast<double>(n_inc) * o.table_resolution * o.table_resolution,
+                   "--table-resolution " + std::to_string(o.table_resolution) + " with " + std::to_string(n_inc) +
+                       " incidences");
   // Tallies: f and f^2 per side, slot and pixel, one per worker plus the merge tree, and the
   // finished results of every incidence.
   const double tally = 2.0 * (o.orders + 1) * (static_cast<double>(o.resolution) * o.resolution + o.resolution) * 2 * 8;

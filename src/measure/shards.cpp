@@ -204,7 +204,9 @@ constexpr std::uint64_t kMaxCount = std::uint64_t(1) << 63;
 
 std::uint64_t count_of(const Json& x, const std::function<UsageError(const std::string&)>& bad,
                        const std::string& field) {
-  if (!x.is_number_unsigned() || x.get<std::uint64_t>() >= kMaxCount)
+  // A JSON integer: unsigned as parsed from text, or signed (and not negative) as built in memory.
+  const bool integer = x.is_number_unsigned() || (x.is_number_integer() && x.get<std::int64_t>() >= 0);
+  if (!integer || x.get<std::uint64_t>() >= kMaxCount)
     throw bad(field + " must be a non-negative integer below 2^63 (got " + x.dump() + ")");
   return x.get<std::uint64_t>();
 }

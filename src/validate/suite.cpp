@@ -41,7 +41,7 @@ T get_typed(const Json& j, const char* key, const std::string& file, const std::
 // A seed: a JSON integer in [0, 2^64 - 1] (a negative value would wrap around and a fraction
 // would be cut, both silently).
 std::uint64_t get_seed(const Json& x, const std::string& file, const std::string& where, const std::string& key) {
-  if (x.is_number_unsigned()) return x.get<std::uint64_t>();
+  if (x.is_number_unsigned() || (x.is_number_integer() && x.get<std::int64_t>() >= 0)) return x.get<std::uint64_t>();
   if (x.is_number_float() && x.get<double>() >= 0 && x.get<double>() < 18446744073709551616.0 &&
       x.get<double>() == std::floor(x.get<double>()))
     return static_cast<std::uint64_t>(x.get<double>());
