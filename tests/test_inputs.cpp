@@ -6,6 +6,7 @@
 #include <signal.h>
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -16,6 +17,7 @@
 #include <fstream>
 #include <random>
 #include <thread>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
@@ -205,6 +207,60 @@ class Inputs : public ::testing::Test {
     write_file(tmp("suite_deep.json"), "{\"entries\": [" + flat + ", \"name\": \"a\", \"x\": " + deep + "}]}");
     write_file(tmp("suite_large.json"), "{\"entries\": []" + std::string(17 << 20, ' ') + "}");
     write_file(tmp("part_deep.json"), "{\"format\": " + deep + "}");
+    // Special files where a file is read: a FIFO without a writer (opening it would block
+    // forever) under every input's name, and a folder.
+    for (const char* name : {"fifo.exr", "fifo.csv", "fifo.json", "fifo.toml", "fifo.ply"})
+      ASSERT_EQ(mkfifo(tmp(name).c_str(), 0600), 0) << name;
+    fs::create_directories(tmp("folder.exr"));
+    // Text heightmaps 40 x 40: plain, with a UTF-8 byte order mark, with CRLF line ends, and
+    // with one infinite height (inf, -inf, 1e999) at column 3, row 5.
+    auto grid = [](const std::string& special, const std::string& eol) {
+      std::string t;
+      for (int j = 0; j < 40; ++j) {
+        for (int i = 0; i < 40; ++i)
+          t += (i ? "," : "") + (j == 5 && i == 3 && !special.empty()
+                                     ? special
+                                     : std::to_string(std::sin(0.3 * i) * std::cos(0.4 * j) + 0.01 * ((i * 7 + j * 13) % 11)));
+        t += eol;
+      }
+      return t;
+    };
+    write_file(tmp("hm.csv"), grid("", "\n"));
+    write_file(tmp("hm_bom.csv"), "\xEF\xBB\xBF" + grid("", "\n"));
+    write_file(tmp("hm_crlf.csv"), grid("", "\r\n"));
+    write_file(tmp("hm_bom_crlf.csv"), "\xEF\xBB\xBF" + grid("", "\r\n"));
+    write_file(tmp("hm_inf.csv"), grid("inf", "\n"));
+    write_file(tmp("hm_neginf.csv"), grid("-inf", "\n"));
+    write_file(tmp("hm_1e999.csv"), grid("1e999", "\n"));
+    write_file(tmp("hm_nan.csv"), grid("nan", "\n"));
+    write_file(tmp("hm_100.csv"), grid("100", "\n"));
+    // Presets naming the files of the run, and one heightmap preset whose key must apply.
+    write_file(tmp("p_output.toml"), "output = \"elsewhere.exr\"\n");
+    write_file(tmp("p_input.toml"), "input = \"elsewhere.csv\"\n");
+    write_file(tmp("p_pixel.toml"), "pixel-size = 2\n");
+    // Suites whose seeds or options are wrong in kind, not only in value.
+    const std::string gauss = "{\"name\": \"g\", \"generate\": \"gaussian\", \"args\": {\"resolution\": 16}";
+    write_file(tmp("suite_seedneg.json"), "{\"entries\": [" + gauss + ", \"seeds\": [-1]}]}");
+    write_file(tmp("suite_seedfrac.json"), "{\"entries\": [" + gauss + ", \"seeds\": [1.5]}]}");
+    write_file(tmp("suite_seedtwice.json"), "{\"entries\": [" + gauss + ", \"seeds\": [1, 2, 1]}]}");
+    write_file(tmp("suite_seedbig.json"), "{\"entries\": [" + gauss + ", \"seeds\": [1e30]}]}");
+    write_file(tmp("suite_thetastr.json"), "{\"entries\": [" + gauss + ", \"theta_deg\": [\"abc\"]}]}");
+    write_file(tmp("suite_checksempty.json"), "{\"entries\": [" + gauss + ", \"checks\": []}]}");
+    write_file(tmp("suite_phihuge.json"), "{\"entries\": [" + gauss + ", \"phi_deg\": [1e308]}]}");
+    // The two parts of a sharded run, and copies of the first with one count (the ray-cast
+    // hits of the first bin of replicate 0) changed to a negative, a fractional and an
+    // overflowing value, and to more hits than the replicate has rays.
+    const std::string shard = "measure g1 " + surface_ + " --theta 30 --rays 2000 -o " + tmp("sharded.json");
+    ASSERT_EQ(run_microsim("--shard 1/2 " + shard).code, 0);
+    ASSERT_EQ(run_microsim("--shard 2/2 " + shard).code, 0);
+    const std::string part1 = tmp("sharded.json.shard-1-of-2.json");
+    for (const auto& [name, value] : std::vector<std::pair<std::string, nlohmann::json>>{
+             {"part_neg.json", -5}, {"part_frac.json", 1.5}, {"part_huge.json", 1e30},
+             {"part_more.json", 1000000}}) {
+      auto j = nlohmann::json::parse(slurp(part1));
+      j["tallies"][0]["counts"][0] = value;
+      write_file(tmp(name), j.dump());
+    }
   }
   static std::string surface_, mesh_;
 };
@@ -478,6 +534,71 @@ const std::vector<Case>& cases() {
       {"validate --suite {T}suite_deep.json -o {o}", 2, "suite_deep.json"},
       {"validate --suite {T}suite_large.json -o {o}", 2, "suite_large.json"},
       {"merge {T}part_deep.json -o {o}", 2, "part_deep.json"},
+      // Work sized by the options is checked against memory before it is allocated.
+      {"measure g1 {S} --rays 1000000000000 -o {o}", 2, "--rays"},
+      {"measure g2 {S} --theta-o 30 --theta-i 30 --rays 1000000000000 -o {o}", 2, "--rays"},
+      {"validate {S} --rays 1000000000000 -o {o}", 2, "--rays"},
+      {"measure bsdf {S} --material mirror --theta-i 0:89:0.001 --resolution 1 --table-resolution 512 "
+       "--rays 10 --no-models -o {o}", 2, "--table-resolution", "bsdf"},
+      // Special files are refused before they are opened (a FIFO without a writer would block).
+      {"info {T}fifo.exr", 2, "FIFO"},
+      {"measure g1 {T}fifo.exr --rays 100 -o {o}", 2, "FIFO"},
+      {"info {T}folder.exr", 2, "folder"},
+      {"generate heightmap --input {T}fifo.csv --pixel-size 1 -o {o}", 2, "FIFO", "exr"},
+      {"generate mesh --input {T}fifo.ply -o {o}", 2, "FIFO", "ply"},
+      {"generate gaussian --config {T}fifo.toml -o {o}", 2, "FIFO", "exr"},
+      {"validate --suite {T}fifo.json -o {o}", 2, "FIFO"},
+      {"merge {T}fifo.json -o {o}", 2, "FIFO"},
+      // Lists: an empty item anywhere is refused (a trailing comma as much as a leading one).
+      {"measure g1 {S} --theta 10,20, --rays 100 -o {o}", 2, "--theta"},
+      {"measure g1 {S} --theta ,10,20 --rays 100 -o {o}", 2, "--theta"},
+      {"measure g1 {S} --theta 10,,20 --rays 100 -o {o}", 2, "--theta"},
+      {"measure g1 {S} --theta 0:80: --rays 100 -o {o}", 2, "--theta"},
+      {"measure g2 {S} --theta-o 30, --theta-i 30 --rays 100 -o {o}", 2, "--theta-o"},
+      {"measure bsdf {S} --material mirror --theta-i 0,30, --rays 100 -o {o}", 2, "--theta-i"},
+      {"generate parallelepiped --matrix 1,0,0,0,1,0,0,0,1, -o {o}", 2, "--matrix", "ply"},
+      {"validate {S} --checks '' --rays 100 -o {o}", 2, "--checks"},
+      {"validate {S} --checks g1, --rays 100 -o {o}", 2, "--checks"},
+      // Azimuths: a value that makes no direction names its own option.
+      {"measure g1 {S} --phi 1e308 --rays 100 -o {o}", 2, "--phi"},
+      {"measure g2 {S} --theta-o 30 --theta-i 30 --phi-i 1e308 --rays 100 -o {o}", 2, "--phi-i"},
+      {"measure g2 {S} --theta-o 30 --theta-i 30 --phi-o -1e308 --rays 100 -o {o}", 2, "--phi-o"},
+      {"measure vndf {S} --phi 1e308 --rays 100 -o {o}", 2, "--phi"},
+      {"validate {S} --phi 1e308 --rays 100 -o {o}", 2, "--phi"},
+      {"measure g1 {S} --phi -3600,3600 --theta 30 --rays 100 -o {o}", 0, ""},
+      // Sizes whose surface no reader would accept (an area of 0 or inf, facets without area).
+      {"generate heightmap --input {T}hm.csv --pixel-size 1e-300 --periodic -o {o}", 2, "--pixel-size", "exr"},
+      {"generate heightmap --input {T}hm.csv --pixel-size 1e200 --periodic -o {o}", 2, "--pixel-size", "exr"},
+      {"generate square-wave --duty 1e-300 -o {o}", 2, "--duty", "ply"},
+      {"generate square-wave --duty 1e-300 --2d -o {o}", 2, "--duty", "ply"},
+      {"generate box --width 1e-300 -o {o}", 2, "--width", "ply"},
+      {"generate heightmap --input {T}hm.csv --pixel-size 1e-3 --periodic -o {o}", 0, "", "exr"},
+      // Heights: only NaN and --nodata are missing; an infinite one is refused where it is.
+      {"generate heightmap --input {T}hm_inf.csv --pixel-size 1 -o {o}", 2, "row 5", "exr"},
+      {"generate heightmap --input {T}hm_neginf.csv --pixel-size 1 -o {o}", 2, "row 5", "exr"},
+      {"generate heightmap --input {T}hm_1e999.csv --pixel-size 1 -o {o}", 2, "row 5", "exr"},
+      {"generate heightmap --input {T}hm_100.csv --pixel-size 1 --height-scale 1e307 -o {o}", 2, "--height-scale", "exr"},
+      {"generate heightmap --input {T}hm_nan.csv --pixel-size 1 -o {o}", 0, "", "exr"},
+      // Suites: seeds are distinct integers in [0, 2^64-1]; type errors name the entry and key.
+      {"validate --suite {T}suite_seedneg.json -o {o}", 2, "entry g: seeds"},
+      {"validate --suite {T}suite_seedfrac.json -o {o}", 2, "entry g: seeds"},
+      {"validate --suite {T}suite_seedbig.json -o {o}", 2, "entry g: seeds"},
+      {"validate --suite {T}suite_seedtwice.json -o {o}", 2, "twice"},
+      {"validate --suite {T}suite_thetastr.json -o {o}", 2, "entry g: theta_deg"},
+      {"validate --suite {T}suite_checksempty.json -o {o}", 2, "entry g: checks"},
+      {"validate --suite {T}suite_phihuge.json -o {o}", 2, "entry g: phi_deg"},
+      // Merge: counts are non-negative integers, named by part and field.
+      {"merge {T}part_neg.json {T}sharded.json.shard-2-of-2.json -o {o}", 2, "part_neg.json"},
+      {"merge {T}part_neg.json {T}sharded.json.shard-2-of-2.json -o {o}", 2, "counts[0]"},
+      {"merge {T}part_frac.json {T}sharded.json.shard-2-of-2.json -o {o}", 2, "counts[0]"},
+      {"merge {T}part_huge.json {T}sharded.json.shard-2-of-2.json -o {o}", 2, "counts[0]"},
+      {"merge {T}part_more.json {T}sharded.json.shard-2-of-2.json -o {o}", 2, "hits exceed"},
+      {"merge {T}sharded.json.shard-1-of-2.json {T}sharded.json.shard-2-of-2.json -o {o}", 0, ""},
+      {"merge /dev/stdin {T}sharded.json.shard-2-of-2.json -o {o} < {T}sharded.json.shard-1-of-2.json", 0, ""},
+      // Presets hold parameters, not the files of the run; a heightmap preset applies.
+      {"generate gaussian --config {T}p_output.toml --resolution 16 -o {o}", 2, "'output'", "exr"},
+      {"generate heightmap --config {T}p_input.toml --input {T}hm.csv --pixel-size 1 -o {o}", 2, "'input'", "exr"},
+      {"generate heightmap --config {T}p_pixel.toml --input {T}hm.csv -o {o}", 0, "", "exr"},
   };
   return c;
 }
@@ -508,6 +629,51 @@ TEST_F(Inputs, EveryBadOptionOrFileIsRefusedWithOneLineAndNoOutput) {
     failed += !ok;
   }
   std::cout << "[ table    ] " << cases().size() << " cases, " << failed << " not as expected\n";
+}
+
+// A byte order mark and CRLF line ends change nothing: every variant gives the plain file's
+// 40 x 40 grid and the same heights.
+TEST_F(Inputs, TextHeightmapsReadTheSameWithByteOrderMarkAndCrlf) {
+  auto grid_of = [&](const std::string& csv) {
+    const std::string out = tmp(csv + ".exr"), info = tmp(csv + ".info.json");
+    Result r = run_microsim("generate heightmap --input " + tmp(csv) + " --pixel-size 1 --periodic -o " + out);
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(run_microsim("info " + out + " --json " + info).code, 0);
+    const auto j = nlohmann::json::parse(slurp(info));
+    return std::make_tuple(j["surface"]["resolution_x"].get<int>(), j["surface"]["resolution_y"].get<int>(),
+                           j["surface"]["detrend_coefficients"].dump());
+  };
+  const auto plain = grid_of("hm.csv");
+  EXPECT_EQ(std::get<0>(plain), 40);
+  EXPECT_EQ(std::get<1>(plain), 40);
+  for (const char* csv : {"hm_bom.csv", "hm_crlf.csv", "hm_bom_crlf.csv"}) {
+    SCOPED_TRACE(csv);
+    EXPECT_EQ(grid_of(csv), plain);
+  }
+}
+
+// The ranges the help shows are the ranges the checks apply: a value at the help's upper end
+// is accepted by the check (no "[1, 64]" in the help beside a check of [1, 16]).
+TEST_F(Inputs, HelpRangesAreTheChecksRanges) {
+  const Result help = run_microsim("measure bsdf --help");
+  ASSERT_EQ(help.code, 0);
+  for (const std::string& option : {std::string("--orders"), std::string("--resolution"), std::string("--table-resolution")}) {
+    SCOPED_TRACE(option);
+    const auto at = help.out.find(option + " INT:in [");
+    ASSERT_NE(at, std::string::npos) << help.out;
+    const auto comma = help.out.find(", ", at), close = help.out.find(']', at);
+    const std::string hi = help.out.substr(comma + 2, close - comma - 2);
+    Result r = run_microsim("measure bsdf " + surface_ + " --material mirror --theta-i 30 --rays 10 --no-models " +
+                            option + " " + hi + " -o " + tmp("help_range.json"));
+    EXPECT_EQ(r.code, 0) << r.err;
+    r = run_microsim("measure bsdf " + surface_ + " --material mirror --theta-i 30 --rays 10 --no-models " +
+                     option + " " + std::to_string(std::stoll(hi) + 1) + " -o " + tmp("help_range.json"));
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find(option), std::string::npos) << r.err;
+  }
+  // render's light stays above the horizon: the help's interval is half-open like the check.
+  const Result render = run_microsim("render --help");
+  EXPECT_NE(render.out.find("--light-theta FLOAT:in [0, 90)"), std::string::npos) << render.out;
 }
 
 TEST_F(Inputs, PresetsApplyWithNonDefaultValuesAndTheCommandLineWins) {

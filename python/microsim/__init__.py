@@ -8,8 +8,11 @@ Keyword arguments are the command line's long options with ``_`` for ``-``
 (``correlation_length=0.02`` is ``--correlation-length 0.02``); lists become comma-separated
 values (``theta=[30, 80]`` is ``--theta 30,80``), ``True`` a flag. ``help("measure g1")``
 lists them. Records are the command's JSON as dicts and lists, numeric arrays as numpy arrays,
-bit for bit what ``-o record.json`` writes at the same seed. Errors raise :class:`UsageError`
-(a ``ValueError``) with the command line's message. Measurements release the GIL.
+bit for bit what ``-o record.json`` writes at the same seed. Errors raise the command line's
+message as :class:`UsageError` (a ``ValueError``) where the command line exits 2 (an option, a
+file or a model argument refused) and as :class:`RuntimeFailure` (a ``RuntimeError``) where it
+exits 1 (the run failed); both are defined once, in the compiled core, and raised by
+:mod:`microsim.models` too. Measurements release the GIL.
 """
 from ._core import RuntimeFailure, Surface, UsageError, _help, _run, load, models, surface_kinds
 

@@ -28,7 +28,7 @@ std::vector<Array> directions(std::vector<py::object> in) {
   for (auto x : b) {
     Array a = Array::ensure(x);
     if (!a || a.ndim() < 1 || a.shape(a.ndim() - 1) != 3)
-      throw py::value_error("directions must be arrays of 3-vectors (last axis of length 3)");
+      throw UsageError("directions must be arrays of 3-vectors (last axis of length 3)");
     out.push_back(a);
   }
   return out;
@@ -58,14 +58,14 @@ models::Ndf make_ndf(const std::string& distribution, double alpha_x, std::optio
   const double ay = alpha_y.value_or(alpha_x);
   if (distribution == "beckmann") return models::Ndf::beckmann(alpha_x, ay);
   if (distribution == "ggx") return models::Ndf::ggx(alpha_x, ay);
-  throw py::value_error("distribution must be 'beckmann' or 'ggx' (got '" + distribution + "')");
+  throw UsageError("distribution must be 'beckmann' or 'ggx' (got '" + distribution + "')");
 }
 
 models::Masking masking_of(const std::string& name) {
   for (auto m : {models::Masking::SmithHeightCorrelated, models::Masking::VCavity,
                  models::Masking::SmithMaskingOnly})
     if (name == models::to_string(m)) return m;
-  throw py::value_error("masking must be smith_height_correlated, vcavity or smith_masking_only (got '" +
+  throw UsageError("masking must be smith_height_correlated, vcavity or smith_masking_only (got '" +
                         name + "')");
 }
 
@@ -113,7 +113,7 @@ void bind_models(py::module_& m) {
       .def("sample_visible_normal", [](const models::Ndf& n, py::array_t<double> v, py::array_t<double> u1,
                                        py::array_t<double> u2) {
         Array vv = Array::ensure(v);
-        if (vv.size() != 3) throw py::value_error("v must be one direction (3 numbers)");
+        if (vv.size() != 3) throw UsageError("v must be one direction (3 numbers)");
         const Vec3 view(vv.data()[0], vv.data()[1], vv.data()[2]);
         py::tuple b = py::module_::import("numpy").attr("broadcast_arrays")(u1, u2);
         Array a = Array::ensure(b[0]), c = Array::ensure(b[1]);
@@ -147,7 +147,7 @@ void bind_models(py::module_& m) {
       return map_directions({o, i, mm}, [](const Vec3* d) { return models::vcavity_G2(d[0], d[1], d[2]); });
     auto it = g2.find(form);
     if (it == g2.end())
-      throw py::value_error("form must be separable, height_correlated, direction_correlated, "
+      throw UsageError("form must be separable, height_correlated, direction_correlated, "
                             "height_direction_correlated or vcavity (got '" + form + "')");
     auto f = it->second;
     return map_directions({o, i, mm}, [&](const Vec3* d) { return f(n, d[0], d[1], d[2]); });
@@ -208,7 +208,7 @@ void bind_models(py::module_& m) {
       }, py::arg("o"), py::arg("i"), "f(o, i): reflection on the same side, transmission across")
       .def("albedo", [](const models::MicrofacetBsdf& b, py::array_t<double> i, int n) {
         Array a = Array::ensure(i);
-        if (a.size() != 3) throw py::value_error("i must be one direction (3 numbers)");
+        if (a.size() != 3) throw UsageError("i must be one direction (3 numbers)");
         const auto r = models::single_scattering_albedo(b, Vec3(a.data()[0], a.data()[1], a.data()[2]), n);
         return py::make_tuple(r.reflected, r.transmitted);
       }, py::arg("i"), py::arg("n") = 1024, "Single-scattering albedo (reflected, transmitted) for light from i");

@@ -142,7 +142,15 @@ PYBIND11_MODULE(_core, m) {
       if (p) std::rethrow_exception(p);
     } catch (const UsageError& e) {
       usage_error(e.what());
+    } catch (const CLI::ParseError& e) {
+      usage_error(e.what());
     } catch (const RuntimeFailure& e) {
+      runtime_failure(e.what());
+    } catch (const py::builtin_exception&) {
+      throw;  // pybind11's own (TypeError of a wrong argument, ...) keep their Python classes
+    } catch (const std::exception& e) {
+      // What the command line reports as "failed" with exit 1 (std::bad_alloc, a file that
+      // cannot be written, ...): RuntimeFailure, as an exit code of 1 is.
       runtime_failure(e.what());
     }
   });

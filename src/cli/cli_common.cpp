@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "microsim/io/checks.hpp"
 #include "microsim/version.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/surface/surface_io.hpp"
@@ -106,10 +107,7 @@ std::vector<double> parse_angle_list(const std::string& text, const std::string&
   };
   std::vector<double> out;
   if (text.find(':') != std::string::npos) {
-    std::vector<std::string> parts;
-    std::stringstream ss(text);
-    std::string p;
-    while (std::getline(ss, p, ':')) parts.push_back(p);
+    const std::vector<std::string> parts = split_items(text, ':', option);
     if (parts.size() != 3) throw UsageError(option + " '" + text + "': expected start:stop:step");
     double a = number(parts[0]), b = number(parts[1]), step = number(parts[2]);
     if (!(step > 0) || b < a)
@@ -117,12 +115,19 @@ std::vector<double> parse_angle_list(const std::string& text, const std::string&
     if ((b - a) / step > 100000) throw UsageError(option + " '" + text + "': too many values");
     for (int k = 0; a + k * step <= b + 1e-9; ++k) out.push_back(a + k * step);
   } else {
-    std::stringstream ss(text);
-    std::string p;
-    while (std::getline(ss, p, ',')) out.push_back(number(p));
+    for (const std::string& p : split_items(text, ',', option)) out.push_back(number(p));
   }
   if (out.empty()) throw UsageError(option + " is empty");
   return out;
+}
+
+std::vector<double> parse_azimuth_list(const std::string& text, const std::string& option) {
+  std::vector<double> phis = parse_angle_list(text, option);
+  for (double p : phis)
+    if (!(std::abs(p) <= kMaxAzimuthDeg))
+      throw UsageError(option + " must be azimuths in [-" + fmt(kMaxAzimuthDeg, 0) + ", " + fmt(kMaxAzimuthDeg, 0) +
+                       "] degrees (got " + number_text(p) + ")");
+  return phis;
 }
 
 void require_above_horizon(const std::vector<double>& thetas, const std::string& option) {

@@ -73,6 +73,11 @@ std::string cell(const Json& x, int precision, int width);
 Json run_header(const std::string& command, const GlobalOptions& g);
 // "a:b:step" (inclusive), "a,b,c" or "a", in degrees.
 std::vector<double> parse_angle_list(const std::string& text, const std::string& option);
+// Largest accepted |azimuth| in degrees (ten turns; the same bound as measure bsdf's --phi-i): a
+// larger one has lost its fractional degrees to rounding, and 1e308 makes no direction at all.
+constexpr double kMaxAzimuthDeg = 3600;
+// parse_angle_list, then UsageError naming `option` unless every |azimuth| <= kMaxAzimuthDeg.
+std::vector<double> parse_azimuth_list(const std::string& text, const std::string& option);
 // UsageError unless every angle is in [0, 90).
 void require_above_horizon(const std::vector<double>& thetas_deg, const std::string& option);
 

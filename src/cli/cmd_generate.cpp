@@ -58,16 +58,14 @@ void register_generate(CLI::App& app, const GlobalOptions& g) {
     auto* k = gen->add_subcommand(kind.name, kind.help);
     auto values = std::make_shared<SurfaceOptionValues>();
     auto out = std::make_shared<std::string>();
-    // heightmap has always read its preset with CLI11's own reader.
-    const bool native_config = kind.name == "heightmap";
-    if (native_config) k->set_config("--config", "", kind.config_help);
-    else add_preset_option(*k, kind.config_help);
+    // Every kind reads its preset the same way (option_checks.hpp); CLI11's own reader, which
+    // heightmap used, left the keys of a subcommand's preset unapplied.
+    add_preset_option(*k, kind.config_help);
     k->add_option("-o,--output", *out, kind.output_help)->required();
     add_surface_options(*k, kind, *values);
     const SurfaceKind* spec = &kind;
     auto run = [spec, values, out, &g] { write_generated(given_surface_options(*spec, *values), *out, g); };
-    if (native_config) k->callback(run);
-    else on_run(k, run);
+    on_run(k, run);
   }
 }
 

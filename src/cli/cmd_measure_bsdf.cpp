@@ -141,10 +141,10 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
   cmd->add_option("--table-resolution", o->request.table_resolution,
                   "-o .bsdf: vertices per side of the per-incidence sample grid (vndf, spectra)")
       ->capture_default_str()
-      ->check(integer_in(2, 512));
+      ->check(integer_in(kMinTableResolution, kMaxTableResolution));
   cmd->add_option("--orders", o->request.orders, "Scattering orders tallied: 1 .. K-1 separately, K+ together")
       ->capture_default_str()
-      ->check(integer_in(1, 64));
+      ->check(integer_in(1, kMaxBsdfOrders));
   cmd->add_option("--rays", o->request.rays, "Rays (random walks)")->capture_default_str()
       ->check(integer_in(1, kMaxRays));
   cmd->add_option("--seed", o->request.seed, "Random seed")->capture_default_str()
@@ -157,7 +157,7 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
                   "Hemisphere map resolution R (R x R equal-area pixels); also the number of "
                   "in-plane bins over [-90, 90] degrees")
       ->capture_default_str()
-      ->check(integer_in(1, 4096));
+      ->check(integer_in(1, kMaxBsdfResolution));
   cmd->callback([o, cmd, &g] {
     o->request.eta = cmd->count("--eta") > 0 ? std::optional<double>(o->eta) : std::nullopt;
     o->request.k = cmd->count("--k") > 0 ? std::optional<double>(o->k) : std::nullopt;

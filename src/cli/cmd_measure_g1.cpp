@@ -58,7 +58,7 @@ void print_g1_table(const Json& rows, bool ensemble) {
 int run_measure_g1(const MeasureOptions& o, const GlobalOptions& g) {
   require_extension(o.output, {"json", "csv"});
   std::vector<double> thetas = parse_angle_list(o.theta, "--theta");
-  std::vector<double> phis = parse_angle_list(o.phi, "--phi");
+  std::vector<double> phis = parse_azimuth_list(o.phi, "--phi");
   for (double t : thetas)
     if (!(t >= 0 && t <= 180) || t == 90)
       throw UsageError("--theta must be in [0, 90) degrees, or (90, 180] for the undersurface of a "

@@ -64,9 +64,9 @@ void print_g2_table(const Json& rows, bool ensemble) {
 int run_measure_g2(const G2CliOptions& o, const GlobalOptions& g) {
   require_extension(o.output, {"json", "csv"});
   const std::vector<double> to = parse_angle_list(o.theta_o, "--theta-o");
-  const std::vector<double> po = parse_angle_list(o.phi_o, "--phi-o");
+  const std::vector<double> po = parse_azimuth_list(o.phi_o, "--phi-o");
   const std::vector<double> ti = parse_angle_list(o.theta_i, "--theta-i");
-  const std::vector<double> pi = parse_angle_list(o.phi_i, "--phi-i");
+  const std::vector<double> pi = parse_azimuth_list(o.phi_i, "--phi-i");
   require_above_horizon(to, "--theta-o");
   require_above_horizon(ti, "--theta-i");
   if (o.rays <= 0)

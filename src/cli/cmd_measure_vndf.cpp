@@ -63,7 +63,7 @@ void print_vndf_table(const Json& rows, bool ensemble) {
 int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
   require_extension(o.output, {"json", "csv"});
   const std::vector<double> thetas = parse_angle_list(o.theta, "--theta");
-  const std::vector<double> phis = parse_angle_list(o.phi, "--phi");
+  const std::vector<double> phis = parse_azimuth_list(o.phi, "--phi");
   require_above_horizon(thetas, "--theta");
   if (o.rays <= 0)
     throw UsageError("--rays must be a positive integer (got " + std::to_string(o.rays) + ")");

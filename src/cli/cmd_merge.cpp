@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "scaleout.hpp"
+#include "microsim/io/checks.hpp"
 #include "microsim/io/json_input.hpp"
 #include "microsim/io/output.hpp"
 
@@ -30,6 +31,7 @@ struct MergeOptions {
 };
 
 Json read_part(const std::string& path) {
+  require_regular_input(path, "part");
   std::ifstream in(path);
   if (!in) throw UsageError("part " + path + " cannot be read");
   try {

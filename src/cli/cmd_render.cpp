@@ -71,7 +71,7 @@ void register_render(CLI::App& app, const GlobalOptions& g) {
   cmd->add_option("--seed", o->preview.seed, "Random seed")->capture_default_str()->check(seed_value());
   cmd->add_option("--light-theta", o->light_theta, "Directional light: angle from the view axis, degrees [0, 90)")
       ->capture_default_str()
-      ->check(number_in(closed(0, 90)));
+      ->check(number_in(Range{0, 90, false, true}));  // [0, 90): the check of table_previews
   cmd->add_option("--light-phi", o->light_phi, "Directional light: azimuth in the image plane from +x (right), degrees")
       ->capture_default_str()
       ->check(number_in(closed(-360, 360)));

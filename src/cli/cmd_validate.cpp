@@ -47,14 +47,6 @@ std::vector<std::string> suite_dirs() {
   return dirs;
 }
 
-std::vector<std::string> split_list(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
 
 int run_validate(ValidateOptions o, const GlobalOptions& g) {
   if (o.files.empty() == o.suite.empty())
@@ -74,10 +66,11 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
   validation::Options cli_options;
   cli_options.theta_deg = parse_angle_list(o.theta, "--theta");
   require_above_horizon(cli_options.theta_deg, "--theta");
-  cli_options.phi_deg = parse_angle_list(o.phi, "--phi");
+  cli_options.phi_deg = parse_azimuth_list(o.phi, "--phi");
   cli_options.rays = static_cast<std::uint64_t>(o.rays);
   cli_options.seed = o.seed;
-  cli_options.checks = split_list(o.checks);
+  // An empty --checks would run every check: a list given is a list of at least one check.
+  if (o.checks_given) cli_options.checks = split_items(o.checks, ',', "--checks");
   auto apply_overrides = [&](validation::Options& opt) {
     if (o.theta_given) opt.theta_deg = cli_options.theta_deg;
     if (o.phi_given) opt.phi_deg = cli_options.phi_deg;

@@ -76,6 +76,11 @@ void apply_preset(CLI::App& cmd) {
     if (!op || !op->get_configurable())
       throw UsageError(where + "unknown option '" + item.key + "' for '" + cmd.get_name() + "' (known: " +
                        option_names(cmd) + ")");
+    // A preset holds a command's parameters; the files it reads and writes are the command
+    // line's (a required option is checked before any preset is read, so it could not apply).
+    if (op->get_required() || item.key == "output" || item.key == "input")
+      throw UsageError(where + "'" + item.key + "' names a file of the run: give --" + item.key +
+                       " on the command line, not in a preset");
     if (op->count() > 0) continue;  // the command line wins
     if (op->get_expected_min() == 0 && item.value != "true" && item.value != "false")  // a flag
       throw UsageError(where + "--" + item.key + ": expected true or false (got '" + item.value + "')");

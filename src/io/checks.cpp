@@ -8,6 +8,7 @@
 #include <cmath>
 #include <algorithm>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <limits>
@@ -94,6 +95,37 @@ std::uint64_t parse_seed(const std::string& text, const std::string& name) {
     throw UsageError(name + (name.empty() ? "" : " ") +
                      "must be an integer in [0, 18446744073709551615] (got '" + text + "')");
   return m;
+}
+
+std::vector<std::string> split_items(const std::string& text, char sep, const std::string& name) {
+  std::vector<std::string> items;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t end = text.find(sep, start);
+    items.push_back(text.substr(start, end == std::string::npos ? std::string::npos : end - start));
+    if (items.back().empty())
+      throw UsageError(name + " '" + text + "': empty item" +
+                       (text.empty() ? "" : std::string(" (a leading, trailing or doubled '") + sep + "')"));
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  return items;
+}
+
+void require_regular_input(const std::string& path, const std::string& name) {
+  namespace fs = std::filesystem;
+  // Standard input named on purpose (a pipe or a terminal) is the user's choice to read.
+  if (path == "-" || path == "/dev/stdin") return;
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);  // follows symbolic links
+  if (ec || !fs::exists(st) || fs::is_regular_file(st)) return;
+  const char* kind = fs::is_directory(st) ? "a folder"
+                     : fs::is_fifo(st)    ? "a FIFO"
+                     : fs::is_socket(st)  ? "a socket"
+                     : fs::is_character_file(st) || fs::is_block_file(st) ? "a device"
+                                                                           : "not a regular file";
+  throw UsageError(name + (name.empty() ? "" : " ") + path + ": " + kind +
+                   ", not a regular file (inputs are read from regular files)");
 }
 
 double available_memory_bytes() {

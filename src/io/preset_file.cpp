@@ -1,4 +1,5 @@
 #include "microsim/io/preset_file.hpp"
+#include "microsim/io/checks.hpp"
 
 #include <sys/stat.h>
 
@@ -78,6 +79,7 @@ std::vector<PresetItem> parse_preset_text(const std::string& text, const std::st
 }
 
 std::vector<PresetItem> read_preset_file(const std::string& path) {
+  require_regular_input(path, "");
   struct stat st;
   if (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) throw UsageError(path + ": no such preset file");
   if (st.st_size > (1 << 20)) throw UsageError(path + ": larger than 1 MiB, not a preset");

@@ -1,4 +1,5 @@
 #include "microsim/measure/bsdf_record.hpp"
+#include "microsim/io/checks.hpp"
 
 #include <tbb/task_arena.h>
 #include <unistd.h>
@@ -110,14 +111,17 @@ void check_bsdf_request(BsdfRequest& o) {
   for (double p : phis)
     if (!std::isfinite(p) || std::abs(p) > 3600)
       throw UsageError("--phi-i must be finite angles in degrees, |phi| <= 3600");
-  if (o.orders < 1 || o.orders > 16)
-    throw UsageError("--orders must be in [1, 16] (got " + std::to_string(o.orders) + ")");
+  if (o.orders < 1 || o.orders > kMaxBsdfOrders)
+    throw UsageError("--orders must be in [1, " + std::to_string(kMaxBsdfOrders) + "] (got " +
+                     std::to_string(o.orders) + ")");
   if (o.rays <= 0 || o.rays > 1000000000000LL)
     throw UsageError("--rays must be in [1, 1e12] (got " + std::to_string(o.rays) + ")");
-  if (o.resolution < 1 || o.resolution > 1024)
-    throw UsageError("--resolution must be in [1, 1024] (got " + std::to_string(o.resolution) + ")");
-  if (o.table_resolution < 2 || o.table_resolution > 512)
-    throw UsageError("--table-resolution must be in [2, 512] (got " + std::to_string(o.table_resolution) + ")");
+  if (o.resolution < 1 || o.resolution > kMaxBsdfResolution)
+    throw UsageError("--resolution must be in [1, " + std::to_string(kMaxBsdfResolution) + "] (got " +
+                     std::to_string(o.resolution) + ")");
+  if (o.table_resolution < kMinTableResolution || o.table_resolution > kMaxTableResolution)
+    throw UsageError("--table-resolution must be in [" + std::to_string(kMinTableResolution) + ", " +
+                     std::to_string(kMaxTableResolution) + "] (got " + std::to_string(o.table_resolution) + ")");
   const std::size_t n_inc = o.theta_i_deg.size() * phis.size();
   if (n_inc > 100000) throw UsageError("--theta-i x --phi-i: more than 100000 incidences");
   if (ext == "binary" && phis.size() > 1)
@@ -126,6 +130,12 @@ void check_bsdf_request(BsdfRequest& o) {
   if (ext == "bsdf" && phis.size() > 1 && (std::abs(phis.front() + 180) > 1e-9 || std::abs(phis.back() - 180) > 1e-9))
     throw UsageError("--phi-i: an anisotropic .bsdf needs azimuths over the full circle from -180 to 180 "
                      "(e.g. --phi-i -180:180:30), or one azimuth for an isotropic table");
+  // -o .bsdf: the RGL tables hold vndf, luminance and two spectra values (floats) per vertex of
+  // the table_resolution^2 grid of every incidence.
+  if (ext == "bsdf")
+    require_memory(16.0 * static_cast<double>(n_inc) * o.table_resolution * o.table_resolution,
+                   "--table-resolution " + std::to_string(o.table_resolution) + " with " + std::to_string(n_inc) +
+                       " incidences");
   // Tallies: f and f^2 per side, slot and pixel, one per worker plus the merge tree, and the
   // finished results of every incidence.
   const double tally = 2.0 * (o.orders + 1) * (static_cast<double>(o.resolution) * o.resolution + o.resolution) * 2 * 8;

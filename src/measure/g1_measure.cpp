@@ -1,4 +1,5 @@
 #include "microsim/measure/g1_measure.hpp"
+#include "microsim/io/checks.hpp"
 
 #include "microsim/measure/sampling.hpp"
 #include "microsim/measure/stats.hpp"
@@ -57,6 +58,11 @@ std::vector<Tally> run_chunks(int R, std::uint64_t n, int nbins, TraceCounters& 
   const std::uint64_t active = end > first ? end - first : 0;
   const std::uint64_t span = std::max<std::uint64_t>(1, kChunk / std::max<std::uint64_t>(1, active));
   const std::uint64_t nc = active ? (n + span - 1) / span : 0;
+  // Every chunk's tallies are kept until the merge: refused before the work when they would not
+  // fit in memory (rather than ending in std::bad_alloc).
+  require_memory(static_cast<double>(nc) * active * (sizeof(Tally) + 3.0 * nbins * sizeof(std::uint64_t)),
+                 "--rays " + std::to_string(static_cast<std::uint64_t>(R) * n) + " (tallies of " +
+                     std::to_string(nc * active) + " chunks of " + std::to_string(nbins) + " normal bins)");
   std::vector<Tally> reps(R, Tally(nbins));
   if (nc == 0) return reps;
   // parts[c * active + q]: chunk c, replicate first + q.
@@ -136,8 +142,26 @@ double per_replicate(std::uint64_t total, int R) { return static_cast<double>(to
 // replicate the ray-casting hits and the area samples and visible samples of every bin. The
 // ray-casting pass counts only hits and the area-sampling pass only samples, so their sum is one
 // row holding both.
+// Counts received from other processes (or read back from a merge's parts) must be possible:
+// per replicate at most n rays hit or are sampled, and no bin has more visible samples than
+// samples. UsageError naming the field otherwise (a part edited by hand, or damaged).
+void require_possible_g1_counts(const Tally& t, std::size_t q, std::uint64_t n) {
+  std::uint64_t hits = 0, samples = 0;
+  for (std::size_t b = 0; b < t.samples.size(); ++b) {
+    if (t.visible[b] > t.samples[b])
+      throw UsageError("g1 tallies of replicate " + std::to_string(q) + ": visible[" + std::to_string(b) + "] = " +
+                       std::to_string(t.visible[b]) + " exceeds samples[" + std::to_string(b) + "] = " +
+                       std::to_string(t.samples[b]) + " (a damaged or edited part)");
+    hits += t.hits[b];
+    samples += t.samples[b];
+    if (hits > n || samples > n)
+      throw UsageError("g1 tallies of replicate " + std::to_string(q) + ": " + (hits > n ? "hits" : "samples") +
+                       " exceed its " + std::to_string(n) + " rays (a damaged or edited part)");
+  }
+}
+
 void exchange_g1(TallySplit& split, UnitRange reps, std::vector<Tally>& ray_reps,
-                 std::vector<Tally>& sample_reps, TraceCounters& counters, int nbins) {
+                 std::vector<Tally>& sample_reps, TraceCounters& counters, int nbins, std::uint64_t n) {
   const std::size_t R = ray_reps.size();
   Tallies t("g1", R, reps, field_sizes(Tally(nbins)).counts, 0, kCounterValues, 0);
   for (std::size_t q = 0; q < R; ++q) {
@@ -149,6 +173,7 @@ void exchange_g1(TallySplit& split, UnitRange reps, std::vector<Tally>& ray_reps
   split.exchange(t);
   for (std::size_t q = 0; q < R; ++q) {
     unpack_fields(ray_reps[q], t.count_row(q));
+    require_possible_g1_counts(ray_reps[q], q, n);
     sample_reps[q] = ray_reps[q];
   }
   counters = get_counters(t.tail_counts.data());
@@ -447,7 +472,7 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
             });
   report();
   r.sample_cpu_seconds = process_cpu_seconds() - cpu_sample;
-  if (o.split) exchange_g1(*o.split, reps, ray_reps, sample_reps, counters, nbins);
+  if (o.split) exchange_g1(*o.split, reps, ray_reps, sample_reps, counters, nbins, n_rep);
   set_g1_counts(r, ray_reps, sample_reps);
   r.counters = counters;
   r.sample_seconds =

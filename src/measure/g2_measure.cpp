@@ -1,4 +1,5 @@
 #include "microsim/measure/g2_measure.hpp"
+#include "microsim/io/checks.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -260,6 +261,11 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
   const UnitRange reps = share_of(opt.split, static_cast<std::uint64_t>(R));
   const int share0 = static_cast<int>(reps.first), share1 = static_cast<int>(reps.end);
   const int halves[3] = {share0, share0 + (share1 - share0) / 2, share1};
+  // The larger half's chunk tallies are held at once: refused before the work when they would
+  // not fit in memory (rather than ending in std::bad_alloc).
+  require_memory(static_cast<double>(share1 - halves[1]) * nc * (sizeof(Tally) + 4.0 * nbins * sizeof(std::uint64_t)),
+                 "--rays " + std::to_string(opt.rays) + " (tallies of " + std::to_string(nc) +
+                     " chunks per replicate, " + std::to_string(nbins) + " normal bins)");
   for (int h = 0; h < 2; ++h) {
     const int r0 = halves[h], r1 = halves[h + 1];
     if (r1 <= r0) continue;

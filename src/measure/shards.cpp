@@ -1,10 +1,13 @@
 #include "microsim/measure/shards.hpp"
+#include "microsim/io/checks.hpp"
 #include "microsim/version.hpp"
 
 #include <sys/stat.h>
 
 #include <cstdio>
+#include <cmath>
 #include <fstream>
+#include <functional>
 #include <map>
 
 namespace microsim {
@@ -196,24 +199,71 @@ Json tallies_json(const Tallies& t) {
           {"tail_reals", t.tail_reals}};
 }
 
-Tallies tallies_of(const Json& j, const std::string& part) {
-  const auto bad = [&](const std::string& why) {
-    return UsageError("part " + part + " is not a valid partial record: " + why);
+// Counts are JSON integers in [0, 2^63): a negative count would wrap around, a fraction be cut
+// and 1e30 overflow, each giving a merged record that looks right.
+constexpr std::uint64_t kMaxCount = std::uint64_t(1) << 63;
+
+std::uint64_t count_of(const Json& x, const std::function<UsageError(const std::string&)>& bad,
+                       const std::string& field) {
+  // A JSON integer: unsigned as parsed from text, or signed (and not negative) as built in memory.
+  const bool integer = x.is_number_unsigned() || (x.is_number_integer() && x.get<std::int64_t>() >= 0);
+  if (!integer || x.get<std::uint64_t>() >= kMaxCount)
+    throw bad(field + " must be a non-negative integer below 2^63 (got " + x.dump() + ")");
+  return x.get<std::uint64_t>();
+}
+
+std::vector<std::uint64_t> counts_of(const Json& j, const char* key,
+                                     const std::function<UsageError(const std::string&)>& bad) {
+  const Json& a = j.at(key);
+  if (!a.is_array()) throw bad(std::string(key) + " must be an array of counts");
+  std::vector<std::uint64_t> v;
+  v.reserve(a.size());
+  for (std::size_t i = 0; i < a.size(); ++i) v.push_back(count_of(a[i], bad, key + ("[" + std::to_string(i) + "]")));
+  return v;
+}
+
+std::vector<double> reals_of(const Json& j, const char* key,
+                             const std::function<UsageError(const std::string&)>& bad) {
+  const Json& a = j.at(key);
+  if (!a.is_array()) throw bad(std::string(key) + " must be an array of numbers");
+  std::vector<double> v;
+  v.reserve(a.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!a[i].is_number() || !std::isfinite(a[i].get<double>()))
+      throw bad(key + ("[" + std::to_string(i) + "] must be a finite number (got " + a[i].dump() + ")"));
+    v.push_back(a[i].get<double>());
+  }
+  return v;
+}
+
+// One estimator call's tallies of a part; `index` is its place in the part's "tallies".
+Tallies tallies_of(const Json& j, const std::string& part, std::size_t index) {
+  const std::function<UsageError(const std::string&)> bad = [&](const std::string& why) {
+    return UsageError("part " + part + " is not a valid partial record: tallies[" + std::to_string(index) +
+                      "]." + why);
   };
-  const UnitRange covered{j.at("covered").at(0).get<std::uint64_t>(),
-                          j.at("covered").at(1).get<std::uint64_t>()};
-  const auto units = j.at("units").get<std::uint64_t>();
-  if (covered.first > covered.end || covered.end > units) throw bad("covered range outside the units");
-  Tallies t(j.at("kind").get<std::string>(), units, covered, j.at("row_counts").get<std::size_t>(),
-            j.at("row_reals").get<std::size_t>(), j.at("tail_counts").size(), j.at("tail_reals").size());
-  const auto counts = j.at("counts").get<std::vector<std::uint64_t>>();
-  const auto reals = j.at("reals").get<std::vector<double>>();
-  if (counts.size() != covered.size() * t.row_counts || reals.size() != covered.size() * t.row_reals)
-    throw bad("row sizes do not match the covered range");
+  const UnitRange covered{count_of(j.at("covered").at(0), bad, "covered[0]"),
+                          count_of(j.at("covered").at(1), bad, "covered[1]")};
+  const auto units = count_of(j.at("units"), bad, "units");
+  if (covered.first > covered.end || covered.end > units) throw bad("covered: range outside the units");
+  const std::uint64_t row_counts = count_of(j.at("row_counts"), bad, "row_counts");
+  const std::uint64_t row_reals = count_of(j.at("row_reals"), bad, "row_reals");
+  const auto counts = counts_of(j, "counts", bad);
+  const auto reals = reals_of(j, "reals", bad);
+  // Sizes checked before the tallies are allocated (units * row widths comes from the file).
+  if (units > 0 && (row_counts > kMaxCount / units || row_reals > kMaxCount / units))
+    throw bad("row_counts: rows too wide for the units");
+  if (counts.size() != covered.size() * row_counts || reals.size() != covered.size() * row_reals)
+    throw bad("counts: row sizes do not match the covered range");
+  require_memory(8.0 * units * (row_counts + row_reals), "part " + part + " (units x row widths)");
+  const auto tail_counts = counts_of(j, "tail_counts", bad);
+  const auto tail_reals = reals_of(j, "tail_reals", bad);
+  Tallies t(j.at("kind").get<std::string>(), units, covered, row_counts, row_reals, tail_counts.size(),
+            tail_reals.size());
   std::copy(counts.begin(), counts.end(), t.counts.begin() + static_cast<std::ptrdiff_t>(covered.first * t.row_counts));
   std::copy(reals.begin(), reals.end(), t.reals.begin() + static_cast<std::ptrdiff_t>(covered.first * t.row_reals));
-  t.tail_counts = j.at("tail_counts").get<std::vector<std::uint64_t>>();
-  t.tail_reals = j.at("tail_reals").get<std::vector<double>>();
+  t.tail_counts = tail_counts;
+  t.tail_reals = tail_reals;
   return t;
 }
 
@@ -274,7 +324,7 @@ MergedRun merge_partials(const std::vector<std::pair<std::string, Json>>& parts)
     seen[k] = name;
     std::vector<Tallies> entries;
     try {
-      for (const auto& e : j.at("tallies")) entries.push_back(tallies_of(e, name));
+      for (const auto& e : j.at("tallies")) entries.push_back(tallies_of(e, name, entries.size()));
     } catch (const Json::exception& e) {
       throw UsageError("part " + name + " is not a valid partial record: " + e.what());
     }

@@ -1,4 +1,5 @@
 #include "microsim/surface/heightmap_import.hpp"
+#include "microsim/io/checks.hpp"
 #include "microsim/surface/guard_band.hpp"
 
 #include <Eigen/Dense>
@@ -104,7 +105,9 @@ RawHeightGrid read_text(const std::string& path) {
   std::vector<double> fields;
   bool header_seen = false;
   for (int lineno = 1; std::getline(f, line); ++lineno) {
-    const std::string t = trim(line);
+    // A UTF-8 byte order mark (spreadsheet exports) is not part of the first row.
+    if (lineno == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
+    const std::string t = trim(line);  // also the '\r' of CRLF line ends
     if (t.empty() || t[0] == '#' || t[0] == '%' || t.rfind("//", 0) == 0) continue;
     if (!parse_fields(t, fields, bad)) {
       if (rows.empty() && !header_seen) {  // a header line naming the columns
@@ -170,6 +173,7 @@ std::string num(double x) {
 }  // namespace
 
 RawHeightGrid read_height_grid(const std::string& path, const std::string& channel) {
+  require_regular_input(path, "--input");
   std::ifstream probe(path);
   if (!probe) throw UsageError("--input " + path + ": cannot open");
   if (is_text_extension(extension_of(path))) {
@@ -409,13 +413,22 @@ Microsurface import_heightmap(const HeightmapImportParams& p) {
 
   std::size_t missing = 0;
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (double& v : g.z) {
-    if (!std::isfinite(v) || (p.has_nodata && v == p.nodata)) {
+  for (std::size_t k = 0; k < g.z.size(); ++k) {
+    double& v = g.z[k];
+    if (std::isnan(v) || (p.has_nodata && v == p.nodata)) {
       v = kNaN;
       ++missing;
       continue;
     }
+    // Only NaN and --nodata mark a missing height: an infinite one (or one beyond the range of
+    // a double, such as 1e999, or one the scale carries there) is a defect of the file, not a
+    // hole to fill.
+    const double raw = v;
     v *= p.height_scale * unit_factor;
+    if (!std::isfinite(v))
+      throw UsageError(path + ": height " + num(raw) + " at column " + std::to_string(k % g.nx) + ", row " +
+                       std::to_string(k / g.nx) + (std::isfinite(raw) ? " times --height-scale" : "") +
+                       " is not a finite number (missing heights are NaN or --nodata)");
     lo = std::min(lo, v);
     hi = std::max(hi, v);
   }

@@ -1,4 +1,5 @@
 #include "microsim/surface/mesh_check.hpp"
+#include "microsim/io/checks.hpp"
 #include "microsim/surface/mesh_header.hpp"
 
 #include "openmesh_headers.hpp"
@@ -271,6 +272,7 @@ void read_mesh_file(const std::string& path, std::vector<Eigen::Vector3f>& verts
 }
 
 Microsurface import_mesh(const MeshImportParams& p) {
+  require_regular_input(p.input, "--input");
   if (!p.normal.allFinite() || !(p.normal.norm() > 0))
     throw UsageError("--normal must be a nonzero vector x,y,z");
   if (p.area < 0 || !std::isfinite(p.area)) throw UsageError("--area must be > 0");

@@ -273,11 +273,17 @@ void save_surface(const Microsurface& s, const std::string& path) {
 
 Microsurface load_surface(const std::string& path) { return load_surface_or_window(path); }
 
+void require_readable_surface(const Microsurface& s, const std::string& name) {
+  macro_from_json(macro_to_json(s.macro()), name);  // the reader's own rules
+  if (s.kind() == Microsurface::Kind::Mesh) check_mesh(s, name);
+}
+
 Microsurface load_surface_or_window(const std::string& path, bool allow_window) {
   // A surface written earlier by this command (demo) and not committed yet is read from its
   // temporary.
   const std::string pending = OutputTransaction::pending(path);
   const std::string file = pending.empty() ? path : pending;
+  require_regular_input(file, "surface file");
   if (!file_exists(file)) throw UsageError("surface file " + path + " does not exist");
   std::string ext = extension_of(path);
   if (ext == "exr") return load_heightfield_exr(file, allow_window);

@@ -14,6 +14,7 @@
 #include "microsim/surface/heightmap_import.hpp"
 #include "microsim/surface/mesh_check.hpp"
 #include "microsim/surface/metrology.hpp"
+#include "microsim/surface/surface_io.hpp"
 #include "microsim/surface/surface_spec.hpp"
 
 namespace microsim {
@@ -70,9 +71,7 @@ void resolve_alpha(const Given& v, double& ax, double& ay) {
 std::vector<double> parse_numbers(const std::string& text, const std::string& option, std::size_t count) {
   const UsageError bad(option + " '" + text + "': expected " + std::to_string(count) + " comma-separated numbers");
   std::vector<double> out;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
+  for (const std::string& item : split_items(text, ',', option)) {
     try {
       std::size_t used = 0;
       double x = std::stod(item, &used);
@@ -88,9 +87,7 @@ std::vector<double> parse_numbers(const std::string& text, const std::string& op
 
 std::vector<int> parse_crop(const std::string& text) {
   std::vector<int> out;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
+  for (const std::string& item : split_items(text, ',', "--crop")) {
     try {
       std::size_t used = 0;
       long v = std::stol(item, &used);
@@ -383,8 +380,23 @@ void require_surface_extension(const std::string& path) {
     throw UsageError("-o " + path + ": unknown surface format (use .exr, .ply, .obj or .off)");
 }
 
+// "generate KIND --a 1 --b 2" of a request, to name its options in a message.
+std::string request_text(const SurfaceRequest& r) {
+  std::string t = "generate " + r.kind;
+  for (const auto& [key, value] : r.options) t += " --" + key + (value == "true" ? "" : " " + value);
+  return t;
+}
+
+// A surface no reader accepts (sizes whose area underflows to 0 or overflows, facets too thin
+// to have an area) is refused here rather than written.
 Microsurface generate_surface(const SurfaceRequest& r, const std::string& output_path) {
-  return prepare(r, output_path)();
+  Microsurface s = prepare(r, output_path)();
+  try {
+    require_readable_surface(s, "surface");
+  } catch (const UsageError& e) {
+    throw UsageError(request_text(r) + ": these sizes give a surface that no reader accepts (" + e.what() + ")");
+  }
+  return s;
 }
 
 void check_surface_request(const SurfaceRequest& r, const std::string& output_path) { prepare(r, output_path); }

@@ -1,5 +1,6 @@
 // Suites of validation entries (JSON files).
 #include "checks_common.hpp"
+#include "microsim/io/checks.hpp"
 
 #include <set>
 
@@ -26,23 +27,45 @@ std::uint64_t get_count(const Json& j, const char* key, const std::string& file,
   return x.is_number_unsigned() ? x.get<std::uint64_t>() : static_cast<std::uint64_t>(x.get<double>());
 }
 
-void read_options(const Json& j, Options& o, const std::string& file, const std::string& where) {
+// A JSON value read as T, or UsageError naming the file, the entry and the key with what it
+// must be (the parser's own text names neither).
+template <class T>
+T get_typed(const Json& j, const char* key, const std::string& file, const std::string& where, const char* expected) {
   try {
-    if (j.contains("theta_deg")) o.theta_deg = j["theta_deg"].get<std::vector<double>>();
-    if (j.contains("phi_deg")) o.phi_deg = j["phi_deg"].get<std::vector<double>>();
-    if (j.contains("rays")) o.rays = get_count(j, "rays", file, where);
-    if (j.contains("seed")) o.seed = j["seed"].is_number_unsigned() ? j["seed"].get<std::uint64_t>()
-                                                                    : get_count(j, "seed", file, where);
-    if (j.contains("checks")) o.checks = j["checks"].get<std::vector<std::string>>();
-    if (j.contains("ndf_theta_bins")) o.ndf_theta_bins = static_cast<int>(get_count(j, "ndf_theta_bins", file, where));
-    if (j.contains("ndf_phi_bins")) o.ndf_phi_bins = static_cast<int>(get_count(j, "ndf_phi_bins", file, where));
-    if (j.contains("min_ring_mass")) o.min_ring_mass = j["min_ring_mass"].get<double>();
-    if (j.contains("min_bin_count")) o.min_bin_count = get_count(j, "min_bin_count", file, where);
-  } catch (const Json::exception& e) {
-    suite_error(file, where + ": " + e.what());
+    return j[key].get<T>();
+  } catch (const Json::exception&) {
+    suite_error(file, where + ": " + key + " must be " + expected + " (got " + j[key].dump() + ")");
   }
+}
+
+// A seed: a JSON integer in [0, 2^64 - 1] (a negative value would wrap around and a fraction
+// would be cut, both silently).
+std::uint64_t get_seed(const Json& x, const std::string& file, const std::string& where, const std::string& key) {
+  if (x.is_number_unsigned() || (x.is_number_integer() && x.get<std::int64_t>() >= 0)) return x.get<std::uint64_t>();
+  if (x.is_number_float() && x.get<double>() >= 0 && x.get<double>() < 18446744073709551616.0 &&
+      x.get<double>() == std::floor(x.get<double>()))
+    return static_cast<std::uint64_t>(x.get<double>());
+  suite_error(file, where + ": " + key + " must be an integer in [0, 2^64-1] (got " + x.dump() + ")");
+}
+
+void read_options(const Json& j, Options& o, const std::string& file, const std::string& where) {
+  if (j.contains("theta_deg"))
+    o.theta_deg = get_typed<std::vector<double>>(j, "theta_deg", file, where, "an array of numbers");
+  if (j.contains("phi_deg")) o.phi_deg = get_typed<std::vector<double>>(j, "phi_deg", file, where, "an array of numbers");
+  if (j.contains("rays")) o.rays = get_count(j, "rays", file, where);
+  if (j.contains("seed")) o.seed = get_seed(j["seed"], file, where, "seed");
+  if (j.contains("checks")) {
+    o.checks = get_typed<std::vector<std::string>>(j, "checks", file, where, "an array of check names");
+    if (o.checks.empty()) suite_error(file, where + ": checks is empty (leave it out to run every check)");
+  }
+  if (j.contains("ndf_theta_bins")) o.ndf_theta_bins = static_cast<int>(get_count(j, "ndf_theta_bins", file, where));
+  if (j.contains("ndf_phi_bins")) o.ndf_phi_bins = static_cast<int>(get_count(j, "ndf_phi_bins", file, where));
+  if (j.contains("min_ring_mass")) o.min_ring_mass = get_typed<double>(j, "min_ring_mass", file, where, "a number");
+  if (j.contains("min_bin_count")) o.min_bin_count = get_count(j, "min_bin_count", file, where);
   for (double t : o.theta_deg)
     if (!(t >= 0 && t < 90)) suite_error(file, where + ": theta_deg must be in [0, 90) degrees");
+  for (double p : o.phi_deg)
+    if (!(std::abs(p) <= 3600)) suite_error(file, where + ": phi_deg must be azimuths in [-3600, 3600] degrees");
   if (o.theta_deg.empty() || o.phi_deg.empty()) suite_error(file, where + ": empty theta_deg or phi_deg");
   if (o.ndf_theta_bins > 3600 || o.ndf_phi_bins > 7200)
     suite_error(file, where + ": ndf_theta_bins in [1, 3600], ndf_phi_bins in [1, 7200]");
@@ -58,6 +81,7 @@ bool is_option_key(const std::string& k) {
 
 Suite load_suite(const std::string& path) {
   namespace fs = std::filesystem;
+  require_regular_input(path, "--suite");
   std::ifstream in(path);
   if (!in) throw UsageError("--suite " + path + ": cannot read the file");
   Json j;
@@ -124,10 +148,14 @@ Suite load_suite(const std::string& path) {
       }
     }
     if (e.contains("seeds")) {
-      try {
-        entry.seeds = e["seeds"].get<std::vector<std::uint64_t>>();
-      } catch (const Json::exception&) {
-        suite_error(path, where + ": seeds must be an array of non-negative integers");
+      // Distinct seeds: the surfaces of an ensemble count as independent samples.
+      if (!e["seeds"].is_array()) suite_error(path, where + ": seeds must be an array of integers in [0, 2^64-1]");
+      std::set<std::uint64_t> seen;
+      for (const Json& x : e["seeds"]) {
+        entry.seeds.push_back(get_seed(x, path, where, "seeds"));
+        if (!seen.insert(entry.seeds.back()).second)
+          suite_error(path, where + ": seeds: " + std::to_string(entry.seeds.back()) +
+                                " is given twice (the surfaces of an ensemble must be independent)");
       }
     }
     if (e.contains("format")) {
@@ -144,6 +172,8 @@ Suite load_suite(const std::string& path) {
 
 std::string find_suite(const std::string& name, const std::vector<std::string>& dirs) {
   namespace fs = std::filesystem;
+  const bool a_path = name.find('/') != std::string::npos || fs::path(name).extension() == ".json";
+  if (a_path && fs::exists(name)) require_regular_input(name, "--suite");
   if (fs::is_regular_file(name)) return name;
   for (const std::string& d : dirs) {
     fs::path p = fs::path(d) / (name + ".json");

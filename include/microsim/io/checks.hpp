@@ -6,6 +6,7 @@
 #pragma once
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace microsim {
 
@@ -32,6 +33,16 @@ double parse_number_in(const std::string& text, const Range& r, const std::strin
 long long parse_integer_in(const std::string& text, long long lo, long long hi, const std::string& name);
 // Parses a seed: a decimal integer in [0, 2^64 - 1].
 std::uint64_t parse_seed(const std::string& text, const std::string& name);
+
+// The items of a `sep`-separated list; UsageError naming `name` when the list or any item is
+// empty (a leading, trailing or doubled separator is a mistake, not an item to skip).
+std::vector<std::string> split_items(const std::string& text, char sep, const std::string& name);
+
+// UsageError "NAME PATH: not a regular file (a FIFO ...)" when `path` exists but is a FIFO, a
+// device, a socket or a folder: reading one could block forever or never end. Missing files
+// are left to the reader's own message. "-" and /dev/stdin pass: standard input named on
+// purpose (e.g. `microsim merge /dev/stdin PART2 < PART1`) is read as before.
+void require_regular_input(const std::string& path, const std::string& name);
 
 // Bytes the process may use: the memory available now (MemAvailable), physical memory, or the
 // address-space limit, whichever is lowest.

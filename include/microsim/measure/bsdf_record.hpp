@@ -24,6 +24,11 @@
 
 namespace microsim {
 
+// Ranges of the request's counts: check_bsdf_request and the command line's help both use them.
+constexpr int kMaxBsdfOrders = 16;
+constexpr int kMaxBsdfResolution = 1024;
+constexpr int kMinTableResolution = 2, kMaxTableResolution = 512;
+
 struct BsdfRequest {
   std::string material;         // mirror, conductor or dielectric
   std::optional<double> eta, k;  // as given (conductor: both; dielectric: eta)

@@ -12,6 +12,10 @@ namespace microsim {
 void save_surface(const Microsurface& s, const std::string& path);
 // Throws UsageError with a one-line message for a missing, unreadable or corrupt file.
 Microsurface load_surface(const std::string& path);
+// UsageError "NAME: ..." unless every reader would accept `s` once saved: the macrosurface
+// fields in the ranges load_surface checks, and for meshes the checks of check_mesh (no
+// degenerate triangle, the rim, [GeomBSDF24, eq. 1b]).
+void require_readable_surface(const Microsurface& s, const std::string& name);
 
 // Converts a heightfield to a triangle mesh with the same facets (same triangulation).
 Microsurface heightfield_to_mesh(const Microsurface& s);
