@@ -36,14 +36,13 @@ std::unique_ptr<MicrosimApp> build_app(GlobalOptions& g, TallyReplay* replay) {
       app.threads = std::make_unique<tbb::global_control>(
           tbb::global_control::max_allowed_parallelism, g.threads);
     std::vector<std::string> words;
-    const CLI::App* command = &app;
-    for (; !command->get_subcommands().empty();) {
-      command = command->get_subcommands().front();
-      words.push_back(command->get_name());
+    for (const CLI::App* level = &app; !level->get_subcommands().empty();) {
+      level = level->get_subcommands().front();
+      words.push_back(level->get_name());
     }
     // Before any work: an output must not replace an input of the same run (embedded, inputs
     // are surfaces held in memory).
-    if (!g.surface_by_name) refuse_outputs_naming_inputs(*command, app.shard_text);
+    if (!g.surface_by_name) refuse_outputs_naming_inputs(app, app.shard_text);
     if ((!app.shard_text.empty() || mpi.active) && !command_can_split(words))
       throw UsageError(std::string(mpi.active ? "mpirun" : "--shard") +
                        " applies to measure g1, g2, vndf, bsdf and validate");

@@ -98,7 +98,10 @@ std::vector<NamedPath> command_inputs(const CLI::App& cmd) {
   return in;
 }
 
-void refuse_outputs_naming_inputs(const CLI::App& cmd, const std::string& shard_text) {
+void refuse_outputs_naming_inputs(const CLI::App& app, const std::string& shard_text) {
+  const CLI::App* leaf = &app;
+  while (!leaf->get_subcommands().empty()) leaf = leaf->get_subcommands().front();
+  const CLI::App& cmd = *leaf;
   const std::vector<NamedPath> inputs = command_inputs(cmd);
   if (inputs.empty()) return;
   for (const NamedPath& o : command_outputs(cmd, shard_text))

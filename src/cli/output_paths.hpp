@@ -24,8 +24,9 @@ std::vector<NamedPath> command_outputs(const CLI::App& cmd, const std::string& s
 // the .json sidecar beside an input mesh.
 std::vector<NamedPath> command_inputs(const CLI::App& cmd);
 
-// UsageError naming both options when an output is the same file as an input (resolved:
-// symbolic links, other spellings and hard links name the same file).
-void refuse_outputs_naming_inputs(const CLI::App& cmd, const std::string& shard_text);
+// UsageError naming both options when an output of the command parsed by `app` (the command
+// itself, or the root of the tree: its parsed leaf) is the same file as one of its inputs
+// (resolved: symbolic links, other spellings and hard links name the same file).
+void refuse_outputs_naming_inputs(const CLI::App& app, const std::string& shard_text);
 
 }  // namespace microsim::cli
