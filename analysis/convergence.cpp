@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <string>
 
+#include "microsim/io/output.hpp"
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/measure/g2_measure.hpp"
@@ -409,12 +410,7 @@ int main(int argc, char** argv) {
       }
     }
     j["seconds"] = seconds_since(t0);
-    const std::string tmp = a.out + ".tmp";
-    {
-      std::ofstream f(tmp);
-      f << j.dump(1) << "\n";
-    }
-    std::rename(tmp.c_str(), a.out.c_str());
+    write_stream_atomically(a.out, [&](std::ofstream& f) { f << j.dump(1) << "\n"; });
   } catch (const std::exception& e) {
     std::fprintf(stderr, "convergence: %s\n", e.what());
     return 1;

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "microsim/io/output.hpp"
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/measure/g2_measure.hpp"
@@ -111,9 +112,16 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  FILE* f = csv ? std::fopen(csv, "w") : nullptr;
-  if (f)
-    std::fprintf(f, "alpha,guard_l,guard_cells,interior_cells,quantity,window,window_stderr,periodic,"
+  // The CSV rows, written at the end through the checked atomic output (a full disk fails the
+  // run instead of leaving a truncated table).
+  std::string rows;
+  auto row = [&rows](const char* format, auto... values) {
+    char line[512];
+    std::snprintf(line, sizeof line, format, values...);
+    rows += line;
+  };
+  if (csv)
+    row("%s", "alpha,guard_l,guard_cells,interior_cells,quantity,window,window_stderr,periodic,"
                     "periodic_stderr,difference,z,side_fraction\n");
   std::printf("Tile %d^2 cells, l = %d cells (%g l per side), %llu rays per G1/G2 estimate, %llu BSDF "
               "paths, seed %llu\n",
@@ -145,14 +153,20 @@ int main(int argc, char** argv) {
         const double z = se > 0 ? d / se : 0.0;
         std::printf("| %s | %.5f +- %.5f | %.5f +- %.5f | %+.5f | %+.2f |\n", w[q].name.c_str(), w[q].mean,
                     w[q].se, r[q].mean, r[q].se, d, z);
-        if (f)
-          std::fprintf(f, "%g,%g,%d,%d,\"%s\",%.8g,%.8g,%.8g,%.8g,%.8g,%.4f,%.6g\n", alpha, g, gc, cx - 2 * gc,
+        if (csv)
+          row("%g,%g,%d,%d,\"%s\",%.8g,%.8g,%.8g,%.8g,%.8g,%.4f,%.6g\n", alpha, g, gc, cx - 2 * gc,
                        w[q].name.c_str(), w[q].mean, w[q].se, r[q].mean, r[q].se, d, z, side_w);
       }
       std::fflush(stdout);
-      if (f) std::fflush(f);
     }
   }
-  if (f) std::fclose(f);
+  if (csv) {
+    try {
+      write_stream_atomically(csv, [&](std::ofstream& out) { out << rows; });
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "guard_band_bias: %s\n", e.what());
+      return 1;
+    }
+  }
   return 0;
 }

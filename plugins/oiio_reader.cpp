@@ -2,6 +2,7 @@
 // points. microsim loads this module only when it imports an image (heightmap_import.cpp) or
 // writes a PNG preview (render/sphere_preview.cpp): OpenImageIO pulls in a few
 // hundred shared libraries, which would otherwise cost every microsim command seconds of start-up.
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <vector>
 
 namespace {
 // Largest value of an integer pixel type: OpenImageIO converts integers to [0, 1] (or [-1, 1]);
@@ -74,16 +76,29 @@ extern "C" int microsim_oiio_read_channel(const char* path, const char* channel,
   return 0;
 }
 
-// Writes an 8-bit RGB image (width*height*3 bytes, row 0 at the top) in the format named by
-// `format` ("png"), whatever the file's name (callers write to a temporary, then rename).
-// Returns 0, or nonzero and a one-line message in err[cap].
-extern "C" int microsim_oiio_write_rgb8(const char* path, const char* format, int width, int height,
-                                        const unsigned char* rgb, char* err, int err_cap) {
+// Encodes an 8-bit RGB image (width*height*3 bytes, row 0 at the top) in the format named by
+// `format` ("png") in memory: the caller writes the bytes through its checked output (an image
+// writer's close does not report a full disk). Returns 0 and a malloc'ed buffer of *size bytes
+// in *bytes (freed by the caller), or nonzero and a one-line message in err[cap].
+extern "C" int microsim_oiio_encode_rgb8(const char* format, int width, int height, const unsigned char* rgb,
+                                         unsigned char** bytes, std::size_t* size, char* err, int err_cap) {
+  *bytes = nullptr;
+  *size = 0;
   auto out = OIIO::ImageOutput::create(format);
   if (!out) return fail(err, err_cap, std::string("no ") + format + " writer in OpenImageIO (" + OIIO::geterror() + ")");
+  if (!out->supports("ioproxy"))
+    return fail(err, err_cap, std::string("the ") + format + " writer of OpenImageIO cannot write to memory");
+  OIIO::Filesystem::IOVecOutput memory;
+  out->set_ioproxy(&memory);
+  const std::string name = std::string("image.") + format;
   const OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-  if (!out->open(path, spec)) return fail(err, err_cap, std::string(path) + ": " + out->geterror());
-  if (!out->write_image(OIIO::TypeDesc::UINT8, rgb)) return fail(err, err_cap, std::string(path) + ": " + out->geterror());
-  if (!out->close()) return fail(err, err_cap, std::string(path) + ": " + out->geterror());
+  if (!out->open(name, spec)) return fail(err, err_cap, out->geterror());
+  if (!out->write_image(OIIO::TypeDesc::UINT8, rgb)) return fail(err, err_cap, out->geterror());
+  if (!out->close()) return fail(err, err_cap, out->geterror());
+  const std::vector<unsigned char>& encoded = memory.buffer();
+  *bytes = static_cast<unsigned char*>(std::malloc(std::max<std::size_t>(1, encoded.size())));
+  if (!*bytes) return fail(err, err_cap, "out of memory");
+  std::memcpy(*bytes, encoded.data(), encoded.size());
+  *size = encoded.size();
   return 0;
 }

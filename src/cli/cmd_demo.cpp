@@ -1,13 +1,11 @@
 // microsim demo: the README's first command. Generates the default preset, measures D and G1
 // and prints them beside Smith.
-#include <sys/stat.h>
-
-#include <cerrno>
 #include <iostream>
 
 #include "cli_common.hpp"
 #include "option_checks.hpp"
 #include "commands.hpp"
+#include "microsim/io/output.hpp"
 
 namespace microsim::cli {
 
@@ -19,7 +17,8 @@ int run_demo(const SurfaceRequest& surface, MeasureOptions meas, const std::stri
   std::vector<double> thetas = parse_angle_list(meas.theta, "--theta");
   require_above_horizon(thetas, "--theta");
   check_surface_request(surface);
-  if (mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST)
+  // A folder created here is removed again if the command fails or is interrupted.
+  if (!create_output_folder(dir))
     throw UsageError("--out-dir " + dir + ": cannot create the folder");
   meas.surface = dir + "/surface.exr";
   write_generated(surface, meas.surface, g);

@@ -84,6 +84,10 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
   std::vector<validation::SurfaceSet> sets;
   double significance = o.significance;
   std::unique_ptr<TemporaryFolder> temp_dir;  // removed at the end (or on interrupt) unless --surfaces-dir
+  // The surfaces generated into --surfaces-dir (and the folders created for them) are placed as
+  // they are generated and kept once the run has ended; a failure or an interrupt before that
+  // removes them.
+  OutputTransaction generated_surfaces;
   if (!o.files.empty()) {
     validation::SurfaceSet set;
     set.name = fs::path(o.files[0]).stem().string();
@@ -104,9 +108,7 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
     fs::path dir;
     if (!o.surfaces_dir.empty()) {
       dir = o.surfaces_dir;
-      std::error_code ec;
-      fs::create_directories(dir, ec);
-      if (ec || !fs::is_directory(dir))
+      if (!create_output_folder(o.surfaces_dir))
         throw UsageError("--surfaces-dir " + o.surfaces_dir + ": cannot create the folder");
     } else {
       temp_dir = std::make_unique<TemporaryFolder>("microsim-validate");
@@ -157,6 +159,7 @@ int run_validate(ValidateOptions o, const GlobalOptions& g) {
     write_record(g, o.output, j);
     if (!g.partial) record.commit();
   }
+  generated_surfaces.commit();
   if (!g.quiet) {
     std::cout << "validate " << (o.suite.empty() ? o.files[0] : "--suite " + o.suite) << ": "
               << result.rows.size() << " rows (groups of per-bin rows shown by their worst row)\n"

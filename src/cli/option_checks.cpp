@@ -1,4 +1,5 @@
 #include "option_checks.hpp"
+#include "output_paths.hpp"
 
 #include "microsim/common.hpp"
 #include "microsim/io/preset_file.hpp"
@@ -96,6 +97,7 @@ void apply_preset(CLI::App& cmd) {
 void on_run(CLI::App* cmd, std::function<void()> run) {
   cmd->callback([cmd, run] {
     apply_preset(*cmd);
+    refuse_outputs_naming_inputs(*cmd, "");  // again: the preset may name an output
     run();
   });
 }

@@ -62,9 +62,7 @@ std::vector<double> merl_cells(const BsdfTable& t) {
 
 void write_merl(const std::string& path, const BsdfTable& t) {
   const std::vector<double> f = merl_cells(t);
-  write_atomically(path, [&](const std::string& tmp) {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw std::runtime_error("cannot write " + path);
+  write_stream_atomically(path, [&](std::ofstream& out) {
     const std::int32_t dims[3] = {kMerlThetaH, kMerlThetaD, kMerlPhiD};
     out.write(reinterpret_cast<const char*>(dims), sizeof(dims));
     std::vector<double> block(f.size());
@@ -72,7 +70,6 @@ void write_merl(const std::string& path, const BsdfTable& t) {
       for (std::size_t k = 0; k < f.size(); ++k) block[k] = f[k] / kMerlScale[c];
       out.write(reinterpret_cast<const char*>(block.data()), static_cast<std::streamsize>(block.size() * sizeof(double)));
     }
-    if (!out) throw std::runtime_error("cannot write " + path);
   });
 }
 

@@ -6,6 +6,7 @@
 
 #include <climits>
 #include <cstdlib>
+#include <memory>
 #include <vector>
 
 #include "microsim/common.hpp"
@@ -97,12 +98,17 @@ void* oiio_module_symbol(const char* name) {
 }
 
 void write_png_rgb8(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb) {
-  using Write = int (*)(const char*, const char*, int, int, const unsigned char*, char*, int);
-  const auto write = reinterpret_cast<Write>(oiio_module_symbol("microsim_oiio_write_rgb8"));
+  using Encode = int (*)(const char*, int, int, const unsigned char*, unsigned char**, std::size_t*, char*, int);
+  const auto encode = reinterpret_cast<Encode>(oiio_module_symbol("microsim_oiio_encode_rgb8"));
   if (rgb.size() != static_cast<std::size_t>(width) * height * 3) throw std::logic_error("write_png_rgb8: size");
-  write_atomically(path, [&](const std::string& tmp) {
-    char err[1024] = {0};
-    if (write(tmp.c_str(), "png", width, height, rgb.data(), err, sizeof err)) throw RuntimeFailure(err);
+  unsigned char* bytes = nullptr;
+  std::size_t size = 0;
+  char err[1024] = {0};
+  if (encode("png", width, height, rgb.data(), &bytes, &size, err, sizeof err))
+    throw RuntimeFailure("cannot write " + path + ": " + err);
+  const std::unique_ptr<unsigned char, decltype(&std::free)> owned(bytes, &std::free);
+  write_stream_atomically(path, [&](std::ofstream& out) {
+    out.write(reinterpret_cast<const char*>(bytes), static_cast<std::streamsize>(size));
   });
 }
 

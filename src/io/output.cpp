@@ -9,7 +9,9 @@
 #include <OpenEXR/ImfStringAttribute.h>
 #include <OpenEXR/ImfDoubleAttribute.h>
 #include <OpenEXR/ImfIntAttribute.h>
+#include <OpenEXR/ImfStdIO.h>
 #include <dirent.h>
+#include <fcntl.h>
 #include <pthread.h>
 #include <signal.h>
 #include <sys/stat.h>
@@ -17,6 +19,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <cstdio>
@@ -151,6 +154,63 @@ TemporaryFolder::~TemporaryFolder() {
   unregister_temporary(path_);
 }
 
+namespace {
+std::string folder_of(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  return slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
+}
+
+// The one line every failed output reports: the file, and why (errno when it says).
+[[noreturn]] void fail_writing(const std::string& path, int err, const std::string& why = "") {
+  std::string reason = why.empty() && err ? std::strerror(err) : why;
+  throw RuntimeFailure("cannot write " + path + (reason.empty() ? "" : ": " + reason));
+}
+
+// An existing file that is neither a regular file nor a folder (stat follows symbolic links, so
+// /dev/stdout is its terminal or pipe): a device or a pipe, written in place.
+bool is_device_or_pipe(const std::string& path) {
+  struct stat st;
+  return stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode);
+}
+
+// The data reaches the disk before the rename makes it the output, so that a crash leaves the
+// previous file or the new one, never a renamed file with missing blocks. Also refuses a
+// writer that returned without creating its file.
+void sync_file(const std::string& file, const std::string& path) {
+  const int fd = open(file.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) fail_writing(path, errno);
+  const int rc = fsync(fd);
+  const int err = errno;
+  close(fd);
+  // EINVAL: a file that cannot be synchronized (a device written in place).
+  if (rc != 0 && err != EINVAL) fail_writing(path, err);
+}
+
+// The rename itself reaches the disk (best effort: a folder that cannot be synced loses nothing
+// that the file's own sync did not keep).
+void sync_folder_of(const std::string& path) {
+  const int fd = open(folder_of(path).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  fsync(fd);
+  close(fd);
+}
+
+// The message of a writer's exception, naming the output rather than its temporary.
+std::string naming_output(std::string what, const std::string& tmp, const std::string& path) {
+  const std::string tmp_name = tmp.substr(tmp.find_last_of('/') + 1);
+  const std::string name = path.substr(path.find_last_of('/') + 1);
+  for (std::size_t at; (at = what.find(tmp_name)) != std::string::npos;) what.replace(at, tmp_name.size(), name);
+  return what;
+}
+
+void remove_folders_if_empty(const std::vector<std::string>& folders) {
+  for (auto it = folders.rbegin(); it != folders.rend(); ++it) {
+    rmdir(it->c_str());  // fails, and keeps the folder, when anything else is in it
+    unregister_temporary(*it);
+  }
+}
+}  // namespace
+
 OutputTransaction::OutputTransaction() { transactions().push_back(this); }
 
 OutputTransaction::~OutputTransaction() {
@@ -158,6 +218,11 @@ OutputTransaction::~OutputTransaction() {
     std::remove(tmp.c_str());
     unregister_temporary(tmp);
   }
+  for (const auto& path : placed_) {
+    std::remove(path.c_str());
+    unregister_temporary(path);
+  }
+  remove_folders_if_empty(folders_);
   auto& st = transactions();
   st.erase(std::remove(st.begin(), st.end(), this), st.end());
 }
@@ -178,8 +243,12 @@ void OutputTransaction::commit() {
   if (renaming)
     for (const auto& [tmp, path] : files) register_temporary(path);
   std::size_t renamed = 0;
+  int err = 0;
   for (const auto& [tmp, path] : files) {
-    if (failed.empty() && std::rename(tmp.c_str(), path.c_str()) != 0) failed = path;
+    if (failed.empty() && std::rename(tmp.c_str(), path.c_str()) != 0) {
+      failed = path;
+      err = errno;
+    }
     if (failed.empty()) ++renamed; else std::remove(tmp.c_str());
     unregister_temporary(tmp);
   }
@@ -187,7 +256,58 @@ void OutputTransaction::commit() {
     for (std::size_t k = 0; k < renamed; ++k) std::remove(files[k].second.c_str());
   if (renaming)
     for (const auto& [tmp, path] : files) unregister_temporary(path);
-  if (!failed.empty()) throw RuntimeFailure("cannot write " + failed);
+  if (!failed.empty()) fail_writing(failed, err);
+  for (const auto& [tmp, path] : files) sync_folder_of(path);
+  // Files placed earlier and folders created for the outputs are kept from now on.
+  for (const auto& path : placed_) unregister_temporary(path);
+  placed_.clear();
+  for (const auto& folder : folders_) unregister_temporary(folder);
+  folders_.clear();
+}
+
+void OutputTransaction::place_provisionally() {
+  auto& st = transactions();
+  const auto self = std::find(st.begin(), st.end(), this);
+  OutputTransaction* parent = self != st.begin() && self != st.end() ? *(self - 1) : nullptr;
+  std::vector<std::string> finals;
+  for (const auto& [tmp, path] : files_) finals.push_back(path);
+  // Registered before the rename: an interrupt in between removes them as well.
+  for (const auto& path : finals) register_temporary(path);
+  try {
+    commit();
+  } catch (...) {
+    for (const auto& path : finals) unregister_temporary(path);
+    throw;
+  }
+  if (parent)
+    parent->placed_.insert(parent->placed_.end(), finals.begin(), finals.end());
+  else
+    for (const auto& path : finals) unregister_temporary(path);
+}
+
+void OutputTransaction::created_folder(const std::string& path) {
+  register_temporary(path);
+  folders_.push_back(path);
+}
+
+bool create_output_folder(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) return true;
+  // The missing folders, outermost first, each created and tied to the transaction.
+  std::vector<fs::path> missing;
+  for (fs::path p = fs::path(path).lexically_normal(); !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+    missing.insert(missing.begin(), p);
+    if (p == p.parent_path()) break;
+  }
+  for (const auto& p : missing) {
+    if (mkdir(p.c_str(), 0755) != 0) {
+      if (errno == EEXIST && fs::is_directory(p, ec)) continue;
+      return false;
+    }
+    if (!transactions().empty()) transactions().back()->created_folder(p.string());
+  }
+  return fs::is_directory(path, ec);
 }
 
 std::string OutputTransaction::pending(const std::string& path) {
@@ -199,6 +319,18 @@ std::string OutputTransaction::pending(const std::string& path) {
 
 void write_atomically(const std::string& path,
                       const std::function<void(const std::string&)>& write) {
+  if (is_device_or_pipe(path)) {
+    try {
+      write(path);
+    } catch (const UsageError&) {
+      throw;
+    } catch (const std::exception& e) {
+      const std::string what = e.what();
+      if (what.rfind("cannot write " + path, 0) == 0) throw;
+      fail_writing(path, 0, what);
+    }
+    return;
+  }
   // Same folder, so the rename is atomic; the temporary keeps the extension (EXR/PLY writers
   // choose formats by it).
   auto slash = path.find_last_of('/');
@@ -207,11 +339,23 @@ void write_atomically(const std::string& path,
   static int counter = 0;
   std::string tmp = dir + ".tmp-" + std::to_string(getpid()) + "-" + std::to_string(counter++) + "-" + base;
   register_temporary(tmp);
-  try {
-    write(tmp);
-  } catch (...) {
+  auto discard = [&] {
     std::remove(tmp.c_str());
     unregister_temporary(tmp);
+  };
+  try {
+    write(tmp);
+    sync_file(tmp, path);
+  } catch (const UsageError&) {
+    discard();
+    throw;
+  } catch (const std::exception& e) {
+    discard();
+    const std::string what = naming_output(e.what(), tmp, path);
+    if (what.rfind("cannot write " + path, 0) == 0) throw RuntimeFailure(what);
+    fail_writing(path, 0, what);
+  } catch (...) {
+    discard();
     throw;
   }
   if (!transactions().empty()) {
@@ -219,18 +363,31 @@ void write_atomically(const std::string& path,
     return;
   }
   const bool ok = std::rename(tmp.c_str(), path.c_str()) == 0;
+  const int err = errno;
   if (!ok) std::remove(tmp.c_str());
   unregister_temporary(tmp);
-  if (!ok) throw RuntimeFailure("cannot write " + path);
+  if (!ok) fail_writing(path, err);
+  sync_folder_of(path);
+}
+
+void write_stream_atomically(const std::string& path, const std::function<void(std::ofstream&)>& write) {
+  write_atomically(path, [&](const std::string& file) {
+    errno = 0;
+    std::ofstream out(file, std::ios::binary | std::ios::trunc);
+    if (!out) fail_writing(path, errno);
+    write(out);
+    // The stream buffers: the last block reaches the file only at the flush, and the close can
+    // fail too. The first errno seen is the reason (a full disk: ENOSPC).
+    int err = out ? 0 : errno;
+    out.flush();
+    if (!out && !err) err = errno;
+    out.close();
+    if (!out) fail_writing(path, err ? err : errno);
+  });
 }
 
 void write_json(const std::string& path, const Json& j) {
-  write_atomically(path, [&](const std::string& tmp) {
-    std::ofstream f(tmp);
-    if (!f) throw RuntimeFailure("cannot open " + path + " for writing");
-    f << std::setw(2) << j << "\n";
-    if (!f) throw RuntimeFailure("error writing " + path);
-  });
+  write_stream_atomically(path, [&](std::ofstream& f) { f << std::setw(2) << j << "\n"; });
 }
 
 void write_csv_rows(const std::string& path, const Json& j) {
@@ -240,9 +397,7 @@ void write_csv_rows(const std::string& path, const Json& j) {
     for (auto it = row.begin(); it != row.end(); ++it)
       if (!it->is_structured() && std::find(cols.begin(), cols.end(), it.key()) == cols.end())
         cols.push_back(it.key());
-  write_atomically(path, [&](const std::string& tmp) {
-    std::ofstream f(tmp);
-    if (!f) throw RuntimeFailure("cannot open " + path + " for writing");
+  write_stream_atomically(path, [&](std::ofstream& f) {
     f << std::setprecision(10);
     for (std::size_t c = 0; c < cols.size(); ++c) f << (c ? "," : "") << cols[c];
     f << "\n";
@@ -255,7 +410,6 @@ void write_csv_rows(const std::string& path, const Json& j) {
       }
       f << "\n";
     }
-    if (!f) throw RuntimeFailure("error writing " + path);
   });
 }
 
@@ -269,7 +423,7 @@ void write_exr_pixels(const std::string& path, const ExrTable& t, const std::vec
   if (pixels.size() != t.channel_names.size())
     throw RuntimeFailure("write_exr: " + std::to_string(t.channel_names.size()) + " channel names for " +
                          std::to_string(pixels.size()) + " channels");
-  write_atomically(path, [&](const std::string& tmp) {
+  write_stream_atomically(path, [&](std::ofstream& out) {
     Imf::Header header(t.width, t.height);
     header.compression() = Imf::ZIP_COMPRESSION;
     for (auto it = t.attributes.begin(); it != t.attributes.end(); ++it) {
@@ -287,7 +441,10 @@ void write_exr_pixels(const std::string& path, const ExrTable& t, const std::vec
                 Imf::Slice(Imf::FLOAT, const_cast<char*>(reinterpret_cast<const char*>(pixels[c])),
                            sizeof(float), sizeof(float) * static_cast<std::size_t>(t.width)));
     }
-    Imf::OutputFile file(tmp.c_str(), header);
+    // OpenEXR writes through the checked stream: its destructor, which writes the line offsets
+    // and swallows any error, runs before the stream is closed and checked.
+    Imf::StdOFStream stream(out, path.c_str());
+    Imf::OutputFile file(stream, header);
     file.setFrameBuffer(fb);
     file.writePixels(t.height);
   });

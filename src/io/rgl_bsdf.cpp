@@ -69,16 +69,13 @@ void write_tensor_file(const std::string& path, const std::vector<TensorField>& 
     offsets.push_back(offset);
     offset = align(offset + f.data.size());
   }
-  write_atomically(path, [&](const std::string& tmp) {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw std::runtime_error("cannot write " + path);
+  write_stream_atomically(path, [&](std::ofstream& out) {
     std::vector<std::uint8_t> bytes = head;
     for (std::size_t k = 0; k < fields.size(); ++k) {
       bytes.resize(offsets[k], 0);
       bytes.insert(bytes.end(), fields[k].data.begin(), fields[k].data.end());
     }
     out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-    if (!out) throw std::runtime_error("cannot write " + path);
   });
 }
 

@@ -172,11 +172,14 @@ void save_mesh(const Microsurface& s, const std::string& path) {
     auto f = om.add_face(vh[t[0]], vh[t[1]], vh[t[2]]);
     if (!f.is_valid()) throw RuntimeFailure("cannot export: the mesh is not manifold");
   }
-  write_atomically(path, [&](const std::string& tmp) {
+  write_stream_atomically(path, [&](std::ofstream& out) {
     OpenMesh::IO::Options opt;
     if (extension_of(path) == "ply") opt += OpenMesh::IO::Options::Binary;
-    // 9 significant digits: text formats (OBJ, OFF) keep every float vertex exactly.
-    if (!OpenMesh::IO::write_mesh(om, tmp, opt, 9)) throw RuntimeFailure("cannot write " + path);
+    // Through the checked stream (OpenMesh's own file writer does not report a failed close);
+    // the format is chosen by the extension. 9 significant digits: text formats (OBJ, OFF) keep
+    // every float vertex exactly.
+    if (!OpenMesh::IO::write_mesh(om, out, "." + extension_of(path), opt, 9))
+      throw RuntimeFailure("cannot write " + path);
   });
   Json side = {{"microsim_surface", "mesh"},
                          {"macrosurface", macro_to_json(m.macro())},

@@ -210,9 +210,11 @@ Microsurface generate_entry(const SuiteEntry& e, const std::string& suite_file, 
   try {
     const SurfaceRequest request = surface_request(e, seed);
     const Microsurface s = generate_surface(request, path);
-    OutputTransaction written;  // the surface is needed now, not with the command's outputs
+    // The surface is needed now, not with the command's outputs; it stays tied to the enclosing
+    // transaction, which removes it if the run fails or is interrupted.
+    OutputTransaction written;
     save_surface(s, path);
-    written.commit();
+    written.place_provisionally();
     if (warnings) *warnings = surface_report(request, s, path, false).warnings;
   } catch (const UsageError& err) {
     throw UsageError("--suite " + suite_file + ": entry " + e.name + ": " + err.what());

@@ -1,6 +1,8 @@
 // Writing results: JSON records, CSV mirrors of JSON rows, EXR tables with self-describing
-// headers. Every write is atomic (temporary file in the same folder, then rename).
+// headers. Every write is atomic (temporary file in the same folder, checked, synced, then
+// renamed): a failed write (a full disk) leaves neither the file nor a temporary.
 #pragma once
+#include <fstream>
 #include <functional>
 #include <string>
 #include <vector>
@@ -14,9 +16,16 @@ namespace microsim {
 // Extension of a path, lower case, without the dot ("json", "csv", "exr"...).
 std::string extension_of(const std::string& path);
 
-// Calls write(tmp_path), tmp_path in the folder of path, and renames tmp_path to path; removes
-// tmp_path if write throws. Inside an OutputTransaction the rename waits for its commit().
+// Calls write(tmp_path), tmp_path in the folder of path, syncs tmp_path to the disk and renames it
+// to path; removes tmp_path and throws RuntimeFailure naming path ("cannot write PATH: why") if
+// write throws or left no file. write must itself check what it wrote (write_stream_atomically
+// does). Inside an OutputTransaction the rename waits for its commit(). A path naming a device or
+// a pipe (/dev/null, /dev/stdout) is written in place: a rename would replace the device itself.
 void write_atomically(const std::string& path, const std::function<void(const std::string&)>& write);
+// write_atomically through a stream: write(out) fills a binary std::ofstream on the temporary; the
+// stream is flushed and closed, and a failure of any write, of the flush or of the close fails
+// the output. Every output file of microsim is written by this or write_atomically.
+void write_stream_atomically(const std::string& path, const std::function<void(std::ofstream&)>& write);
 
 // All outputs of one command committed together: while a transaction is alive, every
 // write_atomically goes to its temporary and is renamed into place only by commit(), after every
@@ -32,11 +41,26 @@ class OutputTransaction {
   void commit();
   // Temporary holding `path` if a live transaction wrote it and has not committed yet.
   static std::string pending(const std::string& path);
+  // Renames this transaction's files into place now (they are read back by the command), but
+  // ties them to the enclosing transaction: it removes them if it ends uncommitted or the
+  // process is interrupted, and keeps them once it commits.
+  void place_provisionally();
+  // A folder the command created for its outputs (mkdir succeeded): removed if the transaction
+  // ends uncommitted (when empty: only the command's own files were in it) or the process is
+  // interrupted; kept once it commits. Folders are removed deepest first.
+  void created_folder(const std::string& path);
 
  private:
   friend void write_atomically(const std::string&, const std::function<void(const std::string&)>&);
   std::vector<std::pair<std::string, std::string>> files_;  // (temporary, final)
+  std::vector<std::string> placed_;   // renamed into place by a nested place_provisionally()
+  std::vector<std::string> folders_;  // created_folder(), in the order created
 };
+
+// Creates the folder `path` (and its missing parents) for a command's outputs; each folder it
+// creates is tied to the innermost live transaction (created_folder), so that a failed or
+// interrupted command leaves no empty folder behind. False when it cannot create it.
+bool create_output_folder(const std::string& path);
 
 // Temporary files and folders removed if the process is interrupted: install_interrupt_cleanup()
 // (called first in main, before any other thread starts) blocks SIGINT, SIGTERM and SIGHUP and
