@@ -168,6 +168,11 @@ inline double G2_height_correlated_transmission(const Ndf& ndf, const Vec3& o, c
   if (!(o.z() > 0.0) || !(i_up.z() > 0.0)) return 0.0;
   return beta_function(1.0 + ndf.Lambda(o), 1.0 + ndf.Lambda(i_up));
 }
+// The same with lambda_o = ndf.Lambda(o) given.
+inline double G2_height_correlated_transmission(const Ndf& ndf, const Vec3& o, const Vec3& i_up, double lambda_o) {
+  if (!(o.z() > 0.0) || !(i_up.z() > 0.0)) return 0.0;
+  return beta_function(1.0 + lambda_o, 1.0 + ndf.Lambda(i_up));
+}
 
 // ---------------------------------------------------------------------------------------------
 // Single-scattering microfacet BSDF
@@ -324,7 +329,7 @@ SingleScatteringAlbedos single_scattering_albedos(const Ndf& ndf, const Material
                                                   const ForRows& for_rows = ForRows()) {
   SingleScatteringAlbedos a;
   if (!(i.z() > 0.0) || n <= 0) return a;
-  const double g1 = ndf.G1(i);
+  const double g1 = ndf.G1(i), lambda_i = ndf.Lambda(i);  // Lambda(i): once, not per sample
   if (!(g1 > 0.0)) return a;
   const auto u_of = [n](int p) { return (p + 0.5) / n; };
   // Beckmann: the slope quantiles of every row (xt) and column (yt), as sample_visible_normal computes them.
@@ -353,13 +358,13 @@ SingleScatteringAlbedos single_scattering_albedos(const Ndf& ndf, const Material
     const double F = material.reflectance(im, true);
     const Vec3 r = reflect(i, m);
     if (r.z() > 0.0) {
-      t[0] = F * G2_height_correlated(ndf, r, i, m) / g1;
+      t[0] = F * G2_height_correlated(ndf, r, i, m, lambda_i) / g1;
       t[2] = F * vcavity_G2(r, i, m) / g1;
     }
     if (material.transmits() && F < 1.0) {
       Vec3 tr;
       if (refract(i, m, 1.0 / material.eta, &tr) && tr.z() < 0.0) {
-        t[1] = (1.0 - F) * G2_height_correlated_transmission(ndf, i, mirror_z(tr)) / g1;
+        t[1] = (1.0 - F) * G2_height_correlated_transmission(ndf, i, mirror_z(tr), lambda_i) / g1;
         t[3] = (1.0 - F) * std::min(vcavity_G1(i, m), vcavity_G1(-tr, m)) / g1;
       }
     }

@@ -516,6 +516,11 @@ inline double G2_height_correlated(const Ndf& ndf, const Vec3& o, const Vec3& i,
   if (!detail::g2_front(o, i, m)) return 0.0;
   return 1.0 / (1.0 + ndf.Lambda(o) + ndf.Lambda(i));
 }
+// The same with lambda_i = ndf.Lambda(i) given (a quadrature over o for one i computes it once).
+inline double G2_height_correlated(const Ndf& ndf, const Vec3& o, const Vec3& i, const Vec3& m, double lambda_i) {
+  if (!detail::g2_front(o, i, m)) return 0.0;
+  return 1.0 / (1.0 + ndf.Lambda(o) + lambda_i);
+}
 
 // [Heitz14, eq. 22]: lambda(phi) G1(o,m) G1(i,m) + (1 - lambda(phi)) min(G1(o,m), G1(i,m)),
 // with the van Ginneken lambda(phi) and phi the azimuth difference of o and i.
