@@ -11,6 +11,7 @@
 #include <functional>
 
 #include "microsim/measure/groove_models.hpp"
+#include "microsim/measure/single_scattering_albedos.hpp"
 
 namespace microsim {
 
@@ -196,6 +197,12 @@ Table bsdf_albedo_spec() {
        "single-scattering albedo of the nominal NDF's BSDF with height-correlated Smith G2 (order_1 rows)"},
       {"vcavity_single", Merge::Copy, N, "1",
        "single-scattering albedo of the nominal NDF's BSDF with V-cavity G2 (order_1 rows)"},
+      {"single_quadrature_n", Merge::Copy, N, "",
+       "smith_single and vcavity_single (order_1 rows): side n of their n x n quadrature of the visible normals, the "
+       "first of 128, 256, 512, 1024 whose estimated error is at most a tenth of the order_1 albedo's standard error"},
+      {"single_quadrature_error", Merge::Copy, N, "1",
+       "smith_single and vcavity_single (order_1 rows): estimated quadrature error, 2 max(|A(n) - A(n/2)|, "
+       "|A(n/2) - A(n/4)| / 2) over the four single-scattering albedos (Smith, V-cavity; reflected, transmitted)"},
       {"smooth_interface", Merge::Copy, N, "1",
        "Fresnel reflectance (transmittance) of a flat interface of the material at theta_i (total rows)"}};
   t.spec.comparisons = {smith_multiple_albedo(), smith_single_albedo(), vcavity_single_albedo(),
@@ -244,14 +251,26 @@ namespace {
 // once for the table and the record.
 struct AlbedoModels {
   std::optional<models::SingleScatteringAlbedo> smith, vcavity;
+  AlbedoQuadrature quadrature;
   Json smooth;
 };
+// The single-scattering models are compared with the order_1 albedo: their quadrature error is held
+// below this fraction of its standard error (the smallest over the sides that have one).
+constexpr double kQuadratureErrorFraction = 0.1;
+double single_quadrature_target(const BsdfResult& r) {
+  double se = 0.0;
+  for (int sd = 0; sd < 2; ++sd) {
+    const double s = r.albedo(sd, 0).stderr_;
+    if (std::isfinite(s) && s > 0.0 && (se == 0.0 || s < se)) se = s;
+  }
+  return kQuadratureErrorFraction * se;  // 0 (no measured error): the finest quadrature
+}
 AlbedoModels albedo_models(const BsdfResult& r) {
-  using namespace microsim::models;
   AlbedoModels a;
   if (r.nominal) {
-    a.smith = single_scattering_albedo(MicrofacetBsdf{*r.nominal, r.options.material, Masking::SmithHeightCorrelated}, r.wi);
-    a.vcavity = single_scattering_albedo(MicrofacetBsdf{*r.nominal, r.options.material, Masking::VCavity}, r.wi);
+    a.quadrature = single_scattering_albedos_to_error(*r.nominal, r.options.material, r.wi, single_quadrature_target(r));
+    a.smith = a.quadrature.albedos.smith;
+    a.vcavity = a.quadrature.albedos.vcavity;
   }
   a.smooth = smooth_interface_json(r.options.material, std::cos(r.options.theta_i));
   return a;
@@ -280,6 +299,8 @@ Table albedo_table(const BsdfResult& r, const AlbedoModels& models) {
         compare_one(row, smith_single_albedo());
         row["vcavity_single"] = sd == 0 ? models.vcavity->reflected : models.vcavity->transmitted;
         compare_one(row, vcavity_single_albedo());
+        row["single_quadrature_n"] = models.quadrature.n;
+        row["single_quadrature_error"] = models.quadrature.estimated_error;
       }
       if (k == K) {
         row["smooth_interface"] = models.smooth[kSideName[sd]];
@@ -386,9 +407,13 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
   if (am.smith) {
     models["smith_single"] = {{"reflected", am.smith->reflected}, {"transmitted", am.smith->transmitted}};
     models["vcavity_single"] = {{"reflected", am.vcavity->reflected}, {"transmitted", am.vcavity->transmitted}};
+    models["single_quadrature"] = {{"n", am.quadrature.n},
+                                   {"estimated_error", am.quadrature.estimated_error},
+                                   {"target_error", am.quadrature.target_error}};
   } else {
     models["smith_single"] = nullptr;
     models["vcavity_single"] = nullptr;
+    models["single_quadrature"] = nullptr;
   }
   if (r.smith_walk) {
     Json mw = Json::object();

@@ -41,6 +41,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "microsim/models/fresnel.hpp"
 #include "microsim/models/ndf.hpp"
@@ -167,6 +168,11 @@ inline double G2_height_correlated_transmission(const Ndf& ndf, const Vec3& o, c
   if (!(o.z() > 0.0) || !(i_up.z() > 0.0)) return 0.0;
   return beta_function(1.0 + ndf.Lambda(o), 1.0 + ndf.Lambda(i_up));
 }
+// The same with lambda_o = ndf.Lambda(o) given.
+inline double G2_height_correlated_transmission(const Ndf& ndf, const Vec3& o, const Vec3& i_up, double lambda_o) {
+  if (!(o.z() > 0.0) || !(i_up.z() > 0.0)) return 0.0;
+  return beta_function(1.0 + lambda_o, 1.0 + ndf.Lambda(i_up));
+}
 
 // ---------------------------------------------------------------------------------------------
 // Single-scattering microfacet BSDF
@@ -258,7 +264,8 @@ struct SingleScatteringAlbedo {
 // Computed by the midpoint rule on the unit square of the exact VNDF sampler's (u1, u2)
 // (n x n points; deterministic). The integrand has kinks (horizon, critical angle) and the
 // sampler's map steepens toward the square's edges: the error decreases roughly like 1/n,
-// ~5e-5 for n = 1024 at moderate roughness (tests compare with a direct quadrature of eval).
+// ~5e-5 for n = 1024 at moderate roughness (tests compare with a direct quadrature of eval), but
+// irregularly (measure/single_scattering_albedos.hpp estimates it from three resolutions).
 // SmithMaskingOnly uses G1(i) (the weak white furnace integrated over outgoing directions).
 inline SingleScatteringAlbedo single_scattering_albedo(const MicrofacetBsdf& bsdf, const Vec3& i, int n = 1024) {
   SingleScatteringAlbedo a;
@@ -293,6 +300,91 @@ inline SingleScatteringAlbedo single_scattering_albedo(const MicrofacetBsdf& bsd
     }
   a.reflected = sr / (static_cast<double>(n) * n);
   a.transmitted = st / (static_cast<double>(n) * n);
+  return a;
+}
+
+// The single-scattering albedos of both G2 models of the BSDF (height-correlated Smith and V-cavity) from one
+// pass of the quadrature of single_scattering_albedo: the visible normals, the Fresnel factors and the
+// reflected / refracted directions are shared, only G2 differs. Each result is bit-identical to
+// single_scattering_albedo with that masking at the same n: the same samples, the same terms, summed in the
+// same order (row p, then column q). The Beckmann sampler's marginals are inverted once per row and column
+// (the grid is a tensor product), which removes the 2 n^2 Newton inversions.
+//
+// for_rows(begin, end, body) must call body(p) once for every row p in [begin, end), in any order and on any
+// threads: the rows' terms are written to separate slots and summed afterwards in the fixed order, so the
+// result does not depend on how the rows are run.
+struct SingleScatteringAlbedos {
+  SingleScatteringAlbedo smith, vcavity;
+};
+
+struct SequentialRows {
+  template <class Body>
+  void operator()(int begin, int end, const Body& body) const {
+    for (int p = begin; p < end; ++p) body(p);
+  }
+};
+
+template <class ForRows = SequentialRows>
+SingleScatteringAlbedos single_scattering_albedos(const Ndf& ndf, const Material& material, const Vec3& i, int n = 1024,
+                                                  const ForRows& for_rows = ForRows()) {
+  SingleScatteringAlbedos a;
+  if (!(i.z() > 0.0) || n <= 0) return a;
+  const double g1 = ndf.G1(i), lambda_i = ndf.Lambda(i);  // Lambda(i): once, not per sample
+  if (!(g1 > 0.0)) return a;
+  const auto u_of = [n](int p) { return (p + 0.5) / n; };
+  // Beckmann: the slope quantiles of every row (xt) and column (yt), as sample_visible_normal computes them.
+  const bool beckmann = ndf.kind == Distribution::Beckmann;
+  const Vec3 vs = ndf.stretched_view(i);
+  const Ndf::BeckmannViewFrame frame = Ndf::beckmann_view_frame(vs);
+  constexpr double one_minus = 1.0 - 0x1p-53;
+  std::vector<double> xt, yt;
+  if (beckmann) {
+    xt.resize(n);
+    yt.resize(n);
+    for_rows(0, n, [&](int p) {
+      const double u = std::max(std::clamp(u_of(p), 0.0, one_minus), 1e-300);
+      xt[p] = detail::beckmann_visible_slope_quantile(frame.mu, u);
+      yt[p] = detail::beckmann_visible_slope_quantile(detail::kInf, u);
+    });
+  }
+  // Terms of one sample: Smith reflected, Smith transmitted, V-cavity reflected, V-cavity transmitted.
+  constexpr int kTerms = 4;
+  const auto sample_terms = [&](int p, int q, double* t) {
+    t[0] = t[1] = t[2] = t[3] = 0.0;
+    const Vec3 m = beckmann ? ndf.beckmann_normal_from_slopes(frame, xt[p], yt[q])
+                            : ndf.sample_visible_normal(i, u_of(p), u_of(q));
+    const double im = i.dot(m);
+    if (!(im > 0.0)) return;
+    const double F = material.reflectance(im, true);
+    const Vec3 r = reflect(i, m);
+    if (r.z() > 0.0) {
+      t[0] = F * G2_height_correlated(ndf, r, i, m, lambda_i) / g1;
+      t[2] = F * vcavity_G2(r, i, m) / g1;
+    }
+    if (material.transmits() && F < 1.0) {
+      Vec3 tr;
+      if (refract(i, m, 1.0 / material.eta, &tr) && tr.z() < 0.0) {
+        t[1] = (1.0 - F) * G2_height_correlated_transmission(ndf, i, mirror_z(tr), lambda_i) / g1;
+        t[3] = (1.0 - F) * std::min(vcavity_G1(i, m), vcavity_G1(-tr, m)) / g1;
+      }
+    }
+  };
+  // Rows in blocks: the block's terms in parallel, then summed in the fixed order.
+  const int block = std::max(1, std::min(n, (1 << 18) / n));
+  std::vector<double> terms(static_cast<std::size_t>(block) * n * kTerms);
+  double sum[kTerms] = {0.0, 0.0, 0.0, 0.0};
+  for (int p0 = 0; p0 < n; p0 += block) {
+    const int p1 = std::min(n, p0 + block);
+    for_rows(p0, p1, [&](int p) {
+      double* row = terms.data() + static_cast<std::size_t>(p - p0) * n * kTerms;
+      for (int q = 0; q < n; ++q) sample_terms(p, q, row + static_cast<std::size_t>(q) * kTerms);
+    });
+    for (std::size_t k = 0; k < static_cast<std::size_t>(p1 - p0) * n; ++k)
+      for (int c = 0; c < kTerms; ++c) sum[c] += terms[k * kTerms + c];
+  }
+  const double nn = static_cast<double>(n) * n;
+  a.smith = {sum[0] / nn, sum[1] / nn};
+  a.vcavity = {sum[2] / nn, sum[3] / nn};
   return a;
 }
 

@@ -368,7 +368,7 @@ struct Ndf {
     constexpr double one_minus = 1.0 - 0x1p-53;
     u1 = std::clamp(u1, 0.0, one_minus);
     u2 = std::clamp(u2, 0.0, one_minus);
-    const Vec3 vs = Vec3(alpha_x * v.x(), alpha_y * v.y(), v.z()).normalized();  // stretched view
+    const Vec3 vs = stretched_view(v);
     if (kind == Distribution::GGX) {
       const double lensq = vs.x() * vs.x() + vs.y() * vs.y();
       const Vec3 t1 = lensq > 0.0 ? Vec3(-vs.y(), vs.x(), 0.0) / std::sqrt(lensq) : Vec3(1.0, 0.0, 0.0);
@@ -386,18 +386,35 @@ struct Ndf {
       return Vec3(alpha_x * nh.x(), alpha_y * nh.y(), std::max(0.0, nh.z())).normalized();
     }
     // Beckmann
-    const double sin_t = std::sqrt(vs.x() * vs.x() + vs.y() * vs.y());
-    double cphi = 1.0, sphi = 0.0, mu = detail::kInf;
-    if (sin_t > 0.0) {
-      cphi = vs.x() / sin_t;
-      sphi = vs.y() / sin_t;
-      mu = vs.z() / sin_t;  // cot(theta')
-    }
-    const double xt = detail::beckmann_visible_slope_quantile(mu, std::max(u1, 1e-300));
+    const BeckmannViewFrame f = beckmann_view_frame(vs);
+    const double xt = detail::beckmann_visible_slope_quantile(f.mu, std::max(u1, 1e-300));
     const double yt = detail::beckmann_visible_slope_quantile(detail::kInf, std::max(u2, 1e-300));
+    return beckmann_normal_from_slopes(f, xt, yt);
+  }
+
+  // The Beckmann VNDF sampler in two halves, so that a tensor grid of (u1, u2) can invert each
+  // marginal once per row / column (xt depends on u1 only, yt on u2 only): the stretched view's
+  // azimuth (cphi, sphi) and mu = cot(theta'), then the normal of the slopes (xt, yt) sampled in
+  // that frame. sample_visible_normal is exactly beckmann_normal_from_slopes(frame, quantiles).
+  struct BeckmannViewFrame {
+    double cphi = 1.0, sphi = 0.0, mu = detail::kInf;
+  };
+  // vs: the stretched, normalized view (alpha_x v.x, alpha_y v.y, v.z) / |...|.
+  static BeckmannViewFrame beckmann_view_frame(const Vec3& vs) {
+    BeckmannViewFrame f;
+    const double sin_t = std::sqrt(vs.x() * vs.x() + vs.y() * vs.y());
+    if (sin_t > 0.0) {
+      f.cphi = vs.x() / sin_t;
+      f.sphi = vs.y() / sin_t;
+      f.mu = vs.z() / sin_t;  // cot(theta')
+    }
+    return f;
+  }
+  Vec3 stretched_view(const Vec3& v) const { return Vec3(alpha_x * v.x(), alpha_y * v.y(), v.z()).normalized(); }
+  Vec3 beckmann_normal_from_slopes(const BeckmannViewFrame& f, double xt, double yt) const {
     // rotate back from the view-azimuth frame, then unstretch the slopes
-    const double sx = alpha_x * (cphi * xt - sphi * yt);
-    const double sy = alpha_y * (sphi * xt + cphi * yt);
+    const double sx = alpha_x * (f.cphi * xt - f.sphi * yt);
+    const double sy = alpha_y * (f.sphi * xt + f.cphi * yt);
     return Vec3(-sx, -sy, 1.0).normalized();
   }
 };
@@ -498,6 +515,11 @@ inline double G2_separable(const Ndf& ndf, const Vec3& o, const Vec3& i, const V
 inline double G2_height_correlated(const Ndf& ndf, const Vec3& o, const Vec3& i, const Vec3& m) {
   if (!detail::g2_front(o, i, m)) return 0.0;
   return 1.0 / (1.0 + ndf.Lambda(o) + ndf.Lambda(i));
+}
+// The same with lambda_i = ndf.Lambda(i) given (a quadrature over o for one i computes it once).
+inline double G2_height_correlated(const Ndf& ndf, const Vec3& o, const Vec3& i, const Vec3& m, double lambda_i) {
+  if (!detail::g2_front(o, i, m)) return 0.0;
+  return 1.0 / (1.0 + ndf.Lambda(o) + lambda_i);
 }
 
 // [Heitz14, eq. 22]: lambda(phi) G1(o,m) G1(i,m) + (1 - lambda(phi)) min(G1(o,m), G1(i,m)),
