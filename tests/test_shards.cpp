@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_helpers.hpp"
+#include "record_helpers.hpp"
 #include "microsim/measure/shards.hpp"
 
 namespace {
@@ -19,25 +20,6 @@ using namespace microsim::testing;
 using nlohmann::json;
 
 std::string tmp(const std::string& name) { return temp_path("shards", name); }
-
-// The record without its timing fields (wall time, rays per second...) and the ranks count.
-json science(json j) {
-  if (j.is_object()) {
-    json out = json::object();
-    for (auto it = j.begin(); it != j.end(); ++it) {
-      const std::string& k = it.key();
-      const bool timing = k.size() >= 7 && (k.compare(k.size() - 7, 7, "seconds") == 0 ||
-                                            k.find("per_second") != std::string::npos);
-      if (!timing && k != "ranks") out[k] = science(it.value());
-    }
-    return out;
-  }
-  if (j.is_array())
-    for (auto& e : j) e = science(e);
-  return j;
-}
-
-json read(const std::string& path) { return json::parse(slurp(path)); }
 
 class Shards : public ::testing::Test {
  protected:
@@ -68,7 +50,7 @@ class Shards : public ::testing::Test {
     EXPECT_EQ(r.code, 0) << r.err;
     const std::string js = ext == "json" ? "" : ".json";
     const auto record = [&](const std::string& p) {
-      return ext == "json" ? read(p) : read(p.substr(0, p.size() - ext.size()) + "json");
+      return ext == "json" ? read_record(p) : read_record(p.substr(0, p.size() - ext.size()) + "json");
     };
     (void)js;
     return {record(one), record(merged)};
@@ -192,17 +174,17 @@ TEST(MergePartials, RefusesMissingDuplicatedAndForeignParts) {
 TEST_F(Shards, G1FourShardsMergedEqualOneRun) {
   const auto [one, merged] = single_and_merged(
       "measure g1 " + surface_ + " --theta 0,40,75 --rays 6000 --seed 5", "g1", 4);
-  EXPECT_EQ(science(merged), science(one));
+  EXPECT_EQ(record_without_timings(merged), record_without_timings(one));
   // Power: another seed is another record.
   const auto [other, unused] = single_and_merged(
       "measure g1 " + surface_ + " --theta 0,40,75 --rays 6000 --seed 6", "g1b", 1);
-  EXPECT_NE(science(other)["rows"], science(one)["rows"]);
+  EXPECT_NE(record_without_timings(other)["rows"], record_without_timings(one)["rows"]);
 }
 
 TEST_F(Shards, G1EnsembleOfTwoSurfacesMerged) {
   const auto [one, merged] =
       single_and_merged("measure g1 " + surface_ + " " + other_ + " --theta 60 --rays 4000", "g1e", 3);
-  EXPECT_EQ(science(merged), science(one));
+  EXPECT_EQ(record_without_timings(merged), record_without_timings(one));
   EXPECT_TRUE(one.contains("per_surface"));
 }
 
@@ -210,20 +192,20 @@ TEST_F(Shards, G2FourShardsMergedEqualOneRun) {
   const auto [one, merged] = single_and_merged("measure g2 " + surface_ +
                                                    " --theta-o 30,70 --theta-i 50 --phi-i 180 --rays 5000",
                                                "g2", 4);
-  EXPECT_EQ(science(merged), science(one));
+  EXPECT_EQ(record_without_timings(merged), record_without_timings(one));
 }
 
 TEST_F(Shards, VndfFourShardsMergedEqualOneRun) {
   const auto [one, merged] =
       single_and_merged("measure vndf " + surface_ + " --theta 20,60 --rays 20001 --sampler-samples 2000",
                         "vndf", 4);
-  EXPECT_EQ(science(merged), science(one));
+  EXPECT_EQ(record_without_timings(merged), record_without_timings(one));
 }
 
 TEST_F(Shards, BsdfMirrorFourShardsMergedEqualOneRun) {
   const auto [one, merged] = single_and_merged(
       "measure bsdf " + surface_ + " --material mirror --theta-i 50 --rays 8000 --resolution 8", "bm", 4);
-  EXPECT_EQ(science(merged), science(one));
+  EXPECT_EQ(record_without_timings(merged), record_without_timings(one));
   EXPECT_TRUE(one.contains("albedo"));
 }
 
@@ -234,7 +216,7 @@ TEST_F(Shards, BsdfDielectricAndConductorFourShardsMergedEqualOneRun) {
     const auto [one, merged] = single_and_merged("measure bsdf " + surface_ + " --material " + material +
                                                      " --theta-i 30 --rays 8000 --resolution 8 --no-models",
                                                  "bd", 4, "exr");
-    EXPECT_EQ(science(merged), science(one)) << material;
+    EXPECT_EQ(record_without_timings(merged), record_without_timings(one)) << material;
   }
 }
 
@@ -242,7 +224,7 @@ TEST_F(Shards, ValidateThreeShardsMergedEqualOneRun) {
   const auto [one, merged] = single_and_merged("validate " + surface_ +
                                                    " --checks g1,g2,vndf,bsdf_albedo --theta 30,70 --rays 6000",
                                                "val", 3);
-  EXPECT_EQ(science(merged), science(one));
+  EXPECT_EQ(record_without_timings(merged), record_without_timings(one));
   EXPECT_TRUE(one.contains("rows") || one.contains("checks")) << one.dump().substr(0, 300);
 }
 
@@ -307,10 +289,10 @@ TEST_F(Shards, MpiTwoRanksRecordsEqualOneProcess) {
     ASSERT_EQ(r.code, 0) << r.err;
     r = mpirun(2, cmd + " --threads 1 -q -o " + two);
     ASSERT_EQ(r.code, 0) << cmd << "\n" << r.err;
-    const json a = read(one), b = read(two);
+    const json a = read_record(one), b = read_record(two);
     EXPECT_EQ(b.value("ranks", 0), 2) << cmd;
     EXPECT_FALSE(a.contains("ranks"));
-    EXPECT_EQ(science(b), science(a)) << cmd;
+    EXPECT_EQ(record_without_timings(b), record_without_timings(a)) << cmd;
   }
 }
 
@@ -338,13 +320,13 @@ TEST_F(Shards, VcavityG1G2VndfAndValidateShardsMergedEqualOneRun) {
       {"validate " + vc + " --checks g1,g2,vndf --theta 75 --rays 12000", "vcval", 2}};
   for (const auto& [command, name, n] : runs) {
     const auto [one, merged] = single_and_merged(command, name, n);
-    EXPECT_EQ(science(merged), science(one)) << command;
+    EXPECT_EQ(record_without_timings(merged), record_without_timings(one)) << command;
     if (command.rfind("measure g2", 0) == 0 || command.rfind("measure vndf", 0) == 0) {
       EXPECT_TRUE(one.value("groove_by_groove", false)) << command;
     }
     // Power: every shard traced a share of each estimator call, not all of it (an estimator that
     // ignores the split exchanges no tallies).
-    const json part = read(tmp(name + "_part.json") + ".shard-1-of-" + std::to_string(n) + ".json");
+    const json part = read_record(tmp(name + "_part.json") + ".shard-1-of-" + std::to_string(n) + ".json");
     EXPECT_FALSE(part["tallies"].empty()) << command;
     for (const auto& t : part["tallies"]) {
       const auto covered = t["covered"][1].get<std::uint64_t>() - t["covered"][0].get<std::uint64_t>();

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_helpers.hpp"
+#include "record_helpers.hpp"
 #include "microsim/tally_fields.hpp"
 #include "microsim/trace/tracer.hpp"
 
@@ -27,25 +28,6 @@ std::string tmp(const std::string& name) { return temp_path("tally", name); }
 // The trace counters every record carries (TraceCounters).
 const std::set<std::string> kCounters = {"rays",       "border_crossings", "lost_below",  "backface_hits",
                                          "unresolved", "side_exits",       "side_entries"};
-
-// The record without its timing fields (seconds, rays per second) and the MPI ranks count.
-json science(json j) {
-  if (j.is_object()) {
-    json out = json::object();
-    for (auto it = j.begin(); it != j.end(); ++it) {
-      const std::string& k = it.key();
-      const bool timing = (k.size() >= 7 && k.compare(k.size() - 7, 7, "seconds") == 0) ||
-                          k.find("per_second") != std::string::npos;
-      if (!timing && k != "ranks") out[k] = science(it.value());
-    }
-    return out;
-  }
-  if (j.is_array())
-    for (auto& e : j) e = science(e);
-  return j;
-}
-
-json read(const std::string& path) { return json::parse(slurp(path)); }
 
 // The differences between two records as a JSON patch (paths and values), for failure messages.
 std::string differences(const json& from, const json& to) {
@@ -118,7 +100,7 @@ TEST_P(TallyFields, ShardsMergedAndMpiRanksEqualOneRunWithEveryCounter) {
   r = run_microsim("merge " + part + ".shard-1-of-2.json " + part + ".shard-2-of-2.json --threads 1 -q -o " +
                    merged);
   ASSERT_EQ(r.code, 0) << r.err;
-  const json single = read(one);
+  const json single = read_record(one);
 
   // Every record holds every counter, under its name.
   std::vector<json> counters;
@@ -153,7 +135,7 @@ TEST_P(TallyFields, ShardsMergedAndMpiRanksEqualOneRunWithEveryCounter) {
     EXPECT_GT(below, 0u) << cmd;  // rays beside the object
   }
 
-  const json a = science(single), b = science(read(merged));
+  const json a = record_without_timings(single), b = record_without_timings(read_record(merged));
   EXPECT_TRUE(a == b) << cmd << "\nmerged shards differ from one run: " << differences(a, b);
 
 #ifdef MICROSIM_MPIEXEC
@@ -161,9 +143,9 @@ TEST_P(TallyFields, ShardsMergedAndMpiRanksEqualOneRunWithEveryCounter) {
   r = run_microsim(cmd + " --threads 1 -q -o " + two, std::string(MICROSIM_MPIEXEC) +
                                                           " -n 2 --allow-run-as-root --oversubscribe --bind-to none");
   ASSERT_EQ(r.code, 0) << cmd << "\n" << r.err;
-  const json ranks = read(two);
+  const json ranks = read_record(two);
   EXPECT_EQ(ranks.value("ranks", 0), 2) << cmd;
-  const json m = science(ranks);
+  const json m = record_without_timings(ranks);
   EXPECT_TRUE(a == m) << cmd << "\nmpirun -n 2 differs from one run: " << differences(a, m);
 #endif
 }

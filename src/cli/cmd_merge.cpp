@@ -19,10 +19,6 @@ bool command_can_split(const std::vector<std::string>& words) {
   return false;
 }
 
-std::string shard_path(const std::string& output, int k, int n) {
-  return output + ".shard-" + std::to_string(k) + "-of-" + std::to_string(n) + ".json";
-}
-
 namespace {
 
 struct MergeOptions {

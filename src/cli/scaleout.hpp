@@ -24,9 +24,6 @@ int run_cli(const std::vector<std::string>& args, TallyReplay* replay = nullptr)
 // and validate. `words` are the subcommand names, outermost first.
 bool command_can_split(const std::vector<std::string>& words);
 
-// Where `--shard K/N` writes its partial record: OUTPUT.shard-K-of-N.json.
-std::string shard_path(const std::string& output, int k, int n);
-
 void register_merge(CLI::App& app, const GlobalOptions& g);
 
 // MPI (compiled with MICROSIM_MPI; otherwise these say "one process").

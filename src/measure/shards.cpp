@@ -30,6 +30,10 @@ ShardRecorder::ShardRecorder(int k, int n) : k_(k), n_(n) {
   if (!(n >= 1 && k >= 1 && k <= n)) throw UsageError("--shard must be K/N with 1 <= K <= N");
 }
 
+std::string shard_path(const std::string& output, int k, int n) {
+  return output + ".shard-" + std::to_string(k) + "-of-" + std::to_string(n) + ".json";
+}
+
 std::pair<int, int> parse_shard(const std::string& text) {
   const auto bad = [&] {
     return UsageError("--shard must be K/N with integers 1 <= K <= N <= 4096 (got '" + text + "')");

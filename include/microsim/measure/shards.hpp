@@ -104,6 +104,9 @@ class ShardRecorder : public TallySplit {
 // "K/N" with 1 <= K <= N (UsageError naming --shard otherwise).
 std::pair<int, int> parse_shard(const std::string& text);
 
+// Where shard K of N writes its partial record: OUTPUT.shard-K-of-N.json.
+std::string shard_path(const std::string& output, int k, int n);
+
 // Replays a run from merged tallies: computes no unit, and each exchange receives the next
 // merged entry (a mismatch of kind or size is a RuntimeFailure: the command that replays is not
 // the one the parts came from).
