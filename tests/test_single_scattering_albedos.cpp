@@ -10,6 +10,7 @@
 
 #include <tbb/task_arena.h>
 
+#include <microsim/common.hpp>
 #include <microsim/measure/single_scattering_albedos.hpp>
 #include <microsim/models/microfacet_bsdf.hpp>
 
@@ -27,11 +28,9 @@ using mm::MicrofacetBsdf;
 using mm::Ndf;
 using mm::Vec3;
 
-constexpr double kPi = 3.14159265358979323846;
-
+// The direction at (theta, phi) in degrees.
 Vec3 incidence(double theta_deg, double phi_deg) {
-  const double t = theta_deg * kPi / 180.0, p = phi_deg * kPi / 180.0;
-  return Vec3(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
+  return microsim::direction_from_angles(microsim::rad(theta_deg), microsim::rad(phi_deg));
 }
 
 void expect_bit_identical(const mm::SingleScatteringAlbedo& a, const mm::SingleScatteringAlbedo& b, const std::string& what) {

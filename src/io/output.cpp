@@ -203,6 +203,12 @@ std::string naming_output(std::string what, const std::string& tmp, const std::s
   return what;
 }
 
+// A writer's failure as the output's one line: kept when it already names the output.
+[[noreturn]] void fail_with_writer_message(const std::string& what, const std::string& path) {
+  if (what.rfind("cannot write " + path, 0) == 0) throw RuntimeFailure(what);
+  fail_writing(path, 0, what);
+}
+
 void remove_folders_if_empty(const std::vector<std::string>& folders) {
   for (auto it = folders.rbegin(); it != folders.rend(); ++it) {
     rmdir(it->c_str());  // fails, and keeps the folder, when anything else is in it
@@ -325,9 +331,7 @@ void write_atomically(const std::string& path,
     } catch (const UsageError&) {
       throw;
     } catch (const std::exception& e) {
-      const std::string what = e.what();
-      if (what.rfind("cannot write " + path, 0) == 0) throw;
-      fail_writing(path, 0, what);
+      fail_with_writer_message(e.what(), path);
     }
     return;
   }
@@ -351,9 +355,7 @@ void write_atomically(const std::string& path,
     throw;
   } catch (const std::exception& e) {
     discard();
-    const std::string what = naming_output(e.what(), tmp, path);
-    if (what.rfind("cannot write " + path, 0) == 0) throw RuntimeFailure(what);
-    fail_writing(path, 0, what);
+    fail_with_writer_message(naming_output(e.what(), tmp, path), path);
   } catch (...) {
     discard();
     throw;
