@@ -122,7 +122,7 @@ PolarizedTable fill_pbsdf(std::vector<float> theta_h, std::vector<float> theta_d
   t.wavelengths = std::move(wavelengths);
   t.M.assign(t.size(), std::numeric_limits<float>::quiet_NaN());
   check_table(t);
-  constexpr double kGrazing = 1e-9;  // z of a grazing direction, to rounding
+  constexpr double kGrazing = 1e-6;  // z of a grazing direction, to the rounding of the float32 grid angles
   tbb::parallel_for(std::size_t(0), t.phi_d.size(), [&](std::size_t p) {
     for (std::size_t d = 0; d < t.theta_d.size(); ++d)
       for (std::size_t h = 0; h < t.theta_h.size(); ++h) {

@@ -65,8 +65,9 @@ inline Vec3 pbsdf_reference_axis(const RusinkiewiczPair& d) { return d.p.cross(d
 using PolarizedBrdf = std::function<models::Mueller(const Vec3& light, const Vec3& view, double wavelength_nm)>;
 // M of a microsim-frame matrix at a node, re-expressed in the plugin's frames.
 models::Mueller to_pbsdf_frames(const models::Mueller& M, const RusinkiewiczPair& d);
-// The table of f on the grids: every node with both directions above the horizon (z >= -1e-9:
-// grazing nodes are evaluated) holds f in the plugin's frames; the others NaN.
+// The table of f on the grids: every node with both directions above the horizon holds f in the
+// plugin's frames, the others NaN. Grazing nodes (z >= -1e-6, the rounding of the float32 angles)
+// are evaluated.
 PolarizedTable fill_pbsdf(std::vector<float> theta_h, std::vector<float> theta_d, std::vector<float> phi_d,
                           std::vector<std::uint16_t> wavelengths, const PolarizedBrdf& f);
 // n values evenly spaced from lo to hi (both included).
