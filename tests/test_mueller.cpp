@@ -445,3 +445,25 @@ TEST(Depolarization, DegreeOfPolarizationFallsWithRandomBounces) {
   EXPECT_GT(dop[0], 0.5);
   for (int k = 1; k < 4; ++k) EXPECT_LT(dop[k], dop[k - 1] - 0.03) << "bounces " << k + 1;
 }
+
+// The incremental builder (what a walk calls facet by facet) gives path_mueller's matrix, and a
+// refused event leaves it as it was.
+TEST(PathMueller, BuilderFollowsTheRayAndRefusesImpossibleEvents) {
+  const Vec3 wi = direction_from_angles(rad(40.0), 0.5);
+  const std::vector<PathEvent> events = {{Vec3(0.3, 0.1, 1).normalized(), true}, {Vec3(-0.2, 0.2, 1).normalized(), false},
+                                         {Vec3(0.1, -0.3, 1).normalized(), false}};
+  PathMuellerBuilder b(wi);
+  for (const PathEvent& e : events) ASSERT_TRUE(b.add(e.m, e.refract, kGlass));
+  const PathMueller p = path_mueller(wi, events, kGlass);
+  ASSERT_TRUE(p.valid);
+  EXPECT_EQ(b.direction(), p.direction_out);
+  EXPECT_EQ(b.matrix(), p.M);
+  // A conductor cannot be hit from inside; glass refracts nothing beyond its critical angle.
+  PathMuellerBuilder g(wi);
+  const Mueller before = g.matrix();
+  EXPECT_FALSE(g.add(Vec3(0, 0, -1), false, kGold));
+  EXPECT_EQ(g.matrix(), before);
+  PathMuellerBuilder inside(direction_from_angles(kPi - rad(60.0), 0.0));
+  EXPECT_FALSE(inside.add(Vec3::UnitZ(), true, kGlass));
+  EXPECT_TRUE(inside.add(Vec3::UnitZ(), false, kGlass));
+}

@@ -122,39 +122,49 @@ Mueller reversed_path_mueller(const Mueller& M) {
   return q.asDiagonal() * M.transpose() * q.asDiagonal();
 }
 
+PathMuellerBuilder::PathMuellerBuilder(const Vec3& wi, std::optional<Vec3> x_in)
+    : d_(-wi.normalized()), x_(x_in ? *x_in : stokes_frame(wi)) {}
+
+bool PathMuellerBuilder::add(const Vec3& normal, bool refract_through, const Material& mat) {
+  const Vec3 m = normal.normalized();
+  const double dm = d_.dot(m);
+  const bool from_outside = dm < 0.0;
+  if (!from_outside && mat.kind != MaterialKind::Dielectric) return false;  // opaque: hit from inside
+  // The facet's s axis; at normal incidence every axis is one (r_p = -r_s): keep the current one.
+  Vec3 s = m.cross(d_);
+  const double sn = s.norm();
+  s = sn > 1e-12 ? Vec3(s / sn) : x_;
+  const double cos_i = std::abs(dm);
+  Vec3 d_next;
+  Mueller F;
+  if (refract_through) {
+    if (mat.kind != MaterialKind::Dielectric) return false;
+    const double eta_ratio = from_outside ? 1.0 / mat.eta : mat.eta;  // incident side over far side
+    if (!refract(-d_, m, eta_ratio, &d_next)) return false;
+    d_next.normalize();
+    F = facet_transmission_mueller(mat, cos_i, from_outside);
+  } else {
+    d_next = d_ - 2.0 * dm * m;
+    F = facet_reflection_mueller(mat, cos_i, from_outside);
+  }
+  M_ = F * (frame_change(d_, x_, s) * M_);
+  d_ = d_next;
+  x_ = s;  // perpendicular to the new direction too: it is normal to the plane of d and m
+  return true;
+}
+
+Mueller PathMuellerBuilder::matrix(std::optional<Vec3> x_out) const {
+  return frame_change(d_, x_, x_out ? *x_out : stokes_frame(d_)) * M_;
+}
+
 PathMueller path_mueller(const Vec3& wi, const std::vector<PathEvent>& events, const Material& mat,
                          std::optional<Vec3> x_in, std::optional<Vec3> x_out) {
   PathMueller out;
-  Vec3 d = -wi.normalized();             // propagation direction
-  Vec3 x = x_in ? *x_in : stokes_frame(wi);  // current reference axis
-  Mueller M = Mueller::Identity();
-  for (const PathEvent& e : events) {
-    const Vec3 m = e.m.normalized();
-    const double dm = d.dot(m);
-    const bool from_outside = dm < 0.0;
-    if (!from_outside && mat.kind != MaterialKind::Dielectric) return out;  // opaque: hit from inside
-    // The facet's s axis; at normal incidence every axis is one (r_p = -r_s): keep the current one.
-    Vec3 s = m.cross(d);
-    const double sn = s.norm();
-    s = sn > 1e-12 ? Vec3(s / sn) : x;
-    M = frame_change(d, x, s) * M;
-    const double cos_i = std::abs(dm);
-    if (e.refract) {
-      if (mat.kind != MaterialKind::Dielectric) return out;
-      const double eta_ratio = from_outside ? 1.0 / mat.eta : mat.eta;  // incident side over far side
-      Vec3 t;
-      if (!refract(-d, m, eta_ratio, &t)) return out;
-      M = facet_transmission_mueller(mat, cos_i, from_outside) * M;
-      d = t.normalized();
-    } else {
-      M = facet_reflection_mueller(mat, cos_i, from_outside) * M;
-      d = d - 2.0 * dm * m;
-    }
-    x = s;  // s is perpendicular to the new direction too (it lies in the plane of d and m's normal)
-  }
-  out.direction_out = d;
-  const Vec3 xo = x_out ? *x_out : stokes_frame(d);
-  out.M = frame_change(d, x, xo) * M;
+  PathMuellerBuilder b(wi, x_in);
+  for (const PathEvent& e : events)
+    if (!b.add(e.m, e.refract, mat)) return out;
+  out.direction_out = b.direction();
+  out.M = b.matrix(x_out);
   out.valid = true;
   return out;
 }

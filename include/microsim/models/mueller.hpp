@@ -90,10 +90,31 @@ struct PathMueller {
 };
 
 // The Mueller matrix of a specular path: light from the direction wi (travelling along -wi, Stokes
-// axis x_in) meets the facets in order; the result maps the incoming Stokes vector to the outgoing
-// one in the frame of axis x_out (default stokes_frame(direction_out)). x_in default stokes_frame(wi).
+// axis x_in, perpendicular to wi) meets the facets in order; the result maps the incoming Stokes
+// vector to the outgoing one in the frame of axis x_out (default stokes_frame(direction_out)).
+// x_in default stokes_frame(wi).
 PathMueller path_mueller(const Vec3& wi, const std::vector<PathEvent>& events, const Material& mat,
                          std::optional<Vec3> x_in = std::nullopt, std::optional<Vec3> x_out = std::nullopt);
+
+// The same product built one event at a time, for a walk that follows a ray: start at the light's
+// direction, add each facet as the ray meets it, read the matrix in the frame of the outgoing
+// direction at the end. path_mueller is this loop.
+class PathMuellerBuilder {
+ public:
+  explicit PathMuellerBuilder(const Vec3& wi, std::optional<Vec3> x_in = std::nullopt);
+  // Applies the facet of normal m (reflection, or refraction when `refract`); false (and the
+  // builder unchanged) for a conductor or mirror hit from inside or a refraction under total
+  // internal reflection.
+  bool add(const Vec3& m, bool refract, const Material& mat);
+  const Vec3& direction() const { return d_; }  // current direction of travel
+  // The matrix so far, from the input frame to the frame of axis x_out (default
+  // stokes_frame(direction())) of the current direction.
+  Mueller matrix(std::optional<Vec3> x_out = std::nullopt) const;
+
+ private:
+  Vec3 d_, x_;  // direction of travel, current reference axis
+  Mueller M_ = Mueller::Identity();
+};
 
 // Coherency (Cloude) matrix of M: Hermitian 4 x 4, trace M(0, 0), positive semidefinite exactly
 // when M is a convex sum of Jones Mueller matrices (physically realizable). For M of one Jones
