@@ -1,7 +1,7 @@
 // Polarization: Stokes vectors, Mueller matrices, Stokes frames, the Fresnel Mueller matrix of a
 // facet and the Mueller matrix of a specular path (docs/theory/polarization.md states every
-// convention and derives the signs; [Baek20] and Mitsuba 3's `measured_polarized` use the same
-// frame convention).
+// convention and derives the signs; Mitsuba 3 [Mitsuba22] uses the same Stokes frames and rotation
+// sign, so its `measured_polarized` tables of [Baek20] are written from these, io/pbsdf.hpp).
 //
 // Conventions (in short):
 //   Stokes frame  a beam travelling along the unit vector f carries a reference axis x (unit,
