@@ -36,6 +36,16 @@ TensorField TensorField::u8(const std::string& name, std::vector<std::uint64_t> 
   return f;
 }
 
+TensorField TensorField::u16(const std::string& name, std::vector<std::uint64_t> shape, const std::vector<std::uint16_t>& v) {
+  TensorField f;
+  f.name = name;
+  f.dtype = 3;
+  f.shape = std::move(shape);
+  f.data.resize(v.size() * sizeof(std::uint16_t));
+  std::memcpy(f.data.data(), v.data(), f.data.size());
+  return f;
+}
+
 namespace {
 template <class T>
 void put(std::vector<std::uint8_t>& out, T x) {  // little-endian host (x86-64, aarch64)
@@ -58,7 +68,7 @@ void write_tensor_file(const std::string& path, const std::vector<TensorField>& 
   for (const auto& f : fields) {
     std::uint64_t count = 1;
     for (auto d : f.shape) count *= d;
-    if (count * (f.dtype == 10 ? 4 : 1) != f.data.size())
+    if (tensor_element_size(f.dtype) == 0 || count * tensor_element_size(f.dtype) != f.data.size())
       throw std::logic_error("tensor field " + f.name + ": shape does not match its data");
     put<std::uint16_t>(head, static_cast<std::uint16_t>(f.name.size()));
     head.insert(head.end(), f.name.begin(), f.name.end());

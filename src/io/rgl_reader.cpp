@@ -42,8 +42,8 @@ std::map<std::string, TensorField> read_tensor_file(const std::string& path) {
       if (f.shape.back() != 0 && count > b.size() / f.shape.back()) throw bad("field " + f.name + " larger than the file");
       count *= f.shape.back();
     }
-    if (f.dtype != 1 && f.dtype != 10) continue;  // other types: not used here
-    const std::uint64_t bytes = count * (f.dtype == 10 ? 4 : 1);
+    if (tensor_element_size(f.dtype) == 0) continue;  // other types: not used here
+    const std::uint64_t bytes = count * tensor_element_size(f.dtype);
     if (offset > b.size() || bytes > b.size() - offset) throw bad("field " + f.name + " runs past the end");
     f.data.assign(b.begin() + static_cast<std::ptrdiff_t>(offset), b.begin() + static_cast<std::ptrdiff_t>(offset + bytes));
     out[f.name] = std::move(f);

@@ -45,7 +45,7 @@
 
 namespace microsim {
 
-// One field of a tensor file: dtype 1 = uint8, 10 = float32; data is raw little-endian bytes.
+// One field of a tensor file: dtype 1 = uint8, 3 = uint16, 10 = float32; data is raw little-endian bytes.
 struct TensorField {
   std::string name;
   std::uint8_t dtype = 10;
@@ -53,7 +53,12 @@ struct TensorField {
   std::vector<std::uint8_t> data;
   static TensorField f32(const std::string& name, std::vector<std::uint64_t> shape, const std::vector<float>& v);
   static TensorField u8(const std::string& name, std::vector<std::uint64_t> shape, const std::vector<std::uint8_t>& v);
+  static TensorField u16(const std::string& name, std::vector<std::uint64_t> shape, const std::vector<std::uint16_t>& v);
 };
+// Bytes per value of a tensor field's dtype (0 for the types not used here).
+inline std::size_t tensor_element_size(std::uint8_t dtype) {
+  return dtype == 1 ? 1 : dtype == 3 ? 2 : dtype == 10 ? 4 : 0;
+}
 // Header `tensor_file\0`, version 1.0, field count, field headers, data (8-byte aligned);
 // written atomically.
 void write_tensor_file(const std::string& path, const std::vector<TensorField>& fields);

@@ -73,19 +73,66 @@ inline FresnelReflectance fresnel_dielectric_transmittance(double cos_i, double 
   return {k * ts * ts, k * tp * tp};
 }
 
+// Complex Fresnel amplitudes of one interface (models/mueller.hpp builds Mueller matrices from
+// them). Frames: s = the unit vector normal to the plane of incidence, the same vector for the
+// incident, reflected and transmitted waves; p = (propagation direction) x s for each wave
+// ((s, p, propagation) right-handed). In these bases the reflected field is (r_s E_s, r_p E_p),
+// the transmitted one (t_s E_s, t_p E_p). This is the convention in which r_p = -r_s at normal
+// incidence (Verdet's sign of r_p). Time dependence exp(-i omega t): an absorbing medium has
+// n = eta + i k, k >= 0.
+struct FresnelAmplitudes {
+  std::complex<double> rs{-1.0, 0.0}, rp{1.0, 0.0};  // reflection (a perfect mirror by default)
+  std::complex<double> ts{0.0, 0.0}, tp{0.0, 0.0};   // transmission (dielectrics, no total reflection)
+  double cos_t = -1.0;  // cosine of the refraction angle; -1 under total internal reflection or for conductors
+};
+
+// Dielectric interface, real relative index n > 0: the amplitudes behind fresnel_dielectric and
+// fresnel_dielectric_transmittance (|r_s|^2 and |r_p|^2 are their R_s and R_p to rounding). Under
+// total internal reflection n cos_t = i sqrt(sin_i^2 - n^2) (the root of an evanescent wave that
+// decays away from the interface for exp(-i omega t)), so |r_s| = |r_p| = 1 with phases.
+inline FresnelAmplitudes fresnel_dielectric_amplitudes(double cos_i, double n) {
+  using C = std::complex<double>;
+  cos_i = std::clamp(std::abs(cos_i), 0.0, 1.0);
+  FresnelAmplitudes a;
+  const double cos_t = fresnel_cos_transmitted(cos_i, n);
+  if (cos_t < 0.0) {
+    const double sin2_i = 1.0 - cos_i * cos_i;
+    const C w(0.0, std::sqrt(std::max(0.0, sin2_i - n * n)));  // n cos_t
+    const C n2cos(n * n * cos_i, 0.0);
+    a.rs = (C(cos_i, 0.0) - w) / (C(cos_i, 0.0) + w);
+    a.rp = (n2cos - w) / (n2cos + w);
+    a.ts = a.tp = 0.0;
+    a.cos_t = -1.0;
+    return a;
+  }
+  a.rs = (cos_i - n * cos_t) / (cos_i + n * cos_t);
+  a.rp = (n * cos_i - cos_t) / (n * cos_i + cos_t);
+  a.ts = 2.0 * cos_i / (cos_i + n * cos_t);
+  a.tp = 2.0 * cos_i / (n * cos_i + cos_t);
+  a.cos_t = cos_t;
+  return a;
+}
+
 // Conductor (or any absorbing medium) with complex relative index n = eta + i k, k >= 0:
 // with w = n cos_t = sqrt(n^2 - sin_i^2) (principal branch, Re w >= 0, Im w >= 0),
 // r_s = (cos_i - w) / (cos_i + w), r_p = (n^2 cos_i - w) / (n^2 cos_i + w). k = 0 reduces to the
 // dielectric formulas (total internal reflection included: w is then imaginary and |r| = 1).
-inline FresnelReflectance fresnel_conductor(double cos_i, double eta, double k) {
+inline FresnelAmplitudes fresnel_conductor_amplitudes(double cos_i, double eta, double k) {
   using C = std::complex<double>;
   cos_i = std::clamp(std::abs(cos_i), 0.0, 1.0);
   const C n(eta, k);
   const C n2 = n * n;
   const C w = std::sqrt(n2 - C(1.0 - cos_i * cos_i, 0.0));
-  const C rs = (C(cos_i, 0.0) - w) / (C(cos_i, 0.0) + w);
-  const C rp = (n2 * cos_i - w) / (n2 * cos_i + w);
-  return {std::norm(rs), std::norm(rp)};
+  FresnelAmplitudes a;
+  a.rs = (C(cos_i, 0.0) - w) / (C(cos_i, 0.0) + w);
+  a.rp = (n2 * cos_i - w) / (n2 * cos_i + w);
+  return a;
+}
+
+// Power reflectances of the conductor: |r_s|^2 and |r_p|^2 of fresnel_conductor_amplitudes.
+inline FresnelReflectance fresnel_conductor(double cos_i, double eta, double k) {
+  const FresnelAmplitudes a = fresnel_conductor_amplitudes(cos_i, eta, k);
+  return {std::norm(a.rs), std::norm(a.rp)};
 }
 
 }  // namespace microsim::models
