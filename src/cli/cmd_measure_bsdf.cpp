@@ -18,7 +18,7 @@ namespace microsim::cli {
 namespace {
 
 struct BsdfCliOptions {
-  std::string surface, output, theta_i, phi_i = "0";
+  std::string surface, output, theta_i, phi_i = "0", wavelengths;
   double eta = 0.0, k = 0.0;
   bool no_models = false;
   BsdfRequest request;
@@ -88,6 +88,7 @@ int run_measure_bsdf(BsdfCliOptions& o, const GlobalOptions& g) {
   r.threads = g.threads;
   r.theta_i_deg = parse_angle_list(o.theta_i, "--theta-i");
   r.phi_i_deg = parse_angle_list(o.phi_i, "--phi-i");
+  if (!o.wavelengths.empty()) r.wavelengths_nm = parse_angle_list(o.wavelengths, "--wavelengths");
   check_bsdf_request(r);
   const Microsurface s = input_surface(g, o.surface);
   check_bsdf_surface(r, s, o.surface);
@@ -132,6 +133,16 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
       ->check(number_in(positive()));
   cmd->add_option("--k", o->k, "Conductor: extinction coefficient (index eta + i k)")
       ->check(number_in(closed(0, 1000)));
+  cmd->add_option("--metal", o->request.metal,
+                  "Conductor: a shipped table of measured optical constants n(lambda), k(lambda): "
+                  "Au, Ag, Cu (Johnson and Christy 1972) or Al (McPeak et al. 2015); a spectral run");
+  cmd->add_option("--ior-file", o->request.ior_file,
+                  "Conductor: a CSV file of rows 'wavelength_nm, n, k' (increasing wavelength; one header "
+                  "line allowed; linear interpolation); a spectral run");
+  cmd->add_option("--wavelengths", o->wavelengths,
+                  "Spectral run (with --metal or --ior-file): wavelengths in nm, increasing, inside the "
+                  "table (a, a,b,c or start:stop:step; default 450:650:50). Paths are traced once and "
+                  "weighted per wavelength");
   cmd->add_option("--theta-i", o->theta_i,
                   "Incidence zenith angles in degrees, [0, 90): a, a,b,c or start:stop:step")
       ->required();

@@ -12,6 +12,7 @@
 
 #include "microsim/measure/groove_models.hpp"
 #include "microsim/measure/single_scattering_albedos.hpp"
+#include "microsim/models/spectral_rgb.hpp"
 
 namespace microsim {
 
@@ -73,8 +74,44 @@ const char* const kNominalZ[3] = {"z_smith_single", "z_smith_multiple", "z_vcavi
 // ---------------------------------------------------------------------------------------------
 // Request
 
+std::optional<models::IndexTable> bsdf_index_table(const BsdfRequest& o) {
+  const bool spectral = !o.metal.empty() || !o.ior_file.empty();
+  if (!spectral) {
+    if (!o.wavelengths_nm.empty()) throw UsageError("--wavelengths needs --metal or --ior-file");
+    return std::nullopt;
+  }
+  if (o.material != "conductor") throw UsageError("--metal and --ior-file apply to --material conductor only");
+  if (!o.metal.empty() && !o.ior_file.empty()) throw UsageError("give --metal or --ior-file, not both");
+  if (o.eta || o.k) throw UsageError("--eta and --k do not go with --metal or --ior-file (the table gives the index)");
+  if (!o.metal.empty()) return models::metal_table(o.metal);
+  return models::read_index_file(o.ior_file);
+}
+
+std::vector<double> bsdf_wavelengths(const BsdfRequest& o) {
+  const auto table = bsdf_index_table(o);
+  if (!table) return {};
+  std::vector<double> nm = o.wavelengths_nm.empty() ? models::default_wavelengths_nm() : o.wavelengths_nm;
+  if (static_cast<int>(nm.size()) > kMaxWavelengths)
+    throw UsageError("--wavelengths: at most " + std::to_string(kMaxWavelengths) + " wavelengths");
+  models::check_wavelengths(nm, *table, "--wavelengths");
+  return nm;
+}
+
+namespace {
+// The conductors of a spectral request, one per wavelength.
+std::vector<models::Material> spectral_conductors(const models::IndexTable& table, const std::vector<double>& nm) {
+  std::vector<models::Material> out;
+  for (double x : nm) {
+    const models::OpticalConstant c = table.at(x);
+    out.push_back(models::Material::conductor(c.n, c.k));
+  }
+  return out;
+}
+}  // namespace
+
 models::Material bsdf_material(const BsdfRequest& o) {
   const auto f4 = [](double x) { return fixed(x, 4); };
+  if (const auto table = bsdf_index_table(o)) return spectral_conductors(*table, bsdf_wavelengths(o)).front();
   if (o.material == "mirror") {
     if (o.eta || o.k) throw UsageError("--eta and --k apply to --material conductor or dielectric, not mirror");
     return models::Material::mirror();
@@ -165,6 +202,10 @@ void check_bsdf_surface(const BsdfRequest& o, const Microsurface& s, const std::
 BsdfTableOptions bsdf_table_options(const BsdfRequest& o, const Microsurface& s, TallySplit* split) {
   BsdfTableOptions to;
   to.base.material = bsdf_material(o);
+  if (const auto table = bsdf_index_table(o)) {
+    to.base.wavelengths_nm = bsdf_wavelengths(o);
+    to.base.spectral = spectral_conductors(*table, to.base.wavelengths_nm);
+  }
   to.base.orders = o.orders;
   to.base.rays = static_cast<std::uint64_t>(o.rays);
   to.base.split = split;
@@ -368,6 +409,50 @@ Table bsdf_in_plane_table(const BsdfResult& r) {
 // ---------------------------------------------------------------------------------------------
 // JSON record
 
+namespace {
+// A spectral run's per-wavelength values: the albedo per side and order with its error, the flat
+// interface's Fresnel reflectance, and the colour of the reflected albedo (models/spectral_rgb.hpp).
+Json spectral_albedo_json(const BsdfResult& r) {
+  const int K = r.options.orders, L = r.wavelengths();
+  Json j;
+  j["wavelengths_nm"] = r.options.wavelengths_nm;
+  Json eta = Json::array(), k = Json::array(), smooth = Json::array();
+  for (const models::Material& m : r.options.spectral) {
+    eta.push_back(m.eta);
+    k.push_back(m.k);
+    smooth.push_back(models::fresnel_conductor(std::cos(r.options.theta_i), m.eta, m.k).unpolarized());
+  }
+  j["eta"] = eta;
+  j["k"] = k;
+  j["smooth_interface_reflected"] = smooth;
+  const models::SpectrumToRgb colour(r.options.wavelengths_nm);
+  for (int sd = 0; sd < 2; ++sd) {
+    Json a = Json::object(), se = Json::object();
+    for (int o = 0; o <= K; ++o) {
+      Json v = Json::array(), e = Json::array();
+      for (int l = 0; l < L; ++l) {
+        const Estimate x = r.albedo(sd, o, l);
+        v.push_back(x.mean);
+        e.push_back(x.stderr_);
+      }
+      a[order_key(o, K)] = v;
+      se[order_key(o, K)] = e;
+    }
+    j["albedo"][kSideName[sd]] = a;
+    j[std::string(kSideName[sd]) + "_stderr"] = se;
+  }
+  Json rgb = Json::object();
+  for (int o = 0; o <= K; ++o) {
+    std::vector<double> v(L);
+    for (int l = 0; l < L; ++l) v[l] = r.albedo(0, o, l).mean;
+    const auto c = colour.rgb(v);
+    rgb[order_key(o, K)] = {c[0], c[1], c[2]};
+  }
+  j["reflected_rgb"] = rgb;
+  return j;
+}
+}  // namespace
+
 Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
   const int K = r.options.orders;
   Json j;
@@ -425,6 +510,7 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
     models["smith_multiple"] = nullptr;
   }
   j["albedo_models"] = models;
+  if (!r.spectral.empty()) j["spectral"] = spectral_albedo_json(r);
 
   // --- the tables: measured beside the models per side and order, and the in-plane lobe
   j["rows"] = albedo_table(r, am).rows;
@@ -488,6 +574,13 @@ void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Mi
                      {"smith_multiple_walks", r.options.model_walks},
                      {"models", o.models}};
   if (o.format == "bsdf") parameters["table_resolution"] = o.table_resolution;
+  if (!r.spectral.empty()) {
+    const auto table = bsdf_index_table(o);
+    parameters["metal"] = o.metal.empty() ? Json(nullptr) : Json(o.metal);
+    parameters["ior_file"] = o.ior_file.empty() ? Json(nullptr) : Json(o.ior_file);
+    parameters["index_source"] = table->source;
+    parameters["wavelengths_nm"] = r.options.wavelengths_nm;
+  }
   j["file"] = file;
   j["surface"] = s.description;
   j["parameters"] = parameters;

@@ -4,7 +4,8 @@ namespace microsim {
 
 WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir0,
                        const models::Material& mat, CounterRng& rng, int max_events, bool finite,
-                       TraceCounters& counters, std::uint64_t& events) {
+                       TraceCounters& counters, std::uint64_t& events,
+                       const SpectralWeights* spectral) {
   using models::MaterialKind;
   const Microsurface& s = tracer.surface();
   WalkEnd e;
@@ -49,6 +50,9 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
         break;
       case MaterialKind::Conductor:
         e.weight *= mat.reflectance(vm, true);  // [GeomBSDF24, eq. 8], complex index
+        if (spectral)
+          for (int l = 0; l < spectral->count; ++l)
+            spectral->weights[l] *= spectral->materials[l].reflectance(vm, true);
         dir = models::reflect(v, m);
         break;
       case MaterialKind::Dielectric: {

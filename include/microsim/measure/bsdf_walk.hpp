@@ -21,6 +21,16 @@ struct WalkEnd {
   Vec3 direction = Vec3::UnitZ();
 };
 
+// A spectral conductor's per-wavelength weights: at each conductor hit weights[l] is multiplied
+// by materials[l]'s reflectance, in the order the single-index walk multiplies its weight, so
+// weights[l] equals the weight of a walk with materials[l] alone bit for bit (the geometry of a
+// conductor's path does not depend on its index). The caller sets the weights to 1 first.
+struct SpectralWeights {
+  const models::Material* materials = nullptr;
+  int count = 0;
+  double* weights = nullptr;
+};
+
 // `finite`: the surface is a finite object. Its rays that miss it at once are Missed, and a ray
 // that leaves it outside after at least one event is reflected whatever its direction (walls send
 // light below the base plane: [GeomBSDF24, "Inherent Assumptions"], the visible area exceeds the
@@ -28,7 +38,8 @@ struct WalkEnd {
 // from inside the slab; anything else is Lost. `events` counts the scattering events.
 WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir,
                        const models::Material& mat, CounterRng& rng, int max_events, bool finite,
-                       TraceCounters& counters, std::uint64_t& events);
+                       TraceCounters& counters, std::uint64_t& events,
+                       const SpectralWeights* spectral = nullptr);
 
 // Adds a walk's end to the tallies with the path's starting weight w0: exits with their order
 // and direction (binned when they point into their side's hemisphere: a finite object's
