@@ -4,6 +4,7 @@
 #include "microsim/measure/groove_models.hpp"
 #include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
+#include "microsim/measure/spectral_tally.hpp"
 #include "microsim/measure/vcavity_measure.hpp"
 #include "microsim/surface/generators.hpp"
 
@@ -412,18 +413,6 @@ constexpr std::uint64_t kPassChunks = 16;
 constexpr double kPassBytes = 64.0 * 1024 * 1024;
 // Unit: the tally a unit's chunks are summed in (BsdfTally, or ExitCounts for paths of weight 1);
 // Rep: the replicate's (added from its units in order).
-// One tally per wavelength of a spectral conductor, summed alike (the unit and the replicate's).
-struct SpectralTally {
-  std::vector<BsdfTally> lambdas;
-  SpectralTally() = default;
-  SpectralTally(int wavelengths, int K, int npix, int nplane) : lambdas(wavelengths, BsdfTally(K, npix, nplane)) {}
-  SpectralTally& operator+=(const SpectralTally& o) {
-    if (lambdas.empty()) return *this = o;
-    for (std::size_t l = 0; l < o.lambdas.size(); ++l) lambdas[l] += o.lambdas[l];
-    return *this;
-  }
-};
-
 // The sizes of a unit's tallies: orders, pixels, in-plane bins, wavelengths (1: one tally).
 struct TallyShape {
   int K, npix, nplane, wavelengths = 1;
@@ -440,7 +429,7 @@ template <class T>
 bool tally_unset(const T& t) {
   return t.albedo.empty();
 }
-bool tally_unset(const SpectralTally& t) { return t.lambdas.empty(); }
+bool tally_unset(const SpectralTally& t) { return t.albedo.empty(); }
 
 template <class Unit, class Rep, class Body, class Done>
 void run_replicate_paths(int q0, int q1, std::uint64_t n, const TallyShape& shape,
@@ -453,7 +442,9 @@ void run_replicate_paths(int q0, int q1, std::uint64_t n, const TallyShape& shap
   std::vector<Rep> reps;  // replicates q0 + k, summed so far
   // A pass keeps one tally per unit: at most kPassBytes of them (large hemisphere maps: one
   // unit per pass, as run_paths).
-  const double tally_bytes = 16.0 * 2 * (K + 1) * (1.0 + npix + nplane) * shape.wavelengths;
+  // (a spectral unit: first moments only, of every wavelength).
+  const double tally_bytes = shape.wavelengths > 1 ? 8.0 * 2 * (K + 1) * (1.0 + npix + nplane) * shape.wavelengths
+                                                   : 16.0 * 2 * (K + 1) * (1.0 + npix + nplane);
   const std::uint64_t max_units = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(kPassBytes / tally_bytes));
   std::uint64_t u = 0;
   while (u < units) {
@@ -637,25 +628,16 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
             double weights[kMaxWavelengths];
             std::fill(weights, weights + L, 1.0);
             const SpectralWeights sw{o.spectral.data(), L, weights};
-            BsdfTally& first = t.lambdas[0];
             CounterRng rng(o.seed, ReplicatePlan::stream(stream, q), i);
+            ++t.paths;
             const Vec2 ab = plan.strata.point(i, rng);
-            WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2, -wi,
-                                       mat, rng, o.max_events, finite, first.counters, first.events, &sw);
-            for (int l = 0; l < L; ++l) {
-              ++t.lambdas[l].paths;
-              e.weight = weights[l];
-              record_walk_end(t.lambdas[l], e, ray_weight, r.map, r.plane);
-            }
+            const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
+                                             -wi, mat, rng, o.max_events, finite, t.counters, t.events, &sw);
+            record_walk_end(t, e, weights, ray_weight, r.map, r.plane);
           },
-          [&](int q, SpectralTally&& rep) {
-            // The walk's counts went to the first wavelength's tally; they are every one's.
-            for (int l = 1; l < L; ++l) {
-              rep.lambdas[l].events = rep.lambdas[0].events;
-              rep.lambdas[l].counters = rep.lambdas[0].counters;
-            }
-            for (int l = 0; l < L; ++l) r.spectral[l].add_replicate(rep.lambdas[l]);
-            (void)q;
+          [&](int, SpectralTally&& rep) {
+            for (int l = 0; l < L; ++l) r.spectral[l].add_replicate(rep.wavelength(l));
+            rep = SpectralTally();  // the finished replicate's memory back (L tallies wide)
           });
       r.measured = r.spectral[0];
     } else if (unit_weight)

@@ -107,6 +107,15 @@ void record_walk_end(BsdfTally& t, const WalkEnd& e, double w0, const Hemisphere
              [&](int s, int px, int b) { t.add_exit(s, e.order, w0 * e.weight, px, b); });
 }
 
+void record_walk_end(SpectralTally& t, const WalkEnd& e, const double* weights, double w0,
+                     const HemisphereMap& map, const InPlaneBins& plane) {
+  record_end(t, e, map, plane, [&](int s, int px, int b) {
+    double w[kMaxWavelengths];
+    for (int l = 0; l < t.wavelengths; ++l) w[l] = w0 * weights[l];
+    t.add_exit(s, e.order, w, px, b);
+  });
+}
+
 void record_walk_end(ExitCounts<std::uint32_t>& t, const WalkEnd& e, const HemisphereMap& map,
                      const InPlaneBins& plane) {
   record_end(t, e, map, plane, [&](int s, int px, int b) { t.add_exit(s, e.order, px, b); });

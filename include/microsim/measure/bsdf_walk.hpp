@@ -8,6 +8,7 @@
 
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/exit_counts.hpp"
+#include "microsim/measure/spectral_tally.hpp"
 #include "microsim/models/microfacet_bsdf.hpp"
 #include "microsim/trace/tracer.hpp"
 
@@ -46,6 +47,9 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
 // reflected ray below the base plane counts in the albedo only), losses and unterminated walks.
 void record_walk_end(BsdfTally& t, const WalkEnd& e, double w0, const HemisphereMap& map,
                      const InPlaneBins& plane);
+// The same for a spectral conductor's path: weight w0 * weights[l] at wavelength l.
+void record_walk_end(SpectralTally& t, const WalkEnd& e, const double* weights, double w0,
+                     const HemisphereMap& map, const InPlaneBins& plane);
 // The same for paths of weight 1 (w0 = 1, e.weight = 1) into integer counts.
 void record_walk_end(ExitCounts<std::uint32_t>& t, const WalkEnd& e, const HemisphereMap& map,
                      const InPlaneBins& plane);
