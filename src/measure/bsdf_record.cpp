@@ -170,15 +170,19 @@ void check_bsdf_request(BsdfRequest& o) {
                      "(e.g. --phi-i -180:180:30), or one azimuth for an isotropic table");
   // -o .bsdf: the RGL tables hold vndf, luminance and two spectra values (floats) per vertex of
   // the table_resolution^2 grid of every incidence.
+  // A spectral run: a spectra value per wavelength and three rgb values.
+  const double wavelengths = static_cast<double>(bsdf_wavelengths(o).size());
+  const double vertex_bytes = wavelengths > 0 ? 4.0 * (2 + wavelengths + 3) : 16.0;
   if (ext == "bsdf")
-    require_memory(16.0 * static_cast<double>(n_inc) * o.table_resolution * o.table_resolution,
+    require_memory(vertex_bytes * static_cast<double>(n_inc) * o.table_resolution * o.table_resolution,
                    "--table-resolution " + std::to_string(o.table_resolution) + " with " + std::to_string(n_inc) +
                        " incidences");
   // Tallies: f and f^2 per side, slot and pixel, one per worker plus the merge tree, and the
   // finished results of every incidence.
   const double tally = 2.0 * (o.orders + 1) * (static_cast<double>(o.resolution) * o.resolution + o.resolution) * 2 * 8;
   const int threads = o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency();
-  const double need = tally * (3.0 * threads + 4.0 + 2.0 * n_inc);
+  // (a spectral run's results: a tally per wavelength beside the first wavelength's)
+  const double need = tally * (3.0 * threads + 4.0 + 2.0 * n_inc * (1.0 + wavelengths));
   const double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
   if (need > 0.5 * have)
     throw UsageError("--resolution " + std::to_string(o.resolution) + " with --orders " +

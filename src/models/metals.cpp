@@ -15,7 +15,7 @@ namespace microsim::models {
 
 namespace {
 
-// [JohnsonChristy72, Table 1]: gold, room temperature, 187.9 - 1937 nm (49 photon energies).
+// [JohnsonChristy72] gold, room temperature, 187.9 - 1937 nm (49 photon energies).
 const OpticalConstant kGoldJohnsonChristy[] = {
     {187.9, 1.28, 1.188},
     {191.6, 1.32, 1.203},
@@ -68,7 +68,7 @@ const OpticalConstant kGoldJohnsonChristy[] = {
     {1937.0, 0.92, 13.78},
 };
 
-// [JohnsonChristy72, Table 1]: silver, room temperature, 187.9 - 1937 nm.
+// [JohnsonChristy72] silver, room temperature, 187.9 - 1937 nm.
 const OpticalConstant kSilverJohnsonChristy[] = {
     {187.9, 1.07, 1.212},
     {191.6, 1.10, 1.232},
@@ -121,7 +121,7 @@ const OpticalConstant kSilverJohnsonChristy[] = {
     {1937.0, 0.24, 14.08},
 };
 
-// [JohnsonChristy72, Table 1]: copper, room temperature, 187.9 - 1937 nm.
+// [JohnsonChristy72] copper, room temperature, 187.9 - 1937 nm.
 const OpticalConstant kCopperJohnsonChristy[] = {
     {187.9, 0.94, 1.337},
     {191.6, 0.95, 1.388},

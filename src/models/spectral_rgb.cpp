@@ -7,7 +7,7 @@ namespace microsim::models {
 
 namespace {
 
-// [Wyman13, eq. 2]: a Gaussian with different widths left and right of its peak.
+// [Wyman13], the multi-lobe fit: a Gaussian with different widths left and right of its peak.
 double piecewise_gaussian(double x, double mu, double sigma_left, double sigma_right) {
   const double t = (x - mu) / (x < mu ? sigma_left : sigma_right);
   return std::exp(-0.5 * t * t);

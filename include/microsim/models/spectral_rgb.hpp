@@ -1,6 +1,6 @@
 // Colour of a sampled reflectance spectrum: CIE 1931 2-degree XYZ by the multi-lobe analytic fit
-// of the colour-matching functions [Wyman13, Sec. 2.1, eq. 2 and Table 1], then linear sRGB
-// (ITU-R BT.709 primaries, the matrix of [SRGB99]) under the equal-energy illuminant E, white
+// of the colour-matching functions [Wyman13] (its multi-lobe piecewise-Gaussian fit), then linear sRGB
+// (ITU-R BT.709 primaries, the XYZ-to-linear-sRGB matrix of [SRGB99]) under the equal-energy illuminant E, white
 // balanced by scaling each linear sRGB channel so that a spectrum equal to 1 everywhere (a mirror)
 // maps to (1, 1, 1) (a von Kries scaling in the sRGB primaries).
 //
@@ -13,7 +13,7 @@
 
 namespace microsim::models {
 
-// [Wyman13, eq. 2, Table 1]: the CIE 1931 2-degree colour-matching functions at `nm`.
+// [Wyman13], multi-lobe fit: the CIE 1931 2-degree colour-matching functions at `nm`.
 std::array<double, 3> cie1931_xyz_fit(double nm);
 
 class SpectrumToRgb {
