@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <type_traits>
 
 namespace microsim {
 
@@ -476,8 +477,14 @@ void run_replicate_paths(int q0, int q1, std::uint64_t n, const TallyShape& shap
     });
     for (std::uint64_t w = u; w < u1; ++w) {
       const std::uint64_t r = w / batches;
-      if (r == reps.size()) reps.push_back(make_tally<Rep>(shape));
-      reps[r] += parts[w - u];
+      if (r < reps.size()) {
+        reps[r] += parts[w - u];
+      } else if constexpr (std::is_same<Rep, SpectralTally>::value && std::is_same<Unit, Rep>::value) {
+        reps.push_back(std::move(parts[w - u]));  // x, as 0 + x (the weights are >= 0), uncopied
+      } else {
+        reps.push_back(make_tally<Rep>(shape));
+        reps[r] += parts[w - u];
+      }
       if (w % batches == batches - 1) done(q0 + static_cast<int>(r), std::move(reps[r]));
     }
     u = u1;

@@ -49,10 +49,11 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
         dir = models::reflect(v, m);  // [GeomBSDF24, eq. 13a]
         break;
       case MaterialKind::Conductor:
-        e.weight *= mat.reflectance(vm, true);  // [GeomBSDF24, eq. 8], complex index
-        if (spectral)
+        if (spectral)  // one weight per wavelength; e.weight stays 1
           for (int l = 0; l < spectral->count; ++l)
             spectral->weights[l] *= spectral->materials[l].reflectance(vm, true);
+        else
+          e.weight *= mat.reflectance(vm, true);  // [GeomBSDF24, eq. 8], complex index
         dir = models::reflect(v, m);
         break;
       case MaterialKind::Dielectric: {

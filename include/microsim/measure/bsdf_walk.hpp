@@ -25,7 +25,8 @@ struct WalkEnd {
 // A spectral conductor's per-wavelength weights: at each conductor hit weights[l] is multiplied
 // by materials[l]'s reflectance, in the order the single-index walk multiplies its weight, so
 // weights[l] equals the weight of a walk with materials[l] alone bit for bit (the geometry of a
-// conductor's path does not depend on its index). The caller sets the weights to 1 first.
+// conductor's path does not depend on its index). The caller sets the weights to 1 first;
+// the walk's own `weight` is then left at 1.
 struct SpectralWeights {
   const models::Material* materials = nullptr;
   int count = 0;
