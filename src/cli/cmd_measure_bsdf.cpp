@@ -47,6 +47,22 @@ void print_summary(const Json& j, const std::string& out) {
             << fmt(j["rays_per_second"].get<double>() / 1e6, 2) << " Mrays/s; wrote " << out << "\n";
 }
 
+// A spectral run: the reflected albedo (all orders) per wavelength and its colour.
+void print_spectral(const Json& sp) {
+  std::cout << "spectral (the rows above: " << fmt(sp["wavelengths_nm"][0].get<double>(), 1)
+            << " nm)\n" << std::setw(12) << "lambda_nm" << std::setw(11) << "R total" << std::setw(10) << "stderr"
+            << std::setw(11) << "R order 1" << std::setw(11) << "smooth" << "\n";
+  for (std::size_t l = 0; l < sp["wavelengths_nm"].size(); ++l)
+    std::cout << std::setw(12) << fmt(sp["wavelengths_nm"][l].get<double>(), 1) << std::setw(11)
+              << fmt(sp["albedo"]["reflected"]["total"][l].get<double>(), 5) << std::setw(10)
+              << fmt(sp["reflected_stderr"]["total"][l].get<double>(), 5) << std::setw(11)
+              << fmt(sp["albedo"]["reflected"].begin().value()[l].get<double>(), 5) << std::setw(11)
+              << fmt(sp["smooth_interface_reflected"][l].get<double>(), 5) << "\n";
+  const Json& c = sp["reflected_rgb"]["total"];
+  std::cout << "linear sRGB of R total: " << fmt(c[0].get<double>(), 4) << " " << fmt(c[1].get<double>(), 4) << " "
+            << fmt(c[2].get<double>(), 4) << "\n";
+}
+
 std::string replace_extension(const std::string& path, const std::string& ext) {
   const auto slash = path.find_last_of('/');
   const auto dot = path.find_last_of('.');
@@ -64,6 +80,7 @@ void print_incidences(const Json& j, const BsdfRequest& o, bool nominal, double 
               << (nominal ? "" : " (no nominal NDF: no microfacet models)")
               << "\n";
     print_summary(j, written);
+    if (j.contains("spectral")) print_spectral(j["spectral"]);
     return;
   }
   std::cout << "BSDF of " << j["file"].get<std::string>() << ", " << o.material << ", " << n_inc

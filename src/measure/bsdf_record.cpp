@@ -617,6 +617,17 @@ void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Mi
       {"incidences", "one object per incidence (theta_i_deg, phi_i_deg and the single-incidence "
                      "fields), phi_i outer, theta_i inner; with one incidence the same fields "
                      "also stand at the top level"}};
+  if (!r.spectral.empty())
+    j["definitions"]["spectral"] =
+        "a spectral conductor (metal or ior_file): every path traced once with one weight per "
+        "wavelength (the product of that wavelength's unpolarized Fresnel reflectances), each "
+        "wavelength's tallies those of a run with its index alone; the scalar fields (albedo, rows, "
+        "in_plane, albedo_models) hold the first wavelength's values and the models use its index. "
+        "spectral.albedo.<side>.<order>: one value per wavelengths_nm (errors in <side>_stderr); "
+        "smooth_interface_reflected: a flat interface's Fresnel reflectance per wavelength; "
+        "reflected_rgb: linear sRGB of the reflected albedo spectrum (CIE 1931 2-degree observer "
+        "by the fit of [Wyman13], equal-energy illuminant, each channel divided by a constant "
+        "spectrum's: a mirror is (1, 1, 1)); n and k linear in the wavelength between table rows";
   const Json incidences = bsdf_incidences_json(t, s);
   if (single)
     for (auto it = incidences[0].begin(); it != incidences[0].end(); ++it)
