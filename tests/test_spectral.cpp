@@ -348,3 +348,22 @@ TEST(SpectralBsdf, RglSpectraAreEachWavelengthsTable) {
     }
   EXPECT_GT(r, 1.3 * b);
 }
+
+TEST(IndexFile, SpectralRunsRefuseShardsAndVcavityEnsembles) {
+  const std::string flat = temp_path("spectral", "flat_shard.exr");
+  ASSERT_EQ(run_microsim("--quiet generate flat --resolution 8 -o " + flat).code, 0);
+  const Result shard = run_microsim("--quiet --shard 1/2 measure bsdf " + flat + " --material conductor --metal Au "
+                                    "--theta-i 0 --rays 100 -o " + temp_path("spectral", "shard.json"));
+  EXPECT_EQ(shard.code, 2);
+  EXPECT_NE(shard.err.find("not split over shards"), std::string::npos) << shard.err;
+  const std::string vc = temp_path("spectral", "vc.ply");
+  ASSERT_EQ(run_microsim("--quiet generate vcavity --config " + std::string(MICROSIM_SOURCE_DIR) +
+                         "/surfaces/vcavity.toml -o " + vc).code, 0);
+  const Result v = run_microsim("--quiet measure bsdf " + vc + " --material conductor --metal Au --theta-i 0 "
+                                "--rays 100 -o " + temp_path("spectral", "vc.json"));
+  EXPECT_EQ(v.code, 2);
+  EXPECT_NE(v.err.find("V-cavity ensembles"), std::string::npos) << v.err;
+  // The same runs with one index go through.
+  EXPECT_EQ(run_microsim("--quiet measure bsdf " + vc + " --material conductor --eta 0.2 --k 3 --theta-i 0 "
+                         "--rays 100 -o " + temp_path("spectral", "vc1.json")).code, 0);
+}
