@@ -8,7 +8,9 @@
 #include "microsim/common.hpp"
 #include "microsim/models/fresnel.hpp"
 #include "microsim/models/g2_forms.hpp"
+#include "microsim/models/metals.hpp"
 #include "microsim/models/microfacet_bsdf.hpp"
+#include "microsim/models/spectral_rgb.hpp"
 #include "microsim/models/ndf.hpp"
 
 namespace py = pybind11;
@@ -182,6 +184,21 @@ void bind_models(py::module_& m) {
     const auto r = models::fresnel_conductor(c, eta, k);
     return py::make_tuple(r.Rs, r.Rp);
   }, py::arg("cos_i"), py::arg("eta"), py::arg("k"), "(Rs, Rp) of a conductor");
+
+  // Spectral conductors: the shipped tables of measured optical constants and the colour of a
+  // sampled spectrum (models/metals.hpp, models/spectral_rgb.hpp).
+  m.def("metal_names", &models::metal_names, "Symbols of the shipped optical-constant tables");
+  m.def("metal_index", [](const std::string& symbol, double nm) {
+    const models::OpticalConstant c = models::metal_table(symbol).at(nm);
+    return py::make_tuple(c.n, c.k);
+  }, py::arg("symbol"), py::arg("wavelength_nm"),
+     "(n, k) of a shipped metal at a wavelength in nm, linear between the table's rows");
+  m.def("spectrum_to_rgb", [](const std::vector<double>& nm, const std::vector<double>& values) {
+    if (values.size() != nm.size()) throw std::invalid_argument("one value per wavelength");
+    const auto c = models::SpectrumToRgb(nm).rgb(values);
+    return py::make_tuple(c[0], c[1], c[2]);
+  }, py::arg("wavelengths_nm"), py::arg("values"),
+     "White-balanced linear sRGB of a sampled spectrum (CIE 1931 2-degree observer, equal-energy white)");
 
   py::class_<models::Material>(m, "Material", "Facet material: mirror, conductor or dielectric")
       .def_static("mirror", &models::Material::mirror)

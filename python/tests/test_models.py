@@ -139,3 +139,17 @@ def test_models_equal_the_records_nominal_columns():
         assert ndf.G1(v) == pytest.approx(row["smith_nominal"], rel=1e-14)
     with pytest.raises(ValueError):
         M.NDF("lambertian", 0.5)
+
+
+def test_spectral_conductor_tables_and_colour():
+    # Johnson and Christy's gold at a tabulated wavelength, and halfway to the next row.
+    assert M.metal_index("Au", 548.6) == (0.43, 2.455)
+    n, k = M.metal_index("Au", (548.6 + 582.1) / 2)
+    assert n == pytest.approx((0.43 + 0.29) / 2, rel=1e-12) and k == pytest.approx((2.455 + 2.863) / 2, rel=1e-12)
+    assert set(M.metal_names()) >= {"Au", "Ag", "Cu", "Al"}
+    # A constant spectrum is the white point; gold's reflectance is red.
+    nm = [450, 500, 550, 600, 650]
+    assert np.allclose(M.spectrum_to_rgb(nm, [0.7] * 5), 0.7, rtol=1e-12)
+    R = [((n - 1) ** 2 + k ** 2) / ((n + 1) ** 2 + k ** 2) for n, k in (M.metal_index("Au", x) for x in nm)]
+    r, g, b = M.spectrum_to_rgb(nm, R)
+    assert r > g > b

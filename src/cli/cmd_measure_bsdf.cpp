@@ -18,7 +18,7 @@ namespace microsim::cli {
 namespace {
 
 struct BsdfCliOptions {
-  std::string surface, output, theta_i, phi_i = "0";
+  std::string surface, output, theta_i, phi_i = "0", wavelengths;
   double eta = 0.0, k = 0.0;
   bool no_models = false;
   BsdfRequest request;
@@ -47,6 +47,22 @@ void print_summary(const Json& j, const std::string& out) {
             << fmt(j["rays_per_second"].get<double>() / 1e6, 2) << " Mrays/s; wrote " << out << "\n";
 }
 
+// A spectral run: the reflected albedo (all orders) per wavelength and its colour.
+void print_spectral(const Json& sp) {
+  std::cout << "spectral (the rows above: " << fmt(sp["wavelengths_nm"][0].get<double>(), 1)
+            << " nm)\n" << std::setw(12) << "lambda_nm" << std::setw(11) << "R total" << std::setw(10) << "stderr"
+            << std::setw(11) << "R order 1" << std::setw(11) << "smooth" << "\n";
+  for (std::size_t l = 0; l < sp["wavelengths_nm"].size(); ++l)
+    std::cout << std::setw(12) << fmt(sp["wavelengths_nm"][l].get<double>(), 1) << std::setw(11)
+              << fmt(sp["albedo"]["reflected"]["total"][l].get<double>(), 5) << std::setw(10)
+              << fmt(sp["reflected_stderr"]["total"][l].get<double>(), 5) << std::setw(11)
+              << fmt(sp["albedo"]["reflected"].begin().value()[l].get<double>(), 5) << std::setw(11)
+              << fmt(sp["smooth_interface_reflected"][l].get<double>(), 5) << "\n";
+  const Json& c = sp["reflected_rgb"]["total"];
+  std::cout << "linear sRGB of R total: " << fmt(c[0].get<double>(), 4) << " " << fmt(c[1].get<double>(), 4) << " "
+            << fmt(c[2].get<double>(), 4) << "\n";
+}
+
 std::string replace_extension(const std::string& path, const std::string& ext) {
   const auto slash = path.find_last_of('/');
   const auto dot = path.find_last_of('.');
@@ -64,6 +80,7 @@ void print_incidences(const Json& j, const BsdfRequest& o, bool nominal, double 
               << (nominal ? "" : " (no nominal NDF: no microfacet models)")
               << "\n";
     print_summary(j, written);
+    if (j.contains("spectral")) print_spectral(j["spectral"]);
     return;
   }
   std::cout << "BSDF of " << j["file"].get<std::string>() << ", " << o.material << ", " << n_inc
@@ -88,6 +105,7 @@ int run_measure_bsdf(BsdfCliOptions& o, const GlobalOptions& g) {
   r.threads = g.threads;
   r.theta_i_deg = parse_angle_list(o.theta_i, "--theta-i");
   r.phi_i_deg = parse_angle_list(o.phi_i, "--phi-i");
+  if (!o.wavelengths.empty()) r.wavelengths_nm = parse_angle_list(o.wavelengths, "--wavelengths");
   check_bsdf_request(r);
   const Microsurface s = input_surface(g, o.surface);
   check_bsdf_surface(r, s, o.surface);
@@ -132,6 +150,16 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
       ->check(number_in(positive()));
   cmd->add_option("--k", o->k, "Conductor: extinction coefficient (index eta + i k)")
       ->check(number_in(closed(0, 1000)));
+  cmd->add_option("--metal", o->request.metal,
+                  "Conductor: a shipped table of measured optical constants n(lambda), k(lambda): "
+                  "Au, Ag, Cu (Johnson and Christy 1972) or Al (McPeak et al. 2015); a spectral run");
+  cmd->add_option("--ior-file", o->request.ior_file,
+                  "Conductor: a CSV file of rows 'wavelength_nm, n, k' (increasing wavelength; one header "
+                  "line allowed; linear interpolation); a spectral run");
+  cmd->add_option("--wavelengths", o->wavelengths,
+                  "Spectral run (with --metal or --ior-file): wavelengths in nm, increasing, inside the "
+                  "table (a, a,b,c or start:stop:step; default 450:650:50). Paths are traced once and "
+                  "weighted per wavelength");
   cmd->add_option("--theta-i", o->theta_i,
                   "Incidence zenith angles in degrees, [0, 90): a, a,b,c or start:stop:step")
       ->required();

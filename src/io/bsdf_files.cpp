@@ -39,6 +39,13 @@ std::string rgl_description(const BsdfRequest& o, const Microsurface& s, const B
                   "), material " + o.material;
   if (o.eta) d += " eta " + f4(*o.eta);
   if (o.k) d += " k " + f4(*o.k);
+  if (!o.metal.empty()) d += " " + o.metal;
+  if (!o.ior_file.empty()) d += " from index file " + o.ior_file;
+  if (t.results[0].wavelengths() > 0) {
+    d += " at";
+    for (double nm : t.results[0].options.wavelengths_nm) d += " " + fixed(nm, 1);
+    d += " nm (rgb: linear sRGB, CIE 1931 2-degree observer, equal-energy white)";
+  }
   d += "; reflection, all scattering orders; " + std::to_string(t.results[0].measured.paths) +
        " random walks per incidence, seed " + std::to_string(o.seed);
   if (o.material == "dielectric") d += "; the reflected part only (transmission is not in this table)";
@@ -74,6 +81,9 @@ void write_bsdf_tables(const std::string& path, const BsdfRequest& o, const Bsdf
                               "hemisphere maps, linear in theta_i between measured incidences, held "
                               "constant outside them; 0 below the horizon"},
                   {"seconds", seconds_since(tb)}};
+    if (t.results[0].wavelengths() > 0)
+      j["table"]["channels"] = "R, G, B: linear sRGB of the per-wavelength f (CIE 1931 2-degree "
+                               "observer, equal-energy illuminant, white balanced: a mirror's are equal)";
   }
 }
 

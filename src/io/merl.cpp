@@ -9,10 +9,11 @@
 #include <fstream>
 
 #include "microsim/io/output.hpp"
+#include "microsim/models/spectral_rgb.hpp"
 
 namespace microsim {
 
-double table_f(const BsdfTable& t, const Vec3& wi0, const Vec3& wo0) {
+double table_f(const BsdfTable& t, const Vec3& wi0, const Vec3& wo0, int lambda) {
   if (t.phi_i.size() != 1) throw UsageError("MERL tables are isotropic: give one --phi-i");
   if (wi0.z() <= 0 || wo0.z() <= 0) return 0.0;
   // Turn the pair about the normal so that wi has the measured azimuth.
@@ -23,20 +24,22 @@ double table_f(const BsdfTable& t, const Vec3& wi0, const Vec3& wo0) {
   const auto& th = t.theta_i;
   const int K = t.results[0].options.orders;
   const int n = static_cast<int>(th.size());
-  if (n == 1 || theta <= th.front()) return interpolate_f(t.at(0, 0), 0, K, wo);
-  if (theta >= th.back()) return interpolate_f(t.at(0, n - 1), 0, K, wo);
+  if (n == 1 || theta <= th.front()) return interpolate_f(t.at(0, 0), 0, K, wo, lambda);
+  if (theta >= th.back()) return interpolate_f(t.at(0, n - 1), 0, K, wo, lambda);
   const int k = static_cast<int>(std::upper_bound(th.begin(), th.end(), theta) - th.begin()) - 1;
   const double w = (theta - th[k]) / (th[k + 1] - th[k]);
-  return (1 - w) * interpolate_f(t.at(0, k), 0, K, wo) + w * interpolate_f(t.at(0, k + 1), 0, K, wo);
+  return (1 - w) * interpolate_f(t.at(0, k), 0, K, wo, lambda) + w * interpolate_f(t.at(0, k + 1), 0, K, wo, lambda);
 }
 
-std::vector<double> merl_cells(const BsdfTable& t) {
+namespace {
+// Calls cell(index, wi, wo) for every cell (in parallel), the pair as merl.hpp describes.
+template <class Cell>
+void for_each_merl_cell(const BsdfTable& t, Cell&& cell) {
   if (t.phi_i.size() != 1)
     throw UsageError("-o .binary: MERL tables are isotropic; this table has " +
                      std::to_string(t.phi_i.size()) + " incidence azimuths (give one --phi-i)");
   for (std::size_t k = 1; k < t.theta_i.size(); ++k)
     if (!(t.theta_i[k] > t.theta_i[k - 1])) throw UsageError("--theta-i must be increasing for a .binary");
-  std::vector<double> cells(static_cast<std::size_t>(kMerlThetaH) * kMerlThetaD * kMerlPhiD, 0.0);
   tbb::parallel_for(0, kMerlThetaH, [&](int ih) {
     const double u = (ih + 0.5) / kMerlThetaH, th = u * u * 0.5 * kPi;
     const double ch = std::cos(th), sh = std::sin(th);
@@ -52,21 +55,45 @@ std::vector<double> merl_cells(const BsdfTable& t) {
         // Reciprocity [GeomBSDF24, eq. 4c]: read the pair with the light at the smaller zenith angle,
         // which the measured incidences cover best.
         if (wo.z() > wi.z()) std::swap(wi, wo);
-        cells[static_cast<std::size_t>(ip) + kMerlPhiD * (id + static_cast<std::size_t>(kMerlThetaD) * ih)] =
-            table_f(t, wi, wo);
+        cell(static_cast<std::size_t>(ip) + kMerlPhiD * (id + static_cast<std::size_t>(kMerlThetaD) * ih), wi, wo);
       }
     }
   });
+}
+}  // namespace
+
+std::vector<double> merl_cells(const BsdfTable& t) {
+  std::vector<double> cells(kMerlCells, 0.0);
+  for_each_merl_cell(t, [&](std::size_t c, const Vec3& wi, const Vec3& wo) { cells[c] = table_f(t, wi, wo); });
   return cells;
 }
 
+std::array<std::vector<double>, 3> merl_rgb_cells(const BsdfTable& t) {
+  const int L = t.results.front().wavelengths();
+  if (L == 0) {
+    std::vector<double> f = merl_cells(t);
+    return {f, f, std::move(f)};
+  }
+  const models::SpectrumToRgb colour(t.results.front().options.wavelengths_nm);
+  std::array<std::vector<double>, 3> rgb;
+  for (auto& c : rgb) c.assign(kMerlCells, 0.0);
+  for_each_merl_cell(t, [&](std::size_t c, const Vec3& wi, const Vec3& wo) {
+    double f[kMaxWavelengths];
+    for (int l = 0; l < L; ++l) f[l] = table_f(t, wi, wo, l);
+    const auto v = colour.rgb(f);
+    for (int ch = 0; ch < 3; ++ch) rgb[ch][c] = v[ch];
+  });
+  return rgb;
+}
+
 void write_merl(const std::string& path, const BsdfTable& t) {
-  const std::vector<double> f = merl_cells(t);
+  const std::array<std::vector<double>, 3> rgb = merl_rgb_cells(t);
   write_stream_atomically(path, [&](std::ofstream& out) {
     const std::int32_t dims[3] = {kMerlThetaH, kMerlThetaD, kMerlPhiD};
     out.write(reinterpret_cast<const char*>(dims), sizeof(dims));
-    std::vector<double> block(f.size());
+    std::vector<double> block(kMerlCells);
     for (int c = 0; c < 3; ++c) {
+      const std::vector<double>& f = rgb[c];
       for (std::size_t k = 0; k < f.size(); ++k) block[k] = f[k] / kMerlScale[c];
       out.write(reinterpret_cast<const char*>(block.data()), static_cast<std::streamsize>(block.size() * sizeof(double)));
     }

@@ -1,4 +1,7 @@
 #include "microsim/io/rgl_bsdf.hpp"
+#include "microsim/models/spectral_rgb.hpp"
+
+#include <optional>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -306,7 +309,15 @@ RglTable build_rgl_table(const BsdfTable& t, const Microsurface& s, const RglOpt
   out.description = o.description;
   for (double x : t.theta_i) out.theta_i.push_back(static_cast<float>(x));
   for (double x : t.phi_i) out.phi_i.push_back(static_cast<float>(x));
-  out.wavelengths = {360.0f, 830.0f};
+  // A spectral conductor's wavelengths (the same for every incidence), else two equal ones.
+  const int L = t.results.front().wavelengths();
+  if (L > 0)
+    for (double nm : t.results.front().options.wavelengths_nm) out.wavelengths.push_back(static_cast<float>(nm));
+  else
+    out.wavelengths = {360.0f, 830.0f};
+  const std::size_t nl = out.wavelengths.size();
+  std::optional<models::SpectrumToRgb> colour;
+  if (L > 0) colour.emplace(t.results.front().options.wavelengths_nm);
 
   // --- ndf: kernel estimate from the facet normals (tent in theta, see kernel_width; tent of one
   // vertex spacing in phi when anisotropic): D(v) = sum_f (A_f / A) K_v(m_f) / int K_v d omega.
@@ -411,7 +422,8 @@ RglTable build_rgl_table(const BsdfTable& t, const Microsurface& s, const RglOpt
   const std::size_t slice = static_cast<std::size_t>(R) * R;
   out.vndf.assign(static_cast<std::size_t>(np) * nt * slice, 0.0f);
   out.luminance.assign(out.vndf.size(), 0.0f);
-  out.spectra.assign(static_cast<std::size_t>(np) * nt * 2 * slice, 0.0f);
+  out.spectra.assign(static_cast<std::size_t>(np) * nt * nl * slice, 0.0f);
+  if (L > 0) out.rgb.assign(static_cast<std::size_t>(np) * nt * 3 * slice, 0.0f);
   for (int p = 0; p < np; ++p)
     for (int q = 0; q < nt; ++q) {
       const BsdfResult& r = t.at(p, q);
@@ -424,6 +436,13 @@ RglTable build_rgl_table(const BsdfTable& t, const Microsurface& s, const RglOpt
       // the measured reflected light, f cos(theta_o) d omega_o / du, and of outgoing directions
       // uniform over the hemisphere, d omega_o / du; mixed by RglOptions' shares.
       const int K = r.options.orders;
+      // f of every wavelength at wo into f_l, and the luminance (wavelength independent: f).
+      std::vector<double> f_l(std::max(L, 1));
+      auto measured_f = [&](const Vec3& wo) {
+        if (L == 0) return interpolate_f(r, 0, K, wo);
+        for (int l = 0; l < L; ++l) f_l[l] = interpolate_f(r, 0, K, wo, l);
+        return colour->luminance(f_l.data());
+      };
       std::vector<double> vis(slice, 0.0), lit(slice, 0.0), all(slice, 0.0);
       double sum_vis = 0.0, sum_lit = 0.0, sum_all = 0.0;
       for (int j = 0; j < R; ++j)
@@ -436,7 +455,7 @@ RglTable build_rgl_table(const BsdfTable& t, const Microsurface& s, const RglOpt
           vis[k] = bilinear(out.ndf, Np, Nt, ut, up) * wm * jac;
           const Vec3 wo = 2.0 * wi.dot(m) * m - wi;
           if (wo.z() > 0) {
-            lit[k] = interpolate_f(r, 0, K, wo) * wo.z() * 4.0 * wm * jac;
+            lit[k] = measured_f(wo) * wo.z() * 4.0 * wm * jac;
             all[k] = 4.0 * wm * jac;
           }
           sum_vis += vis[k];
@@ -460,14 +479,23 @@ RglTable build_rgl_table(const BsdfTable& t, const Microsurface& s, const RglOpt
           const Vec3 m = half_vector(um.x(), um.y());
           const Vec3 wo = 2.0 * wi.dot(m) * m - wi;
           double value = 0.0;
+          std::fill(f_l.begin(), f_l.end(), 0.0);
           if (wo.z() > 0) {
             const double D = bilinear(out.ndf, Np, Nt, um.x(), um.y());
-            value = interpolate_f(r, 0, K, wo) * wo.z() * 4.0 * sig / D;
+            value = measured_f(wo) * wo.z() * 4.0 * sig / D;
+            for (int l = 0; l < L; ++l) f_l[l] = f_l[l] * wo.z() * 4.0 * sig / D;
           }
           const std::size_t k = static_cast<std::size_t>(j) * R + i;
           out.luminance[base + k] = static_cast<float>(value);
-          const std::size_t sb = (static_cast<std::size_t>(p) * nt + q) * 2 * slice;
-          out.spectra[sb + k] = out.spectra[sb + slice + k] = static_cast<float>(value);
+          const std::size_t sb = (static_cast<std::size_t>(p) * nt + q) * nl * slice;
+          if (L == 0) {
+            out.spectra[sb + k] = out.spectra[sb + slice + k] = static_cast<float>(value);
+            continue;
+          }
+          for (int l = 0; l < L; ++l) out.spectra[sb + l * slice + k] = static_cast<float>(f_l[l]);
+          const auto c = colour->rgb(f_l.data());
+          const std::size_t cb = (static_cast<std::size_t>(p) * nt + q) * 3 * slice;
+          for (int ch = 0; ch < 3; ++ch) out.rgb[cb + ch * slice + k] = static_cast<float>(c[ch]);
         }
     }
   return out;
@@ -477,12 +505,13 @@ std::vector<TensorField> RglTable::fields() const {
   using U = std::uint64_t;
   const U np = phi_i.size(), nt = theta_i.size(), R = static_cast<U>(resolution);
   std::vector<std::uint8_t> text(description.begin(), description.end());
-  std::vector<float> rgb;
-  const std::size_t slice = R * R;
-  for (std::size_t s = 0; s < np * nt; ++s)
-    for (int c = 0; c < 3; ++c)
-      rgb.insert(rgb.end(), spectra.begin() + static_cast<std::ptrdiff_t>(s * 2 * slice),
-                 spectra.begin() + static_cast<std::ptrdiff_t>(s * 2 * slice + slice));
+  std::vector<float> grey;
+  const std::size_t slice = R * R, nl = wavelengths.size();
+  if (rgb.empty())
+    for (std::size_t s = 0; s < np * nt; ++s)
+      for (int c = 0; c < 3; ++c)
+        grey.insert(grey.end(), spectra.begin() + static_cast<std::ptrdiff_t>(s * nl * slice),
+                    spectra.begin() + static_cast<std::ptrdiff_t>(s * nl * slice + slice));
   return {TensorField::u8("description", {text.size()}, text),
           TensorField::u8("jacobian", {1}, {1}),
           TensorField::f32("theta_i", {nt}, theta_i),
@@ -493,7 +522,7 @@ std::vector<TensorField> RglTable::fields() const {
           TensorField::f32("vndf", {np, nt, R, R}, vndf),
           TensorField::f32("luminance", {np, nt, R, R}, luminance),
           TensorField::f32("spectra", {np, nt, wavelengths.size(), R, R}, spectra),
-          TensorField::f32("rgb", {np, nt, 3, R, R}, rgb)};
+          TensorField::f32("rgb", {np, nt, 3, R, R}, rgb.empty() ? grey : rgb)};
 }
 
 void write_rgl_bsdf(const std::string& path, const RglTable& table) { write_tensor_file(path, table.fields()); }

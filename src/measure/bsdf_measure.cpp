@@ -4,6 +4,7 @@
 #include "microsim/measure/groove_models.hpp"
 #include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
+#include "microsim/measure/spectral_tally.hpp"
 #include "microsim/measure/vcavity_measure.hpp"
 #include "microsim/surface/generators.hpp"
 
@@ -13,6 +14,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <type_traits>
 
 namespace microsim {
 
@@ -314,17 +316,20 @@ Estimate tally_estimate(double sum, double sum2, std::uint64_t n, double scale) 
   return e;
 }
 
-Estimate BsdfResult::albedo(int s, int k) const {
-  const auto i = measured.a_index(s, k);
-  return measured.estimate(measured.albedo[i], measured.albedo2[i]);
+Estimate BsdfResult::albedo(int s, int k, int lambda) const {
+  const BsdfTally& t = tally(lambda);
+  const auto i = t.a_index(s, k);
+  return t.estimate(t.albedo[i], t.albedo2[i]);
 }
-Estimate BsdfResult::f_pixel(int s, int k, int px) const {
-  const auto i = measured.p_index(s, k, px);
-  return measured.estimate(measured.pix[i], measured.pix2[i], 1.0 / map.pixel_cos_integral(px));
+Estimate BsdfResult::f_pixel(int s, int k, int px, int lambda) const {
+  const BsdfTally& t = tally(lambda);
+  const auto i = t.p_index(s, k, px);
+  return t.estimate(t.pix[i], t.pix2[i], 1.0 / map.pixel_cos_integral(px));
 }
-Estimate BsdfResult::f_plane(int s, int k, int b) const {
-  const auto i = measured.b_index(s, k, b);
-  return measured.estimate(measured.plane[i], measured.plane2[i], 1.0 / plane.cos_integral(b));
+Estimate BsdfResult::f_plane(int s, int k, int b, int lambda) const {
+  const BsdfTally& t = tally(lambda);
+  const auto i = t.b_index(s, k, b);
+  return t.estimate(t.plane[i], t.plane2[i], 1.0 / plane.cos_integral(b));
 }
 Estimate BsdfResult::model_albedo(int s, int k) const {
   if (!smith_walk) return {};
@@ -409,17 +414,38 @@ constexpr std::uint64_t kPassChunks = 16;
 constexpr double kPassBytes = 64.0 * 1024 * 1024;
 // Unit: the tally a unit's chunks are summed in (BsdfTally, or ExitCounts for paths of weight 1);
 // Rep: the replicate's (added from its units in order).
+// The sizes of a unit's tallies: orders, pixels, in-plane bins, wavelengths (1: one tally).
+struct TallyShape {
+  int K, npix, nplane, wavelengths = 1;
+};
+template <class T>
+T make_tally(const TallyShape& s) {
+  return T(s.K, s.npix, s.nplane);
+}
+template <>
+SpectralTally make_tally<SpectralTally>(const TallyShape& s) {
+  return SpectralTally(s.wavelengths, s.K, s.npix, s.nplane);
+}
+template <class T>
+bool tally_unset(const T& t) {
+  return t.albedo.empty();
+}
+bool tally_unset(const SpectralTally& t) { return t.albedo.empty(); }
+
 template <class Unit, class Rep, class Body, class Done>
-void run_replicate_paths(int q0, int q1, std::uint64_t n, int K, int npix, int nplane,
+void run_replicate_paths(int q0, int q1, std::uint64_t n, const TallyShape& shape,
                          const std::function<void(double)>& progress, double progress_span, Body&& body,
                          Done&& done) {
+  const int K = shape.K, npix = shape.npix, nplane = shape.nplane;
   const std::uint64_t nchunks = (n + kChunk - 1) / kChunk;
   const std::uint64_t batches = path_batches(n);
   const std::uint64_t units = static_cast<std::uint64_t>(q1 - q0) * batches;
   std::vector<Rep> reps;  // replicates q0 + k, summed so far
   // A pass keeps one tally per unit: at most kPassBytes of them (large hemisphere maps: one
   // unit per pass, as run_paths).
-  const double tally_bytes = 16.0 * 2 * (K + 1) * (1.0 + npix + nplane);
+  // (a spectral unit: first moments only, of every wavelength).
+  const double tally_bytes = shape.wavelengths > 1 ? 8.0 * 2 * (K + 1) * (1.0 + npix + nplane) * shape.wavelengths
+                                                   : 16.0 * 2 * (K + 1) * (1.0 + npix + nplane);
   const std::uint64_t max_units = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(kPassBytes / tally_bytes));
   std::uint64_t u = 0;
   while (u < units) {
@@ -437,7 +463,7 @@ void run_replicate_paths(int q0, int q1, std::uint64_t n, int K, int npix, int n
       parts[w - u] = tbb::parallel_deterministic_reduce(
           tbb::blocked_range<std::uint64_t>(c0, c1, 1), Unit(),
           [&](const tbb::blocked_range<std::uint64_t>& range, Unit acc) {
-            if (acc.albedo.empty()) acc = Unit(K, npix, nplane);
+            if (tally_unset(acc)) acc = make_tally<Unit>(shape);
             for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
               const std::uint64_t end = std::min(n, (c + 1) * kChunk);
               for (std::uint64_t i = c * kChunk; i < end; ++i) body(q, i, acc);
@@ -451,8 +477,14 @@ void run_replicate_paths(int q0, int q1, std::uint64_t n, int K, int npix, int n
     });
     for (std::uint64_t w = u; w < u1; ++w) {
       const std::uint64_t r = w / batches;
-      if (r == reps.size()) reps.emplace_back(K, npix, nplane);
-      reps[r] += parts[w - u];
+      if (r < reps.size()) {
+        reps[r] += parts[w - u];
+      } else if constexpr (std::is_same<Rep, SpectralTally>::value && std::is_same<Unit, Rep>::value) {
+        reps.push_back(std::move(parts[w - u]));  // x, as 0 + x (the weights are >= 0), uncopied
+      } else {
+        reps.push_back(make_tally<Rep>(shape));
+        reps[r] += parts[w - u];
+      }
       if (w % batches == batches - 1) done(q0 + static_cast<int>(r), std::move(reps[r]));
     }
     u = u1;
@@ -496,6 +528,27 @@ void exchange_paths(TallySplit& split, const char* kind, UnitRange share, bool s
   for (std::size_t u = 0; u < units.size(); ++u) unpack_paths(units[u], second, t.count_row(u), t.real_row(u));
 }
 
+// A spectral run: a conductor index per wavelength, increasing wavelengths, the first index the
+// material's; periodic tiles and finite objects in one process.
+void check_spectral_options(const BsdfOptions& o, const Microsurface& s) {
+  if (o.spectral.empty() && o.wavelengths_nm.empty()) return;
+  if (o.spectral.size() != o.wavelengths_nm.size())
+    throw std::invalid_argument("BsdfOptions: one spectral index per wavelength");
+  if (o.spectral.size() > static_cast<std::size_t>(kMaxWavelengths))
+    throw UsageError("--wavelengths: at most " + std::to_string(kMaxWavelengths) + " wavelengths");
+  for (std::size_t l = 0; l < o.spectral.size(); ++l) {
+    if (o.spectral[l].kind != models::MaterialKind::Conductor)
+      throw std::invalid_argument("BsdfOptions: spectral indices are conductors'");
+    if (l > 0 && !(o.wavelengths_nm[l] > o.wavelengths_nm[l - 1]))
+      throw UsageError("--wavelengths must be increasing");
+  }
+  if (!(o.material.kind == models::MaterialKind::Conductor && o.material.eta == o.spectral[0].eta &&
+        o.material.k == o.spectral[0].k))
+    throw std::invalid_argument("BsdfOptions: the material must be the first wavelength's conductor");
+  if (o.split) throw UsageError("--wavelengths: spectral runs are not split over shards or MPI ranks");
+  if (is_vcavity(s)) throw UsageError("--wavelengths: V-cavity ensembles are measured at one index");
+}
+
 }  // namespace
 
 BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
@@ -507,6 +560,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
   if (o.rays == 0) throw UsageError("--rays must be positive");
   if (o.orders < 1 || o.orders > 64) throw UsageError("--orders must be in [1, 64]");
   if (o.resolution < 1 || o.resolution > 4096) throw UsageError("--resolution must be in [1, 4096]");
+  check_spectral_options(o, s);
   const auto t0 = std::chrono::steady_clock::now();
 
   BsdfResult r;
@@ -568,9 +622,34 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
       return walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2, -wi, mat,
                             rng, o.max_events, finite, t.counters, t.events);
     };
-    if (unit_weight)
+    const int L = static_cast<int>(o.spectral.size());
+    const TallyShape shape{K, npix, nplane, L > 0 ? L : 1};
+    if (L > 0) {
+      // One walk per path, a weight per wavelength (bsdf_walk.hpp); each wavelength's tallies
+      // receive exactly what a run with that wavelength's index alone would.
+      r.spectral.assign(L, BsdfTally(K, npix, nplane));
+      run_replicate_paths<SpectralTally, SpectralTally>(
+          static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), shape,
+          o.progress, share,
+          [&](int q, std::uint64_t i, SpectralTally& t) {
+            double weights[kMaxWavelengths];
+            std::fill(weights, weights + L, 1.0);
+            const SpectralWeights sw{o.spectral.data(), L, weights};
+            CounterRng rng(o.seed, ReplicatePlan::stream(stream, q), i);
+            ++t.paths;
+            const Vec2 ab = plan.strata.point(i, rng);
+            const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
+                                             -wi, mat, rng, o.max_events, finite, t.counters, t.events, &sw);
+            record_walk_end(t, e, weights, ray_weight, r.map, r.plane);
+          },
+          [&](int, SpectralTally&& rep) {
+            for (int l = 0; l < L; ++l) r.spectral[l].add_replicate(rep.wavelength(l));
+            rep = SpectralTally();  // the finished replicate's memory back (L tallies wide)
+          });
+      r.measured = r.spectral[0];
+    } else if (unit_weight)
       run_replicate_paths<ExitCounts<std::uint32_t>, ExitCounts<std::uint64_t>>(
-          static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), K, npix, nplane,
+          static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), shape,
           o.progress, share,
           [&](int q, std::uint64_t i, ExitCounts<std::uint32_t>& t) {
             record_walk_end(t, walk(q, i, t), r.map, r.plane);
@@ -578,7 +657,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
           [&](int q, ExitCounts<std::uint64_t>&& rep) { keep(q, rep.tally()); });
     else
       run_replicate_paths<BsdfTally, BsdfTally>(
-          static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), K, npix, nplane,
+          static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), shape,
           o.progress, share,
           [&](int q, std::uint64_t i, BsdfTally& t) {
             record_walk_end(t, walk(q, i, t), ray_weight, r.map, r.plane);

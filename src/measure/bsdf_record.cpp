@@ -12,6 +12,7 @@
 
 #include "microsim/measure/groove_models.hpp"
 #include "microsim/measure/single_scattering_albedos.hpp"
+#include "microsim/models/spectral_rgb.hpp"
 
 namespace microsim {
 
@@ -73,8 +74,44 @@ const char* const kNominalZ[3] = {"z_smith_single", "z_smith_multiple", "z_vcavi
 // ---------------------------------------------------------------------------------------------
 // Request
 
+std::optional<models::IndexTable> bsdf_index_table(const BsdfRequest& o) {
+  const bool spectral = !o.metal.empty() || !o.ior_file.empty();
+  if (!spectral) {
+    if (!o.wavelengths_nm.empty()) throw UsageError("--wavelengths needs --metal or --ior-file");
+    return std::nullopt;
+  }
+  if (o.material != "conductor") throw UsageError("--metal and --ior-file apply to --material conductor only");
+  if (!o.metal.empty() && !o.ior_file.empty()) throw UsageError("give --metal or --ior-file, not both");
+  if (o.eta || o.k) throw UsageError("--eta and --k do not go with --metal or --ior-file (the table gives the index)");
+  if (!o.metal.empty()) return models::metal_table(o.metal);
+  return models::read_index_file(o.ior_file);
+}
+
+std::vector<double> bsdf_wavelengths(const BsdfRequest& o) {
+  const auto table = bsdf_index_table(o);
+  if (!table) return {};
+  std::vector<double> nm = o.wavelengths_nm.empty() ? models::default_wavelengths_nm() : o.wavelengths_nm;
+  if (static_cast<int>(nm.size()) > kMaxWavelengths)
+    throw UsageError("--wavelengths: at most " + std::to_string(kMaxWavelengths) + " wavelengths");
+  models::check_wavelengths(nm, *table, "--wavelengths");
+  return nm;
+}
+
+namespace {
+// The conductors of a spectral request, one per wavelength.
+std::vector<models::Material> spectral_conductors(const models::IndexTable& table, const std::vector<double>& nm) {
+  std::vector<models::Material> out;
+  for (double x : nm) {
+    const models::OpticalConstant c = table.at(x);
+    out.push_back(models::Material::conductor(c.n, c.k));
+  }
+  return out;
+}
+}  // namespace
+
 models::Material bsdf_material(const BsdfRequest& o) {
   const auto f4 = [](double x) { return fixed(x, 4); };
+  if (const auto table = bsdf_index_table(o)) return spectral_conductors(*table, bsdf_wavelengths(o)).front();
   if (o.material == "mirror") {
     if (o.eta || o.k) throw UsageError("--eta and --k apply to --material conductor or dielectric, not mirror");
     return models::Material::mirror();
@@ -133,15 +170,19 @@ void check_bsdf_request(BsdfRequest& o) {
                      "(e.g. --phi-i -180:180:30), or one azimuth for an isotropic table");
   // -o .bsdf: the RGL tables hold vndf, luminance and two spectra values (floats) per vertex of
   // the table_resolution^2 grid of every incidence.
+  // A spectral run: a spectra value per wavelength and three rgb values.
+  const double wavelengths = static_cast<double>(bsdf_wavelengths(o).size());
+  const double vertex_bytes = wavelengths > 0 ? 4.0 * (2 + wavelengths + 3) : 16.0;
   if (ext == "bsdf")
-    require_memory(16.0 * static_cast<double>(n_inc) * o.table_resolution * o.table_resolution,
+    require_memory(vertex_bytes * static_cast<double>(n_inc) * o.table_resolution * o.table_resolution,
                    "--table-resolution " + std::to_string(o.table_resolution) + " with " + std::to_string(n_inc) +
                        " incidences");
   // Tallies: f and f^2 per side, slot and pixel, one per worker plus the merge tree, and the
   // finished results of every incidence.
   const double tally = 2.0 * (o.orders + 1) * (static_cast<double>(o.resolution) * o.resolution + o.resolution) * 2 * 8;
   const int threads = o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency();
-  const double need = tally * (3.0 * threads + 4.0 + 2.0 * n_inc);
+  // (a spectral run's results: a tally per wavelength beside the first wavelength's)
+  const double need = tally * (3.0 * threads + 4.0 + 2.0 * n_inc * (1.0 + wavelengths));
   const double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
   if (need > 0.5 * have)
     throw UsageError("--resolution " + std::to_string(o.resolution) + " with --orders " +
@@ -165,6 +206,10 @@ void check_bsdf_surface(const BsdfRequest& o, const Microsurface& s, const std::
 BsdfTableOptions bsdf_table_options(const BsdfRequest& o, const Microsurface& s, TallySplit* split) {
   BsdfTableOptions to;
   to.base.material = bsdf_material(o);
+  if (const auto table = bsdf_index_table(o)) {
+    to.base.wavelengths_nm = bsdf_wavelengths(o);
+    to.base.spectral = spectral_conductors(*table, to.base.wavelengths_nm);
+  }
   to.base.orders = o.orders;
   to.base.rays = static_cast<std::uint64_t>(o.rays);
   to.base.split = split;
@@ -368,6 +413,50 @@ Table bsdf_in_plane_table(const BsdfResult& r) {
 // ---------------------------------------------------------------------------------------------
 // JSON record
 
+namespace {
+// A spectral run's per-wavelength values: the albedo per side and order with its error, the flat
+// interface's Fresnel reflectance, and the colour of the reflected albedo (models/spectral_rgb.hpp).
+Json spectral_albedo_json(const BsdfResult& r) {
+  const int K = r.options.orders, L = r.wavelengths();
+  Json j;
+  j["wavelengths_nm"] = r.options.wavelengths_nm;
+  Json eta = Json::array(), k = Json::array(), smooth = Json::array();
+  for (const models::Material& m : r.options.spectral) {
+    eta.push_back(m.eta);
+    k.push_back(m.k);
+    smooth.push_back(models::fresnel_conductor(std::cos(r.options.theta_i), m.eta, m.k).unpolarized());
+  }
+  j["eta"] = eta;
+  j["k"] = k;
+  j["smooth_interface_reflected"] = smooth;
+  const models::SpectrumToRgb colour(r.options.wavelengths_nm);
+  for (int sd = 0; sd < 2; ++sd) {
+    Json a = Json::object(), se = Json::object();
+    for (int o = 0; o <= K; ++o) {
+      Json v = Json::array(), e = Json::array();
+      for (int l = 0; l < L; ++l) {
+        const Estimate x = r.albedo(sd, o, l);
+        v.push_back(x.mean);
+        e.push_back(x.stderr_);
+      }
+      a[order_key(o, K)] = v;
+      se[order_key(o, K)] = e;
+    }
+    j["albedo"][kSideName[sd]] = a;
+    j[std::string(kSideName[sd]) + "_stderr"] = se;
+  }
+  Json rgb = Json::object();
+  for (int o = 0; o <= K; ++o) {
+    std::vector<double> v(L);
+    for (int l = 0; l < L; ++l) v[l] = r.albedo(0, o, l).mean;
+    const auto c = colour.rgb(v);
+    rgb[order_key(o, K)] = {c[0], c[1], c[2]};
+  }
+  j["reflected_rgb"] = rgb;
+  return j;
+}
+}  // namespace
+
 Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
   const int K = r.options.orders;
   Json j;
@@ -425,6 +514,7 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
     models["smith_multiple"] = nullptr;
   }
   j["albedo_models"] = models;
+  if (!r.spectral.empty()) j["spectral"] = spectral_albedo_json(r);
 
   // --- the tables: measured beside the models per side and order, and the in-plane lobe
   j["rows"] = albedo_table(r, am).rows;
@@ -488,6 +578,13 @@ void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Mi
                      {"smith_multiple_walks", r.options.model_walks},
                      {"models", o.models}};
   if (o.format == "bsdf") parameters["table_resolution"] = o.table_resolution;
+  if (!r.spectral.empty()) {
+    const auto table = bsdf_index_table(o);
+    parameters["metal"] = o.metal.empty() ? Json(nullptr) : Json(o.metal);
+    parameters["ior_file"] = o.ior_file.empty() ? Json(nullptr) : Json(o.ior_file);
+    parameters["index_source"] = table->source;
+    parameters["wavelengths_nm"] = r.options.wavelengths_nm;
+  }
   j["file"] = file;
   j["surface"] = s.description;
   j["parameters"] = parameters;
@@ -520,6 +617,17 @@ void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Mi
       {"incidences", "one object per incidence (theta_i_deg, phi_i_deg and the single-incidence "
                      "fields), phi_i outer, theta_i inner; with one incidence the same fields "
                      "also stand at the top level"}};
+  if (!r.spectral.empty())
+    j["definitions"]["spectral"] =
+        "a spectral conductor (metal or ior_file): every path traced once with one weight per "
+        "wavelength (the product of that wavelength's unpolarized Fresnel reflectances), each "
+        "wavelength's tallies those of a run with its index alone; the scalar fields (albedo, rows, "
+        "in_plane, albedo_models) hold the first wavelength's values and the models use its index. "
+        "spectral.albedo.<side>.<order>: one value per wavelengths_nm (errors in <side>_stderr); "
+        "smooth_interface_reflected: a flat interface's Fresnel reflectance per wavelength; "
+        "reflected_rgb: linear sRGB of the reflected albedo spectrum (CIE 1931 2-degree observer "
+        "by the fit of [Wyman13], equal-energy illuminant, each channel divided by a constant "
+        "spectrum's: a mirror is (1, 1, 1)); n and k linear in the wavelength between table rows";
   const Json incidences = bsdf_incidences_json(t, s);
   if (single)
     for (auto it = incidences[0].begin(); it != incidences[0].end(); ++it)

@@ -35,9 +35,9 @@ BsdfTable measure_bsdf_table(const Tracer& tracer, const BsdfTableOptions& o) {
   return table;
 }
 
-double interpolate_f(const BsdfResult& r, int side, int slot, const Vec3& wo) {
+double interpolate_f(const BsdfResult& r, int side, int slot, const Vec3& wo, int lambda) {
   const int R = r.map.resolution();
-  auto pixel = [&](int i, int j) { return r.f_pixel(side, slot, j * R + i).mean; };
+  auto pixel = [&](int i, int j) { return r.f_pixel(side, slot, j * R + i, lambda).mean; };
   if (R == 1) return pixel(0, 0);
   const Vec2 sq = r.map.to_square(wo);
   // Pixel centres sit at a = -1 + (i + 1/2) 2/R: continuous index x = (a + 1) R/2 - 1/2.

@@ -4,7 +4,8 @@ namespace microsim {
 
 WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir0,
                        const models::Material& mat, CounterRng& rng, int max_events, bool finite,
-                       TraceCounters& counters, std::uint64_t& events) {
+                       TraceCounters& counters, std::uint64_t& events,
+                       const SpectralWeights* spectral) {
   using models::MaterialKind;
   const Microsurface& s = tracer.surface();
   WalkEnd e;
@@ -48,7 +49,11 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
         dir = models::reflect(v, m);  // [GeomBSDF24, eq. 13a]
         break;
       case MaterialKind::Conductor:
-        e.weight *= mat.reflectance(vm, true);  // [GeomBSDF24, eq. 8], complex index
+        if (spectral)  // one weight per wavelength; e.weight stays 1
+          for (int l = 0; l < spectral->count; ++l)
+            spectral->weights[l] *= spectral->materials[l].reflectance(vm, true);
+        else
+          e.weight *= mat.reflectance(vm, true);  // [GeomBSDF24, eq. 8], complex index
         dir = models::reflect(v, m);
         break;
       case MaterialKind::Dielectric: {
@@ -101,6 +106,15 @@ void record_walk_end(BsdfTally& t, const WalkEnd& e, double w0, const Hemisphere
                      const InPlaneBins& plane) {
   record_end(t, e, map, plane,
              [&](int s, int px, int b) { t.add_exit(s, e.order, w0 * e.weight, px, b); });
+}
+
+void record_walk_end(SpectralTally& t, const WalkEnd& e, const double* weights, double w0,
+                     const HemisphereMap& map, const InPlaneBins& plane) {
+  record_end(t, e, map, plane, [&](int s, int px, int b) {
+    double w[kMaxWavelengths];
+    for (int l = 0; l < t.wavelengths; ++l) w[l] = w0 * weights[l];
+    t.add_exit(s, e.order, w, px, b);
+  });
 }
 
 void record_walk_end(ExitCounts<std::uint32_t>& t, const WalkEnd& e, const HemisphereMap& map,

@@ -3,7 +3,9 @@
 // phi_d + 180 (theta_d + 90 theta_h); theta_h cell i covers u in [i/90, (i+1)/90) with theta_h =
 // u^2 pi/2, theta_d cell j covers [j, j+1) pi/180, phi_d cell k covers [k, k+1) pi/180. A reader
 // multiplies the three blocks by 1/1500, 1.15/1500 and 1.66/1500; we store f times the inverse,
-// so the decoded channels are equal for our wavelength-independent materials.
+// so the decoded channels are equal for our wavelength-independent materials. A spectral
+// conductor's channels are the white-balanced linear sRGB of its per-wavelength f
+// (models/spectral_rgb.hpp; a mirror's would be equal).
 //
 // Filling: each cell's value is the measured f (reflected side, all orders) at the cell centre.
 // The centre's (theta_h, theta_d, phi_d) give the pair (wi, wo) with the half vector at azimuth 0
@@ -14,6 +16,7 @@
 // same outgoing direction and interpolated linearly in theta_i (held constant outside the
 // measured range). Cells with wi or wo below the horizon hold 0.
 #pragma once
+#include <array>
 #include <string>
 #include <vector>
 
@@ -22,13 +25,18 @@
 namespace microsim {
 
 constexpr int kMerlThetaH = 90, kMerlThetaD = 90, kMerlPhiD = 180;
+constexpr std::size_t kMerlCells = static_cast<std::size_t>(kMerlThetaH) * kMerlThetaD * kMerlPhiD;
 constexpr double kMerlScale[3] = {1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0};
 
 // The f of every cell (one block, not yet divided by the reader's scales). UsageError when the
 // table has more than one azimuth (anisotropic).
 std::vector<double> merl_cells(const BsdfTable& t);
 // The measured f at (wi, wo), interpolated in theta_i as described above.
-double table_f(const BsdfTable& t, const Vec3& wi, const Vec3& wo);
+// `lambda`: a spectral run's wavelength index, -1 the measured tallies.
+double table_f(const BsdfTable& t, const Vec3& wi, const Vec3& wo, int lambda = -1);
+// The R, G and B cells (not yet divided by the reader's scales): three copies of merl_cells, or a
+// spectral conductor's colour per cell.
+std::array<std::vector<double>, 3> merl_rgb_cells(const BsdfTable& t);
 void write_merl(const std::string& path, const BsdfTable& t);
 
 }  // namespace microsim

@@ -33,9 +33,14 @@
 //          f cos(theta_o) (all orders, reflected side; bilinear on the measured hemisphere map)
 //          times 4 sigma(u_wi) / ndf(u_m), both as the reader interpolates them, so that the
 //          reader returns the measured f cos(theta_o) exactly at those directions. 0 where wo is
-//          below the horizon. Materials here are wavelength independent: two wavelengths
-//          (360 and 830 nm) with equal values, and `rgb` with three equal channels.
-//   luminance = spectra (the sampling density over the sample square).
+//          below the horizon. A wavelength-independent material: two wavelengths (360 and
+//          830 nm) with equal values, and `rgb` with three equal channels. A spectral conductor
+//          (measure/bsdf_measure.hpp, BsdfOptions::spectral): the run's wavelengths, each from
+//          its own tallies, and `rgb` their white-balanced linear sRGB (models/spectral_rgb.hpp:
+//          CIE 1931 2-degree observer, equal-energy illuminant, a mirror is (1, 1, 1)).
+//   luminance = spectra (the sampling density over the sample square); a spectral conductor: the
+//          spectrum's luminance Y (relative to the white's), which also weighs the measured
+//          half vectors of the vndf.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -101,6 +106,7 @@ struct RglTable {
   std::vector<float> theta_i, phi_i, wavelengths;
   int ndf_phi = 0, ndf_theta = 0, sigma_phi = 0, sigma_theta = 0;
   std::vector<float> ndf, sigma, vndf, luminance, spectra;  // row-major as in the file
+  std::vector<float> rgb;  // [np][nt][3][R][R]; empty: three copies of the first spectrum
   std::string description;
   std::vector<TensorField> fields() const;
 };

@@ -107,8 +107,18 @@ class InPlaneBins {
   Vec3 s_, p_;
 };
 
+// Most wavelengths of one spectral run (each adds a set of tallies).
+constexpr int kMaxWavelengths = 64;
+
 struct BsdfOptions {
   models::Material material = models::Material::mirror();
+  // A spectral conductor: the conductor's index at each wavelength (nm, increasing). Every path
+  // is traced once and carries one weight per wavelength (the product of that wavelength's
+  // Fresnel reflectances); each wavelength gets its own tallies (BsdfResult::spectral).
+  // `material` is then the conductor at the first wavelength (the models beside the
+  // measurement and the record's scalar fields). Empty: the single `material`.
+  std::vector<double> wavelengths_nm;
+  std::vector<models::Material> spectral;
   double theta_i = 0.0, phi_i = 0.0;  // incidence, radians (light direction l)
   int orders = 4;                     // K: orders 1 .. K-1 separately, K and above together
   std::uint64_t rays = 1000000;
@@ -195,14 +205,18 @@ struct BsdfResult {
   Vec3 wi;              // light direction l
   HemisphereMap map;
   InPlaneBins plane{0.0, 1};
-  BsdfTally measured;
+  BsdfTally measured;                // spectral runs: the first wavelength's tallies
+  std::vector<BsdfTally> spectral;    // per wavelength of options.wavelengths_nm (empty if none)
   std::optional<BsdfTally> smith_walk;  // the model's tallies (nominal NDF available)
   std::optional<models::Ndf> nominal;
   double seconds = 0, model_seconds = 0;
 
-  Estimate albedo(int side, int k) const;
-  Estimate f_pixel(int side, int k, int px) const;
-  Estimate f_plane(int side, int k, int b) const;
+  int wavelengths() const { return static_cast<int>(spectral.size()); }
+  // The tallies of wavelength index `lambda` (spectral runs), or `measured` for lambda < 0.
+  const BsdfTally& tally(int lambda) const { return lambda < 0 ? measured : spectral[lambda]; }
+  Estimate albedo(int side, int k, int lambda = -1) const;
+  Estimate f_pixel(int side, int k, int px, int lambda = -1) const;
+  Estimate f_plane(int side, int k, int b, int lambda = -1) const;
   Estimate model_albedo(int side, int k) const;
   Estimate model_f_plane(int side, int k, int b) const;
 };

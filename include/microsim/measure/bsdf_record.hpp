@@ -21,6 +21,7 @@
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/bsdf_table.hpp"
 #include "microsim/measure/table.hpp"
+#include "microsim/models/metals.hpp"
 
 namespace microsim {
 
@@ -32,6 +33,10 @@ constexpr int kMinTableResolution = 2, kMaxTableResolution = 512;
 struct BsdfRequest {
   std::string material;         // mirror, conductor or dielectric
   std::optional<double> eta, k;  // as given (conductor: both; dielectric: eta)
+  // A spectral conductor (instead of eta and k): a shipped metal's table (models/metals.hpp) or
+  // a CSV file of wavelength_nm, n, k; the wavelengths in nm (empty: default_wavelengths_nm).
+  std::string metal, ior_file;
+  std::vector<double> wavelengths_nm;
   std::vector<double> theta_i_deg, phi_i_deg;  // check_bsdf_request sorts them, without repeats
   int orders = 4;
   long long rays = 1000000;
@@ -44,7 +49,12 @@ struct BsdfRequest {
   int threads = 0;              // for the memory estimate (0: all processors)
 };
 
-// The material the request names; UsageError for a wrong name or missing / misplaced indices.
+// The index table of a spectral request (--metal or --ior-file), or nullopt; UsageError for a
+// misplaced or unknown metal and an unreadable or malformed file.
+std::optional<models::IndexTable> bsdf_index_table(const BsdfRequest& request);
+// The wavelengths of a spectral request, checked against its table (empty when not spectral).
+std::vector<double> bsdf_wavelengths(const BsdfRequest& request);
+// The material the request names (a spectral conductor: its index at the first wavelength); UsageError for a wrong name or missing / misplaced indices.
 models::Material bsdf_material(const BsdfRequest& request);
 // Checks the counts, angles, output format against the angles and the memory the tallies need;
 // sorts the angle lists. UsageError with the command line's option names.

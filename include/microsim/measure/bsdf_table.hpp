@@ -37,6 +37,7 @@ BsdfTable measure_bsdf_table(const Tracer& tracer, const BsdfTableOptions& optio
 // equal-area hemisphere map (in its square coordinates; edge pixels held constant to the border).
 // Pixels are cos-weighted pixel averages, so this is the histogram's piecewise-bilinear
 // reconstruction; its error is the pixel size, not the Monte Carlo error.
-double interpolate_f(const BsdfResult& r, int side, int slot, const Vec3& wo);
+// `lambda`: a spectral run's wavelength index (BsdfResult::tally), -1 the measured tallies.
+double interpolate_f(const BsdfResult& r, int side, int slot, const Vec3& wo, int lambda = -1);
 
 }  // namespace microsim

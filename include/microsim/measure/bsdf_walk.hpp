@@ -8,6 +8,7 @@
 
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/exit_counts.hpp"
+#include "microsim/measure/spectral_tally.hpp"
 #include "microsim/models/microfacet_bsdf.hpp"
 #include "microsim/trace/tracer.hpp"
 
@@ -21,6 +22,17 @@ struct WalkEnd {
   Vec3 direction = Vec3::UnitZ();
 };
 
+// A spectral conductor's per-wavelength weights: at each conductor hit weights[l] is multiplied
+// by materials[l]'s reflectance, in the order the single-index walk multiplies its weight, so
+// weights[l] equals the weight of a walk with materials[l] alone bit for bit (the geometry of a
+// conductor's path does not depend on its index). The caller sets the weights to 1 first;
+// the walk's own `weight` is then left at 1.
+struct SpectralWeights {
+  const models::Material* materials = nullptr;
+  int count = 0;
+  double* weights = nullptr;
+};
+
 // `finite`: the surface is a finite object. Its rays that miss it at once are Missed, and a ray
 // that leaves it outside after at least one event is reflected whatever its direction (walls send
 // light below the base plane: [GeomBSDF24, "Inherent Assumptions"], the visible area exceeds the
@@ -28,13 +40,17 @@ struct WalkEnd {
 // from inside the slab; anything else is Lost. `events` counts the scattering events.
 WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir,
                        const models::Material& mat, CounterRng& rng, int max_events, bool finite,
-                       TraceCounters& counters, std::uint64_t& events);
+                       TraceCounters& counters, std::uint64_t& events,
+                       const SpectralWeights* spectral = nullptr);
 
 // Adds a walk's end to the tallies with the path's starting weight w0: exits with their order
 // and direction (binned when they point into their side's hemisphere: a finite object's
 // reflected ray below the base plane counts in the albedo only), losses and unterminated walks.
 void record_walk_end(BsdfTally& t, const WalkEnd& e, double w0, const HemisphereMap& map,
                      const InPlaneBins& plane);
+// The same for a spectral conductor's path: weight w0 * weights[l] at wavelength l.
+void record_walk_end(SpectralTally& t, const WalkEnd& e, const double* weights, double w0,
+                     const HemisphereMap& map, const InPlaneBins& plane);
 // The same for paths of weight 1 (w0 = 1, e.weight = 1) into integer counts.
 void record_walk_end(ExitCounts<std::uint32_t>& t, const WalkEnd& e, const HemisphereMap& map,
                      const InPlaneBins& plane);
