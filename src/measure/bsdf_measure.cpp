@@ -37,7 +37,7 @@ double triangle_integral(const Vec2& p0, const Vec2& p1, const Vec2& p2) {
 HemisphereMap::HemisphereMap(int resolution)
     : res_(resolution),
       edge_margin_(16 * 0.5 * resolution * (4 / kPi * (kAzimuthError + 2e-15) + 4e-15)) {
-  if (resolution < 1) throw UsageError("--resolution must be at least 1");
+  if (resolution < 1) throw ParameterError("{resolution} must be at least 1");
   cos_integral_.resize(static_cast<std::size_t>(res_) * res_);
   const double h = 2.0 / res_;
   for (int j = 0; j < res_; ++j)
@@ -502,11 +502,11 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
   using namespace microsim::models;
   const Microsurface& s = tracer.surface();
   if (!(o.theta_i >= 0.0 && o.theta_i < 0.5 * kPi))
-    throw UsageError("--theta-i must be in [0, 90) degrees");
-  if (!std::isfinite(o.phi_i)) throw UsageError("--phi-i must be finite");
-  if (o.rays == 0) throw UsageError("--rays must be positive");
-  if (o.orders < 1 || o.orders > 64) throw UsageError("--orders must be in [1, 64]");
-  if (o.resolution < 1 || o.resolution > 4096) throw UsageError("--resolution must be in [1, 4096]");
+    throw ParameterError("{theta_i} must be in [0, 90) degrees");
+  if (!std::isfinite(o.phi_i)) throw ParameterError("{phi_i} must be finite");
+  if (o.rays == 0) throw ParameterError("{rays} must be positive");
+  if (o.orders < 1 || o.orders > 64) throw ParameterError("{orders} must be in [1, 64]");
+  if (o.resolution < 1 || o.resolution > 4096) throw ParameterError("{resolution} must be in [1, 4096]");
   const auto t0 = std::chrono::steady_clock::now();
 
   BsdfResult r;

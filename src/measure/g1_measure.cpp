@@ -61,7 +61,7 @@ std::vector<Tally> run_chunks(int R, std::uint64_t n, int nbins, TraceCounters& 
   // Every chunk's tallies are kept until the merge: refused before the work when they would not
   // fit in memory (rather than ending in std::bad_alloc).
   require_memory(static_cast<double>(nc) * active * (sizeof(Tally) + 3.0 * nbins * sizeof(std::uint64_t)),
-                 "--rays " + std::to_string(static_cast<std::uint64_t>(R) * n) + " (tallies of " +
+                 "{rays} " + std::to_string(static_cast<std::uint64_t>(R) * n) + " (tallies of " +
                      std::to_string(nc * active) + " chunks of " + std::to_string(nbins) + " normal bins)");
   std::vector<Tally> reps(R, Tally(nbins));
   if (nc == 0) return reps;
@@ -243,11 +243,11 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
                     const FacetTable* table, const Tracer* under) {
   const Microsurface& s = tracer.surface();
   if (!(std::abs(v_in.z()) > 1e-12 * v_in.norm()))
-    throw UsageError("--theta must not be 90 degrees: G1 is undefined at v.n = 0");
+    throw ParameterError("{theta} must not be 90 degrees: G1 is undefined at v.n = 0");
   if (v_in.z() < 0) {
     if (s.kind() == Microsurface::Kind::Heightfield)
-      throw UsageError("--theta must be in [0, 90) degrees for a heightfield (theta in (90, 180], "
-                       "the undersurface, is measured on meshes only)");
+      throw ParameterError("{theta} must be in [0, 90) degrees for a heightfield (theta in (90, 180], "
+                           "the undersurface, is measured on meshes only)");
     // [GeomBSDF24, "Inherent Assumptions"]: the undersurface, explicitly. Traced on the mirrored,
     // reversed sheet at mirror_z(v); results relabelled to v and to the normals -m_f.
     std::unique_ptr<Microsurface> own_surface;
@@ -265,7 +265,7 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
     for (auto& b : r.bins) b.mean_normal = mirror_z(b.mean_normal);  // M m' = -m
     return r;
   }
-  if (o.rays == 0) throw UsageError("--rays must be positive");
+  if (o.rays == 0) throw ParameterError("{rays} must be positive");
   auto t0 = std::chrono::steady_clock::now();
   G1Result r;
   r.v = v_in.normalized();

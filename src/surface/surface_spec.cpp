@@ -3,6 +3,7 @@
 // surface_kinds.cpp.
 #include "microsim/surface/surface_spec.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
@@ -231,9 +232,9 @@ std::vector<SurfaceKind> make_kinds() {
   return k;
 }
 
-// Throws the command line's message for a value the option refuses.
+// Throws a ParameterError naming the option's parameter for a value the option refuses.
 void check_value(const SurfaceOption& o, const std::string& value) {
-  const std::string name = "--" + o.name;
+  const std::string name = surface_option_placeholder(o.name);
   try {
     switch (o.check) {
       case Check::Range: parse_number_in(value, o.range, ""); break;
@@ -243,19 +244,25 @@ void check_value(const SurfaceOption& o, const std::string& value) {
       case Check::None: break;
     }
   } catch (const UsageError& e) {
-    throw UsageError(name + ": " + e.what());
+    throw ParameterError(name + ": " + message_template(e));
   }
   if (o.type == Type::Flag && value != "true" && value != "false")
-    throw UsageError(name + ": expected true or false (got '" + value + "')");
+    throw ParameterError(name + ": expected true or false (got '" + literal_text(value) + "')");
   if (o.type == Type::Number && o.check == Check::None) {
     char* end = nullptr;
     std::strtold(value.c_str(), &end);
     if (value.empty() || end != value.c_str() + value.size())
-      throw UsageError("Could not convert: " + name + " = " + value);
+      throw ParameterError("Could not convert: " + name + " = " + literal_text(value));
   }
 }
 
 }  // namespace
+
+std::string surface_option_placeholder(const std::string& option) {
+  std::string name = option;
+  std::replace(name.begin(), name.end(), '-', '_');
+  return placeholder(name);
+}
 
 const SurfaceOption* SurfaceKind::option(const std::string& name) const {
   for (const auto& o : options)
@@ -300,7 +307,7 @@ void read_surface_preset(SurfaceRequest& r, const std::string& path) {
     try {
       set_surface_option(r, item.key, item.value);
     } catch (const UsageError& e) {
-      throw UsageError(preset_line_where(path, item) + e.what());
+      throw ParameterError(literal_text(preset_line_where(path, item)) + message_template(e));
     }
   }
 }
