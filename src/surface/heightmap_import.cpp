@@ -361,10 +361,10 @@ void record_discretization(Microsurface& s, bool periodic) {
   }
   add_discretization(s.description, std::max(s.dx(), s.dy()), extent, a.sal / k, a.longest / k);
 }
-}  // namespace
 
-Microsurface import_heightmap(const HeightmapImportParams& p) {
-  const std::string& path = p.input;
+// The parameters checked, in the order the import has always checked them; returns the factor
+// from file values times height_scale (in height_unit) to the surface's length unit.
+double checked_unit_factor(const HeightmapImportParams& p) {
   if (p.pixel_size_x != 0 && !finite_positive(p.pixel_size_x))
     throw ParameterError("{pixel_size} " + num(p.pixel_size_x) + ": must be a finite number > 0");
   if (p.pixel_size_y != 0 && !finite_positive(p.pixel_size_y))
@@ -381,17 +381,24 @@ Microsurface import_heightmap(const HeightmapImportParams& p) {
   if ((lu == 0) != (hu == 0) && !p.height_unit.empty() && p.length_unit.empty())
     throw ParameterError("{height_unit} " + literal_text(p.height_unit) + " needs {length_unit} (the unit of {pixel_size})");
   // File value * scale is in height_unit; the surface keeps one length unit for x, y and z.
-  const double unit_factor = (lu > 0 && hu > 0) ? hu / lu : 1.0;
+  return (lu > 0 && hu > 0) ? hu / lu : 1.0;
+}
 
-  RawHeightGrid g = read_height_grid(path, p.channel);
+// Grid spacings: the options, else the file's x,y columns; dy defaults to dx.
+std::pair<double, double> pixel_sizes(const HeightmapImportParams& p, const RawHeightGrid& g) {
   double dx = p.pixel_size_x, dy = p.pixel_size_y;
   if (dx == 0) {
-    if (g.dx <= 0) throw ParameterError("{pixel_size} is required for " + literal_text(path) + " (a " + g.format + " has no x,y columns)");
+    if (g.dx <= 0) throw ParameterError("{pixel_size} is required for " + literal_text(p.input) + " (a " + g.format + " has no x,y columns)");
     dx = g.dx;
     if (dy == 0) dy = g.dy;
   }
   if (dy == 0) dy = dx;
+  return {dx, dy};
+}
 
+// The crop's window of the grid (when asked), then at least 2 x 2 heights.
+void crop_grid(RawHeightGrid& g, const HeightmapImportParams& p) {
+  const std::string& path = p.input;
   if (p.crop) {
     if (p.crop_w < 2 || p.crop_h < 2 || p.crop_x0 < 0 || p.crop_y0 < 0 || p.crop_x0 + p.crop_w > g.nx ||
         p.crop_y0 + p.crop_h > g.ny)
@@ -410,7 +417,15 @@ Microsurface import_heightmap(const HeightmapImportParams& p) {
   if (g.nx < 2 || g.ny < 2)
     throw UsageError(path + ": a " + std::to_string(g.nx) + " x " + std::to_string(g.ny) +
                      " grid; a heightmap needs at least 2 x 2 heights");
+}
 
+// Missing heights (NaN, nodata) as NaN, the others scaled to the surface's unit; refused when
+// too many are missing or the rest is constant. Returns the fraction missing and the range.
+struct ScaledHeights {
+  double missing_fraction, lo, hi;
+};
+ScaledHeights scale_heights(RawHeightGrid& g, const HeightmapImportParams& p, double unit_factor) {
+  const std::string& path = p.input;
   std::size_t missing = 0;
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (std::size_t k = 0; k < g.z.size(); ++k) {
@@ -439,7 +454,12 @@ Microsurface import_heightmap(const HeightmapImportParams& p) {
                          " heights missing (" + num(100 * fraction) + "%), above {max_missing} " +
                          num(p.max_missing_fraction) + "; crop to the measured region or raise {max_missing}");
   if (!(hi > lo)) throw UsageError(path + ": constant heights (" + num(lo) + "): a plane, nothing to measure");
+  return {fraction, lo, hi};
+}
 
+// The detrend's coefficients; refused when it leaves nothing (the map is that form exactly).
+std::vector<double> detrended(RawHeightGrid& g, const HeightmapImportParams& p, double dx, double dy,
+                              const ScaledHeights& before) {
   const std::vector<double> coef = detrend(g.z, g.nx, g.ny, dx, dy, p.detrend);
   double lo2 = std::numeric_limits<double>::infinity(), hi2 = -lo2;
   for (double v : g.z)
@@ -447,9 +467,33 @@ Microsurface import_heightmap(const HeightmapImportParams& p) {
       lo2 = std::min(lo2, v);
       hi2 = std::max(hi2, v);
     }
-  if (!(hi2 - lo2 > 1e-6 * (hi - lo)))
-    throw ParameterError(literal_text(path) + ": nothing left after {detrend} " + to_string(p.detrend) +
+  if (!(hi2 - lo2 > 1e-6 * (before.hi - before.lo)))
+    throw ParameterError(literal_text(p.input) + ": nothing left after {detrend} " + to_string(p.detrend) +
                          " (the map is that form exactly)");
+  return coef;
+}
+
+// Data that is not periodic gets a cliff where the tile wraps: the RMS slopes with and without
+// the wrap-around cells (equal for a truly periodic map, up to 1/n noise).
+Json seam_check(const Microsurface& s) {
+  HeightGridView v = grid_view(s);
+  v.periodic = false;
+  const SlopeStats inner = slope_stats(v, 2);
+  v.periodic = true;
+  const SlopeStats all = slope_stats(v, 2);
+  return {{"slope_rms_x_tile", all.rms_x}, {"slope_rms_y_tile", all.rms_y},
+          {"slope_rms_x_without_wrap", inner.rms_x}, {"slope_rms_y_without_wrap", inner.rms_y}};
+}
+}  // namespace
+
+Microsurface import_heightmap(const HeightmapImportParams& p) {
+  const std::string& path = p.input;
+  const double unit_factor = checked_unit_factor(p);
+  RawHeightGrid g = read_height_grid(path, p.channel);
+  const auto [dx, dy] = pixel_sizes(p, g);
+  crop_grid(g, p);
+  const ScaledHeights scaled = scale_heights(g, p, unit_factor);
+  const std::vector<double> coef = detrended(g, p, dx, dy, scaled);
   const std::size_t filled = fill_missing(g.z, g.nx, g.ny, p.periodic);
 
   std::vector<float> heights(g.z.begin(), g.z.end());
@@ -471,26 +515,15 @@ Microsurface import_heightmap(const HeightmapImportParams& p) {
   if (p.crop) d["crop"] = {p.crop_x0, p.crop_y0, p.crop_w, p.crop_h};
   if (p.has_nodata) d["nodata"] = p.nodata;
   d["missing_filled"] = filled;
-  d["missing_fraction"] = fraction;
+  d["missing_fraction"] = scaled.missing_fraction;
   d["fill_rule"] = "harmonic: each missing height is the mean of its 4 neighbours (discrete Laplace equation)";
   d["detrend"] = to_string(p.detrend);
   d["detrend_coefficients"] = coef;
   d["detrend_basis"] = "1, x, y, x^2, x y, y^2 with x = i pixel_size_x, y = j pixel_size_y (first terms)";
-  if (p.periodic) {
-    // Data that is not periodic gets a cliff where the tile wraps: compare the RMS slopes with
-    // and without the wrap-around cells (equal for a truly periodic map, up to 1/n noise).
-    HeightGridView v = grid_view(s);
-    v.periodic = false;
-    const SlopeStats inner = slope_stats(v, 2);
-    v.periodic = true;
-    const SlopeStats all = slope_stats(v, 2);
-    d["seam_check"] = {{"slope_rms_x_tile", all.rms_x}, {"slope_rms_y_tile", all.rms_y},
-                       {"slope_rms_x_without_wrap", inner.rms_x}, {"slope_rms_y_without_wrap", inner.rms_y}};
-  }
+  if (p.periodic) d["seam_check"] = seam_check(s);
   s.description = d;
   if (!p.periodic) record_guard_band(s, p);
   record_discretization(s, p.periodic);
   return s;
 }
-
 }  // namespace microsim
