@@ -7,6 +7,7 @@
 #include <fstream>
 #include <map>
 
+#include "../src/cli/option_checks.hpp"
 #include "cli_helpers.hpp"
 #include "microsim/common.hpp"
 #include "microsim/io/output.hpp"
@@ -45,13 +46,14 @@ Result run(const std::string& args, const std::string& name) {
 
 std::string saved_file(const std::string& p) { return slurp(p) + (extension_of(p) == "exr" ? "" : slurp(p + ".json")); }
 
-// The message of the UsageError `f` throws ("" when it does not).
+// The message of the UsageError `f` throws as the command line prints it, its parameters named
+// as options ("" when it does not throw).
 template <class F>
 std::string refusal(F f) {
   try {
     f();
   } catch (const UsageError& e) {
-    return e.what();
+    return cli::cli_message(e);
   }
   return "";
 }

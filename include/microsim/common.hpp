@@ -4,8 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 #include <nlohmann/json.hpp>
 
@@ -22,6 +24,29 @@ constexpr double kPi = 3.14159265358979323846;
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+// A usage error naming parameters of the library (theta_i, rays, height_scale), never a front
+// end's spelling of them: its message is a template in which "{name}" is the parameter `name`
+// and "{{" a literal "{". Each front end spells the parameters when it prints the message
+// (spell_parameters): the command line as its options (--theta-i), Python as its keywords.
+struct ParameterError : UsageError {
+  using UsageError::UsageError;
+};
+// Turns a parameter's name into a front end's word for it.
+using ParameterSpeller = std::function<std::string(std::string_view name)>;
+// `message` with every "{name}" (name: lower-case letters, digits, '_') replaced by
+// speller(name) and every "{{" by "{"; any other brace is kept as it is.
+std::string spell_parameters(std::string_view message, const ParameterSpeller& speller);
+// The text of `e` as a front end prints it: a ParameterError spelled, another error as it is.
+std::string spelled_message(const UsageError& e, const ParameterSpeller& speller);
+// The parameter `name` as a ParameterError's message names it: "{name}".
+std::string placeholder(std::string_view name);
+// `text` (a path, a value given by the user) inside a ParameterError's message: its braces are
+// doubled, so that no front end reads a placeholder in it.
+std::string literal_text(std::string_view text);
+// The message of `e` as a part of a ParameterError's message (to say where it arose): a
+// ParameterError's own template, another error's text as literal text.
+std::string message_template(const UsageError& e);
+
 // A failure while running on valid input (CLI exit code 1).
 struct RuntimeFailure : std::runtime_error {
   using std::runtime_error::runtime_error;

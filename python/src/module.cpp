@@ -47,6 +47,9 @@ py::object nominal(const Microsurface& s) {
   return std::move(d);
 }
 
+// A library parameter as Python names it: the keyword argument of the same name.
+std::string keyword_spelling(std::string_view parameter) { return std::string(parameter); }
+
 struct RunResult {
   std::optional<Json> record;
   std::vector<Surface> surfaces;
@@ -141,7 +144,7 @@ PYBIND11_MODULE(_core, m) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const UsageError& e) {
-      usage_error(e.what());
+      usage_error(spelled_message(e, keyword_spelling).c_str());
     } catch (const CLI::ParseError& e) {
       usage_error(e.what());
     } catch (const RuntimeFailure& e) {

@@ -22,10 +22,31 @@ def test_a_refused_model_argument_is_a_usage_error():
 
 
 def test_rays_beyond_memory_are_a_usage_error_naming_rays():
-    """The CLI refuses them with exit 2 before the work (not std::bad_alloc, exit 1)."""
+    """The CLI refuses them with exit 2 before the work (not std::bad_alloc, exit 1); Python names
+    the keyword (the command line its option, --rays)."""
     s = microsim.generate("gaussian", alpha=0.5, resolution=16, seed=2)
-    with pytest.raises(microsim.UsageError, match="--rays"):
+    with pytest.raises(microsim.UsageError, match=r"^rays \d+ \(tallies of") as e:
         microsim.measure_g1(s, rays=10**12, theta=30)
+    assert "--" not in str(e.value)
+
+
+def test_the_library_names_parameters_as_keywords(cli, tmp_path):
+    """A message of the library names its parameters: the keywords here, the options on the
+    command line, otherwise word for word."""
+    s = microsim.generate("gaussian", alpha=0.5, resolution=16, seed=2)
+    with pytest.raises(microsim.UsageError) as e:
+        microsim.measure_bsdf(s, material="mirror", eta=1.5, theta_i=30, phi_i=0, rays=1000)
+    assert str(e.value) == "eta and k apply to material conductor or dielectric, not mirror"
+    path = tmp_path / "s.exr"
+    s.save(str(path))
+    p = cli("measure", "bsdf", path, "--material", "mirror", "--eta", 1.5, "--theta-i", 30, "--phi-i", 0,
+            "--rays", 1000, "-o", tmp_path / "x.json", check=False)
+    assert p.returncode == 2
+    assert p.stderr == "microsim: error: --eta and --k apply to --material conductor or dielectric, not mirror\n"
+    # A value given keeps its braces: only the library's placeholders are spelled.
+    with pytest.raises(microsim.UsageError) as e:
+        microsim.generate("vcavity", ndf="{alpha}")
+    assert str(e.value) == "ndf must be beckmann or ggx (got '{alpha}')"
 
 
 def test_a_failed_run_is_a_runtime_failure():

@@ -5,6 +5,7 @@
 
 #include "microsim/version.hpp"
 #include "microsim/io/output.hpp"
+#include "option_checks.hpp"
 #include "output_paths.hpp"
 
 namespace microsim::cli {
@@ -152,7 +153,7 @@ int run_cli(const std::vector<std::string>& args, TallyReplay* replay) {
     if (root) std::cerr << "microsim: error: " << e.what() << "\n";
     return 2;
   } catch (const UsageError& e) {
-    if (root) std::cerr << "microsim: error: " << e.what() << "\n";
+    if (root) std::cerr << "microsim: error: " << cli_message(e) << "\n";
     return 2;
   } catch (const CommandExit& e) {
     return e.code;

@@ -21,7 +21,7 @@ int run_measure_ndf(const MeasureOptions& o, const GlobalOptions& g) {
     NdfOptions defaults;
     const double bins = static_cast<double>(o.theta_bins) * o.phi_bins;
     require_memory(bins * defaults.blocks * defaults.blocks * 8.0 * 2 * (tbb::this_task_arena::max_concurrency() + 1),
-                   "--theta-bins " + std::to_string(o.theta_bins) + " x --phi-bins " + std::to_string(o.phi_bins));
+                   "{theta_bins} " + std::to_string(o.theta_bins) + " x {phi_bins} " + std::to_string(o.phi_bins));
   }
   Microsurface s = input_surface(g, o.surface);
   NdfOptions no;

@@ -32,7 +32,7 @@ Json read_part(const std::string& path) {
   if (!in) throw UsageError("part " + path + " cannot be read");
   try {
     // A part holds the tallies of every unit of its share: large, but bounded.
-    return parse_json_input(in, "part " + path, JsonLimits{64, std::size_t(1) << 30, false});
+    return parse_json_input(in, "part " + literal_text(path), JsonLimits{64, std::size_t(1) << 30, false});
   } catch (const Json::exception&) {
     throw UsageError("part " + path + " is not JSON (expected a partial record written by --shard)");
   }

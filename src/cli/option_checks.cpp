@@ -1,10 +1,24 @@
 #include "option_checks.hpp"
+
+#include <algorithm>
 #include "output_paths.hpp"
 
 #include "microsim/common.hpp"
 #include "microsim/io/preset_file.hpp"
 
 namespace microsim::cli {
+
+std::string option_spelling(std::string_view parameter) {
+  // The parameters whose option is not "--" and the name with '-' for '_'.
+  static const std::pair<std::string_view, std::string_view> options_named_otherwise[] = {{"output", "-o"}};
+  for (const auto& [name, option] : options_named_otherwise)
+    if (parameter == name) return std::string(option);
+  std::string option = "--" + std::string(parameter);
+  std::replace(option.begin() + 2, option.end(), '_', '-');
+  return option;
+}
+
+std::string cli_message(const UsageError& e) { return spelled_message(e, option_spelling); }
 
 namespace {
 // A validator running one of the checks.hpp parsers; its UsageError text becomes CLI11's message
@@ -15,7 +29,7 @@ CLI::Validator from_check(std::function<void(const std::string&)> check, const s
         try {
           check(value);
         } catch (const UsageError& e) {
-          return e.what();
+          return cli_message(e);
         }
         return {};
       },
@@ -68,7 +82,7 @@ void apply_preset(CLI::App& cmd) {
   try {
     items = read_preset_file(path);
   } catch (const UsageError& e) {
-    throw UsageError("--config " + std::string(e.what()));
+    throw ParameterError("{config} " + message_template(e));
   }
   for (const PresetItem& item : items) {
     const std::string where = "--config " + preset_line_where(path, item);

@@ -6,10 +6,18 @@
 
 #include <functional>
 #include <string>
+#include <string_view>
 
+#include "microsim/common.hpp"
 #include "microsim/io/checks.hpp"
 
 namespace microsim::cli {
+
+// A library parameter as the command line names it: its option, "--" and the name with '-' for
+// '_' (theta_i: --theta-i), or the option of the few whose name differs (output: -o).
+std::string option_spelling(std::string_view parameter);
+// The text of a usage error as the command line prints it: its parameters named as options.
+std::string cli_message(const UsageError& e);
 
 // A finite number inside r ("--alpha: must be a finite number in (0, 10] (got -1)").
 CLI::Validator number_in(const Range& r);

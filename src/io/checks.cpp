@@ -39,8 +39,8 @@ std::string Range::text() const {
 
 void require_in_range(double x, const Range& r, const std::string& name) {
   if (!r.contains(x))
-    throw UsageError(name + (name.empty() ? "" : " ") + "must be a finite number in " + r.text() +
-                     " (got " + number_text(x) + ")");
+    throw ParameterError(name + (name.empty() ? "" : " ") + "must be a finite number in " + r.text() +
+                         " (got " + number_text(x) + ")");
 }
 
 double parse_number_in(const std::string& text, const Range& r, const std::string& name) {
@@ -49,8 +49,8 @@ double parse_number_in(const std::string& text, const Range& r, const std::strin
   errno = 0;
   double x = std::strtod(s, &end);
   if (text.empty() || end != s + text.size() || std::isspace(static_cast<unsigned char>(text[0])))
-    throw UsageError(name + (name.empty() ? "" : " ") + "must be a finite number in " + r.text() +
-                     " (got '" + text + "')");
+    throw ParameterError(name + (name.empty() ? "" : " ") + "must be a finite number in " + r.text() +
+                         " (got '" + literal_text(text) + "')");
   require_in_range(x, r, name);
   return x;
 }
@@ -77,8 +77,8 @@ long long parse_integer_in(const std::string& text, long long lo, long long hi, 
   unsigned long long m;
   bool neg;
   const auto fail = [&] {
-    return UsageError(name + (name.empty() ? "" : " ") + "must be an integer in [" + std::to_string(lo) +
-                      ", " + std::to_string(hi) + "] (got '" + text + "')");
+    return ParameterError(name + (name.empty() ? "" : " ") + "must be an integer in [" + std::to_string(lo) +
+                          ", " + std::to_string(hi) + "] (got '" + literal_text(text) + "')");
   };
   if (!parse_decimal(text, true, m, neg)) throw fail();
   const unsigned long long max = static_cast<unsigned long long>(std::numeric_limits<long long>::max());
@@ -92,8 +92,8 @@ std::uint64_t parse_seed(const std::string& text, const std::string& name) {
   unsigned long long m;
   bool neg;
   if (!parse_decimal(text, false, m, neg))
-    throw UsageError(name + (name.empty() ? "" : " ") +
-                     "must be an integer in [0, 18446744073709551615] (got '" + text + "')");
+    throw ParameterError(name + (name.empty() ? "" : " ") +
+                         "must be an integer in [0, 18446744073709551615] (got '" + literal_text(text) + "')");
   return m;
 }
 
@@ -104,8 +104,8 @@ std::vector<std::string> split_items(const std::string& text, char sep, const st
     const std::size_t end = text.find(sep, start);
     items.push_back(text.substr(start, end == std::string::npos ? std::string::npos : end - start));
     if (items.back().empty())
-      throw UsageError(name + " '" + text + "': empty item" +
-                       (text.empty() ? "" : std::string(" (a leading, trailing or doubled '") + sep + "')"));
+      throw ParameterError(name + " '" + literal_text(text) + "': empty item" +
+                           (text.empty() ? "" : std::string(" (a leading, trailing or doubled '") + sep + "')"));
     if (end == std::string::npos) break;
     start = end + 1;
   }
@@ -124,8 +124,8 @@ void require_regular_input(const std::string& path, const std::string& name) {
                      : fs::is_socket(st)  ? "a socket"
                      : fs::is_character_file(st) || fs::is_block_file(st) ? "a device"
                                                                            : "not a regular file";
-  throw UsageError(name + (name.empty() ? "" : " ") + path + ": " + kind +
-                   ", not a regular file (inputs are read from regular files)");
+  throw ParameterError(name + (name.empty() ? "" : " ") + literal_text(path) + ": " + kind +
+                       ", not a regular file (inputs are read from regular files)");
 }
 
 double available_memory_bytes() {
@@ -155,7 +155,7 @@ void require_memory(double bytes, const std::string& what) {
   os.precision(3);
   os << what << " needs about " << bytes / (1 << 30) << " GiB, more than 80% of the "
      << have / (1 << 30) << " GiB available";
-  throw UsageError(os.str());
+  throw ParameterError(os.str());
 }
 
 }  // namespace microsim

@@ -14,7 +14,7 @@
 namespace microsim {
 
 double table_f(const BsdfTable& t, const Vec3& wi0, const Vec3& wo0, int lambda) {
-  if (t.phi_i.size() != 1) throw UsageError("MERL tables are isotropic: give one --phi-i");
+  if (t.phi_i.size() != 1) throw ParameterError("MERL tables are isotropic: give one {phi_i}");
   if (wi0.z() <= 0 || wo0.z() <= 0) return 0.0;
   // Turn the pair about the normal so that wi has the measured azimuth.
   const double turn = t.phi_i[0] - std::atan2(wi0.y(), wi0.x());
@@ -36,10 +36,10 @@ namespace {
 template <class Cell>
 void for_each_merl_cell(const BsdfTable& t, Cell&& cell) {
   if (t.phi_i.size() != 1)
-    throw UsageError("-o .binary: MERL tables are isotropic; this table has " +
-                     std::to_string(t.phi_i.size()) + " incidence azimuths (give one --phi-i)");
+    throw ParameterError("{output} .binary: MERL tables are isotropic; this table has " +
+                         std::to_string(t.phi_i.size()) + " incidence azimuths (give one {phi_i})");
   for (std::size_t k = 1; k < t.theta_i.size(); ++k)
-    if (!(t.theta_i[k] > t.theta_i[k - 1])) throw UsageError("--theta-i must be increasing for a .binary");
+    if (!(t.theta_i[k] > t.theta_i[k - 1])) throw ParameterError("{theta_i} must be increasing for a .binary");
   tbb::parallel_for(0, kMerlThetaH, [&](int ih) {
     const double u = (ih + 0.5) / kMerlThetaH, th = u * u * 0.5 * kPi;
     const double ch = std::cos(th), sh = std::sin(th);

@@ -478,7 +478,7 @@ ExrTable read_exr(const std::string& path, const std::function<void(const ExrTab
     for (auto c = h.channels().begin(); c != h.channels().end(); ++c) t.channel_names.push_back(c.name());
     if (check_header) check_header(t);
     require_memory(static_cast<double>(w) * hgt * 4.0 * std::max<std::size_t>(1, t.channel_names.size()),
-                   path + " (" + std::to_string(w) + " x " + std::to_string(hgt) + " pixels)");
+                   literal_text(path) + " (" + std::to_string(w) + " x " + std::to_string(hgt) + " pixels)");
     Imf::FrameBuffer fb;
     for (std::size_t c = 0; c < t.channel_names.size(); ++c)
       t.channels.emplace_back(static_cast<std::size_t>(t.width) * t.height);

@@ -290,20 +290,20 @@ double projected_area(const FacetNormals& f, const Vec3& w) {
 
 RglTable build_rgl_table(const BsdfTable& t, const Microsurface& s, const RglOptions& o) {
   if (o.resolution < 2 || o.ndf_resolution < 2 || o.sigma_resolution < 2)
-    throw UsageError("--table-resolution must be at least 2");
+    throw ParameterError("{table_resolution} must be at least 2");
   RglTable out;
   out.isotropic = t.phi_i.size() == 1;
   if (!out.isotropic) {
     const double lo = *std::min_element(t.phi_i.begin(), t.phi_i.end());
     const double hi = *std::max_element(t.phi_i.begin(), t.phi_i.end());
     if (std::abs(lo + kPi) > 1e-6 || std::abs(hi - kPi) > 1e-6)
-      throw UsageError("--phi-i: an anisotropic .bsdf needs incidence azimuths over the full circle "
-                       "from -180 to 180 degrees (e.g. --phi-i -180:180:30), or one azimuth for an isotropic table");
+      throw ParameterError("{phi_i}: an anisotropic .bsdf needs incidence azimuths over the full circle "
+                           "from -180 to 180 degrees (e.g. {phi_i} -180:180:30), or one azimuth for an isotropic table");
   }
   for (std::size_t k = 1; k < t.theta_i.size(); ++k)
-    if (!(t.theta_i[k] > t.theta_i[k - 1])) throw UsageError("--theta-i must be increasing for a .bsdf");
+    if (!(t.theta_i[k] > t.theta_i[k - 1])) throw ParameterError("{theta_i} must be increasing for a .bsdf");
   for (std::size_t k = 1; k < t.phi_i.size(); ++k)
-    if (!(t.phi_i[k] > t.phi_i[k - 1])) throw UsageError("--phi-i must be increasing for a .bsdf");
+    if (!(t.phi_i[k] > t.phi_i[k - 1])) throw ParameterError("{phi_i} must be increasing for a .bsdf");
   const int R = o.resolution, nt = static_cast<int>(t.theta_i.size()), np = static_cast<int>(t.phi_i.size());
   out.resolution = R;
   out.description = o.description;

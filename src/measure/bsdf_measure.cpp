@@ -39,7 +39,7 @@ double triangle_integral(const Vec2& p0, const Vec2& p1, const Vec2& p2) {
 HemisphereMap::HemisphereMap(int resolution)
     : res_(resolution),
       edge_margin_(16 * 0.5 * resolution * (4 / kPi * (kAzimuthError + 2e-15) + 4e-15)) {
-  if (resolution < 1) throw UsageError("--resolution must be at least 1");
+  if (resolution < 1) throw ParameterError("{resolution} must be at least 1");
   cos_integral_.resize(static_cast<std::size_t>(res_) * res_);
   const double h = 2.0 / res_;
   for (int j = 0; j < res_; ++j)
@@ -535,18 +535,18 @@ void check_spectral_options(const BsdfOptions& o, const Microsurface& s) {
   if (o.spectral.size() != o.wavelengths_nm.size())
     throw std::invalid_argument("BsdfOptions: one spectral index per wavelength");
   if (o.spectral.size() > static_cast<std::size_t>(kMaxWavelengths))
-    throw UsageError("--wavelengths: at most " + std::to_string(kMaxWavelengths) + " wavelengths");
+    throw ParameterError("{wavelengths}: at most " + std::to_string(kMaxWavelengths) + " wavelengths");
   for (std::size_t l = 0; l < o.spectral.size(); ++l) {
     if (o.spectral[l].kind != models::MaterialKind::Conductor)
       throw std::invalid_argument("BsdfOptions: spectral indices are conductors'");
     if (l > 0 && !(o.wavelengths_nm[l] > o.wavelengths_nm[l - 1]))
-      throw UsageError("--wavelengths must be increasing");
+      throw ParameterError("{wavelengths} must be increasing");
   }
   if (!(o.material.kind == models::MaterialKind::Conductor && o.material.eta == o.spectral[0].eta &&
         o.material.k == o.spectral[0].k))
     throw std::invalid_argument("BsdfOptions: the material must be the first wavelength's conductor");
-  if (o.split) throw UsageError("--wavelengths: spectral runs are not split over shards or MPI ranks");
-  if (is_vcavity(s)) throw UsageError("--wavelengths: V-cavity ensembles are measured at one index");
+  if (o.split) throw ParameterError("{wavelengths}: spectral runs are not split over shards or MPI ranks");
+  if (is_vcavity(s)) throw ParameterError("{wavelengths}: V-cavity ensembles are measured at one index");
 }
 
 }  // namespace
@@ -555,11 +555,11 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
   using namespace microsim::models;
   const Microsurface& s = tracer.surface();
   if (!(o.theta_i >= 0.0 && o.theta_i < 0.5 * kPi))
-    throw UsageError("--theta-i must be in [0, 90) degrees");
-  if (!std::isfinite(o.phi_i)) throw UsageError("--phi-i must be finite");
-  if (o.rays == 0) throw UsageError("--rays must be positive");
-  if (o.orders < 1 || o.orders > 64) throw UsageError("--orders must be in [1, 64]");
-  if (o.resolution < 1 || o.resolution > 4096) throw UsageError("--resolution must be in [1, 4096]");
+    throw ParameterError("{theta_i} must be in [0, 90) degrees");
+  if (!std::isfinite(o.phi_i)) throw ParameterError("{phi_i} must be finite");
+  if (o.rays == 0) throw ParameterError("{rays} must be positive");
+  if (o.orders < 1 || o.orders > 64) throw ParameterError("{orders} must be in [1, 64]");
+  if (o.resolution < 1 || o.resolution > 4096) throw ParameterError("{resolution} must be in [1, 4096]");
   check_spectral_options(o, s);
   const auto t0 = std::chrono::steady_clock::now();
 

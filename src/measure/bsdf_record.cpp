@@ -77,12 +77,12 @@ const char* const kNominalZ[3] = {"z_smith_single", "z_smith_multiple", "z_vcavi
 std::optional<models::IndexTable> bsdf_index_table(const BsdfRequest& o) {
   const bool spectral = !o.metal.empty() || !o.ior_file.empty();
   if (!spectral) {
-    if (!o.wavelengths_nm.empty()) throw UsageError("--wavelengths needs --metal or --ior-file");
+    if (!o.wavelengths_nm.empty()) throw ParameterError("{wavelengths} needs {metal} or {ior_file}");
     return std::nullopt;
   }
-  if (o.material != "conductor") throw UsageError("--metal and --ior-file apply to --material conductor only");
-  if (!o.metal.empty() && !o.ior_file.empty()) throw UsageError("give --metal or --ior-file, not both");
-  if (o.eta || o.k) throw UsageError("--eta and --k do not go with --metal or --ior-file (the table gives the index)");
+  if (o.material != "conductor") throw ParameterError("{metal} and {ior_file} apply to {material} conductor only");
+  if (!o.metal.empty() && !o.ior_file.empty()) throw ParameterError("give {metal} or {ior_file}, not both");
+  if (o.eta || o.k) throw ParameterError("{eta} and {k} do not go with {metal} or {ior_file} (the table gives the index)");
   if (!o.metal.empty()) return models::metal_table(o.metal);
   return models::read_index_file(o.ior_file);
 }
@@ -92,8 +92,8 @@ std::vector<double> bsdf_wavelengths(const BsdfRequest& o) {
   if (!table) return {};
   std::vector<double> nm = o.wavelengths_nm.empty() ? models::default_wavelengths_nm() : o.wavelengths_nm;
   if (static_cast<int>(nm.size()) > kMaxWavelengths)
-    throw UsageError("--wavelengths: at most " + std::to_string(kMaxWavelengths) + " wavelengths");
-  models::check_wavelengths(nm, *table, "--wavelengths");
+    throw ParameterError("{wavelengths}: at most " + std::to_string(kMaxWavelengths) + " wavelengths");
+  models::check_wavelengths(nm, *table, "{wavelengths}");
   return nm;
 }
 
@@ -113,25 +113,25 @@ models::Material bsdf_material(const BsdfRequest& o) {
   const auto f4 = [](double x) { return fixed(x, 4); };
   if (const auto table = bsdf_index_table(o)) return spectral_conductors(*table, bsdf_wavelengths(o)).front();
   if (o.material == "mirror") {
-    if (o.eta || o.k) throw UsageError("--eta and --k apply to --material conductor or dielectric, not mirror");
+    if (o.eta || o.k) throw ParameterError("{eta} and {k} apply to {material} conductor or dielectric, not mirror");
     return models::Material::mirror();
   }
   if (o.material == "conductor") {
-    if (!o.eta || !o.k) throw UsageError("--material conductor needs --eta E and --k K (complex index eta + ik)");
+    if (!o.eta || !o.k) throw ParameterError("{material} conductor needs {eta} E and {k} K (complex index eta + ik)");
     if (!(std::isfinite(*o.eta) && *o.eta > 0 && *o.eta <= 100))
-      throw UsageError("--eta must be in (0, 100] (got " + f4(*o.eta) + ")");
+      throw ParameterError("{eta} must be in (0, 100] (got " + f4(*o.eta) + ")");
     if (!(std::isfinite(*o.k) && *o.k >= 0 && *o.k <= 100))
-      throw UsageError("--k must be in [0, 100] (got " + f4(*o.k) + ")");
+      throw ParameterError("{k} must be in [0, 100] (got " + f4(*o.k) + ")");
     return models::Material::conductor(*o.eta, *o.k);
   }
   if (o.material == "dielectric") {
-    if (!o.eta) throw UsageError("--material dielectric needs --eta E (index below / index above)");
-    if (o.k) throw UsageError("--k applies to --material conductor only");
+    if (!o.eta) throw ParameterError("{material} dielectric needs {eta} E (index below / index above)");
+    if (o.k) throw ParameterError("{k} applies to {material} conductor only");
     if (!(std::isfinite(*o.eta) && *o.eta >= 0.01 && *o.eta <= 100))
-      throw UsageError("--eta must be in [0.01, 100] (got " + f4(*o.eta) + ")");
+      throw ParameterError("{eta} must be in [0.01, 100] (got " + f4(*o.eta) + ")");
     return models::Material::dielectric(*o.eta);
   }
-  throw UsageError("--material must be mirror, conductor or dielectric (got '" + o.material + "')");
+  throw ParameterError("{material} must be mirror, conductor or dielectric (got '" + literal_text(o.material) + "')");
 }
 
 void check_bsdf_request(BsdfRequest& o) {
@@ -141,33 +141,33 @@ void check_bsdf_request(BsdfRequest& o) {
   bsdf_material(o);
   o.theta_i_deg = sorted_unique(o.theta_i_deg);
   o.phi_i_deg = sorted_unique(o.phi_i_deg);
-  if (o.theta_i_deg.empty() || o.phi_i_deg.empty()) throw UsageError("--theta-i and --phi-i need at least one angle");
+  if (o.theta_i_deg.empty() || o.phi_i_deg.empty()) throw ParameterError("{theta_i} and {phi_i} need at least one angle");
   for (double t : o.theta_i_deg)
     if (!(t >= 0 && t < 90))
-      throw UsageError("--theta-i must be in [0, 90) degrees (got " + fixed(t, 2) + ")");
+      throw ParameterError("{theta_i} must be in [0, 90) degrees (got " + fixed(t, 2) + ")");
   const std::vector<double>& phis = o.phi_i_deg;
   for (double p : phis)
     if (!std::isfinite(p) || std::abs(p) > 3600)
-      throw UsageError("--phi-i must be finite angles in degrees, |phi| <= 3600");
+      throw ParameterError("{phi_i} must be finite angles in degrees, |phi| <= 3600");
   if (o.orders < 1 || o.orders > kMaxBsdfOrders)
-    throw UsageError("--orders must be in [1, " + std::to_string(kMaxBsdfOrders) + "] (got " +
-                     std::to_string(o.orders) + ")");
+    throw ParameterError("{orders} must be in [1, " + std::to_string(kMaxBsdfOrders) + "] (got " +
+                         std::to_string(o.orders) + ")");
   if (o.rays <= 0 || o.rays > 1000000000000LL)
-    throw UsageError("--rays must be in [1, 1e12] (got " + std::to_string(o.rays) + ")");
+    throw ParameterError("{rays} must be in [1, 1e12] (got " + std::to_string(o.rays) + ")");
   if (o.resolution < 1 || o.resolution > kMaxBsdfResolution)
-    throw UsageError("--resolution must be in [1, " + std::to_string(kMaxBsdfResolution) + "] (got " +
-                     std::to_string(o.resolution) + ")");
+    throw ParameterError("{resolution} must be in [1, " + std::to_string(kMaxBsdfResolution) + "] (got " +
+                         std::to_string(o.resolution) + ")");
   if (o.table_resolution < kMinTableResolution || o.table_resolution > kMaxTableResolution)
-    throw UsageError("--table-resolution must be in [" + std::to_string(kMinTableResolution) + ", " +
-                     std::to_string(kMaxTableResolution) + "] (got " + std::to_string(o.table_resolution) + ")");
+    throw ParameterError("{table_resolution} must be in [" + std::to_string(kMinTableResolution) + ", " +
+                         std::to_string(kMaxTableResolution) + "] (got " + std::to_string(o.table_resolution) + ")");
   const std::size_t n_inc = o.theta_i_deg.size() * phis.size();
-  if (n_inc > 100000) throw UsageError("--theta-i x --phi-i: more than 100000 incidences");
+  if (n_inc > 100000) throw ParameterError("{theta_i} x {phi_i}: more than 100000 incidences");
   if (ext == "binary" && phis.size() > 1)
-    throw UsageError("-o .binary: MERL tables are isotropic; give one --phi-i (got " +
-                     std::to_string(phis.size()) + " azimuths)");
+    throw ParameterError("{output} .binary: MERL tables are isotropic; give one {phi_i} (got " +
+                         std::to_string(phis.size()) + " azimuths)");
   if (ext == "bsdf" && phis.size() > 1 && (std::abs(phis.front() + 180) > 1e-9 || std::abs(phis.back() - 180) > 1e-9))
-    throw UsageError("--phi-i: an anisotropic .bsdf needs azimuths over the full circle from -180 to 180 "
-                     "(e.g. --phi-i -180:180:30), or one azimuth for an isotropic table");
+    throw ParameterError("{phi_i}: an anisotropic .bsdf needs azimuths over the full circle from -180 to 180 "
+                         "(e.g. {phi_i} -180:180:30), or one azimuth for an isotropic table");
   // -o .bsdf: the RGL tables hold vndf, luminance and two spectra values (floats) per vertex of
   // the table_resolution^2 grid of every incidence.
   // A spectral run: a spectra value per wavelength and three rgb values.
@@ -175,7 +175,7 @@ void check_bsdf_request(BsdfRequest& o) {
   const double vertex_bytes = wavelengths > 0 ? 4.0 * (2 + wavelengths + 3) : 16.0;
   if (ext == "bsdf")
     require_memory(vertex_bytes * static_cast<double>(n_inc) * o.table_resolution * o.table_resolution,
-                   "--table-resolution " + std::to_string(o.table_resolution) + " with " + std::to_string(n_inc) +
+                   "{table_resolution} " + std::to_string(o.table_resolution) + " with " + std::to_string(n_inc) +
                        " incidences");
   // Tallies: f and f^2 per side, slot and pixel, one per worker plus the merge tree, and the
   // finished results of every incidence.
@@ -185,22 +185,22 @@ void check_bsdf_request(BsdfRequest& o) {
   const double need = tally * (3.0 * threads + 4.0 + 2.0 * n_inc * (1.0 + wavelengths));
   const double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
   if (need > 0.5 * have)
-    throw UsageError("--resolution " + std::to_string(o.resolution) + " with --orders " +
-                     std::to_string(o.orders) + " and " + std::to_string(n_inc) + " incidences needs about " +
-                     fixed(need / (1 << 30), 1) + " GiB of tallies, more than half of this machine's memory");
+    throw ParameterError("{resolution} " + std::to_string(o.resolution) + " with {orders} " +
+                         std::to_string(o.orders) + " and " + std::to_string(n_inc) + " incidences needs about " +
+                         fixed(need / (1 << 30), 1) + " GiB of tallies, more than half of this machine's memory");
 }
 
 void check_bsdf_surface(const BsdfRequest& o, const Microsurface& s, const std::string& name) {
   const std::string& ext = o.format;
   if (s.macro().finite_object() && (ext == "bsdf" || ext == "binary"))
-    throw UsageError(name + ": -o ." + ext + " tables need a periodic tile (this surface is a finite object)");
+    throw ParameterError(literal_text(name) + ": {output} ." + ext + " tables need a periodic tile (this surface is a finite object)");
   const bool anisotropic_surface = s.nominal && std::abs(s.nominal->alpha_x - s.nominal->alpha_y) > 1e-12;
   if (ext == "binary" && anisotropic_surface)
-    throw UsageError(name + ": -o .binary needs an isotropic surface (MERL tables are isotropic; nominal "
-                     "alpha_x != alpha_y); write a .bsdf with --phi-i -180:180:STEP instead");
+    throw ParameterError(literal_text(name) + ": {output} .binary needs an isotropic surface (MERL tables are isotropic; nominal "
+                         "alpha_x != alpha_y); write a .bsdf with {phi_i} -180:180:STEP instead");
   if (ext == "bsdf" && anisotropic_surface && o.phi_i_deg.size() == 1)
-    throw UsageError(name + ": an anisotropic surface (alpha_x != alpha_y) needs --phi-i over the full "
-                     "circle for a .bsdf (e.g. --phi-i -180:180:30)");
+    throw ParameterError(literal_text(name) + ": an anisotropic surface (alpha_x != alpha_y) needs {phi_i} over the full "
+                         "circle for a .bsdf (e.g. {phi_i} -180:180:30)");
 }
 
 BsdfTableOptions bsdf_table_options(const BsdfRequest& o, const Microsurface& s, TallySplit* split) {

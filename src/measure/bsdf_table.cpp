@@ -7,13 +7,13 @@
 namespace microsim {
 
 BsdfTable measure_bsdf_table(const Tracer& tracer, const BsdfTableOptions& o) {
-  if (o.theta_i.empty()) throw UsageError("--theta-i: no incidence angle given");
-  if (o.phi_i.empty()) throw UsageError("--phi-i: no azimuth given");
+  if (o.theta_i.empty()) throw ParameterError("{theta_i}: no incidence angle given");
+  if (o.phi_i.empty()) throw ParameterError("{phi_i}: no azimuth given");
   for (double t : o.theta_i)
     if (!(t >= 0.0 && t < 0.5 * kPi))
-      throw UsageError("--theta-i must be in [0, 90) degrees (got " + std::to_string(deg(t)) + ")");
+      throw ParameterError("{theta_i} must be in [0, 90) degrees (got " + std::to_string(deg(t)) + ")");
   for (double p : o.phi_i)
-    if (!std::isfinite(p)) throw UsageError("--phi-i must be finite");
+    if (!std::isfinite(p)) throw ParameterError("{phi_i} must be finite");
   const auto t0 = std::chrono::steady_clock::now();
   BsdfTable table;
   table.theta_i = o.theta_i;

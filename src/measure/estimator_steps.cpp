@@ -9,9 +9,9 @@
 namespace microsim {
 
 G2Result start_g2(const Vec3& o, const Vec3& i, const G2Options& opt, double macro_area) {
-  if (!(o.z() > 0)) throw UsageError("--theta-o must be in [0, 90) degrees");
-  if (!(i.z() > 0)) throw UsageError("--theta-i must be in [0, 90) degrees");
-  if (opt.rays == 0) throw UsageError("--rays must be positive");
+  if (!(o.z() > 0)) throw ParameterError("{theta_o} must be in [0, 90) degrees");
+  if (!(i.z() > 0)) throw ParameterError("{theta_i} must be in [0, 90) degrees");
+  if (opt.rays == 0) throw ParameterError("{rays} must be positive");
   G2Result r;
   r.o = o.normalized();
   r.i = i.normalized();
@@ -72,8 +72,8 @@ void finish_g2(G2Result& r, const G2Options& opt, UnitRange reps) {
 }
 
 VndfResult start_vndf(const Vec3& v, const VndfOptions& o, double macro_area) {
-  if (!(v.z() > 0)) throw UsageError("--theta must be in [0, 90) degrees");
-  if (o.rays == 0) throw UsageError("--rays must be positive");
+  if (!(v.z() > 0)) throw ParameterError("{theta} must be in [0, 90) degrees");
+  if (o.rays == 0) throw ParameterError("{rays} must be positive");
   VndfResult r;
   r.v = v.normalized();
   r.binning = vndf_binning(o);

@@ -61,7 +61,7 @@ std::vector<Tally> run_chunks(int R, std::uint64_t n, int nbins, TraceCounters& 
   // Every chunk's tallies are kept until the merge: refused before the work when they would not
   // fit in memory (rather than ending in std::bad_alloc).
   require_memory(static_cast<double>(nc) * active * (sizeof(Tally) + 3.0 * nbins * sizeof(std::uint64_t)),
-                 "--rays " + std::to_string(static_cast<std::uint64_t>(R) * n) + " (tallies of " +
+                 "{rays} " + std::to_string(static_cast<std::uint64_t>(R) * n) + " (tallies of " +
                      std::to_string(nc * active) + " chunks of " + std::to_string(nbins) + " normal bins)");
   std::vector<Tally> reps(R, Tally(nbins));
   if (nc == 0) return reps;
@@ -235,58 +235,38 @@ void set_g1_counts(G1Result& r, const std::vector<Tally>& ray_reps, const std::v
   }
 }
 
-DirectionBinning g1_normal_binning(const G1Options& o) {
-  return DirectionBinning(o.normal_theta_bins, o.normal_phi_bins, kPi);
-}
+namespace {
 
-G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
-                    const FacetTable* table, const Tracer* under) {
-  const Microsurface& s = tracer.surface();
-  if (!(std::abs(v_in.z()) > 1e-12 * v_in.norm()))
-    throw UsageError("--theta must not be 90 degrees: G1 is undefined at v.n = 0");
-  if (v_in.z() < 0) {
-    if (s.kind() == Microsurface::Kind::Heightfield)
-      throw UsageError("--theta must be in [0, 90) degrees for a heightfield (theta in (90, 180], "
-                       "the undersurface, is measured on meshes only)");
-    // [GeomBSDF24, "Inherent Assumptions"]: the undersurface, explicitly. Traced on the mirrored,
-    // reversed sheet at mirror_z(v); results relabelled to v and to the normals -m_f.
-    std::unique_ptr<Microsurface> own_surface;
-    std::unique_ptr<Tracer> own_tracer;
-    if (!under) {
-      own_surface = std::make_unique<Microsurface>(undersurface(s));
-      own_tracer = std::make_unique<Tracer>(*own_surface);
-      under = own_tracer.get();
-    }
-    G1Result r = measure_g1(*under, mirror_z(v_in.normalized()), o, nullptr, nullptr);
-    r.undersurface = true;
-    r.v = v_in.normalized();
-    r.theta = theta_of(r.v);
-    r.phi = phi_of(r.v);
-    for (auto& b : r.bins) b.mean_normal = mirror_z(b.mean_normal);  // M m' = -m
-    return r;
+// [GeomBSDF24, "Inherent Assumptions"]: the undersurface, explicitly. Traced on the mirrored,
+// reversed sheet at mirror_z(v) (on `under` when given); results relabelled to v and to the
+// normals -m_f.
+G1Result measure_g1_undersurface(const Microsurface& s, const Vec3& v_in, const G1Options& o, const Tracer* under) {
+  std::unique_ptr<Microsurface> own_surface;
+  std::unique_ptr<Tracer> own_tracer;
+  if (!under) {
+    own_surface = std::make_unique<Microsurface>(undersurface(s));
+    own_tracer = std::make_unique<Tracer>(*own_surface);
+    under = own_tracer.get();
   }
-  if (o.rays == 0) throw UsageError("--rays must be positive");
-  auto t0 = std::chrono::steady_clock::now();
-  G1Result r;
+  G1Result r = measure_g1(*under, mirror_z(v_in.normalized()), o, nullptr, nullptr);
+  r.undersurface = true;
   r.v = v_in.normalized();
   r.theta = theta_of(r.v);
   r.phi = phi_of(r.v);
-  r.macro_area = s.macro().area;
-  r.binning = g1_normal_binning(o);
-  const int nbins = r.binning.size();
-  r.bins.assign(nbins, G1NormalBin{});
-  const Vec3 v = r.v;
+  for (auto& b : r.bins) b.mean_normal = mirror_z(b.mean_normal);  // M m' = -m
+  return r;
+}
 
-  // Exact facet sums per normal bin, and the CDF of projected area for estimator (b).
-  auto t_facets = std::chrono::steady_clock::now();
-  FacetTable own;
-  const FacetTable& ft = facet_table_for(s, r.binning, table, own);
-  const std::size_t nf = s.num_facets();
+// The exact facet sums of r.bins at r.v (area, front projected area, mean normal, V-cavity
+// weighted area), r.total_area and r.lambda_numeric.
+void sum_facets_per_bin(G1Result& r, const FacetTable& ft, const Microsurface& s) {
+  const Vec3 v = r.v;
+  const int nbins = static_cast<int>(r.bins.size());
   // Per bin: area, front projected area, projected-area-weighted normal (3), V-cavity-weighted
   // front projected area; then back area.
   using Sums = std::vector<double>;
   const std::size_t width = 6 * static_cast<std::size_t>(nbins) + 1;
-  Sums sums = sum_over_facets(nf, width, [&](std::size_t k, double* acc) {
+  Sums sums = sum_over_facets(s.num_facets(), width, [&](std::size_t k, double* acc) {
     Vec3 m;
     double a;
     ft.normal_area(k, m, a);
@@ -312,6 +292,43 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   }
   // Lambda(v) = sum_f A_f max(0, -v.m_f) / ((v.n) A)   [Heitz14, App. A]
   r.lambda_numeric = sums[width - 1] / (v.dot(s.macro().normal) * s.macro().area);
+}
+
+}  // namespace
+
+DirectionBinning g1_normal_binning(const G1Options& o) {
+  return DirectionBinning(o.normal_theta_bins, o.normal_phi_bins, kPi);
+}
+
+G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
+                    const FacetTable* table, const Tracer* under) {
+  const Microsurface& s = tracer.surface();
+  if (!(std::abs(v_in.z()) > 1e-12 * v_in.norm()))
+    throw ParameterError("{theta} must not be 90 degrees: G1 is undefined at v.n = 0");
+  if (v_in.z() < 0) {
+    if (s.kind() == Microsurface::Kind::Heightfield)
+      throw ParameterError("{theta} must be in [0, 90) degrees for a heightfield (theta in (90, 180], "
+                           "the undersurface, is measured on meshes only)");
+    return measure_g1_undersurface(s, v_in, o, under);
+  }
+  if (o.rays == 0) throw ParameterError("{rays} must be positive");
+  auto t0 = std::chrono::steady_clock::now();
+  G1Result r;
+  r.v = v_in.normalized();
+  r.theta = theta_of(r.v);
+  r.phi = phi_of(r.v);
+  r.macro_area = s.macro().area;
+  r.binning = g1_normal_binning(o);
+  const int nbins = r.binning.size();
+  r.bins.assign(nbins, G1NormalBin{});
+  const Vec3 v = r.v;
+
+  // Exact facet sums per normal bin, and the CDF of projected area for estimator (b).
+  auto t_facets = std::chrono::steady_clock::now();
+  FacetTable own;
+  const FacetTable& ft = facet_table_for(s, r.binning, table, own);
+  const std::size_t nf = s.num_facets();
+  sum_facets_per_bin(r, ft, s);
   // Estimator (b) draws facets by front-facing projected area A_f max(0, v.m_f).
   const auto weights = [&](std::size_t k0, std::size_t k1, double* w) {
     ft.for_each_cross(k0, k1, [&](std::size_t k, const Vec3& c) { w[k - k0] = std::max(0.0, 0.5 * c.dot(v)); });

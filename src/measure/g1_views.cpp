@@ -15,9 +15,9 @@ G1Views measure_g1_views(const Microsurface& s, const std::vector<Vec3>& views, 
   bool below = false;
   for (const Vec3& v : views) below = below || v.z() < 0;
   if (below && s.kind() == Microsurface::Kind::Heightfield)
-    throw UsageError("--theta must be in [0, 90) degrees for a heightfield (theta in (90, 180], the "
-                     "undersurface, is measured on meshes only)");
-  if (below && is_vcavity(s)) throw UsageError("--theta must be in [0, 90) degrees for a vcavity ensemble");
+    throw ParameterError("{theta} must be in [0, 90) degrees for a heightfield (theta in (90, 180], the "
+                         "undersurface, is measured on meshes only)");
+  if (below && is_vcavity(s)) throw ParameterError("{theta} must be in [0, 90) degrees for a vcavity ensemble");
   G1Views out;
   out.table = g1_table();
   std::size_t done = 0;

@@ -264,7 +264,7 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
   // The larger half's chunk tallies are held at once: refused before the work when they would
   // not fit in memory (rather than ending in std::bad_alloc).
   require_memory(static_cast<double>(share1 - halves[1]) * nc * (sizeof(Tally) + 4.0 * nbins * sizeof(std::uint64_t)),
-                 "--rays " + std::to_string(opt.rays) + " (tallies of " + std::to_string(nc) +
+                 "{rays} " + std::to_string(opt.rays) + " (tallies of " + std::to_string(nc) +
                      " chunks per replicate, " + std::to_string(nbins) + " normal bins)");
   for (int h = 0; h < 2; ++h) {
     const int r0 = halves[h], r1 = halves[h + 1];

@@ -4,7 +4,7 @@ namespace microsim {
 
 ReplicatePlan::ReplicatePlan(std::uint64_t rays, int requested) {
   if (requested < 2)
-    throw UsageError("--replicates must be at least 2 (the error is the spread between replicates)");
+    throw ParameterError("{replicates} must be at least 2 (the error is the spread between replicates)");
   replicates = static_cast<int>(std::max<std::uint64_t>(1, std::min<std::uint64_t>(requested, rays)));
   strata = Strata((rays + replicates - 1) / replicates);
 }

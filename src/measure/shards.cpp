@@ -27,7 +27,7 @@ Tallies::Tallies(std::string kind_, std::uint64_t units_, UnitRange covered_, st
       counts(units_ * rc, 0), reals(units_ * rr, 0.0), tail_counts(tc, 0), tail_reals(tr, 0.0) {}
 
 ShardRecorder::ShardRecorder(int k, int n) : k_(k), n_(n) {
-  if (!(n >= 1 && k >= 1 && k <= n)) throw UsageError("--shard must be K/N with 1 <= K <= N");
+  if (!(n >= 1 && k >= 1 && k <= n)) throw ParameterError("{shard} must be K/N with 1 <= K <= N");
 }
 
 std::string shard_path(const std::string& output, int k, int n) {
@@ -36,7 +36,7 @@ std::string shard_path(const std::string& output, int k, int n) {
 
 std::pair<int, int> parse_shard(const std::string& text) {
   const auto bad = [&] {
-    return UsageError("--shard must be K/N with integers 1 <= K <= N <= 4096 (got '" + text + "')");
+    return ParameterError("{shard} must be K/N with integers 1 <= K <= N <= 4096 (got '" + literal_text(text) + "')");
   };
   const auto slash = text.find('/');
   if (slash == std::string::npos) throw bad();
@@ -259,7 +259,7 @@ Tallies tallies_of(const Json& j, const std::string& part, std::size_t index) {
     throw bad("row_counts: rows too wide for the units");
   if (counts.size() != covered.size() * row_counts || reals.size() != covered.size() * row_reals)
     throw bad("counts: row sizes do not match the covered range");
-  require_memory(8.0 * units * (row_counts + row_reals), "part " + part + " (units x row widths)");
+  require_memory(8.0 * units * (row_counts + row_reals), "part " + literal_text(part) + " (units x row widths)");
   const auto tail_counts = counts_of(j, "tail_counts", bad);
   const auto tail_reals = reals_of(j, "tail_reals", bad);
   Tallies t(j.at("kind").get<std::string>(), units, covered, row_counts, row_reals, tail_counts.size(),
@@ -294,8 +294,8 @@ MergedRun merge_partials(const std::vector<std::pair<std::string, Json>>& parts)
   std::vector<std::vector<Tallies>> all;
   for (const auto& [name, j] : parts) {
     if (!j.is_object() || j.value("format", std::string()) != kPartialFormat)
-      throw UsageError("part " + name + " is not a partial record (no \"format\": \"" +
-                       std::string(kPartialFormat) + "\"; written by measure ... --shard K/N)");
+      throw ParameterError("part " + literal_text(name) + " is not a partial record (no \"format\": \"" +
+                           std::string(kPartialFormat) + "\"; written by measure ... {shard} K/N)");
     RunIdentity run;
     int k = 0, n = 0;
     try {
@@ -338,9 +338,9 @@ MergedRun merge_partials(const std::vector<std::pair<std::string, Json>>& parts)
   for (int k = 1; k <= m.shards; ++k)
     if (!seen.count(k)) missing += (missing.empty() ? "" : ", ") + std::to_string(k) + "/" + std::to_string(m.shards);
   if (!missing.empty())
-    throw UsageError("shard" + std::string(missing.find(',') != std::string::npos ? "s " : " ") + missing +
-                     " missing (run them with --shard K/N, then merge all " +
-                     std::to_string(m.shards) + " parts)");
+    throw ParameterError("shard" + std::string(missing.find(',') != std::string::npos ? "s " : " ") + missing +
+                         " missing (run them with {shard} K/N, then merge all " +
+                         std::to_string(m.shards) + " parts)");
 
   // Entry by entry: the same layout in every part, covered ranges tiling the units.
   const std::size_t ne = all[0].size();

@@ -42,11 +42,11 @@ std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vecto
                                          const G1Options& o) {
   if (!is_vcavity(s) || s.num_facets() % 4 != 0)
     throw UsageError("measure_vcavity_g1: not a vcavity surface (generate vcavity)");
-  if (o.rays == 0) throw UsageError("--rays must be positive");
+  if (o.rays == 0) throw ParameterError("{rays} must be positive");
   for (const Vec3& v : views)
     if (!(v.z() > 1e-12 * v.norm()))
-      throw UsageError("--theta must be in [0, 90) degrees for a vcavity ensemble (its grooves are "
-                       "heightfields)");
+      throw ParameterError("{theta} must be in [0, 90) degrees for a vcavity ensemble (its grooves are "
+                           "heightfields)");
   auto t0 = std::chrono::steady_clock::now();
   const std::size_t K = s.num_facets() / 4, nv = views.size();
   const DirectionBinning binning = g1_normal_binning(o);

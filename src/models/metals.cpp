@@ -331,7 +331,7 @@ const IndexTable& metal_table(const std::string& symbol) {
     if (t.name == symbol) return t;
   std::string choices;
   for (const std::string& n : metal_names()) choices += (choices.empty() ? "" : ", ") + n;
-  throw UsageError("--metal must be one of " + choices + " (got '" + symbol + "')");
+  throw ParameterError("{metal} must be one of " + choices + " (got '" + literal_text(symbol) + "')");
 }
 
 namespace {
@@ -362,13 +362,13 @@ bool parse_number(const std::string& s, double* x) {
 
 IndexTable read_index_file(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw UsageError("--ior-file: cannot read " + path);
+  if (!in) throw ParameterError("{ior_file}: cannot read " + literal_text(path));
   IndexTable t{path, "file", {}};
   std::string line;
   int line_no = 0;
   bool header_allowed = true;
   auto fail = [&](const std::string& what) {
-    throw UsageError("--ior-file " + path + ":" + std::to_string(line_no) + ": " + what);
+    throw ParameterError("{ior_file} " + literal_text(path) + ":" + std::to_string(line_no) + ": " + literal_text(what));
   };
   while (std::getline(in, line)) {
     ++line_no;
@@ -396,19 +396,19 @@ IndexTable read_index_file(const std::string& path) {
       fail("wavelengths must increase (" + f[0] + " after " + number_text(t.rows.back().wavelength_nm) + ")");
     t.rows.push_back({v[0], v[1], v[2]});
   }
-  if (t.rows.size() < 2) throw UsageError("--ior-file " + path + ": needs at least two rows 'wavelength_nm, n, k'");
+  if (t.rows.size() < 2) throw ParameterError("{ior_file} " + literal_text(path) + ": needs at least two rows 'wavelength_nm, n, k'");
   return t;
 }
 
 std::vector<double> default_wavelengths_nm() { return {450.0, 500.0, 550.0, 600.0, 650.0}; }
 
 void check_wavelengths(const std::vector<double>& nm, const IndexTable& table, const std::string& option) {
-  if (nm.empty()) throw UsageError(option + " needs at least one wavelength");
+  if (nm.empty()) throw ParameterError(option + " needs at least one wavelength");
   for (std::size_t i = 0; i < nm.size(); ++i) {
     if (!table.covers(nm[i]))
-      throw UsageError(option + ": " + number_text(nm[i]) + " nm is outside the index table of " + table.name +
+      throw ParameterError(option + ": " + number_text(nm[i]) + " nm is outside the index table of " + literal_text(table.name) +
                        " (" + number_text(table.min_nm()) + " - " + number_text(table.max_nm()) + " nm)");
-    if (i > 0 && !(nm[i] > nm[i - 1])) throw UsageError(option + " must be increasing wavelengths in nm");
+    if (i > 0 && !(nm[i] > nm[i - 1])) throw ParameterError(option + " must be increasing wavelengths in nm");
   }
 }
 

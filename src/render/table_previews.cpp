@@ -106,11 +106,11 @@ std::string fixed3(double x) {
 
 TablePreviews render_table_previews(const TablePreviewOptions& o, const std::function<void(double)>& progress) {
   if (extension_of(o.table) != "bsdf")
-    throw UsageError(o.table + ": render reads an RGL .bsdf table (write one with measure bsdf -o TABLE.bsdf)");
+    throw ParameterError(literal_text(o.table) + ": render reads an RGL .bsdf table (write one with measure bsdf {output} TABLE.bsdf)");
   if (!(o.light_theta >= 0 && o.light_theta < 90))
-    throw UsageError("--light-theta must be in [0, 90) degrees (got " + fixed3(o.light_theta) + ")");
+    throw ParameterError("{light_theta} must be in [0, 90) degrees (got " + fixed3(o.light_theta) + ")");
   if (o.against != "walk" && o.against != "single")
-    throw UsageError("--difference must be walk or single (got '" + o.against + "')");
+    throw ParameterError("{difference} must be walk or single (got '" + literal_text(o.against) + "')");
   const RglMaterial table(o.table);
   const TableModel tm = model_from_description(table.description());
 
@@ -118,14 +118,14 @@ TablePreviews render_table_previews(const TablePreviewOptions& o, const std::fun
   TablePreviews out;
   const std::string dist = !o.distribution.empty() ? o.distribution : tm.distribution;
   if (dist != "beckmann" && dist != "ggx")
-    throw UsageError("--distribution must be beckmann or ggx" +
-                     std::string(dist.empty() ? " (the table's description names none)" : " (got '" + dist + "')"));
+    throw ParameterError("{distribution} must be beckmann or ggx" +
+                         std::string(dist.empty() ? " (the table's description names none)" : " (got '" + literal_text(dist) + "')"));
   double ax = tm.alpha_x, ay = tm.alpha_y;
   if (o.alpha > 0) ax = ay = o.alpha;
   if (o.alpha_x > 0) ax = o.alpha_x;
   if (o.alpha_y > 0) ay = o.alpha_y;
   if (!(ax > 0 && ay > 0))
-    throw UsageError("--alpha (or --alpha-x and --alpha-y) is needed: the table's description gives no roughness");
+    throw ParameterError("{alpha} (or {alpha_x} and {alpha_y}) is needed: the table's description gives no roughness");
   const std::string mname = !o.material.empty() ? o.material : tm.material;
   const double eta = o.eta > 0 ? o.eta : tm.eta, k = o.k > 0 ? o.k : (o.eta > 0 ? 0.0 : tm.k);
   models::Material material;
@@ -133,8 +133,8 @@ TablePreviews render_table_previews(const TablePreviewOptions& o, const std::fun
   else if (mname == "conductor" && eta > 0) material = models::Material::conductor(eta, k);
   else if (mname == "dielectric" && eta > 0) material = models::Material::dielectric(eta);
   else
-    throw UsageError("--material must be mirror, conductor (with --eta, --k) or dielectric (with --eta); the "
-                     "table's description gives '" + mname + "'");
+    throw ParameterError("{material} must be mirror, conductor (with {eta}, {k}) or dielectric (with {eta}); the "
+                         "table's description gives '" + literal_text(mname) + "'");
   const models::Ndf ndf = dist == "ggx" ? models::Ndf::ggx(ax, ay) : models::Ndf::beckmann(ax, ay);
 
   Lighting directional, environment;

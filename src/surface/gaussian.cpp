@@ -40,18 +40,18 @@ double default_correlation_length(int resolution, double size) {
 void validate(const GaussianParams& p) {
   if (!(p.alpha_x > 0) || !(p.alpha_y > 0) || !std::isfinite(p.alpha_x) ||
       !std::isfinite(p.alpha_y) || p.alpha_x > 10 || p.alpha_y > 10)
-    throw UsageError("--alpha/--alpha-x/--alpha-y must be in (0, 10]");
-  if (p.resolution < 4) throw UsageError("--resolution must be at least 4 (got " +
-                                         std::to_string(p.resolution) + ")");
+    throw ParameterError("{alpha}/{alpha_x}/{alpha_y} must be in (0, 10]");
+  if (p.resolution < 4) throw ParameterError("{resolution} must be at least 4 (got " +
+                                             std::to_string(p.resolution) + ")");
   if (p.resolution > 32760)
-    throw UsageError("--resolution must be at most 32760 (Embree grid limit); got " +
-                     std::to_string(p.resolution));
-  require_memory(gaussian_memory_estimate(p.resolution), "--resolution " + std::to_string(p.resolution));
-  if (!(p.size > 0) || !std::isfinite(p.size)) throw UsageError("--size must be > 0");
+    throw ParameterError("{resolution} must be at most 32760 (Embree grid limit); got " +
+                         std::to_string(p.resolution));
+  require_memory(gaussian_memory_estimate(p.resolution), "{resolution} " + std::to_string(p.resolution));
+  if (!(p.size > 0) || !std::isfinite(p.size)) throw ParameterError("{size} must be > 0");
   double dx = p.size / p.resolution;
   if (p.correlation_length != 0.0 &&
       !(p.correlation_length >= dx && p.correlation_length <= 0.25 * p.size))
-    throw UsageError("--correlation-length must be in [size/resolution, size/4]");
+    throw ParameterError("{correlation_length} must be in [size/resolution, size/4]");
 }
 
 namespace {
@@ -170,8 +170,8 @@ std::pair<double, double> anisotropic_lengths(int n, double size, double ell, do
   const double target = g(ell) * (smooth * smooth) / (rough * rough);
   double lo = ell, hi = 0.5 * size;
   if (g(hi) > target)
-    throw UsageError("--alpha-x/--alpha-y: anisotropy " + std::to_string(rough / smooth) +
-                     " too strong for this tile and correlation length");
+    throw ParameterError("{alpha_x}/{alpha_y}: anisotropy " + std::to_string(rough / smooth) +
+                         " too strong for this tile and correlation length");
   for (int it = 0; it < 200 && hi - lo > 1e-12 * hi; ++it) {
     double mid = 0.5 * (lo + hi);
     if (g(mid) > target) lo = mid; else hi = mid;
@@ -231,17 +231,17 @@ Microsurface generate_gaussian_ggx(const GaussianGgxParams& p) {
   base.alpha_y = p.alpha_y;
   base.seed = p.seed;
   validate(base);
-  require_memory(gaussian_ggx_memory_estimate(p.resolution), "--resolution " + std::to_string(p.resolution));
+  require_memory(gaussian_ggx_memory_estimate(p.resolution), "{resolution} " + std::to_string(p.resolution));
   const int n = p.resolution;
   const double dx = p.size / n;
   const double ell = p.correlation_length > 0 ? p.correlation_length : default_correlation_length(n, p.size);
   const double big = p.roughness_correlation_length > 0 ? p.roughness_correlation_length
                                                         : std::min(16 * ell, 0.25 * p.size);
   if (!(big >= ell && big <= 0.5 * p.size))
-    throw UsageError("--roughness-correlation-length must be in [correlation length, size/2] (got " +
-                     std::to_string(big) + ")");
+    throw ParameterError("{roughness_correlation_length} must be in [correlation length, size/2] (got " +
+                         std::to_string(big) + ")");
   if (!(p.tail_fraction > 0 && p.tail_fraction < 0.5))
-    throw UsageError("--tail-fraction must be in (0, 0.5) (got " + std::to_string(p.tail_fraction) + ")");
+    throw ParameterError("{tail_fraction} must be in (0, 0.5) (got " + std::to_string(p.tail_fraction) + ")");
 
   // g: Beckmann(alpha_x, alpha_y) field, exactly as generate_gaussian.
   const auto [ell_x, ell_y] = anisotropic_lengths(n, p.size, ell, p.alpha_x, p.alpha_y);

@@ -10,14 +10,15 @@ namespace microsim {
 namespace {
 using detail::num;
 
+// `option`: the parameter as a ParameterError names it ("{width}").
 void require_positive(double x, const char* option, double max = 1e6) {
   if (!(x > 0) || !std::isfinite(x) || x > max)
-    throw UsageError(std::string(option) + " must be in (0, " + num(max) + "] (got " + num(x) + ")");
+    throw ParameterError(std::string(option) + " must be in (0, " + num(max) + "] (got " + num(x) + ")");
 }
 
 void require_tiles(int n) {
   if (n < 1 || n > 256)
-    throw UsageError("--tiles must be in [1, 256] (got " + std::to_string(n) + ")");
+    throw ParameterError("{tiles} must be in [1, 256] (got " + std::to_string(n) + ")");
 }
 
 // Box [x0, x1] x [y0, y1] x [0, h]: top and four walls with outward normals, no bottom.
@@ -66,9 +67,9 @@ Macrosurface finite_macro(const detail::MeshBuilder& mb,
 }
 
 void validate_box(const BoxParams& p) {
-  require_positive(p.width, "--width");
-  require_positive(p.depth, "--depth");
-  require_positive(p.height, "--height");
+  require_positive(p.width, "{width}");
+  require_positive(p.depth, "{depth}");
+  require_positive(p.height, "{height}");
   require_tiles(p.tiles);
 }
 
@@ -76,9 +77,9 @@ void validate_box(const BoxParams& p) {
 
 Microsurface generate_flat(const FlatParams& p) {
   if (p.resolution < 1 || p.resolution > 4096)
-    throw UsageError("--resolution must be in [1, 4096] for flat (got " +
-                     std::to_string(p.resolution) + ")");
-  if (!(p.size > 0)) throw UsageError("--size must be > 0");
+    throw ParameterError("{resolution} must be in [1, 4096] for flat (got " +
+                         std::to_string(p.resolution) + ")");
+  if (!(p.size > 0)) throw ParameterError("{size} must be > 0");
   Microsurface s = Microsurface::heightfield(
       p.resolution, p.resolution, p.size, p.size,
       std::vector<float>(static_cast<std::size_t>(p.resolution) * p.resolution, 0.0f));
@@ -114,13 +115,13 @@ Microsurface generate_parallelepiped(const ParallelepipedParams& p) {
   const double* L = p.matrix;
   for (int k = 0; k < 9; ++k)
     if (!std::isfinite(L[k]) || std::abs(L[k]) > 1e6)
-      throw UsageError("--matrix entries must be finite numbers of magnitude <= 1e6");
+      throw ParameterError("{matrix} entries must be finite numbers of magnitude <= 1e6");
   if (L[6] != 0 || L[7] != 0 || !(L[8] > 0))
-    throw UsageError("--matrix third row must be (0, 0, k) with k > 0 (the base must stay the "
-                     "macrosurface z = 0); got (" + num(L[6]) + ", " + num(L[7]) + ", " + num(L[8]) + ")");
+    throw ParameterError("{matrix} third row must be (0, 0, k) with k > 0 (the base must stay the "
+                         "macrosurface z = 0); got (" + num(L[6]) + ", " + num(L[7]) + ", " + num(L[8]) + ")");
   const double det2 = L[0] * L[4] - L[1] * L[3];
   if (!(std::abs(det2) > 1e-9 * (std::abs(L[0] * L[4]) + std::abs(L[1] * L[3]) + 1e-300)))
-    throw UsageError("--matrix is singular in x, y (l11 l22 - l12 l21 = 0): the base would be flat");
+    throw ParameterError("{matrix} is singular in x, y (l11 l22 - l12 l21 = 0): the base would be flat");
   detail::MeshBuilder box;
   auto bases = add_tiled_boxes(box, p.width, p.depth, p.height, p.tiles);
   // Map the float vertices (so that coincident walls of neighbours stay coincident).
@@ -141,10 +142,10 @@ Microsurface generate_parallelepiped(const ParallelepipedParams& p) {
 }
 
 Microsurface generate_square_wave(const SquareWaveParams& p) {
-  require_positive(p.period, "--period");
-  require_positive(p.height, "--height");
+  require_positive(p.period, "{period}");
+  require_positive(p.height, "{height}");
   if (!(p.duty > 0 && p.duty < 1))
-    throw UsageError("--duty must be in (0, 1) (got " + num(p.duty) + ")");
+    throw ParameterError("{duty} must be in (0, 1) (got " + num(p.duty) + ")");
   const double P = p.period, a = 0.5 * p.duty * P, h = p.height, e = 0.5 * P;
   detail::MeshBuilder mb;
   if (!p.two_d) {
@@ -186,8 +187,8 @@ Microsurface generate_square_wave(const SquareWaveParams& p) {
 
 Microsurface generate_vgroove(const VGrooveParams& p) {
   if (!(p.facet_angle_deg > 0 && p.facet_angle_deg < 90))
-    throw UsageError("--facet-angle must be in (0, 90) degrees (got " + num(p.facet_angle_deg) + ")");
-  require_positive(p.period, "--period");
+    throw ParameterError("{facet_angle} must be in (0, 90) degrees (got " + num(p.facet_angle_deg) + ")");
+  require_positive(p.period, "{period}");
   const double P = p.period, top = 0.5 * P * std::tan(rad(p.facet_angle_deg));
   Microsurface s;
   if (!p.two_d) {

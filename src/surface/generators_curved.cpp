@@ -10,19 +10,19 @@ namespace {
 using detail::num;
 void require_alpha(double a, const char* option) {
   if (!(a >= 1e-3 && a <= 1e3))
-    throw UsageError(std::string(option) + " must be in [0.001, 1000] (got " + num(a) + ")");
+    throw ParameterError(std::string(option) + " must be in [0.001, 1000] (got " + num(a) + ")");
 }
 }  // namespace
 
 Microsurface generate_ellipsoid(const EllipsoidParams& p) {
-  require_alpha(p.alpha_x, "--alpha-x");
-  require_alpha(p.alpha_y, "--alpha-y");
+  require_alpha(p.alpha_x, "{alpha_x}");
+  require_alpha(p.alpha_y, "{alpha_y}");
   if (p.rings < 2 || p.rings > 4096)
-    throw UsageError("--rings must be in [2, 4096] (got " + std::to_string(p.rings) + ")");
+    throw ParameterError("{rings} must be in [2, 4096] (got " + std::to_string(p.rings) + ")");
   if (p.segments < 8 || p.segments > 16384)
-    throw UsageError("--segments must be in [8, 16384] (got " + std::to_string(p.segments) + ")");
+    throw ParameterError("{segments} must be in [8, 16384] (got " + std::to_string(p.segments) + ")");
   if (2.0 * p.rings * p.segments > 5e7)
-    throw UsageError("--rings x --segments must be at most 2.5e7 (about 5e7 triangles)");
+    throw ParameterError("{rings} x {segments} must be at most 2.5e7 (about 5e7 triangles)");
   // p = A^-1 u for u on a latitude-longitude mesh of the unit upper hemisphere, A = diag(ax, ay,
   // 1): p lies on (ax x)^2 + (ay y)^2 + z^2 = 1 ([TSBlog24], C = 1); facet normals map to A n_u.
   const int R = p.rings, S = p.segments;
@@ -72,11 +72,11 @@ Vec3 vcavity_groove_normal(const Microsurface& s, std::size_t k) { return s.face
 
 Microsurface generate_vcavity(const VCavityParams& p) {
   if (p.ndf != "beckmann" && p.ndf != "ggx")
-    throw UsageError("--ndf must be beckmann or ggx (got '" + p.ndf + "')");
-  require_alpha(p.alpha_x, "--alpha-x");
-  require_alpha(p.alpha_y, "--alpha-y");
+    throw ParameterError("{ndf} must be beckmann or ggx (got '" + literal_text(p.ndf) + "')");
+  require_alpha(p.alpha_x, "{alpha_x}");
+  require_alpha(p.alpha_y, "{alpha_y}");
   if (p.grooves < 1 || p.grooves > 1000000)
-    throw UsageError("--grooves must be in [1, 1000000] (got " + std::to_string(p.grooves) + ")");
+    throw ParameterError("{grooves} must be in [1, 1000000] (got " + std::to_string(p.grooves) + ")");
   const int K = p.grooves;
   const int grid = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(K))));
   const double spacing = 2.0;  // strips of 1 x 1 (diagonal 1.42) never touch

@@ -20,14 +20,14 @@ int guard_cells(double width, double cell) {
 
 void apply_guard_band(Microsurface& s, int gx, int gy, bool periodic, double correlation_length,
                       const std::string& option) {
-  if (s.kind() != Microsurface::Kind::Heightfield) throw UsageError(option + ": needs a heightfield");
+  if (s.kind() != Microsurface::Kind::Heightfield) throw ParameterError(option + ": needs a heightfield");
   const int cx = periodic ? s.nx() : s.nx() - 1, cy = periodic ? s.ny() : s.ny() - 1;
   if (gx < 0 || gy < 0)
-    throw UsageError(option + ": the guard width must be >= 0");
+    throw ParameterError(option + ": the guard width must be >= 0");
   if (2 * gx >= cx || 2 * gy >= cy)
-    throw UsageError(option + ": a guard of " + std::to_string(gx) + " x " + std::to_string(gy) +
-                     " cells leaves no interior in the " + std::to_string(cx) + " x " + std::to_string(cy) +
-                     " cells of the patch (the guard must be narrower than half the patch)");
+    throw ParameterError(option + ": a guard of " + std::to_string(gx) + " x " + std::to_string(gy) +
+                         " cells leaves no interior in the " + std::to_string(cx) + " x " + std::to_string(cy) +
+                         " cells of the patch (the guard must be narrower than half the patch)");
   s.set_sample_region(gx, cx - gx, gy, cy - gy, periodic);
   const Macrosurface& m = s.macro();
   Json g;
@@ -66,7 +66,7 @@ void apply_recorded_guard_band(Microsurface& s) {
   const double w = kDefaultGuardCorrelationLengths * l;
   apply_guard_band(s, guard_cells(w, s.dx()), guard_cells(w, s.dy()), false, l,
                    "the default guard band (" + std::to_string(kDefaultGuardCorrelationLengths) +
-                       " correlation lengths; re-import with generate heightmap --guard)");
+                       " correlation lengths; re-import with generate heightmap {guard})");
 }
 
 }  // namespace microsim

@@ -173,11 +173,11 @@ std::string num(double x) {
 }  // namespace
 
 RawHeightGrid read_height_grid(const std::string& path, const std::string& channel) {
-  require_regular_input(path, "--input");
+  require_regular_input(path, "{input}");
   std::ifstream probe(path);
-  if (!probe) throw UsageError("--input " + path + ": cannot open");
+  if (!probe) throw ParameterError("{input} " + literal_text(path) + ": cannot open");
   if (is_text_extension(extension_of(path))) {
-    if (!channel.empty()) throw UsageError("--channel: " + path + " is a text grid, not an image");
+    if (!channel.empty()) throw ParameterError("{channel}: " + literal_text(path) + " is a text grid, not an image");
     return read_text(path);
   }
   return read_image(path, channel);
@@ -188,7 +188,7 @@ Detrend parse_detrend(const std::string& name) {
   if (name == "mean") return Detrend::Mean;
   if (name == "plane") return Detrend::Plane;
   if (name == "poly2") return Detrend::Poly2;
-  throw UsageError("--detrend " + name + ": expected none, mean, plane or poly2");
+  throw ParameterError("{detrend} " + literal_text(name) + ": expected none, mean, plane or poly2");
 }
 
 std::string to_string(Detrend d) {
@@ -226,12 +226,12 @@ std::vector<double> detrend(std::vector<double>& z, int nx, int ny, double dx, d
       ++n;
     }
   if (n < static_cast<std::size_t>(terms) * 2)
-    throw UsageError("--detrend " + to_string(d) + ": too few heights (" + std::to_string(n) + ") to fit");
+    throw ParameterError("{detrend} " + to_string(d) + ": too few heights (" + std::to_string(n) + ") to fit");
   // The normal equations of centred coordinates, solved by LDLT: exact to rounding for these few,
   // well-scaled terms (tested to 1e-12); a rank-deficient fit (a single row or column) is refused.
   Eigen::LDLT<Eigen::MatrixXd> ldlt(ata);
   if (ldlt.info() != Eigen::Success || ldlt.rcond() < 1e-13)
-    throw UsageError("--detrend " + to_string(d) + ": the grid is too narrow to fit it");
+    throw ParameterError("{detrend} " + to_string(d) + ": the grid is too narrow to fit it");
   Eigen::VectorXd c = ldlt.solve(atz);
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i) {
@@ -328,8 +328,8 @@ void record_guard_band(Microsurface& s, const HeightmapImportParams& p) {
   const double l = patch_correlation_length(s);
   const double k = p.guard_correlation_lengths >= 0 ? p.guard_correlation_lengths : kDefaultGuardCorrelationLengths;
   const double w = p.guard_width >= 0 ? p.guard_width : k * l;
-  const std::string option = p.guard_width >= 0 ? "--guard-width " + num(p.guard_width)
-                                                : "--guard " + num(k) + " (correlation lengths, l = " + num(l) + ")";
+  const std::string option = p.guard_width >= 0 ? "{guard_width} " + num(p.guard_width)
+                                                : "{guard} " + num(k) + " (correlation lengths, l = " + num(l) + ")";
   Microsurface region = s;
   try {
     apply_guard_band(region, guard_cells(w, s.dx()), guard_cells(w, s.dy()), false, l, option);
@@ -361,44 +361,51 @@ void record_discretization(Microsurface& s, bool periodic) {
   }
   add_discretization(s.description, std::max(s.dx(), s.dy()), extent, a.sal / k, a.longest / k);
 }
-}  // namespace
 
-Microsurface import_heightmap(const HeightmapImportParams& p) {
-  const std::string& path = p.input;
+// The parameters checked, in the order the import has always checked them; returns the factor
+// from file values times height_scale (in height_unit) to the surface's length unit.
+double checked_unit_factor(const HeightmapImportParams& p) {
   if (p.pixel_size_x != 0 && !finite_positive(p.pixel_size_x))
-    throw UsageError("--pixel-size " + num(p.pixel_size_x) + ": must be a finite number > 0");
+    throw ParameterError("{pixel_size} " + num(p.pixel_size_x) + ": must be a finite number > 0");
   if (p.pixel_size_y != 0 && !finite_positive(p.pixel_size_y))
-    throw UsageError("--pixel-size-y " + num(p.pixel_size_y) + ": must be a finite number > 0");
+    throw ParameterError("{pixel_size_y} " + num(p.pixel_size_y) + ": must be a finite number > 0");
   if (!std::isfinite(p.height_scale) || p.height_scale == 0)
-    throw UsageError("--height-scale " + num(p.height_scale) + ": must be a finite nonzero number");
+    throw ParameterError("{height_scale} " + num(p.height_scale) + ": must be a finite nonzero number");
   if (!(p.max_missing_fraction >= 0 && p.max_missing_fraction < 1))
-    throw UsageError("--max-missing " + num(p.max_missing_fraction) + ": must be in [0, 1)");
+    throw ParameterError("{max_missing} " + num(p.max_missing_fraction) + ": must be in [0, 1)");
   if (p.has_nodata && !std::isfinite(p.nodata))
-    throw UsageError("--nodata " + num(p.nodata) + ": must be a finite number (NaN is always missing)");
+    throw ParameterError("{nodata} " + num(p.nodata) + ": must be a finite number (NaN is always missing)");
   const double lu = length_unit_in_metres(p.length_unit), hu = length_unit_in_metres(p.height_unit);
-  if (lu < 0) throw UsageError("--length-unit " + p.length_unit + ": expected m, mm, um, nm or pm");
-  if (hu < 0) throw UsageError("--height-unit " + p.height_unit + ": expected m, mm, um, nm or pm");
+  if (lu < 0) throw ParameterError("{length_unit} " + literal_text(p.length_unit) + ": expected m, mm, um, nm or pm");
+  if (hu < 0) throw ParameterError("{height_unit} " + literal_text(p.height_unit) + ": expected m, mm, um, nm or pm");
   if ((lu == 0) != (hu == 0) && !p.height_unit.empty() && p.length_unit.empty())
-    throw UsageError("--height-unit " + p.height_unit + " needs --length-unit (the unit of --pixel-size)");
+    throw ParameterError("{height_unit} " + literal_text(p.height_unit) + " needs {length_unit} (the unit of {pixel_size})");
   // File value * scale is in height_unit; the surface keeps one length unit for x, y and z.
-  const double unit_factor = (lu > 0 && hu > 0) ? hu / lu : 1.0;
+  return (lu > 0 && hu > 0) ? hu / lu : 1.0;
+}
 
-  RawHeightGrid g = read_height_grid(path, p.channel);
+// Grid spacings: the options, else the file's x,y columns; dy defaults to dx.
+std::pair<double, double> pixel_sizes(const HeightmapImportParams& p, const RawHeightGrid& g) {
   double dx = p.pixel_size_x, dy = p.pixel_size_y;
   if (dx == 0) {
-    if (g.dx <= 0) throw UsageError("--pixel-size is required for " + path + " (a " + g.format + " has no x,y columns)");
+    if (g.dx <= 0) throw ParameterError("{pixel_size} is required for " + literal_text(p.input) + " (a " + g.format + " has no x,y columns)");
     dx = g.dx;
     if (dy == 0) dy = g.dy;
   }
   if (dy == 0) dy = dx;
+  return {dx, dy};
+}
 
+// The crop's window of the grid (when asked), then at least 2 x 2 heights.
+void crop_grid(RawHeightGrid& g, const HeightmapImportParams& p) {
+  const std::string& path = p.input;
   if (p.crop) {
     if (p.crop_w < 2 || p.crop_h < 2 || p.crop_x0 < 0 || p.crop_y0 < 0 || p.crop_x0 + p.crop_w > g.nx ||
         p.crop_y0 + p.crop_h > g.ny)
-      throw UsageError("--crop " + std::to_string(p.crop_x0) + "," + std::to_string(p.crop_y0) + "," +
-                       std::to_string(p.crop_w) + "," + std::to_string(p.crop_h) + ": outside the " +
-                       std::to_string(g.nx) + " x " + std::to_string(g.ny) + " grid of " + path +
-                       " (or smaller than 2 x 2)");
+      throw ParameterError("{crop} " + std::to_string(p.crop_x0) + "," + std::to_string(p.crop_y0) + "," +
+                           std::to_string(p.crop_w) + "," + std::to_string(p.crop_h) + ": outside the " +
+                           std::to_string(g.nx) + " x " + std::to_string(g.ny) + " grid of " + literal_text(path) +
+                           " (or smaller than 2 x 2)");
     std::vector<double> c;
     c.reserve(static_cast<std::size_t>(p.crop_w) * p.crop_h);
     for (int j = p.crop_y0; j < p.crop_y0 + p.crop_h; ++j)
@@ -410,7 +417,15 @@ Microsurface import_heightmap(const HeightmapImportParams& p) {
   if (g.nx < 2 || g.ny < 2)
     throw UsageError(path + ": a " + std::to_string(g.nx) + " x " + std::to_string(g.ny) +
                      " grid; a heightmap needs at least 2 x 2 heights");
+}
 
+// Missing heights (NaN, nodata) as NaN, the others scaled to the surface's unit; refused when
+// too many are missing or the rest is constant. Returns the fraction missing and the range.
+struct ScaledHeights {
+  double missing_fraction, lo, hi;
+};
+ScaledHeights scale_heights(RawHeightGrid& g, const HeightmapImportParams& p, double unit_factor) {
+  const std::string& path = p.input;
   std::size_t missing = 0;
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (std::size_t k = 0; k < g.z.size(); ++k) {
@@ -426,20 +441,25 @@ Microsurface import_heightmap(const HeightmapImportParams& p) {
     const double raw = v;
     v *= p.height_scale * unit_factor;
     if (!std::isfinite(v))
-      throw UsageError(path + ": height " + num(raw) + " at column " + std::to_string(k % g.nx) + ", row " +
-                       std::to_string(k / g.nx) + (std::isfinite(raw) ? " times --height-scale" : "") +
-                       " is not a finite number (missing heights are NaN or --nodata)");
+      throw ParameterError(literal_text(path) + ": height " + num(raw) + " at column " + std::to_string(k % g.nx) + ", row " +
+                           std::to_string(k / g.nx) + (std::isfinite(raw) ? " times {height_scale}" : "") +
+                           " is not a finite number (missing heights are NaN or {nodata})");
     lo = std::min(lo, v);
     hi = std::max(hi, v);
   }
   const double fraction = static_cast<double>(missing) / g.z.size();
-  if (missing == g.z.size()) throw UsageError(path + ": every height is missing (NaN or --nodata)");
+  if (missing == g.z.size()) throw ParameterError(literal_text(path) + ": every height is missing (NaN or {nodata})");
   if (fraction > p.max_missing_fraction)
-    throw UsageError(path + ": " + std::to_string(missing) + " of " + std::to_string(g.z.size()) +
-                     " heights missing (" + num(100 * fraction) + "%), above --max-missing " +
-                     num(p.max_missing_fraction) + "; crop to the measured region or raise --max-missing");
+    throw ParameterError(literal_text(path) + ": " + std::to_string(missing) + " of " + std::to_string(g.z.size()) +
+                         " heights missing (" + num(100 * fraction) + "%), above {max_missing} " +
+                         num(p.max_missing_fraction) + "; crop to the measured region or raise {max_missing}");
   if (!(hi > lo)) throw UsageError(path + ": constant heights (" + num(lo) + "): a plane, nothing to measure");
+  return {fraction, lo, hi};
+}
 
+// The detrend's coefficients; refused when it leaves nothing (the map is that form exactly).
+std::vector<double> detrended(RawHeightGrid& g, const HeightmapImportParams& p, double dx, double dy,
+                              const ScaledHeights& before) {
   const std::vector<double> coef = detrend(g.z, g.nx, g.ny, dx, dy, p.detrend);
   double lo2 = std::numeric_limits<double>::infinity(), hi2 = -lo2;
   for (double v : g.z)
@@ -447,9 +467,33 @@ Microsurface import_heightmap(const HeightmapImportParams& p) {
       lo2 = std::min(lo2, v);
       hi2 = std::max(hi2, v);
     }
-  if (!(hi2 - lo2 > 1e-6 * (hi - lo)))
-    throw UsageError(path + ": nothing left after --detrend " + to_string(p.detrend) +
-                     " (the map is that form exactly)");
+  if (!(hi2 - lo2 > 1e-6 * (before.hi - before.lo)))
+    throw ParameterError(literal_text(p.input) + ": nothing left after {detrend} " + to_string(p.detrend) +
+                         " (the map is that form exactly)");
+  return coef;
+}
+
+// Data that is not periodic gets a cliff where the tile wraps: the RMS slopes with and without
+// the wrap-around cells (equal for a truly periodic map, up to 1/n noise).
+Json seam_check(const Microsurface& s) {
+  HeightGridView v = grid_view(s);
+  v.periodic = false;
+  const SlopeStats inner = slope_stats(v, 2);
+  v.periodic = true;
+  const SlopeStats all = slope_stats(v, 2);
+  return {{"slope_rms_x_tile", all.rms_x}, {"slope_rms_y_tile", all.rms_y},
+          {"slope_rms_x_without_wrap", inner.rms_x}, {"slope_rms_y_without_wrap", inner.rms_y}};
+}
+}  // namespace
+
+Microsurface import_heightmap(const HeightmapImportParams& p) {
+  const std::string& path = p.input;
+  const double unit_factor = checked_unit_factor(p);
+  RawHeightGrid g = read_height_grid(path, p.channel);
+  const auto [dx, dy] = pixel_sizes(p, g);
+  crop_grid(g, p);
+  const ScaledHeights scaled = scale_heights(g, p, unit_factor);
+  const std::vector<double> coef = detrended(g, p, dx, dy, scaled);
   const std::size_t filled = fill_missing(g.z, g.nx, g.ny, p.periodic);
 
   std::vector<float> heights(g.z.begin(), g.z.end());
@@ -471,26 +515,15 @@ Microsurface import_heightmap(const HeightmapImportParams& p) {
   if (p.crop) d["crop"] = {p.crop_x0, p.crop_y0, p.crop_w, p.crop_h};
   if (p.has_nodata) d["nodata"] = p.nodata;
   d["missing_filled"] = filled;
-  d["missing_fraction"] = fraction;
+  d["missing_fraction"] = scaled.missing_fraction;
   d["fill_rule"] = "harmonic: each missing height is the mean of its 4 neighbours (discrete Laplace equation)";
   d["detrend"] = to_string(p.detrend);
   d["detrend_coefficients"] = coef;
   d["detrend_basis"] = "1, x, y, x^2, x y, y^2 with x = i pixel_size_x, y = j pixel_size_y (first terms)";
-  if (p.periodic) {
-    // Data that is not periodic gets a cliff where the tile wraps: compare the RMS slopes with
-    // and without the wrap-around cells (equal for a truly periodic map, up to 1/n noise).
-    HeightGridView v = grid_view(s);
-    v.periodic = false;
-    const SlopeStats inner = slope_stats(v, 2);
-    v.periodic = true;
-    const SlopeStats all = slope_stats(v, 2);
-    d["seam_check"] = {{"slope_rms_x_tile", all.rms_x}, {"slope_rms_y_tile", all.rms_y},
-                       {"slope_rms_x_without_wrap", inner.rms_x}, {"slope_rms_y_without_wrap", inner.rms_y}};
-  }
+  if (p.periodic) d["seam_check"] = seam_check(s);
   s.description = d;
   if (!p.periodic) record_guard_band(s, p);
   record_discretization(s, p.periodic);
   return s;
 }
-
 }  // namespace microsim

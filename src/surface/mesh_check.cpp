@@ -272,12 +272,12 @@ void read_mesh_file(const std::string& path, std::vector<Eigen::Vector3f>& verts
 }
 
 Microsurface import_mesh(const MeshImportParams& p) {
-  require_regular_input(p.input, "--input");
+  require_regular_input(p.input, "{input}");
   if (!p.normal.allFinite() || !(p.normal.norm() > 0))
-    throw UsageError("--normal must be a nonzero vector x,y,z");
-  if (p.area < 0 || !std::isfinite(p.area)) throw UsageError("--area must be > 0");
+    throw ParameterError("{normal} must be a nonzero vector x,y,z");
+  if (p.area < 0 || !std::isfinite(p.area)) throw ParameterError("{area} must be > 0");
   if (p.periodic && !(p.tile_x > 0 && p.tile_y > 0 && std::isfinite(p.tile_x) && std::isfinite(p.tile_y)))
-    throw UsageError("--periodic needs --tile-x and --tile-y > 0");
+    throw ParameterError("{periodic} needs {tile_x} and {tile_y} > 0");
   std::vector<Eigen::Vector3f> verts;
   std::vector<std::array<std::uint32_t, 3>> tris;
   read_mesh_file(p.input, verts, tris);
@@ -322,8 +322,8 @@ Microsurface import_mesh(const MeshImportParams& p) {
     // [GeomBSDF24, eq. 1c]: A = sum_f A_f (n.m_f); eq. 1b then checks the tangential part.
     const double a = facet_sums(s).sum_area_cos;
     if (!(a > 0))
-      throw UsageError(p.input + ": the signed projected area along --normal is not positive "
-                       "(inside-out mesh or wrong --normal)");
+      throw ParameterError(literal_text(p.input) + ": the signed projected area along {normal} is not positive "
+                           "(inside-out mesh or wrong {normal})");
     m.area = a;
     s = Microsurface::mesh(s.vertices(), s.triangles(), m);
   }

@@ -21,7 +21,7 @@ namespace {
 constexpr double kBytesPerVertex = 120, kBytesPerFace = 160;
 
 long long count_field(const std::string& token, const std::string& path, const std::string& field) {
-  return parse_integer_in(token, 0, 4000000000LL, path + ": header field '" + field + "'");
+  return parse_integer_in(token, 0, 4000000000LL, literal_text(path) + ": header field '" + field + "'");
 }
 
 void check_counts(long long nv, long long nf, double min_vertex_bytes, double min_face_bytes,
@@ -33,7 +33,7 @@ void check_counts(long long nv, long long nf, double min_vertex_bytes, double mi
        << " faces, more than its " << static_cast<long long>(file_bytes) << " bytes can hold";
     throw UsageError(os.str());
   }
-  require_memory(nv * kBytesPerVertex + nf * kBytesPerFace, path + " (" + std::to_string(nv) +
+  require_memory(nv * kBytesPerVertex + nf * kBytesPerFace, literal_text(path) + " (" + std::to_string(nv) +
                                                                 " vertices, " + std::to_string(nf) + " faces)");
 }
 

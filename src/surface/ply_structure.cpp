@@ -12,7 +12,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -149,28 +151,63 @@ class Body {
   bool binary_, big_;
 };
 
-}  // namespace
+// What a malformed file is told: "PATH: malformed PLY file (WHY)".
+using Malformed = std::function<void(const std::string& why)>;
 
-void check_ply_structure(const std::string& path) {
-  const auto malformed = [&](const std::string& why) {
-    throw UsageError(path + ": malformed PLY file (" + why + ")");
-  };
-  // The header, read with the reader's own stream operations (its binary data starts 12 or 14
-  // bytes after the position before "end_header" was extracted).
-  std::ifstream in(path, std::ios::binary);
-  std::string line, word, format;
+struct PlyHeader {
+  std::string format;
+  std::vector<Element> elements;
+  std::streamoff before_end = 0;  // the position before "end_header" was extracted
+};
+
+// One "property" line of the header, after the word "property"; false when the reader refuses
+// it (a list count type it does not read).
+bool read_property(std::istream& in, std::vector<Element>& elements, bool binary, const Malformed& malformed) {
+  if (elements.empty()) malformed("a property before any element");
+  Property p;
+  std::string a, b;
+  in >> a;
+  if (a == "list") {
+    in >> a >> b >> p.name;
+    p.list = true;
+    p.count = type_of(a);
+    p.value = type_of(b);
+    if (a != "uchar" && a != "uint8" && a != "uint16" && a != "int") return false;  // the reader refuses it
+  } else {
+    in >> b;
+    p.value = type_of(a).bytes ? type_of(a) : type_of(b);
+    p.name = type_of(a).bytes ? b : a;
+  }
+  Element& e = elements.back();
+  if (p.list && !(e.name == "face" && (p.name == "vertex_indices" || p.name == "vertex_index")))
+    malformed("list property '" + p.name + "' of element " + e.name +
+              ": the only list read is the faces' vertex_indices");
+  if (p.list && !e.props.empty())
+    malformed("vertex_indices must be the first property of element face");
+  if (p.value.bytes == 0 || type_of(p.name).bytes)
+    malformed("property '" + p.name + "' of element " + e.name + ": one known type and a name");
+  check_reader_type(e.name, p, binary, malformed);
+  if (p.list && p.value.kind != Kind::Int) malformed("vertex_indices must hold integers");
+  e.props.push_back(p);
+  return true;
+}
+
+// The header, read with the reader's own stream operations; nothing where the reader refuses
+// the file itself (not "ply", an unknown format, a list it does not read).
+std::optional<PlyHeader> read_ply_header(std::istream& in, const Malformed& malformed) {
+  PlyHeader h;
+  std::string line, word;
   std::getline(in, line);
   while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back()))) line.pop_back();
   while (!line.empty() && std::isspace(static_cast<unsigned char>(line.front()))) line.erase(0, 1);
-  if (line != "ply" && line != "PLY") return;  // the reader refuses it
+  if (line != "ply" && line != "PLY") return std::nullopt;  // the reader refuses it
   std::string version;
-  if (!(in >> word >> format >> version) || !ascii_value_ok(version, type_of("float"), nullptr))
+  if (!(in >> word >> h.format >> version) || !ascii_value_ok(version, type_of("float"), nullptr))
     malformed("the second line must be 'format ascii|binary_little_endian|binary_big_endian 1.0'");
-  const bool binary = format != "ascii";
-  if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
-    return;  // the reader refuses it
-  std::vector<Element> elements;
-  std::streamoff before_end = in.tellg();
+  const bool binary = h.format != "ascii";
+  if (h.format != "ascii" && h.format != "binary_little_endian" && h.format != "binary_big_endian")
+    return std::nullopt;  // the reader refuses it
+  h.before_end = in.tellg();
   for (int tokens = 0; in >> word && word != "end_header"; ++tokens) {
     if (tokens > 100000) malformed("no end_header");
     if (word == "comment") {
@@ -182,42 +219,21 @@ void check_ply_structure(const std::string& path) {
       if (count.empty() || count.size() > 10 || count.find_first_not_of("0123456789") != std::string::npos)
         malformed("element " + e.name + " needs a count");
       e.count = std::stoll(count);
-      for (const Element& seen : elements)
+      for (const Element& seen : h.elements)
         if (seen.name == e.name) malformed("element " + e.name + " declared twice");
-      elements.push_back(e);
+      h.elements.push_back(e);
     } else if (word == "property") {
-      if (elements.empty()) malformed("a property before any element");
-      Property p;
-      std::string a, b;
-      in >> a;
-      if (a == "list") {
-        in >> a >> b >> p.name;
-        p.list = true;
-        p.count = type_of(a);
-        p.value = type_of(b);
-        if (a != "uchar" && a != "uint8" && a != "uint16" && a != "int") return;  // the reader refuses it
-      } else {
-        in >> b;
-        p.value = type_of(a).bytes ? type_of(a) : type_of(b);
-        p.name = type_of(a).bytes ? b : a;
-      }
-      Element& e = elements.back();
-      if (p.list && !(e.name == "face" && (p.name == "vertex_indices" || p.name == "vertex_index")))
-        malformed("list property '" + p.name + "' of element " + e.name +
-                  ": the only list read is the faces' vertex_indices");
-      if (p.list && !e.props.empty())
-        malformed("vertex_indices must be the first property of element face");
-      if (p.value.bytes == 0 || type_of(p.name).bytes)
-        malformed("property '" + p.name + "' of element " + e.name + ": one known type and a name");
-      check_reader_type(e.name, p, binary, malformed);
-      if (p.list && p.value.kind != Kind::Int) malformed("vertex_indices must hold integers");
-      e.props.push_back(p);
+      if (!read_property(in, h.elements, binary, malformed)) return std::nullopt;
     }
-    before_end = in.tellg();
+    h.before_end = in.tellg();
   }
   if (word != "end_header") malformed("no end_header");
-  // Each value takes at least one byte: this bounds every loop below (and the reader's) by the
-  // file's length.
+  return h;
+}
+
+// Each value takes at least one byte: this bounds every loop of the body (and the reader's) by
+// the file's length. Leaves `in` at the end of the header.
+void check_counts_fit(std::istream& in, const std::vector<Element>& elements, const Malformed& malformed) {
   in.clear();
   const std::streamoff header_end = in.tellg();
   in.seekg(0, std::ios::end);
@@ -227,18 +243,14 @@ void check_ply_structure(const std::string& path) {
     if (e.count > 0 && (e.props.empty() || double(e.count) * double(e.props.size()) > data_bytes))
       malformed("element " + e.name + " declares " + std::to_string(e.count) + " items of " +
                 std::to_string(e.props.size()) + " properties, more than the file holds");
+}
+
+// Every value up to the faces (the reader stops after them): readable, and each face 3 to nv
+// existing vertices.
+void check_ply_body(Body& body, const std::vector<Element>& elements, const Malformed& malformed) {
   long long nv = 0;
   for (const Element& e : elements)
     if (e.name == "vertex") nv = e.count;
-  if (binary) {
-    in.clear();
-    in.seekg(before_end);
-    char c1 = 0, c2 = 0;
-    in.get(c1);
-    in.get(c2);
-    in.seekg(before_end + ((c1 == '\r' && c2 == '\n') ? 14 : 12));
-  }
-  Body body(in, path, binary, format == "binary_big_endian");
   for (const Element& e : elements) {
     for (long long i = 0; i < e.count; ++i) {
       for (const Property& p : e.props) {
@@ -263,4 +275,28 @@ void check_ply_structure(const std::string& path) {
   }
 }
 
+}  // namespace
+
+void check_ply_structure(const std::string& path) {
+  const Malformed malformed = [&](const std::string& why) {
+    throw UsageError(path + ": malformed PLY file (" + why + ")");
+  };
+  std::ifstream in(path, std::ios::binary);
+  const std::optional<PlyHeader> h = read_ply_header(in, malformed);
+  if (!h) return;  // the reader refuses it
+  const bool binary = h->format != "ascii";
+  check_counts_fit(in, h->elements, malformed);
+  if (binary) {
+    // The reader's binary data starts 12 or 14 bytes after the position before "end_header"
+    // was extracted.
+    in.clear();
+    in.seekg(h->before_end);
+    char c1 = 0, c2 = 0;
+    in.get(c1);
+    in.get(c2);
+    in.seekg(h->before_end + ((c1 == '\r' && c2 == '\n') ? 14 : 12));
+  }
+  Body body(in, path, binary, h->format == "binary_big_endian");
+  check_ply_body(body, h->elements, malformed);
+}
 }  // namespace microsim

@@ -44,7 +44,7 @@ Macrosurface macro_from_json(const Json& j, const std::string& file) {
   const auto number = [&](const Json& x, const std::string& key, const Range& r) {
     if (!x.is_number()) throw UsageError(file + ": macrosurface field '" + key + "' must be a number");
     const double v = x.get<double>();
-    require_in_range(v, r, file + ": macrosurface field '" + key + "'");
+    require_in_range(v, r, literal_text(file) + ": macrosurface field '" + key + "'");
     return v;
   };
   if (!j.is_object()) throw UsageError(file + ": the macrosurface must be a JSON object");
@@ -73,7 +73,7 @@ void restore_nominal(Microsurface& s, const std::string& file) {
     if (!d.contains(key)) continue;
     if (!d[key].is_number())
       throw UsageError(file + ": description field '" + key + "' must be a number in (0, 1000]");
-    require_in_range(d[key].get<double>(), open_closed(0, 1000), file + ": description field '" + key + "'");
+    require_in_range(d[key].get<double>(), open_closed(0, 1000), literal_text(file) + ": description field '" + key + "'");
   }
   if (!d.contains("nominal_ndf") || !d.contains("alpha_x") || !d.contains("alpha_y")) return;
   if (!d["nominal_ndf"].is_string() ||
@@ -138,10 +138,10 @@ Microsurface load_heightfield_exr(const std::string& path, bool allow_window) {
     require_memory(window_metrology ? std::max(heightfield_bytes(h.width, h.height),
                                                metrology_bytes(h.width, h.height, /*periodic=*/false))
                                     : heightfield_bytes(h.width, h.height),
-                   path + " (" + std::to_string(h.width) + " x " + std::to_string(h.height) +
+                   literal_text(path) + " (" + std::to_string(h.width) + " x " + std::to_string(h.height) +
                        (window_metrology ? " heightfield, a non-periodic window" : " heightfield") + ")");
-    require_in_range(m.size_x, closed(1e-6, 1e6), path + ": macrosurface field 'size_x'");
-    require_in_range(m.size_y, closed(1e-6, 1e6), path + ": macrosurface field 'size_y'");
+    require_in_range(m.size_x, closed(1e-6, 1e6), literal_text(path) + ": macrosurface field 'size_x'");
+    require_in_range(m.size_y, closed(1e-6, 1e6), literal_text(path) + ": macrosurface field 'size_y'");
     // A window is loaded as a grid like a tile; for the estimators it is then made a window
     // measured inside its guard band (surface/guard_band.hpp); metrology reads the grid.
   });
@@ -221,8 +221,8 @@ Microsurface load_mesh(const std::string& path) {
   if (!has_sidecar) {
     macro.area = facet_sums(s).sum_area_cos;
     if (!(macro.area > 0))
-      throw UsageError(path + ": no macrosurface sidecar (" + side + ") and no positive signed "
-                       "projected area along +z; declare one with microsim generate mesh --input");
+      throw ParameterError(literal_text(path) + ": no macrosurface sidecar (" + literal_text(side) + ") and no positive signed "
+                           "projected area along +z; declare one with microsim generate mesh {input}");
     s = Microsurface::mesh(s.vertices(), s.triangles(), macro);
     s.description = description;
   }
@@ -230,8 +230,8 @@ Microsurface load_mesh(const std::string& path) {
     check_mesh(s, path);
   } catch (const UsageError& e) {
     if (has_sidecar) throw;
-    throw UsageError(std::string(e.what()) + " (no sidecar " + side +
-                     ": declare the macrosurface with microsim generate mesh --input)");
+    throw ParameterError(message_template(e) + " (no sidecar " + literal_text(side) +
+                         ": declare the macrosurface with microsim generate mesh {input})");
   }
   restore_nominal(s, side);
   return s;
@@ -265,12 +265,12 @@ void save_surface(const Microsurface& s, const std::string& path) {
   std::string ext = extension_of(path);
   if (ext == "exr") {
     if (s.kind() != Microsurface::Kind::Heightfield)
-      throw UsageError("-o " + path + ": only heightfields can be saved as EXR; use .ply/.obj");
+      throw ParameterError("{output} " + literal_text(path) + ": only heightfields can be saved as EXR; use .ply/.obj");
     save_heightfield_exr(s, path);
   } else if (ext == "ply" || ext == "obj" || ext == "off") {
     save_mesh(s, path);
   } else {
-    throw UsageError("-o " + path + ": unknown surface format (use .exr, .ply, .obj or .off)");
+    throw ParameterError("{output} " + literal_text(path) + ": unknown surface format (use .exr, .ply, .obj or .off)");
   }
 }
 

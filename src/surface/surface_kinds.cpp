@@ -34,10 +34,10 @@ struct Given {
     if (has(n)) x = static_cast<double>(std::strtold(text(n).c_str(), nullptr));
   }
   void set(const char* n, int& x) const {
-    if (has(n)) x = static_cast<int>(parse_integer_in(text(n), -2147483647LL, 2147483647LL, n));
+    if (has(n)) x = static_cast<int>(parse_integer_in(text(n), -2147483647LL, 2147483647LL, surface_option_placeholder(n)));
   }
   void set(const char* n, std::uint64_t& x) const {
-    if (has(n)) x = parse_seed(text(n), n);
+    if (has(n)) x = parse_seed(text(n), surface_option_placeholder(n));
   }
   void set(const char* n, bool& x) const {
     if (has(n)) x = text(n) == "true";
@@ -50,16 +50,16 @@ struct Given {
 void require_mesh_extension(const std::string& path) {
   require_surface_extension(path);
   if (extension_of(path) == "exr")
-    throw UsageError("-o " + path + ": this surface is a mesh; use .ply, .obj or .off");
+    throw ParameterError("{output} " + literal_text(path) + ": this surface is a mesh; use .ply, .obj or .off");
 }
 
-// --alpha shorthand or --alpha-x/--alpha-y (one axis given: isotropic).
+// The alpha shorthand or alpha-x/alpha-y (one axis given: isotropic).
 void resolve_alpha(const Given& v, double& ax, double& ay) {
   v.set("alpha-x", ax);
   v.set("alpha-y", ay);
   const bool x_given = v.has("alpha-x"), y_given = v.has("alpha-y");
   if (v.has("alpha")) {
-    if (x_given || y_given) throw UsageError("--alpha cannot be combined with --alpha-x/--alpha-y");
+    if (x_given || y_given) throw ParameterError("{alpha} cannot be combined with {alpha_x}/{alpha_y}");
     double alpha = 0;
     v.set("alpha", alpha);
     ax = ay = alpha;
@@ -68,8 +68,9 @@ void resolve_alpha(const Given& v, double& ax, double& ay) {
   }
 }
 
+// `option`: the parameter as a ParameterError names it ("{matrix}").
 std::vector<double> parse_numbers(const std::string& text, const std::string& option, std::size_t count) {
-  const UsageError bad(option + " '" + text + "': expected " + std::to_string(count) + " comma-separated numbers");
+  const ParameterError bad(option + " '" + literal_text(text) + "': expected " + std::to_string(count) + " comma-separated numbers");
   std::vector<double> out;
   for (const std::string& item : split_items(text, ',', option)) {
     try {
@@ -87,7 +88,7 @@ std::vector<double> parse_numbers(const std::string& text, const std::string& op
 
 std::vector<int> parse_crop(const std::string& text) {
   std::vector<int> out;
-  for (const std::string& item : split_items(text, ',', "--crop")) {
+  for (const std::string& item : split_items(text, ',', "{crop}")) {
     try {
       std::size_t used = 0;
       long v = std::stol(item, &used);
@@ -99,15 +100,16 @@ std::vector<int> parse_crop(const std::string& text) {
     }
   }
   if (out.size() != 4)
-    throw UsageError("--crop '" + text + "': expected x0,y0,w,h (four non-negative pixel counts)");
+    throw ParameterError("{crop} '" + literal_text(text) + "': expected x0,y0,w,h (four non-negative pixel counts)");
   return out;
 }
 
+// `option`: the parameter as a ParameterError names it ("{pixel_size}").
 void require_finite_positive(double v, const char* option) {
   if (!(std::isfinite(v) && v > 0)) {
     std::ostringstream s;
     s << option << " " << v << ": must be a finite number > 0";
-    throw UsageError(s.str());
+    throw ParameterError(s.str());
   }
 }
 
@@ -184,8 +186,8 @@ Build parallelepiped(const Given& v, const std::string& out) {
   if (!out.empty()) require_mesh_extension(out);
   if (v.has("matrix") && !v.text("matrix").empty()) {
     if (v.has("shear-x") || v.has("shear-y"))
-      throw UsageError("--matrix cannot be combined with --shear-x/--shear-y");
-    auto m = parse_numbers(v.text("matrix"), "--matrix", 9);
+      throw ParameterError("{matrix} cannot be combined with {shear_x}/{shear_y}");
+    auto m = parse_numbers(v.text("matrix"), "{matrix}", 9);
     std::copy(m.begin(), m.end(), p.matrix);
   } else {
     double shear_x = 0.5, shear_y = 0.0;
@@ -228,11 +230,11 @@ Build mesh(const Given& v, const std::string& out) {
   v.set("periodic", p.periodic);
   v.set("tile-x", p.tile_x);
   v.set("tile-y", p.tile_y);
-  if (!v.has("input")) throw UsageError("--input is required");
+  if (!v.has("input")) throw ParameterError("{input} is required");
   if (!out.empty()) require_mesh_extension(out);
-  auto n = parse_numbers(normal, "--normal", 3);
+  auto n = parse_numbers(normal, "{normal}", 3);
   p.normal = Vec3(n[0], n[1], n[2]);
-  if (!p.periodic && (v.has("tile-x") || v.has("tile-y"))) throw UsageError("--tile-x/--tile-y need --periodic");
+  if (!p.periodic && (v.has("tile-x") || v.has("tile-y"))) throw ParameterError("{tile_x}/{tile_y} need {periodic}");
   return [p] { return import_mesh(p); };
 }
 
@@ -254,20 +256,20 @@ Build heightmap(const Given& v, const std::string& out) {
   v.set("detrend", detrend);
   v.set("nodata", p.nodata);
   v.set("max-missing", p.max_missing_fraction);
-  if (!v.has("input")) throw UsageError("--input is required");
-  if (!out.empty() && extension_of(out) != "exr") throw UsageError("-o " + out + ": a heightmap is saved as .exr");
-  if (p.periodic && window) throw UsageError("--periodic and --window exclude each other");
-  if (v.has("pixel-size")) require_finite_positive(p.pixel_size_x, "--pixel-size");
-  if (v.has("pixel-size-y")) require_finite_positive(p.pixel_size_y, "--pixel-size-y");
+  if (!v.has("input")) throw ParameterError("{input} is required");
+  if (!out.empty() && extension_of(out) != "exr") throw ParameterError("{output} " + literal_text(out) + ": a heightmap is saved as .exr");
+  if (p.periodic && window) throw ParameterError("{periodic} and {window} exclude each other");
+  if (v.has("pixel-size")) require_finite_positive(p.pixel_size_x, "{pixel_size}");
+  if (v.has("pixel-size-y")) require_finite_positive(p.pixel_size_y, "{pixel_size_y}");
   if (v.has("max-missing") && !(p.max_missing_fraction >= 0 && p.max_missing_fraction < 1))
-    throw UsageError("--max-missing: must be in [0, 1)");
+    throw ParameterError("{max_missing}: must be in [0, 1)");
   if ((v.has("guard") || v.has("guard-width")) && p.periodic)
-    throw UsageError("--guard/--guard-width: a periodic tile has no guard band (a window option)");
-  if (v.has("guard") && v.has("guard-width")) throw UsageError("--guard and --guard-width exclude each other");
+    throw ParameterError("{guard}/{guard_width}: a periodic tile has no guard band (a window option)");
+  if (v.has("guard") && v.has("guard-width")) throw ParameterError("{guard} and {guard_width} exclude each other");
   if (v.has("guard") && !(std::isfinite(p.guard_correlation_lengths) && p.guard_correlation_lengths >= 0))
-    throw UsageError("--guard: must be a finite number >= 0 (correlation lengths)");
+    throw ParameterError("{guard}: must be a finite number >= 0 (correlation lengths)");
   if (v.has("guard-width") && !(std::isfinite(p.guard_width) && p.guard_width >= 0))
-    throw UsageError("--guard-width: must be a finite number >= 0");
+    throw ParameterError("{guard_width}: must be a finite number >= 0");
   p.has_nodata = v.has("nodata");
   p.detrend = parse_detrend(detrend);
   if (v.has("crop") && !v.text("crop").empty()) {
@@ -377,13 +379,14 @@ void heightmap_report(const SurfaceRequest& r, const Microsurface& s, const std:
 void require_surface_extension(const std::string& path) {
   const std::string ext = extension_of(path);
   if (ext != "exr" && ext != "ply" && ext != "obj" && ext != "off")
-    throw UsageError("-o " + path + ": unknown surface format (use .exr, .ply, .obj or .off)");
+    throw ParameterError("{output} " + literal_text(path) + ": unknown surface format (use .exr, .ply, .obj or .off)");
 }
 
-// "generate KIND --a 1 --b 2" of a request, to name its options in a message.
+// "generate KIND {a} 1 {b} 2" of a request (a ParameterError's message), to name its options.
 std::string request_text(const SurfaceRequest& r) {
-  std::string t = "generate " + r.kind;
-  for (const auto& [key, value] : r.options) t += " --" + key + (value == "true" ? "" : " " + value);
+  std::string t = "generate " + literal_text(r.kind);
+  for (const auto& [key, value] : r.options)
+    t += " " + surface_option_placeholder(key) + (value == "true" ? "" : " " + literal_text(value));
   return t;
 }
 
@@ -394,7 +397,8 @@ Microsurface generate_surface(const SurfaceRequest& r, const std::string& output
   try {
     require_readable_surface(s, "surface");
   } catch (const UsageError& e) {
-    throw UsageError(request_text(r) + ": these sizes give a surface that no reader accepts (" + e.what() + ")");
+    throw ParameterError(request_text(r) + ": these sizes give a surface that no reader accepts (" +
+                         message_template(e) + ")");
   }
   return s;
 }

@@ -54,6 +54,100 @@ double g1_work(const SurfaceSet& set) {
   return w;
 }
 
+namespace {
+
+// The models of one view beside its measured G1(v, m): Smith from the facets' Lambda, and the
+// V-cavity model per normal bin.
+struct BinModels {
+  double smith_numeric;
+  const std::vector<double>& vcavity;
+};
+// Where a view's rows are: its condition text, its group suffix and its angles.
+struct ViewPlace {
+  const std::string& where;
+  const std::string& dir;
+  const Json& angles;
+};
+
+// Per normal bin G1(v, m): estimators (a) = (b), Smith and the V-cavity model; bins with too few
+// counts are left out.
+void push_bin_rows(const SurfaceSet& set, const G1Result& r, const DirectionBinning& binning,
+                   const BinModels& models, const ViewPlace& at, CheckOutput& out) {
+  const Options& o = set.options;
+  for (int b = 0; b < binning.size(); ++b) {
+    const G1NormalBin& nb = r.bins[b];
+    if (nb.front_projected <= 0 || nb.samples < o.min_bin_count ||
+        nb.raycast_hits < o.min_bin_count)
+      continue;
+    const NormalBinRange bin = normal_bin_range(binning, b);
+    const std::string bin_where = at.where + ", " + bin.text();
+    Json bx = bin.with(at.angles);
+    bx["m"] = {nb.mean_normal.x(), nb.mean_normal.y(), nb.mean_normal.z()};
+    const Estimate eb = floored(r.bin_g1_area_sampling(b), nb.samples);
+    const double sa = r.window_area_perp / nb.front_projected;
+    const Estimate ha = floored(r.bin_g1_raycast(b), r.raycast_rays, sa);
+    Row a = make_row(set, "", "g1_bin", "g1_bin_raycast", Kind::Identity,
+                     "G1(v,m) estimators (a) = (b)");
+    push_measured(out, std::move(a), bin_where, eb.mean,
+                  std::hypot(eb.stderr_, ha.stderr_), ha.mean, "rays",
+                  set.name + "/g1_bin_raycast/" + at.dir, bx);
+    // Smith: G1(v, m) = chi+(v.m) G1(v), independent of m [Heitz14, eq. 9-10].
+    Row sm = make_row(set, "", "g1_bin", "smith_numeric", Kind::Model,
+                      "[Heitz14, eq. 9-10]: Smith G1(v,m) = chi+(v.m) G1(v)");
+    push_measured(out, std::move(sm), bin_where, eb.mean,
+                  eb.stderr_, models.smith_numeric, "rays",
+                  set.name + "/g1_bin_smith/" + at.dir, bx);
+    Row vc = make_row(set, "", "g1_bin", "vcavity", Kind::Model,
+                      "[Heitz14, eq. 24], averaged over the bin's facets");
+    push_measured(out, std::move(vc), bin_where, eb.mean,
+                  eb.stderr_, models.vcavity[b], "rays",
+                  set.name + "/g1_bin_vcavity/" + at.dir, bx);
+  }
+}
+
+// The measurement's row of the record (measure g1's), with the models per bin beside the
+// measured G1(v, m).
+Json measurement_row(const G1Result& r, const Microsurface& s, const DirectionBinning& binning,
+                     const BinModels& models, double t, double p) {
+  Table g1_rows = g1_table();
+  Json& row = add_row(g1_rows, r, s);
+  row["theta_deg"] = t;
+  row["phi_deg"] = p;
+  // In the order add_row lists the bins.
+  std::size_t jb = 0;
+  for (int b = 0; b < binning.size() && jb < row["bins"].size(); ++b) {
+    if (r.bins[b].area <= 0) continue;
+    row["bins"][jb]["smith_numeric"] = r.bins[b].front_projected > 0 ? models.smith_numeric : 0.0;
+    row["bins"][jb]["vcavity"] = models.vcavity[b];
+    row["bins"][jb]["samples"] = r.bins[b].samples;
+    row["bins"][jb]["raycast_hits"] = r.bins[b].raycast_hits;
+    ++jb;
+  }
+  return row;
+}
+
+// Averaged G1 against the Smith G1 of the nominal NDF ([Heitz14, eq. 11] with alpha_o): a
+// statistic of the generated surfaces, so it needs the between-surface error. One surface
+// gives the relative deviation only.
+void push_nominal_rows(const SurfaceSet& set,
+                       std::map<std::pair<double, double>, std::vector<Estimate>>& g1_by_direction,
+                       CheckOutput& out) {
+  const Options& o = set.options;
+  const Microsurface& s0 = set.surfaces[0];
+  if (!s0.nominal) return;
+  for (double p : o.phi_deg)
+    for (double t : o.theta_deg) {
+      const Vec3 v = direction_from_angles(rad(t), rad(p));
+      Row r = make_row(set, "", "g1", "smith_nominal", Kind::Model,
+                       "[Heitz14, eq. 11] with alpha_o; Beckmann Lambda");
+      push_nominal(out, std::move(r), "theta " + angle(t) + " phi " + angle(p),
+                   g1_by_direction[{t, p}], s0.nominal->G1(v), "",
+                   {{"theta_deg", t}, {"phi_deg", p}});
+    }
+}
+
+}  // namespace
+
 void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
   const Options& o = set.options;
   G1Options go = check_options<G1Options>(o, o.rays);
@@ -120,70 +214,13 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
                     gb.stderr_, smith_numeric, "rays",
                     set.name + "/smith_numeric/" + dir, ang);
 
-      // Per normal bin G1(v, m).
-      for (int b = 0; b < binning.size(); ++b) {
-        const G1NormalBin& nb = r.bins[b];
-        if (nb.front_projected <= 0 || nb.samples < o.min_bin_count ||
-            nb.raycast_hits < o.min_bin_count)
-          continue;
-        const NormalBinRange bin = normal_bin_range(binning, b);
-        const std::string bin_where = where + ", " + bin.text();
-        Json bx = bin.with(ang);
-        bx["m"] = {nb.mean_normal.x(), nb.mean_normal.y(), nb.mean_normal.z()};
-        const Estimate eb = floored(r.bin_g1_area_sampling(b), nb.samples);
-        const double sa = r.window_area_perp / nb.front_projected;
-        const Estimate ha = floored(r.bin_g1_raycast(b), r.raycast_rays, sa);
-        Row a = make_row(set, "", "g1_bin", "g1_bin_raycast", Kind::Identity,
-                         "G1(v,m) estimators (a) = (b)");
-        push_measured(out, std::move(a), bin_where, eb.mean,
-                      std::hypot(eb.stderr_, ha.stderr_), ha.mean, "rays",
-                      set.name + "/g1_bin_raycast/" + dir, bx);
-        // Smith: G1(v, m) = chi+(v.m) G1(v), independent of m [Heitz14, eq. 9-10].
-        Row sm = make_row(set, "", "g1_bin", "smith_numeric", Kind::Model,
-                          "[Heitz14, eq. 9-10]: Smith G1(v,m) = chi+(v.m) G1(v)");
-        push_measured(out, std::move(sm), bin_where, eb.mean,
-                      eb.stderr_, smith_numeric, "rays",
-                      set.name + "/g1_bin_smith/" + dir, bx);
-        Row vc = make_row(set, "", "g1_bin", "vcavity", Kind::Model,
-                          "[Heitz14, eq. 24], averaged over the bin's facets");
-        push_measured(out, std::move(vc), bin_where, eb.mean,
-                      eb.stderr_, vcav[b], "rays",
-                      set.name + "/g1_bin_vcavity/" + dir, bx);
-      }
-
-      Table g1_rows = g1_table();
-      Json& row = add_row(g1_rows, r, s);
-      row["theta_deg"] = t;
-      row["phi_deg"] = p;
-      // Models per bin beside the measured G1(v, m), in the order add_row lists the bins.
-      std::size_t jb = 0;
-      for (int b = 0; b < binning.size() && jb < row["bins"].size(); ++b) {
-        if (r.bins[b].area <= 0) continue;
-        row["bins"][jb]["smith_numeric"] = r.bins[b].front_projected > 0 ? smith_numeric : 0.0;
-        row["bins"][jb]["vcavity"] = vcav[b];
-        row["bins"][jb]["samples"] = r.bins[b].samples;
-        row["bins"][jb]["raycast_hits"] = r.bins[b].raycast_hits;
-        ++jb;
-      }
-      pass.rows().push_back(row);
+      const BinModels models{smith_numeric, vcav};
+      push_bin_rows(set, r, binning, models, {where, dir, ang}, out);
+      pass.rows().push_back(measurement_row(r, s, binning, models, t, p));
       g1_by_direction[{t, p}].push_back(gb);
     });
   });
-  // Averaged G1 against the Smith G1 of the nominal NDF ([Heitz14, eq. 11] with alpha_o): a
-  // statistic of the generated surfaces, so it needs the between-surface error. One surface
-  // gives the relative deviation only.
-  const Microsurface& s0 = set.surfaces[0];
-  if (s0.nominal) {
-    for (double p : o.phi_deg)
-      for (double t : o.theta_deg) {
-        const Vec3 v = direction_from_angles(rad(t), rad(p));
-        Row r = make_row(set, "", "g1", "smith_nominal", Kind::Model,
-                         "[Heitz14, eq. 11] with alpha_o; Beckmann Lambda");
-        push_nominal(out, std::move(r), "theta " + angle(t) + " phi " + angle(p),
-                     g1_by_direction[{t, p}], s0.nominal->G1(v), "",
-                     {{"theta_deg", t}, {"phi_deg", p}});
-      }
-  }
+  push_nominal_rows(set, g1_by_direction, out);
   out.measurements = per_surface;
 }
 

@@ -35,6 +35,64 @@ double g2_work(const SurfaceSet& set) {
   return w;
 }
 
+namespace {
+
+// The hotspot per normal bin ([GeomBSDF24, eq. 16]: G2(v,m,v) = G1(v,m)) at theta t: rows, and
+// the bins of the record's `hot` entry; bins with too few counts are left out.
+void push_hotspot_bins(const SurfaceSet& set, const G2Result& h, const G1Result& g, const DirectionBinning& binning,
+                       const std::string& where, double t, Json& hot, CheckOutput& out) {
+  const Options& o = set.options;
+  const Json ang = {{"theta_deg", t}};
+  for (int b = 0; b < binning.size(); ++b) {
+    const G2NormalBin& hb = h.bins[b];
+    const G1NormalBin& gb = g.bins[b];
+    if (hb.samples < o.min_bin_count || gb.samples < o.min_bin_count) continue;
+    const NormalBinRange bin = normal_bin_range(binning, b);
+    const Estimate e2 = floored(h.bin_g2(b), hb.samples);
+    const Estimate e1 = floored(g.bin_g1_area_sampling(b), gb.samples);
+    const Json bx = bin.with(ang);
+    Row rb = make_row(set, "", "g2_hotspot_bin", "g1_bin_independent", Kind::Identity,
+                      "[GeomBSDF24, eq. 16]: G2(v,m,v) = G1(v,m) per normal bin");
+    push_measured(out, std::move(rb), where + ", " + bin.text(), e2.mean, std::hypot(e2.stderr_, e1.stderr_), e1.mean, "rays",
+                  set.name + "/g2_hotspot_bin/theta " + angle(t), bx);
+    hot["bins"].push_back({{"theta_m_range_deg", {bin.theta_lo, bin.theta_hi}},
+                           {"phi_m_range_deg", {bin.phi_lo, bin.phi_hi}}, {"g2", e2.mean}, {"g2_stderr", e2.stderr_},
+                           {"g1_independent", e1.mean}, {"g1_independent_stderr", e1.stderr_}});
+  }
+}
+
+// The four Smith forms of the nominal NDF ([Heitz14, eq. 20-23] with its Lambda): a statistic of
+// the generated surfaces, compared over the ensemble (g2_by_pair: each surface's G2 per pair).
+void push_nominal_forms(const SurfaceSet& set, const std::vector<std::vector<Estimate>>& g2_by_pair,
+                        CheckOutput& out) {
+  const Microsurface& s0 = set.surfaces[0];
+  if (!s0.nominal) return;
+  for (std::size_t ip = 0; ip < g2_pairs().size(); ++ip) {
+    const G2Pair& p = g2_pairs()[ip];
+    const Vec3 vo = direction_from_angles(rad(p.theta_o), rad(p.phi_o));
+    const Vec3 vi = direction_from_angles(rad(p.theta_i), rad(p.phi_i));
+    const double phi = std::acos(std::clamp(
+        Vec2(vo.x(), vo.y()).normalized().dot(Vec2(vi.x(), vi.y()).normalized()), -1.0, 1.0));
+    const models::G2Forms fm =
+        models::g2_forms_from_lambda(s0.nominal->Lambda(vo), s0.nominal->Lambda(vi), phi);
+    const std::string dir = "o " + angle(p.theta_o) + "/" + angle(p.phi_o) + " i " +
+                            angle(p.theta_i) + "/" + angle(p.phi_i);
+    const Json ang = {{"theta_o_deg", p.theta_o}, {"phi_o_deg", p.phi_o},
+                      {"theta_i_deg", p.theta_i}, {"phi_i_deg", p.phi_i}};
+    auto nominal_row = [&](const std::string& name, double value, const std::string& ref) {
+      Row r = make_row(set, "", "g2", name, Kind::Model, ref);
+      push_nominal(out, std::move(r), dir, g2_by_pair[ip], value, set.name + "/g2_" + name, ang);
+    };
+    nominal_row("separable_nominal", fm.separable, "[Heitz14, eq. 20], nominal NDF");
+    nominal_row("height_correlated_nominal", fm.height_correlated, "[Heitz14, eq. 21], nominal NDF");
+    nominal_row("direction_correlated_nominal", fm.direction_correlated, "[Heitz14, eq. 22], nominal NDF");
+    nominal_row("height_direction_correlated_nominal", fm.height_direction_correlated,
+                "[Heitz14, eq. 23], nominal NDF");
+  }
+}
+
+}  // namespace
+
 void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
   const Options& o = set.options;
   G2Options go = check_options<G2Options>(o, share_of_rays(o, 4));
@@ -124,52 +182,12 @@ void check_g2(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
                   {"g1_independent", g1.mean}, {"g1_independent_stderr", g1.stderr_},
                   {"direction_correlated_numeric", h.smith_numeric().direction_correlated},
                   {"bins", Json::array()}};
-      for (int b = 0; b < binning.size(); ++b) {
-        const G2NormalBin& hb = h.bins[b];
-        const G1NormalBin& gb = g.bins[b];
-        if (hb.samples < o.min_bin_count || gb.samples < o.min_bin_count) continue;
-        const NormalBinRange bin = normal_bin_range(binning, b);
-        const Estimate e2 = floored(h.bin_g2(b), hb.samples);
-        const Estimate e1 = floored(g.bin_g1_area_sampling(b), gb.samples);
-        const Json bx = bin.with(ang);
-        Row rb = make_row(set, "", "g2_hotspot_bin", "g1_bin_independent", Kind::Identity,
-                          "[GeomBSDF24, eq. 16]: G2(v,m,v) = G1(v,m) per normal bin");
-        push_measured(out, std::move(rb), where + ", " + bin.text(), e2.mean, std::hypot(e2.stderr_, e1.stderr_), e1.mean, "rays",
-                      set.name + "/g2_hotspot_bin/theta " + angle(t), bx);
-        hot["bins"].push_back({{"theta_m_range_deg", {bin.theta_lo, bin.theta_hi}},
-                               {"phi_m_range_deg", {bin.phi_lo, bin.phi_hi}}, {"g2", e2.mean}, {"g2_stderr", e2.stderr_},
-                               {"g1_independent", e1.mean}, {"g1_independent_stderr", e1.stderr_}});
-      }
+      push_hotspot_bins(set, h, g, binning, where, t, hot, out);
       hotspot.push_back(hot);
     }
     pass.entry["hotspot"] = hotspot;
   });
-  // The four Smith forms of the nominal NDF ([Heitz14, eq. 20-23] with its Lambda): a statistic of
-  // the generated surfaces, compared over the ensemble.
-  const Microsurface& s0 = set.surfaces[0];
-  if (s0.nominal)
-    for (std::size_t ip = 0; ip < g2_pairs().size(); ++ip) {
-      const G2Pair& p = g2_pairs()[ip];
-      const Vec3 vo = direction_from_angles(rad(p.theta_o), rad(p.phi_o));
-      const Vec3 vi = direction_from_angles(rad(p.theta_i), rad(p.phi_i));
-      const double phi = std::acos(std::clamp(
-          Vec2(vo.x(), vo.y()).normalized().dot(Vec2(vi.x(), vi.y()).normalized()), -1.0, 1.0));
-      const models::G2Forms fm =
-          models::g2_forms_from_lambda(s0.nominal->Lambda(vo), s0.nominal->Lambda(vi), phi);
-      const std::string dir = "o " + angle(p.theta_o) + "/" + angle(p.phi_o) + " i " +
-                              angle(p.theta_i) + "/" + angle(p.phi_i);
-      const Json ang = {{"theta_o_deg", p.theta_o}, {"phi_o_deg", p.phi_o},
-                        {"theta_i_deg", p.theta_i}, {"phi_i_deg", p.phi_i}};
-      auto nominal_row = [&](const std::string& name, double value, const std::string& ref) {
-        Row r = make_row(set, "", "g2", name, Kind::Model, ref);
-        push_nominal(out, std::move(r), dir, g2_by_pair[ip], value, set.name + "/g2_" + name, ang);
-      };
-      nominal_row("separable_nominal", fm.separable, "[Heitz14, eq. 20], nominal NDF");
-      nominal_row("height_correlated_nominal", fm.height_correlated, "[Heitz14, eq. 21], nominal NDF");
-      nominal_row("direction_correlated_nominal", fm.direction_correlated, "[Heitz14, eq. 22], nominal NDF");
-      nominal_row("height_direction_correlated_nominal", fm.height_direction_correlated,
-                  "[Heitz14, eq. 23], nominal NDF");
-    }
+  push_nominal_forms(set, g2_by_pair, out);
   out.measurements = per_surface;
 }
 

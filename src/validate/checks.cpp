@@ -41,7 +41,7 @@ const std::vector<Check>& checks() {
 Result run(const std::vector<SurfaceSet>& sets, double significance,
            const std::function<void(double)>& report) {
   if (!(significance > 0 && significance < 1))
-    throw UsageError("--significance must be in (0, 1) (got " + num(significance) + ")");
+    throw ParameterError("{significance} must be in (0, 1) (got " + num(significance) + ")");
   auto t0 = std::chrono::steady_clock::now();
   // Resolve the checks of every set first: an unknown name fails before any work.
   std::vector<std::vector<const Check*>> todo(sets.size());
@@ -54,10 +54,10 @@ Result run(const std::vector<SurfaceSet>& sets, double significance,
       throw RuntimeFailure("validation entry " + set.name + ": one label per surface expected");
     const Options& o = set.options;
     if (o.theta_deg.empty() || o.phi_deg.empty())
-      throw UsageError("validation entry " + set.name + ": no view direction (--theta, --phi)");
+      throw ParameterError("validation entry " + literal_text(set.name) + ": no view direction ({theta}, {phi})");
     for (double t : o.theta_deg)
-      if (!(t >= 0 && t < 90)) throw UsageError("--theta must be in [0, 90) degrees (got " + num(t) + ")");
-    if (o.rays == 0) throw UsageError("--rays must be positive");
+      if (!(t >= 0 && t < 90)) throw ParameterError("{theta} must be in [0, 90) degrees (got " + num(t) + ")");
+    if (o.rays == 0) throw ParameterError("{rays} must be positive");
     for (const std::string& name : set.options.checks) {
       auto it = std::find_if(checks().begin(), checks().end(), [&](const Check& c) { return c.name == name; });
       if (it == checks().end()) {

@@ -15,7 +15,7 @@ namespace microsim::validation {
 
 namespace {
 [[noreturn]] void suite_error(const std::string& file, const std::string& what) {
-  throw UsageError("--suite " + file + ": " + what);
+  throw ParameterError("{suite} " + literal_text(file) + ": " + literal_text(what));
 }
 
 // A positive integer (JSON integer, or a number with an integral value such as 1e6).
@@ -81,12 +81,12 @@ bool is_option_key(const std::string& k) {
 
 Suite load_suite(const std::string& path) {
   namespace fs = std::filesystem;
-  require_regular_input(path, "--suite");
+  require_regular_input(path, "{suite}");
   std::ifstream in(path);
-  if (!in) throw UsageError("--suite " + path + ": cannot read the file");
+  if (!in) throw ParameterError("{suite} " + literal_text(path) + ": cannot read the file");
   Json j;
   try {
-    j = parse_json_input(in, "--suite " + path, JsonLimits{64, std::size_t(16) << 20, true});
+    j = parse_json_input(in, "{suite} " + literal_text(path), JsonLimits{64, std::size_t(16) << 20, true});
   } catch (const Json::exception& e) {
     suite_error(path, std::string("not valid JSON (") + e.what() + ")");
   }
@@ -173,7 +173,7 @@ Suite load_suite(const std::string& path) {
 std::string find_suite(const std::string& name, const std::vector<std::string>& dirs) {
   namespace fs = std::filesystem;
   const bool a_path = name.find('/') != std::string::npos || fs::path(name).extension() == ".json";
-  if (a_path && fs::exists(name)) require_regular_input(name, "--suite");
+  if (a_path && fs::exists(name)) require_regular_input(name, "{suite}");
   if (fs::is_regular_file(name)) return name;
   for (const std::string& d : dirs) {
     fs::path p = fs::path(d) / (name + ".json");
@@ -182,7 +182,8 @@ std::string find_suite(const std::string& name, const std::vector<std::string>& 
   std::string known;
   for (const std::string& d : dirs)
     for (const std::string& n : list_suites(d)) known += (known.empty() ? "" : ", ") + n;
-  throw UsageError("--suite " + name + ": no such suite (known: " + (known.empty() ? "none" : known) + ")");
+  throw ParameterError("{suite} " + literal_text(name) + ": no such suite (known: " +
+                       literal_text(known.empty() ? "none" : known) + ")");
 }
 
 std::vector<std::string> list_suites(const std::string& dir) {
@@ -217,7 +218,8 @@ Microsurface generate_entry(const SuiteEntry& e, const std::string& suite_file, 
     written.place_provisionally();
     if (warnings) *warnings = surface_report(request, s, path, false).warnings;
   } catch (const UsageError& err) {
-    throw UsageError("--suite " + suite_file + ": entry " + e.name + ": " + err.what());
+    throw ParameterError("{suite} " + literal_text(suite_file) + ": entry " + literal_text(e.name) + ": " +
+                         message_template(err));
   }
   return load_surface(path);
 }
@@ -228,10 +230,10 @@ void require_safe_entry_names(const Suite& suite, const std::string& path) {
     bool ok = !e.name.empty() && e.name.size() <= 100 && e.name[0] != '.' && e.name[0] != '-';
     for (char c : e.name) ok = ok && c != '/' && c != '\\' && static_cast<unsigned char>(c) >= 0x20;
     if (!ok)
-      throw UsageError("--suite " + path + ": entry name '" + e.name + "' must be 1-100 characters "
-                       "without '/', '\\', control characters or a leading '.' or '-'");
+      throw ParameterError("{suite} " + literal_text(path) + ": entry name '" + literal_text(e.name) + "' must be 1-100 characters "
+                           "without '/', '\\', control characters or a leading '.' or '-'");
     if (!seen.insert(e.name).second)
-      throw UsageError("--suite " + path + ": entry name '" + e.name + "' is used twice");
+      throw ParameterError("{suite} " + literal_text(path) + ": entry name '" + literal_text(e.name) + "' is used twice");
   }
 }
 

@@ -2,7 +2,9 @@
 // finite and inside its documented range, a count must be an integer in range, and anything
 // sized by the input (rays, bins, grid cells, mesh vertices) must fit in memory. Each rule
 // throws UsageError with one line naming the option or file field and the accepted range, so
-// the command line exits 2 before any work or allocation.
+// the command line exits 2 before any work or allocation. A NAME or WHAT below is a
+// ParameterError's message template (common.hpp): "{rays}" names the parameter rays; a path in it
+// is given as literal_text(path). The errors are ParameterErrors.
 #pragma once
 #include <cstdint>
 #include <string>

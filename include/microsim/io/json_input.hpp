@@ -21,8 +21,9 @@ struct JsonLimits {
   bool ignore_comments = false;            // suites allow // and /* */ comments
 };
 
-// Parses `text`; `what` names the input in the messages ("part p1.json", "x.exr header").
-// Limits: UsageError. Malformed JSON: Json::parse_error, as Json::parse throws it, for the
+// Parses `text`; `what` names the input in the messages ("part p1.json", "x.exr header"): a
+// ParameterError's message template (common.hpp), a path in it given as literal_text(path).
+// Limits: ParameterError. Malformed JSON: Json::parse_error, as Json::parse throws it, for the
 // caller's own message.
 Json parse_json_input(const std::string& text, const std::string& what, const JsonLimits& limits = {});
 // Reads at most limits.max_bytes + 1 bytes of `in` and parses them as above.

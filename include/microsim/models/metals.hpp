@@ -43,7 +43,7 @@ IndexTable read_index_file(const std::string& path);
 std::vector<double> default_wavelengths_nm();
 
 // Checks a wavelength list against a table: at least one, each finite and inside the table's
-// range, strictly increasing. UsageError naming `option` and the table.
+// range, strictly increasing. ParameterError naming `option` (a "{parameter}" placeholder) and the table.
 void check_wavelengths(const std::vector<double>& nm, const IndexTable& table, const std::string& option);
 
 }  // namespace microsim::models

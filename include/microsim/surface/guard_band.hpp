@@ -32,7 +32,7 @@ int guard_cells(double width, double cell);
 // the description, so every record carries it. UsageError naming `option` when the guard
 // leaves no interior (a guard as wide as half the patch or wider) or is negative.
 void apply_guard_band(Microsurface& s, int gx, int gy, bool periodic, double correlation_length = 0,
-                      const std::string& option = "--guard");
+                      const std::string& option = "{guard}");
 
 // A heightfield loaded from a window file: its recorded guard cells, or the default width
 // (kDefaultGuardCorrelationLengths l) for a description without one.

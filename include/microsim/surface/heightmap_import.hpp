@@ -29,7 +29,7 @@ struct RawHeightGrid {
 RawHeightGrid read_height_grid(const std::string& path, const std::string& channel = "");
 
 enum class Detrend { None, Mean, Plane, Poly2 };
-Detrend parse_detrend(const std::string& name);  // UsageError naming --detrend
+Detrend parse_detrend(const std::string& name);  // ParameterError naming {detrend}
 std::string to_string(Detrend d);
 
 // Least-squares fit of {1}, {1, x, y} or {1, x, y, x^2, xy, y^2} (x = i dx, y = j dy) over

@@ -55,15 +55,20 @@ struct SurfaceRequest {
   std::map<std::string, std::string> options;
 };
 
+// The parameter an option of the table sets, as a ParameterError's message names it (common.hpp):
+// its name with '_' for '-' in braces ("pixel-size": "{pixel_size}"), the command line's option
+// and Python's keyword once spelled.
+std::string surface_option_placeholder(const std::string& option);
+
 // Sets (or replaces) one option after checking it against the table: UsageError "unknown option
-// 'NAME' for 'KIND' (known: ...)", or the command line's message for a bad value
-// ("--alpha: must be a finite number in (0, 10] (got -1)").
+// 'NAME' for 'KIND' (known: ...)", or a ParameterError for a bad value
+// ("{alpha}: must be a finite number in (0, 10] (got -1)").
 void set_surface_option(SurfaceRequest& r, const std::string& name, const std::string& value);
 
 // Reads a preset (surfaces/*.toml, by read_preset_file: the command line's --config reads it
 // the same way) into r, each key through set_surface_option. UsageError naming the file (and the
 // line) for what read_preset_file refuses, an unknown key or a bad value
-// ("PATH: line 2: --alpha: must be a finite number in (0, 10] (got -1)").
+// ("PATH: line 2: {alpha}: must be a finite number in (0, 10] (got -1)").
 void read_surface_preset(SurfaceRequest& r, const std::string& path);
 
 // Checks every option and their combinations (and, when output_path is not empty, that the
@@ -73,7 +78,7 @@ Microsurface generate_surface(const SurfaceRequest& r, const std::string& output
 // The checks of generate_surface without building anything (to refuse before writing).
 void check_surface_request(const SurfaceRequest& r, const std::string& output_path = "");
 
-// UsageError "-o PATH: unknown surface format (use .exr, .ply, .obj or .off)" unless `path` ends
+// ParameterError "{output} PATH: unknown surface format (use .exr, .ply, .obj or .off)" unless `path` ends
 // in one of them.
 void require_surface_extension(const std::string& path);
 
