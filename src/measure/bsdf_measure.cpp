@@ -529,8 +529,9 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
   BsdfTally t = run(m, 0, share, 0.1 * (1.0 - share));
   for (int pass = 1; pass <= kWalkPasses; ++pass) {
     r.model_budget = smith_walk_budget(t, r, o.model_error_fraction, cap);
-    const std::uint64_t next = r.model_budget.walks / static_cast<std::uint64_t>(R);
+    std::uint64_t next = r.model_budget.walks / static_cast<std::uint64_t>(R);
     if (next <= m) break;
+    if (2 * next > cap) next = cap;  // near the cap: the cap at once (no run that a re-check would discard)
     m = next;
     t = run(m, mix64(0x9E3779B97F4A7C15ull * static_cast<std::uint64_t>(pass)), share + 0.1 * (1.0 - share),
             0.9 * (1.0 - share));
