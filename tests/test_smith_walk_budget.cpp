@@ -41,7 +41,7 @@ OrderMeans order_means(const mm::SmithRandomWalk& walk, const Vec3& wi, int K, s
     const mm::WalkExit e = walk.walk_with_expected_escapes(
         wi, rng, [](const mm::WalkVertex&) {}, expected ? K - 1 : 0,
         [&](const mm::WalkEscape& s) { x[slot(s.reflected, s.order)] += bias * s.weight; });
-    if (!e.lost && e.weight != 0.0 && e.order >= 1) x[slot(e.reflected, e.order)] += e.weight;
+    if (!e.lost && e.order >= 1 && (!expected || e.order >= K)) x[slot(e.reflected, e.order)] += e.weight;
     for (int k = 0; k < 2 * K; ++k) {
       sum[k] += x[k];
       sum2[k] += x[k] * x[k];

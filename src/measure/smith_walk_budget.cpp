@@ -35,28 +35,26 @@ void for_target_slots(const BsdfResult& r, F&& f) {
 
 }  // namespace
 
-void add_walk_escapes(BsdfTally& t, const std::vector<models::WalkEscape>& escapes, const HemisphereMap& map,
-                      const InPlaneBins& plane) {
-  if (escapes.empty()) return;
+void add_walk_escapes(BsdfTally& t, const std::vector<models::WalkEscape>& escapes, const models::WalkExit* drawn,
+                      const HemisphereMap& map, const InPlaneBins& plane) {
   const int K = t.orders;
   thread_local std::vector<std::pair<std::size_t, double>> a, p, b;
   a.clear();
   p.clear();
   b.clear();
-  double both = 0.0;
-  for (const models::WalkEscape& e : escapes) {
-    const int s = e.reflected ? 0 : 1;
-    const int k = std::min(e.order, K) - 1;
-    if (k < 0) continue;
-    both += e.weight;
-    const int px = map.pixel_of(e.direction), bin = plane.bin_of(e.direction);
-    for (int slot : {k, K}) {
-      a.push_back({t.a_index(s, slot), e.weight});
-      if (px >= 0) p.push_back({t.p_index(s, slot, px), e.weight});
-      if (bin >= 0) b.push_back({t.b_index(s, slot, bin), e.weight});
-    }
+  auto add = [&](int s, int slot, double w, int px, int bin) {
+    a.push_back({t.a_index(s, slot), w});
+    if (px >= 0) p.push_back({t.p_index(s, slot, px), w});
+    if (bin >= 0) b.push_back({t.b_index(s, slot, bin), w});
+  };
+  for (const models::WalkEscape& e : escapes)  // orders 1 .. K - 1, expected
+    if (e.order >= 1 && e.order < K) add(e.reflected ? 0 : 1, e.order - 1, e.weight, map.pixel_of(e.direction), plane.bin_of(e.direction));
+  if (drawn && drawn->order >= 1) {  // the total, and the slot of orders K and above, drawn
+    const int s = drawn->reflected ? 0 : 1, px = map.pixel_of(drawn->direction), bin = plane.bin_of(drawn->direction);
+    if (drawn->order >= K) add(s, K - 1, drawn->weight, px, bin);
+    add(s, K, drawn->weight, px, bin);
+    t.both2 += drawn->weight * drawn->weight;
   }
-  t.both2 += both * both;
   add_cells(a, t.albedo, t.albedo2);
   add_cells(p, t.pix, t.pix2);
   add_cells(b, t.plane, t.plane2);
@@ -100,9 +98,7 @@ void smith_walk_expected_path(const models::SmithRandomWalk& walk, const Vec3& w
       [&](const models::WalkEscape& x) { escapes.push_back(x); });
   t.events += static_cast<std::uint64_t>(e.order);
   if (e.lost) ++t.unterminated;
-  else if (e.order > expected_orders && e.weight != 0.0)
-    escapes.push_back({e.order, e.reflected, e.direction, e.weight});
-  add_walk_escapes(t, escapes, r.map, r.plane);
+  add_walk_escapes(t, escapes, e.lost ? nullptr : &e, r.map, r.plane);
 }
 
 WalkBudget smith_walk_budget(const BsdfTally& pilot, const BsdfResult& r, double fraction,

@@ -11,11 +11,12 @@
 
 namespace microsim {
 
-// Adds one walk's escapes (each a side, order, direction and weight) to the tally: the walk's sums per
-// albedo slot, pixel and in-plane bin, and their squares (a walk adds one term per cell, so that the
-// second moments are those of the per-walk contributions and tally_estimate's errors stay exact).
-void add_walk_escapes(BsdfTally& t, const std::vector<models::WalkEscape>& escapes, const HemisphereMap& map,
-                      const InPlaneBins& plane);
+// Adds one walk to the tally: its expected escapes (orders 1 .. K - 1) to their order slots, and its drawn
+// exit (`drawn`, nullptr for a lost walk) to the total and, at orders K and above, to the slot K+. The total
+// stays the drawn weight (a mirror's is exactly 1 per walk; expected escapes would add spread there). Per
+// walk one term per cell: the second moments are those of the per-walk contributions.
+void add_walk_escapes(BsdfTally& t, const std::vector<models::WalkEscape>& escapes, const models::WalkExit* drawn,
+                      const HemisphereMap& map, const InPlaneBins& plane);
 
 // The walk's error target: its standard error of an albedo slot at most this fraction of the
 // measurement's standard error of that slot.

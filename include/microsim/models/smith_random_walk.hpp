@@ -200,10 +200,10 @@ class SmithRandomWalk {
   // expectations (Rao-Blackwellisation, docs/theory/bsdf.md "Expected escapes"): where the walk draws whether
   // a ray leaving upward from height h escapes (probability g = C1(h)^Lambda(w)), it first calls
   // at_escape({order, side, direction, W g}) with the walk's weight W; the draw then goes on as in walk()
-  // (the same uniforms, the same path), but an escape at those orders is not tallied again: the returned
-  // exit has weight 0. From event expected_orders + 1 on, the returned exit is walk()'s. Each order's
-  // expected tally is walk()'s (E[W 1{escape}] = E[W g]); the per-walk spread is smaller (at order 1
-  // only the first height and facet normal are left random). expected_orders = 0 is walk().
+  // (the same uniforms, the same path, the same returned exit). The caller tallies an order either by the
+  // expected escapes or by the drawn exit, not both. Each order's expected tally is walk()'s
+  // (E[W 1{escape}] = E[W g]); the per-walk spread is smaller (at order 1 only the first height and facet
+  // normal are left random). expected_orders = 0 is walk().
   template <class Rng, class Visitor, class EscapeVisitor>
   WalkExit walk_with_expected_escapes(const Vec3& wi, Rng& rng, Visitor&& at_vertex, int expected_orders,
                                       EscapeVisitor&& at_escape) const {
@@ -226,7 +226,6 @@ class SmithRandomWalk {
             out.reflected = above;
             out.order = order;
             out.direction = above ? w : mirror_z(w);
-            out.weight = 0.0;  // tallied above
             return out;
           }
           c_next = c * std::pow(U, -1.0 / lambda);
