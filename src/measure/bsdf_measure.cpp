@@ -507,8 +507,7 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
   const BsdfOptions& o = r.options;
   const int K = o.orders, npix = r.map.size(), nplane = r.plane.size();
   const int R = std::max(1, o.replicates);
-  const std::uint64_t cap = std::max<std::uint64_t>(
-      kWalkPilotPerReplicate, o.model_walks * kWalkCapFactor / static_cast<std::uint64_t>(R));
+  const std::uint64_t cap = std::max<std::uint64_t>(1, o.model_walks * kWalkCapFactor / static_cast<std::uint64_t>(R));
   auto run = [&](std::uint64_t m, std::uint64_t salt, double p0, double span) {
     std::vector<WalkStrata> strata(R);
     tbb::parallel_for(0, R, [&](int q) {
