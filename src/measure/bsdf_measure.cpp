@@ -5,6 +5,7 @@
 #include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
 #include "microsim/measure/spectral_tally.hpp"
+#include "microsim/measure/smith_walk_budget.hpp"
 #include "microsim/measure/vcavity_measure.hpp"
 #include "microsim/surface/generators.hpp"
 
@@ -331,15 +332,16 @@ Estimate BsdfResult::f_plane(int s, int k, int b, int lambda) const {
   const auto i = t.b_index(s, k, b);
   return t.estimate(t.plane[i], t.plane2[i], 1.0 / plane.cos_integral(b));
 }
+// The model's tallies: per walk (replicates == 0), or replicates of walks (measure/smith_walk_budget.hpp).
 Estimate BsdfResult::model_albedo(int s, int k) const {
   if (!smith_walk) return {};
   const auto i = smith_walk->a_index(s, k);
-  return tally_estimate(smith_walk->albedo[i], smith_walk->albedo2[i], smith_walk->paths);
+  return smith_walk->estimate(smith_walk->albedo[i], smith_walk->albedo2[i]);
 }
 Estimate BsdfResult::model_f_plane(int s, int k, int b) const {
   if (!smith_walk) return {};
   const auto i = smith_walk->b_index(s, k, b);
-  return tally_estimate(smith_walk->plane[i], smith_walk->plane2[i], smith_walk->paths, 1.0 / plane.cos_integral(b));
+  return smith_walk->estimate(smith_walk->plane[i], smith_walk->plane2[i], 1.0 / plane.cos_integral(b));
 }
 
 std::string order_key(int k, int orders) {
@@ -549,6 +551,47 @@ void check_spectral_options(const BsdfOptions& o, const Microsurface& s) {
   if (is_vcavity(s)) throw ParameterError("{wavelengths}: V-cavity ensembles are measured at one index");
 }
 
+// The Smith walks with expected escapes, in replicates of Latin-hypercube walks (measure/smith_walk_budget.hpp):
+// a pilot of kWalkPilotPerReplicate walks per replicate, then as many per replicate as the error target
+// needs (a new hypercube over them), checked on that run's errors. Every process of a split computes all of them (the same result as
+// one process).
+BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& r, std::uint64_t mstream,
+                               const std::function<void(double)>& progress, double share) {
+  const BsdfOptions& o = r.options;
+  const int K = o.orders, npix = r.map.size(), nplane = r.plane.size();
+  const int R = std::max(1, o.replicates);
+  const std::uint64_t cap = std::max<std::uint64_t>(1, o.model_walks * kWalkCapFactor / static_cast<std::uint64_t>(R));
+  auto run = [&](std::uint64_t m, std::uint64_t salt, double p0, double span) {
+    std::vector<WalkStrata> strata(R);
+    tbb::parallel_for(0, R, [&](int q) {
+      strata[q] = walk_strata(o.seed, ReplicatePlan::stream(mstream ^ salt, q), m);
+    });
+    BsdfTally t(K, npix, nplane);
+    run_replicate_paths<BsdfTally, BsdfTally>(
+        0, R, m, K, npix, nplane, progress ? std::function<void(double)>([&](double f) { progress(p0 + span * f); }) : nullptr, 1.0,
+        [&](int q, std::uint64_t j, BsdfTally& acc) {
+          smith_walk_expected_path(walk, r.wi, o.seed, ReplicatePlan::stream(mstream ^ salt, q), j, strata[q], r, acc);
+        },
+        [&](int, BsdfTally&& rep) { t.add_replicate(rep); });
+    return t;
+  };
+  // The pilot's error of a rare order (a few walks per replicate reach it) is itself rough: the walks are
+  // chosen again from each run's own errors, until a run has enough (at most kWalkPasses runs after the pilot).
+  std::uint64_t m = std::min(kWalkPilotPerReplicate, cap);
+  BsdfTally t = run(m, 0, share, 0.1 * (1.0 - share));
+  for (int pass = 1; pass <= kWalkPasses; ++pass) {
+    r.model_budget = smith_walk_budget(t, r, o.model_error_fraction, cap);
+    std::uint64_t next = r.model_budget.walks / static_cast<std::uint64_t>(R);
+    if (next <= m) break;
+    if (2 * next > cap) next = cap;  // near the cap: the cap at once (no run that a re-check would discard)
+    m = next;
+    t = run(m, mix64(0x9E3779B97F4A7C15ull * static_cast<std::uint64_t>(pass)), share + 0.1 * (1.0 - share),
+            0.9 * (1.0 - share));
+  }
+  r.model_budget.walks = t.paths;
+  return t;
+}
+
 }  // namespace
 
 BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
@@ -689,7 +732,9 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
       }
       leave(t, e.reflected, e.order, e.weight, e.direction);
     };
-    if (!o.split) {
+    if (o.model_error_fraction > 0.0) {
+      r.smith_walk = smith_walks_to_error(walk, r, mstream, o.progress, share);
+    } else if (!o.split) {
       r.smith_walk = run_paths(o.model_walks, K, npix, nplane, o.progress, share, 1.0 - share, model_path);
     } else {
       // The model's sequential batches shared like replicates, then summed in batch order.

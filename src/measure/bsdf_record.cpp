@@ -13,6 +13,7 @@
 #include "microsim/measure/groove_models.hpp"
 #include "microsim/measure/single_scattering_albedos.hpp"
 #include "microsim/models/spectral_rgb.hpp"
+#include "microsim/measure/smith_walk_budget.hpp"
 
 namespace microsim {
 
@@ -509,6 +510,7 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
     albedos(mw, [&](int sd, int k) { return r.model_albedo(sd, k); });
     mw["walks"] = r.smith_walk->paths;
     mw["unterminated"] = r.smith_walk->unterminated;
+    mw["error_target"] = smith_walk_error_json(r);
     models["smith_multiple"] = mw;
   } else {
     models["smith_multiple"] = nullptr;
@@ -594,7 +596,8 @@ void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Mi
                  "product of their Fresnel factors, a dielectric chooses reflection with "
                  "probability F (unpolarized light); *_stderr: standard error of the mean of "
                  "`replicates` independent stratified replicates of the rays (the Smith walk's: "
-                 "over its independent walks)"},
+                 "over its replicates of Latin-hypercube walks, or its independent walks with "
+                 "albedo_models.smith_multiple.error_target null)"},
       {"in_plane", "f = p / int_B |cos theta_o| d omega (exact), p the fraction of power leaving "
                    "through bin B: a band |beta| <= half width around the plane of incidence, "
                    "theta_o_deg signed, positive on the specular side (azimuth phi_i + 180); "

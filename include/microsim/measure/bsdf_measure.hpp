@@ -127,6 +127,11 @@ struct BsdfOptions {
   int max_events = 10000;  // a walk longer than this is counted unterminated (lost)
   // Smith random-walk model: walks of the nominal NDF (0 = none); same seed, own stream.
   std::uint64_t model_walks = 0;
+  // > 0: the walks tally expected escapes and their number is chosen from a pilot so that the walk's
+  // standard error of every albedo slot is at most this fraction of the measurement's
+  // (measure/smith_walk_budget.hpp), at most kWalkCapFactor model_walks; <= 0: exactly model_walks
+  // walks with drawn escapes.
+  double model_error_fraction = 1.0;
   // false: measure only (no analytic model beside the measurement: no single-scattering
   // integrals, no Smith walk, no V-groove closed forms), for tables where models cost time.
   bool models = true;
@@ -200,6 +205,13 @@ struct BsdfTally {
 // Mean and standard error of the per-path contribution X (0 or the path's weight) times `scale`.
 Estimate tally_estimate(double sum, double sum2, std::uint64_t n, double scale = 1.0);
 
+// The number of Smith walks chosen for the error target (measure/smith_walk_budget.hpp).
+struct WalkBudget {
+  std::uint64_t walks = 0;                     // the walks run (pilot included)
+  double target_ratio = 0.0;                   // walk stderr / measured stderr asked for (0: fixed walks)
+  int limiting_side = -1, limiting_slot = -1;  // the albedo slot that needed the most walks (-1: none)
+};
+
 struct BsdfResult {
   BsdfOptions options;  // as run (progress callback dropped)
   Vec3 wi;              // light direction l
@@ -208,6 +220,7 @@ struct BsdfResult {
   BsdfTally measured;                // spectral runs: the first wavelength's tallies
   std::vector<BsdfTally> spectral;    // per wavelength of options.wavelengths_nm (empty if none)
   std::optional<BsdfTally> smith_walk;  // the model's tallies (nominal NDF available)
+  WalkBudget model_budget;              // how many walks, for which error
   std::optional<models::Ndf> nominal;
   double seconds = 0, model_seconds = 0;
 

@@ -13,12 +13,14 @@ models::SingleScatteringAlbedos parallel_single_scattering_albedos(const models:
                                                                    const models::Vec3& i, int n);
 
 // The albedos at the smallest resolution n (doubling from 4 min_n) whose estimated quadrature error is at most
-// target_error, or at max_n. The midpoint rule's error decreases roughly like 1/n (microfacet_bsdf.hpp), so
-// the error at n is about the change from n / 2, and half the change from n / 4 to n / 2; the larger of the
-// two (over Smith, V-cavity x reflected, transmitted), doubled because the convergence is irregular:
+// target_error, or at max_n. The smoothed midpoint rule's error (microfacet_bsdf.hpp albedo_node) decreases at
+// least like 1/n, so the error at n is at most about the change from n / 2, and half the change from n / 4 to
+// n / 2; the larger of the two (over Smith, V-cavity x reflected, transmitted), doubled because the
+// convergence is irregular:
 //   estimated_error = 2 max(|A(n) - A(n/2)|, |A(n/2) - A(n/4)| / 2).
-// Not a guarantee: where the error decreases much more slowly than 1/n (Beckmann alpha = 0.2, mirror,
-// theta_i <= 20 deg: errors 1e-5..2e-4 decreasing ~1.3x per doubling) it underestimated up to 10x.
+// Not a guarantee: on the plain (unsmoothed) square, where the error decreased much more slowly than 1/n
+// (Beckmann alpha = 0.2, mirror, theta_i <= 20 deg) it underestimated up to 10x; the tests bound the smoothed
+// rule's estimate against n = 4096 in their cases.
 // target_error <= 0 (or not finite) asks for max_n.
 struct AlbedoQuadrature {
   models::SingleScatteringAlbedos albedos;

@@ -257,15 +257,28 @@ struct SingleScatteringAlbedo {
   double transmitted = 0.0;
 };
 
+// Node p of n of the albedo quadrature on one axis of the sampler's unit square: the midpoint s = (p + 1/2) / n
+// mapped by the quintic smoothstep u = s^3 (10 - 15 s + 6 s^2), with the weight du/ds = 30 s^2 (1 - s)^2.
+// The sampler's map steepens toward the square's edges (u -> 0 or 1: slopes -> infinity); the weight
+// vanishes there to second order, so that the integrand in s is smooth up to the edges and the product
+// midpoint rule converges much faster than on the plain square (Beckmann alpha 0.2..1, theta_i 0..80 deg,
+// mirror: errors 1e-5..2e-4 at n = 1024 on the plain square, < 2e-5 at n = 128 and < 3e-6 at n = 256 with it).
+struct AlbedoNode {
+  double u, w;
+};
+inline AlbedoNode albedo_node(int p, int n) {
+  const double s = (p + 0.5) / n;
+  return {s * s * s * (10.0 + s * (-15.0 + 6.0 * s)), 30.0 * s * s * (1.0 - s) * (1.0 - s)};
+}
+
 // Albedo of the single-scattering BSDF for light arriving from i (i.z > 0):
 // int f(o, i) |o.z| d omega_o over each hemisphere. By the Jacobians 19b/20b this equals the
 // expectation over visible normals m ~ D_i [Heitz14, eq. 13] of F G2 / G1(i) (reflection, o = 13a)
 // and (1 - F) G2 / G1(i) (transmission, o = 15a), each 0 when o leaves on the wrong side.
-// Computed by the midpoint rule on the unit square of the exact VNDF sampler's (u1, u2)
-// (n x n points; deterministic). The integrand has kinks (horizon, critical angle) and the
-// sampler's map steepens toward the square's edges: the error decreases roughly like 1/n,
-// ~5e-5 for n = 1024 at moderate roughness (tests compare with a direct quadrature of eval), but
-// irregularly (measure/single_scattering_albedos.hpp estimates it from three resolutions).
+// Computed by the product midpoint rule on the unit square of the exact VNDF sampler's (u1, u2), each
+// axis smoothed by albedo_node (n x n points; deterministic). The integrand has kinks (horizon, critical
+// angle, the V-cavity's min), so the error decreases irregularly (measure/single_scattering_albedos.hpp
+// estimates it from three resolutions; tests compare with a direct quadrature of eval).
 // SmithMaskingOnly uses G1(i) (the weak white furnace integrated over outgoing directions).
 inline SingleScatteringAlbedo single_scattering_albedo(const MicrofacetBsdf& bsdf, const Vec3& i, int n = 1024) {
   SingleScatteringAlbedo a;
@@ -276,7 +289,9 @@ inline SingleScatteringAlbedo single_scattering_albedo(const MicrofacetBsdf& bsd
   double sr = 0.0, st = 0.0;
   for (int p = 0; p < n; ++p)
     for (int q = 0; q < n; ++q) {
-      const Vec3 m = ndf.sample_visible_normal(i, (p + 0.5) / n, (q + 0.5) / n);
+      const AlbedoNode a1 = albedo_node(p, n), a2 = albedo_node(q, n);
+      const double w = a1.w * a2.w;
+      const Vec3 m = ndf.sample_visible_normal(i, a1.u, a2.u);
       const double im = i.dot(m);
       if (!(im > 0.0)) continue;
       const double F = bsdf.material.reflectance(im, true);
@@ -285,7 +300,7 @@ inline SingleScatteringAlbedo single_scattering_albedo(const MicrofacetBsdf& bsd
         const double G2 = bsdf.masking == Masking::SmithHeightCorrelated ? G2_height_correlated(ndf, r, i, m)
                           : bsdf.masking == Masking::VCavity                ? vcavity_G2(r, i, m)
                                                                             : g1;
-        sr += F * G2 / g1;
+        sr += w * (F * G2 / g1);
       }
       if (bsdf.material.transmits() && F < 1.0) {
         Vec3 t;
@@ -294,7 +309,7 @@ inline SingleScatteringAlbedo single_scattering_albedo(const MicrofacetBsdf& bsd
               bsdf.masking == Masking::SmithHeightCorrelated ? G2_height_correlated_transmission(ndf, i, mirror_z(t))
               : bsdf.masking == Masking::VCavity             ? std::min(vcavity_G1(i, m), vcavity_G1(-t, m))
                                                              : g1;
-          st += (1.0 - F) * G2 / g1;
+          st += w * ((1.0 - F) * G2 / g1);
         }
       }
     }
@@ -331,7 +346,8 @@ SingleScatteringAlbedos single_scattering_albedos(const Ndf& ndf, const Material
   if (!(i.z() > 0.0) || n <= 0) return a;
   const double g1 = ndf.G1(i), lambda_i = ndf.Lambda(i);  // Lambda(i): once, not per sample
   if (!(g1 > 0.0)) return a;
-  const auto u_of = [n](int p) { return (p + 0.5) / n; };
+  const auto u_of = [n](int p) { return albedo_node(p, n).u; };
+  const auto w_of = [n](int p) { return albedo_node(p, n).w; };
   // Beckmann: the slope quantiles of every row (xt) and column (yt), as sample_visible_normal computes them.
   const bool beckmann = ndf.kind == Distribution::Beckmann;
   const Vec3 vs = ndf.stretched_view(i);
@@ -357,15 +373,16 @@ SingleScatteringAlbedos single_scattering_albedos(const Ndf& ndf, const Material
     if (!(im > 0.0)) return;
     const double F = material.reflectance(im, true);
     const Vec3 r = reflect(i, m);
+    const double w = w_of(p) * w_of(q);
     if (r.z() > 0.0) {
-      t[0] = F * G2_height_correlated(ndf, r, i, m, lambda_i) / g1;
-      t[2] = F * vcavity_G2(r, i, m) / g1;
+      t[0] = w * (F * G2_height_correlated(ndf, r, i, m, lambda_i) / g1);
+      t[2] = w * (F * vcavity_G2(r, i, m) / g1);
     }
     if (material.transmits() && F < 1.0) {
       Vec3 tr;
       if (refract(i, m, 1.0 / material.eta, &tr) && tr.z() < 0.0) {
-        t[1] = (1.0 - F) * G2_height_correlated_transmission(ndf, i, mirror_z(tr), lambda_i) / g1;
-        t[3] = (1.0 - F) * std::min(vcavity_G1(i, m), vcavity_G1(-tr, m)) / g1;
+        t[1] = w * ((1.0 - F) * G2_height_correlated_transmission(ndf, i, mirror_z(tr), lambda_i) / g1);
+        t[3] = w * ((1.0 - F) * std::min(vcavity_G1(i, m), vcavity_G1(-tr, m)) / g1);
       }
     }
   };

@@ -155,6 +155,15 @@ struct WalkExit {
   double weight = 1.0;      // product of conductor Fresnel factors (1 for mirror/dielectric)
 };
 
+// An escape of a walk tallied with its expected weight (walk_with_expected_escapes): after `order` events,
+// upward (reflected) or into the material below, along `direction` (real frame).
+struct WalkEscape {
+  int order;
+  bool reflected;
+  Vec3 direction;
+  double weight;
+};
+
 // A scattering event of the walk: v points back along the arriving ray (current frame), h is
 // the height (current frame), `above` tells the frame, weight the product of the Fresnel factors
 // before this event.
@@ -184,6 +193,20 @@ class SmithRandomWalk {
   // (the point estimators of models/smith_walk_eval.hpp evaluate the phase function there).
   template <class Rng, class Visitor>
   WalkExit walk(const Vec3& wi, Rng& rng, Visitor&& at_vertex) const {
+    return walk_with_expected_escapes(wi, rng, at_vertex, 0, [](const WalkEscape&) {});
+  }
+
+  // The walk with the escapes after the events 1 .. expected_orders tallied by their conditional
+  // expectations (Rao-Blackwellisation, docs/theory/bsdf.md "Expected escapes"): where the walk draws whether
+  // a ray leaving upward from height h escapes (probability g = C1(h)^Lambda(w)), it first calls
+  // at_escape({order, side, direction, W g}) with the walk's weight W; the draw then goes on as in walk()
+  // (the same uniforms, the same path, the same returned exit). The caller tallies an order either by the
+  // expected escapes or by the drawn exit, not both. Each order's expected tally is walk()'s
+  // (E[W 1{escape}] = E[W g]); the per-walk spread is smaller (at order 1 only the first height and facet
+  // normal are left random). expected_orders = 0 is walk().
+  template <class Rng, class Visitor, class EscapeVisitor>
+  WalkExit walk_with_expected_escapes(const Vec3& wi, Rng& rng, Visitor&& at_vertex, int expected_orders,
+                                      EscapeVisitor&& at_escape) const {
     WalkExit out;
     Vec3 w = -wi;       // propagation direction in the current frame
     double h = detail::kInf;
@@ -195,14 +218,27 @@ class SmithRandomWalk {
       if (w.z() > 0.0) {
         const double lambda = ndf_.Lambda(w);
         const double g1 = (lambda == 0.0) ? 1.0 : std::pow(c, lambda);
-        const double U = rng.uniform();
-        if (U < g1) {  // escapes
-          out.reflected = above;
-          out.order = order;
-          out.direction = above ? w : mirror_z(w);
-          return out;
+        if (order <= expected_orders) {
+          // expected escape W g1 tallied; the escape itself still drawn (continuing with W, probability 1 - g1)
+          at_escape(WalkEscape{order, above, above ? w : mirror_z(w), out.weight * g1});
+          const double U = rng.uniform();
+          if (U < g1) {
+            out.reflected = above;
+            out.order = order;
+            out.direction = above ? w : mirror_z(w);
+            return out;
+          }
+          c_next = c * std::pow(U, -1.0 / lambda);
+        } else {
+          const double U = rng.uniform();
+          if (U < g1) {  // escapes
+            out.reflected = above;
+            out.order = order;
+            out.direction = above ? w : mirror_z(w);
+            return out;
+          }
+          c_next = c * std::pow(U, -1.0 / lambda);
         }
-        c_next = c * std::pow(U, -1.0 / lambda);
       } else if (w.z() < 0.0) {
         const double lambda = ndf_.Lambda(-w);
         const double U = 1.0 - rng.uniform();  // (0, 1]

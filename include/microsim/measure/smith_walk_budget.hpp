@@ -1,0 +1,70 @@
+// The Smith random-walk model column of a bsdf measurement (models/smith_random_walk.hpp) at the
+// measurement's accuracy: walks with expected escapes (walk_with_expected_escapes) tallied per walk, and
+// the number of walks chosen from a pilot so that the walk's standard error of every albedo slot is at
+// most a stated fraction of the measurement's standard error of the same slot.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "microsim/measure/bsdf_measure.hpp"
+
+namespace microsim {
+
+// Adds one walk to the tally: its expected escapes (orders 1 .. K - 1) to their order slots, and its drawn
+// exit (`drawn`, nullptr for a lost walk) to the total and, at orders K and above, to the slot K+. The total
+// stays the drawn weight (a mirror's is exactly 1 per walk; expected escapes would add spread there). Per
+// walk one term per cell: the second moments are those of the per-walk contributions.
+void add_walk_escapes(BsdfTally& t, const std::vector<models::WalkEscape>& escapes, const models::WalkExit* drawn,
+                      const HemisphereMap& map, const InPlaneBins& plane);
+
+// The walk's error target: its standard error of an albedo slot at most this fraction of the
+// measurement's standard error of that slot.
+constexpr double kWalkErrorFraction = 1.0;
+// Slots measured to rounding (standard error below this, e.g. a mirror's total 1) set no target.
+constexpr double kWalkErrorFloor = 1e-9;
+
+// The pilot: kWalkPilotPerReplicate walks in each replicate; at most kWalkCapFactor model_walks walks (the
+// model never costs more walks than requested; the record states the error reached). The pilot's error
+// estimate from 32 replicates is itself uncertain by ~13%: the walks are chosen for the target error
+// divided by kWalkPilotMargin.
+constexpr std::uint64_t kWalkPilotPerReplicate = 128;
+constexpr std::uint64_t kWalkCapFactor = 1;
+constexpr double kWalkPilotMargin = 1.25;
+// Runs after the pilot, each with the walks its predecessor's errors ask for.
+constexpr int kWalkPasses = 3;
+
+// The first kLatinDims uniforms of the walks of one replicate form a Latin hypercube over its n walks
+// (each dimension d: walk j draws (perm_d(j) + U) / n): every walk's uniforms are still independent and
+// uniform, so each walk's expectation is unchanged, but the first height, the first facet normal and the
+// draw after it are spread evenly over the replicate, which removes most of the order-1 spread (a smooth
+// function of them with expected escapes). The errors come from the spread of the replicates.
+constexpr int kLatinDims = 6;
+struct WalkStrata {
+  std::uint64_t n = 0;
+  std::vector<std::uint32_t> perm;  // [d * n + j]
+};
+WalkStrata walk_strata(std::uint64_t seed, std::uint64_t stream, std::uint64_t n);
+
+// Walk j of a replicate (CounterRng(seed, stream, j), its first uniforms from `strata`) with expected
+// escapes at the orders 1 .. K - 1 (models::SmithRandomWalk::walk_with_expected_escapes), added to t
+// (add_walk_escapes); the drawn escape of orders K and above as one more escape.
+void smith_walk_expected_path(const models::SmithRandomWalk& walk, const Vec3& wi, std::uint64_t seed,
+                              std::uint64_t stream, std::uint64_t j, const WalkStrata& strata,
+                              const BsdfResult& r, BsdfTally& t);
+
+// The walks per replicate m = m_pilot (kWalkPilotMargin stderr_pilot / (fraction * stderr_measured))^2, the largest over the
+// albedo slots whose measured error is above kWalkErrorFloor (the error of the replicate means falls at least
+// like 1 / sqrt(m)), at least the pilot's and at most max_per_replicate. `pilot`: replicates of m_pilot walks.
+WalkBudget smith_walk_budget(const BsdfTally& pilot, const BsdfResult& measured, double fraction,
+                             std::uint64_t max_per_replicate);
+
+// The achieved ratio max over the same slots of walk stderr / measured stderr (0 when no slot sets a target);
+// *side, *slot: where it is reached.
+double smith_walk_error_ratio(const BsdfResult& r, int* side = nullptr, int* slot = nullptr);
+
+// The record's albedo_models.smith_multiple.error_target: {ratio: the target fraction, achieved_ratio,
+// limiting: "side order" where the achieved ratio is largest, walks_cap}, or null (fixed walks).
+Json smith_walk_error_json(const BsdfResult& r);
+
+}  // namespace microsim

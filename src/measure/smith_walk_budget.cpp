@@ -1,0 +1,153 @@
+#include "microsim/measure/smith_walk_budget.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+namespace microsim {
+
+namespace {
+
+// Adds the per-walk sums of (index, weight) pairs to sum and sum2: one term per distinct index.
+void add_cells(std::vector<std::pair<std::size_t, double>>& cells, std::vector<double>& sum,
+               std::vector<double>& sum2) {
+  std::sort(cells.begin(), cells.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (std::size_t i = 0; i < cells.size();) {
+    double w = 0.0;
+    std::size_t j = i;
+    for (; j < cells.size() && cells[j].first == cells[i].first; ++j) w += cells[j].second;
+    sum[cells[i].first] += w;
+    sum2[cells[i].first] += w * w;
+    i = j;
+  }
+}
+
+// The slots with a target: every (side, slot) whose measured albedo error is above the floor.
+template <class F>
+void for_target_slots(const BsdfResult& r, F&& f) {
+  const int K = r.measured.orders;
+  for (int sd = 0; sd < 2; ++sd)
+    for (int k = 0; k <= K; ++k) {
+      const double se = r.albedo(sd, k).stderr_;
+      if (std::isfinite(se) && se > kWalkErrorFloor) f(sd, k, se);
+    }
+}
+
+}  // namespace
+
+void add_walk_escapes(BsdfTally& t, const std::vector<models::WalkEscape>& escapes, const models::WalkExit* drawn,
+                      const HemisphereMap& map, const InPlaneBins& plane) {
+  const int K = t.orders;
+  thread_local std::vector<std::pair<std::size_t, double>> a, p, b;
+  a.clear();
+  p.clear();
+  b.clear();
+  auto add = [&](int s, int slot, double w, int px, int bin) {
+    a.push_back({t.a_index(s, slot), w});
+    if (px >= 0) p.push_back({t.p_index(s, slot, px), w});
+    if (bin >= 0) b.push_back({t.b_index(s, slot, bin), w});
+  };
+  for (const models::WalkEscape& e : escapes)  // orders 1 .. K - 1, expected
+    if (e.order >= 1 && e.order < K) add(e.reflected ? 0 : 1, e.order - 1, e.weight, map.pixel_of(e.direction), plane.bin_of(e.direction));
+  if (drawn && drawn->order >= 1) {  // the total, and the slot of orders K and above, drawn
+    const int s = drawn->reflected ? 0 : 1, px = map.pixel_of(drawn->direction), bin = plane.bin_of(drawn->direction);
+    if (drawn->order >= K) add(s, K - 1, drawn->weight, px, bin);
+    add(s, K, drawn->weight, px, bin);
+    t.both2 += drawn->weight * drawn->weight;
+  }
+  add_cells(a, t.albedo, t.albedo2);
+  add_cells(p, t.pix, t.pix2);
+  add_cells(b, t.plane, t.plane2);
+}
+
+WalkStrata walk_strata(std::uint64_t seed, std::uint64_t stream, std::uint64_t n) {
+  WalkStrata s;
+  s.n = n;
+  s.perm.resize(static_cast<std::size_t>(kLatinDims) * n);
+  for (int d = 0; d < kLatinDims; ++d) {
+    std::uint32_t* p = s.perm.data() + static_cast<std::size_t>(d) * n;
+    for (std::uint64_t j = 0; j < n; ++j) p[j] = static_cast<std::uint32_t>(j);
+    CounterRng rng(seed, stream ^ 0x1A7140C0BE000000ull, static_cast<std::uint64_t>(d));
+    for (std::uint64_t j = n; j > 1; --j)  // Fisher-Yates
+      std::swap(p[j - 1], p[rng.next_u64() % j]);
+  }
+  return s;
+}
+
+void smith_walk_expected_path(const models::SmithRandomWalk& walk, const Vec3& wi, std::uint64_t seed,
+                              std::uint64_t stream, std::uint64_t j, const WalkStrata& strata,
+                              const BsdfResult& r, BsdfTally& t) {
+  struct Rng {
+    CounterRng c;
+    const WalkStrata& s;
+    std::uint64_t j;
+    int k = 0;
+    double uniform() {
+      const double u = c.uniform();
+      if (k >= kLatinDims) return u;
+      const double v = (s.perm[static_cast<std::size_t>(k++) * s.n + j] + u) / static_cast<double>(s.n);
+      return std::min(v, 1.0 - 0x1p-53);
+    }
+  } rng{CounterRng(seed, stream, j), strata, j};
+  ++t.paths;
+  const int expected_orders = t.orders - 1;
+  thread_local std::vector<models::WalkEscape> escapes;
+  escapes.clear();
+  const models::WalkExit e = walk.walk_with_expected_escapes(
+      wi, rng, [](const models::WalkVertex&) {}, expected_orders,
+      [&](const models::WalkEscape& x) { escapes.push_back(x); });
+  t.events += static_cast<std::uint64_t>(e.order);
+  if (e.lost) ++t.unterminated;
+  add_walk_escapes(t, escapes, e.lost ? nullptr : &e, r.map, r.plane);
+}
+
+WalkBudget smith_walk_budget(const BsdfTally& pilot, const BsdfResult& r, double fraction,
+                             std::uint64_t max_per_replicate) {
+  WalkBudget out;
+  out.target_ratio = fraction;
+  const double m0 = static_cast<double>(pilot.paths) / std::max(1, pilot.replicates);
+  double need = m0;
+  for_target_slots(r, [&](int sd, int k, double se) {
+    const auto i = pilot.a_index(sd, k);
+    const double sp = pilot.estimate(pilot.albedo[i], pilot.albedo2[i]).stderr_;
+    const double ratio = kWalkPilotMargin * sp / (fraction * se);
+    const double m = m0 * ratio * ratio;
+    if (m > need) {
+      need = m;
+      out.limiting_side = sd;
+      out.limiting_slot = k;
+    }
+  });
+  const std::uint64_t m = std::min<std::uint64_t>(max_per_replicate, static_cast<std::uint64_t>(std::ceil(need)));
+  out.walks = std::max<std::uint64_t>(m, static_cast<std::uint64_t>(m0)) * std::max(1, pilot.replicates);
+  return out;
+}
+
+double smith_walk_error_ratio(const BsdfResult& r, int* side, int* slot) {
+  double ratio = 0.0;
+  if (side) *side = -1;
+  if (slot) *slot = -1;
+  if (!r.smith_walk) return ratio;
+  for_target_slots(r, [&](int sd, int k, double se) {
+    const double x = r.model_albedo(sd, k).stderr_ / se;
+    if (x > ratio) {
+      ratio = x;
+      if (side) *side = sd;
+      if (slot) *slot = k;
+    }
+  });
+  return ratio;
+}
+
+Json smith_walk_error_json(const BsdfResult& r) {
+  if (!r.smith_walk || !(r.model_budget.target_ratio > 0.0)) return nullptr;
+  int side = -1, slot = -1;
+  const double achieved = smith_walk_error_ratio(r, &side, &slot);
+  const char* sides[2] = {"reflected", "transmitted"};
+  return {{"ratio", r.model_budget.target_ratio},
+          {"achieved_ratio", achieved},
+          {"limiting", side < 0 ? Json(nullptr) : Json(std::string(sides[side]) + " " + order_key(slot, r.options.orders))},
+          {"walks_cap", r.options.model_walks * kWalkCapFactor}};
+}
+
+}  // namespace microsim

@@ -1,0 +1,213 @@
+// Tests of the Smith walk model column at the measurement's accuracy (measure/smith_walk_budget.hpp):
+// expected escapes tally the same means per order as drawn escapes (with a power check), the Latin-hypercube
+// replicates give the same tallies for any thread count, and the number of walks meets the error target.
+#include <gtest/gtest.h>
+
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/smith_walk_budget.hpp"
+#include "microsim/models/smith_random_walk.hpp"
+#include "microsim/surface/gaussian.hpp"
+#include "microsim/surface/generators.hpp"
+
+using namespace microsim;
+namespace mm = microsim::models;
+
+namespace {
+
+struct Rng {
+  CounterRng c;
+  double uniform() { return c.uniform(); }
+};
+
+// Per-order albedo means and standard errors of n independent walks: slot k = 0 .. K-2 the orders, K-1 the
+// orders K and above, per side; `expected`: expected escapes at orders 1 .. K - 1 (times `bias`: a deliberately
+// wrong weight for the power check).
+struct OrderMeans {
+  std::vector<double> mean, se;  // [side * K + k]
+};
+OrderMeans order_means(const mm::SmithRandomWalk& walk, const Vec3& wi, int K, std::uint64_t n, bool expected,
+                       std::uint64_t stream, double bias = 1.0) {
+  std::vector<double> sum(2 * K, 0.0), sum2(2 * K, 0.0), x(2 * K);
+  for (std::uint64_t i = 0; i < n; ++i) {
+    Rng rng{CounterRng(7, stream, i)};
+    std::fill(x.begin(), x.end(), 0.0);
+    auto slot = [&](bool reflected, int order) { return (reflected ? 0 : K) + std::min(order, K) - 1; };
+    const mm::WalkExit e = walk.walk_with_expected_escapes(
+        wi, rng, [](const mm::WalkVertex&) {}, expected ? K - 1 : 0,
+        [&](const mm::WalkEscape& s) { x[slot(s.reflected, s.order)] += bias * s.weight; });
+    if (!e.lost && e.order >= 1 && (!expected || e.order >= K)) x[slot(e.reflected, e.order)] += e.weight;
+    for (int k = 0; k < 2 * K; ++k) {
+      sum[k] += x[k];
+      sum2[k] += x[k] * x[k];
+    }
+  }
+  OrderMeans m;
+  for (int k = 0; k < 2 * K; ++k) {
+    const double mu = sum[k] / n;
+    m.mean.push_back(mu);
+    m.se.push_back(std::sqrt(std::max(0.0, sum2[k] / n - mu * mu) / (n - 1)));
+  }
+  return m;
+}
+
+// Largest |difference| / combined standard error over the slots.
+double largest_z(const OrderMeans& a, const OrderMeans& b) {
+  double z = 0.0;
+  for (std::size_t k = 0; k < a.mean.size(); ++k) {
+    const double se = std::hypot(a.se[k], b.se[k]);
+    if (se > 0.0) z = std::max(z, std::abs(a.mean[k] - b.mean[k]) / se);
+  }
+  return z;
+}
+
+// 3 materials x 2 roughnesses x 2 incidences x 8 slots: a Sidak bound for 96 z at 1e-3 overall is ~4.4.
+constexpr double kZ = 4.5;
+
+}  // namespace
+
+TEST(SmithWalkExpectedEscapes, SameMeanPerOrderAsDrawnEscapes) {
+  const int K = 4;
+  const std::uint64_t n = 60000;
+  double worst = 0.0;
+  for (const mm::Material& mat :
+       {mm::Material::mirror(), mm::Material::conductor(0.47, 2.4), mm::Material::dielectric(1.5)})
+    for (double alpha : {0.3, 0.8})
+      for (double theta : {0.0, 60.0}) {
+        const mm::SmithRandomWalk walk(mm::Ndf::beckmann(alpha, alpha), mat);
+        const Vec3 wi = direction_from_angles(rad(theta), 0.0);
+        const OrderMeans drawn = order_means(walk, wi, K, n, false, 1);
+        const OrderMeans expected = order_means(walk, wi, K, n, true, 2);
+        const double z = largest_z(drawn, expected);
+        worst = std::max(worst, z);
+        EXPECT_LT(z, kZ) << to_string(mat.kind) << " alpha " << alpha << " theta " << theta;
+        // The expected escapes' error of order 1 is smaller (the point of the estimator).
+        EXPECT_LT(expected.se[0], drawn.se[0]) << to_string(mat.kind) << " alpha " << alpha << " theta " << theta;
+      }
+  RecordProperty("largest_z", std::to_string(worst));
+}
+
+TEST(SmithWalkExpectedEscapes, WrongWeightIsDetected) {
+  // Power: the expected escapes tallied 5% too heavy are rejected at the same threshold.
+  const int K = 4;
+  const mm::SmithRandomWalk walk(mm::Ndf::beckmann(0.5, 0.5), mm::Material::mirror());
+  const Vec3 wi = direction_from_angles(rad(30.0), 0.0);
+  const OrderMeans drawn = order_means(walk, wi, K, 60000, false, 1);
+  const OrderMeans wrong = order_means(walk, wi, K, 60000, true, 2, 1.05);
+  EXPECT_GT(largest_z(drawn, wrong), kZ);
+}
+
+TEST(SmithWalkExpectedEscapes, NoExpectedOrdersIsTheDrawnWalk) {
+  // expected_orders = 0: the same draws and exits as walk().
+  const mm::SmithRandomWalk walk(mm::Ndf::beckmann(0.6, 0.6), mm::Material::dielectric(1.5));
+  const Vec3 wi = direction_from_angles(rad(50.0), 0.0);
+  for (std::uint64_t i = 0; i < 2000; ++i) {
+    Rng a{CounterRng(3, 9, i)}, b{CounterRng(3, 9, i)};
+    const mm::WalkExit x = walk.walk(wi, a);
+    int calls = 0;
+    const mm::WalkExit y = walk.walk_with_expected_escapes(
+        wi, b, [](const mm::WalkVertex&) {}, 0, [&](const mm::WalkEscape&) { ++calls; });
+    EXPECT_EQ(calls, 0);
+    EXPECT_EQ(x.order, y.order);
+    EXPECT_EQ(x.reflected, y.reflected);
+    EXPECT_EQ(x.direction, y.direction);
+  }
+}
+
+namespace {
+Microsurface gaussian_tile(double alpha, std::uint64_t seed) {
+  GaussianParams gp;
+  gp.alpha_x = gp.alpha_y = alpha;
+  gp.resolution = 64;
+  gp.seed = seed;
+  return generate_gaussian(gp);
+}
+BsdfOptions walk_options(const mm::Material& m, double theta_deg, std::uint64_t rays) {
+  BsdfOptions o;
+  o.material = m;
+  o.theta_i = rad(theta_deg);
+  o.rays = rays;
+  o.resolution = 8;
+  o.model_walks = rays;
+  return o;
+}
+}  // namespace
+
+TEST(SmithWalkBudget, IndependentOfThreadCount) {
+  const Microsurface s = gaussian_tile(0.5, 2);
+  Tracer tracer(s);
+  const BsdfOptions o = walk_options(mm::Material::dielectric(1.5), 40.0, 40000);
+  BsdfResult a, b;
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    a = measure_bsdf(tracer, o);
+  }
+  b = measure_bsdf(tracer, o);
+  ASSERT_TRUE(a.smith_walk && b.smith_walk);
+  EXPECT_GT(a.smith_walk->replicates, 1);
+  EXPECT_EQ(a.smith_walk->paths, b.smith_walk->paths);
+  EXPECT_EQ(a.smith_walk->albedo, b.smith_walk->albedo);  // bitwise
+  EXPECT_EQ(a.smith_walk->albedo2, b.smith_walk->albedo2);
+  EXPECT_EQ(a.smith_walk->plane, b.smith_walk->plane);
+  EXPECT_EQ(a.smith_walk->pix2, b.smith_walk->pix2);
+}
+
+TEST(SmithWalkBudget, ErrorTargetMetBelowTheCap) {
+  // Where the cap (model_walks) is not reached, every albedo slot's walk error is at most the
+  // measurement's (the pilot margin and the re-checked runs cover the pilot's own uncertainty); a target
+  // half as large needs about 4x the walks (power: the rule follows the target).
+  const Microsurface s = gaussian_tile(0.5, 3);
+  Tracer tracer(s);
+  int checked = 0;
+  for (const mm::Material& mat : {mm::Material::mirror(), mm::Material::conductor(0.47, 2.4), mm::Material::dielectric(1.5)})
+    for (double theta : {20.0, 70.0}) {
+      BsdfOptions o = walk_options(mat, theta, 20000);
+      o.model_walks = 2000000;  // a cap far above the need
+      const BsdfResult r = measure_bsdf(tracer, o);
+      ASSERT_TRUE(r.smith_walk);
+      ASSERT_LT(r.smith_walk->paths, o.model_walks * kWalkCapFactor);
+      EXPECT_LE(smith_walk_error_ratio(r), 1.0) << to_string(mat.kind) << " theta " << theta;
+      o.model_error_fraction = 0.5;
+      const BsdfResult tight = measure_bsdf(tracer, o);
+      EXPECT_GT(tight.smith_walk->paths, 2 * r.smith_walk->paths) << to_string(mat.kind) << " theta " << theta;
+      if (tight.smith_walk->paths < o.model_walks * kWalkCapFactor) {
+        EXPECT_LE(smith_walk_error_ratio(tight), 0.5) << to_string(mat.kind) << " theta " << theta;
+      }
+      ++checked;
+    }
+  EXPECT_EQ(checked, 6);
+}
+
+TEST(SmithWalkBudget, WalksFromThePilotRule) {
+  // smith_walk_budget: m = m_pilot (margin * se_pilot / (fraction * se_measured))^2 for the slot that needs the
+  // most, clamped to [m_pilot, cap]; here constructed tallies with known errors.
+  BsdfResult r;
+  r.options.orders = 2;
+  r.measured = BsdfTally(2, 1, 1);
+  BsdfTally pilot(2, 1, 1);
+  // Two replicates of 100 walks per slot: replicate means x1, x2 give sum = 100 (x1 + x2) and
+  // squared deviations (x1 - x2)^2 / 2, so se = |x1 - x2| / 2.
+  auto replicate = [](BsdfTally& t, int n, const std::vector<double>& means) {
+    BsdfTally rep(2, 1, 1);
+    rep.paths = static_cast<std::uint64_t>(n);
+    for (std::size_t k = 0; k < means.size(); ++k) rep.albedo[k] = means[k] * n;
+    t.add_replicate(rep);
+  };
+  // slots (side 0): order_1, order_2plus, total; side 1 all zero.
+  replicate(r.measured, 1000, {0.50, 0.10, 0.60, 0, 0, 0});
+  replicate(r.measured, 1000, {0.52, 0.11, 0.63, 0, 0, 0});  // se 0.01, 0.005, 0.015
+  replicate(pilot, 100, {0.40, 0.20, 0.60, 0, 0, 0});
+  replicate(pilot, 100, {0.48, 0.21, 0.69, 0, 0, 0});  // se 0.04, 0.005, 0.045
+  const WalkBudget b = smith_walk_budget(pilot, r, 1.0, 1000000);
+  // order_1: (1.25 * 0.04 / 0.01)^2 = 25 -> 2500 walks per replicate; total: (1.25 * 3)^2 = 14.06 -> 1407.
+  EXPECT_EQ(b.limiting_side, 0);
+  EXPECT_EQ(b.limiting_slot, 0);
+  EXPECT_NEAR(static_cast<double>(b.walks), 2.0 * 2500, 2.0);
+  EXPECT_EQ(smith_walk_budget(pilot, r, 1.0, 700).walks, 1400u);  // the cap
+  EXPECT_EQ(smith_walk_budget(pilot, r, 100.0, 1000000).walks, 200u);  // at least the pilot
+}
