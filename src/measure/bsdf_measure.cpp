@@ -568,7 +568,7 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
     });
     BsdfTally t(K, npix, nplane);
     run_replicate_paths<BsdfTally, BsdfTally>(
-        0, R, m, K, npix, nplane, progress ? std::function<void(double)>([&](double f) { progress(p0 + span * f); }) : nullptr, 1.0,
+        0, R, m, TallyShape{K, npix, nplane}, progress ? std::function<void(double)>([&](double f) { progress(p0 + span * f); }) : nullptr, 1.0,
         [&](int q, std::uint64_t j, BsdfTally& acc) {
           smith_walk_expected_path(walk, r.wi, o.seed, ReplicatePlan::stream(mstream ^ salt, q), j, strata[q], r, acc);
         },
