@@ -549,6 +549,12 @@ void check_spectral_options(const BsdfOptions& o, const Microsurface& s) {
   if (is_vcavity(s)) throw UsageError("--wavelengths: V-cavity ensembles are measured at one index");
 }
 
+void check_polarized_options(const BsdfOptions& o, const Microsurface& s) {
+  if (!o.polarized) return;
+  if (o.split) throw UsageError("--polarized: polarized runs are not split over shards or MPI ranks");
+  if (is_vcavity(s)) throw UsageError("--polarized: V-cavity ensembles are not walked with Mueller matrices");
+}
+
 }  // namespace
 
 BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
@@ -561,6 +567,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
   if (o.orders < 1 || o.orders > 64) throw UsageError("--orders must be in [1, 64]");
   if (o.resolution < 1 || o.resolution > 4096) throw UsageError("--resolution must be in [1, 4096]");
   check_spectral_options(o, s);
+  check_polarized_options(o, s);
   const auto t0 = std::chrono::steady_clock::now();
 
   BsdfResult r;
@@ -667,6 +674,10 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
       exchange_paths(*o.split, "bsdf", reps, false, kept);
       for (const BsdfTally& rep : kept) r.measured.add_replicate(rep);
     }
+    if (o.polarized)
+      r.polarization = measure_polarization(
+          tracer, {wi, window.origin0, window.e1, window.e2, ray_weight, finite, o.seed, stream, o.rays,
+                   o.replicates, K, o.max_events, mat, o.spectral});
   }
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
