@@ -104,6 +104,40 @@ Estimate PolarizationTally::statistic(int k, int l, const std::function<double(c
   return e;
 }
 
+namespace {
+// sum_px |pol(M_px s)| / sum_px s0(M_px s) over a [k][l][pixel][16] block starting at p.
+double resolved_dop(const double* p, int pixels, const models::Stokes& s) {
+  double pol = 0.0, flux = 0.0;
+  for (int px = 0; px < pixels; ++px) {
+    const models::Stokes out = read_matrix(p + 16 * static_cast<std::size_t>(px), 1.0) * s;
+    pol += out.tail<3>().norm();
+    flux += out[0];
+  }
+  return flux > 0.0 ? pol / flux : 0.0;
+}
+}  // namespace
+
+Estimate PolarizationTally::resolved_degree_of_polarization(int k, int l, const models::Stokes& s) const {
+  Estimate e;
+  e.n = paths;
+  if (paths == 0 || pixels == 0) return e;
+  const std::size_t block = static_cast<std::size_t>(pixels) * 16;
+  const std::size_t at = (static_cast<std::size_t>(k) * wavelengths + l) * block;
+  e.mean = resolved_dop(map_total.data() + at, pixels, s);
+  if (replicates < 2) return e;
+  const std::size_t per_rep = static_cast<std::size_t>(slots()) * wavelengths * block;
+  double sum = 0.0, sum2 = 0.0;
+  for (int q = 0; q < replicates; ++q) {
+    const double x = resolved_dop(map_replicate.data() + q * per_rep + at, pixels, s);
+    sum += x;
+    sum2 += x * x;
+  }
+  const double m = sum / replicates;
+  const double var = std::max(0.0, sum2 / replicates - m * m) * replicates / (replicates - 1.0);
+  e.stderr_ = std::sqrt(var / replicates);
+  return e;
+}
+
 Estimate coherency_min_eigenvalue(const PolarizationTally& t, int k, int l) {
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4cd> es(models::coherency_matrix(t.mean(k, l)));
   const Eigen::Vector4cd v = es.eigenvectors().col(0);  // the lowest eigenvalue's
@@ -132,14 +166,18 @@ std::uint64_t path_batches(std::uint64_t n) { return std::min<std::uint64_t>((n 
 
 struct UnitSums {
   std::vector<double> sums;  // [k][l][16]
+  std::vector<double> map;   // [k][l][pixel][16]
   std::uint64_t paths = 0;
   UnitSums& operator+=(const UnitSums& o) {
     if (sums.empty()) return *this = o;
     for (std::size_t i = 0; i < sums.size(); ++i) sums[i] += o.sums[i];
+    for (std::size_t i = 0; i < map.size(); ++i) map[i] += o.map[i];
     paths += o.paths;
     return *this;
   }
 };
+// Units run at once: at most this many bytes of unit sums.
+constexpr double kPassBytes = 64.0 * 1024 * 1024;
 }  // namespace
 
 PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalkSetup& su) {
@@ -151,7 +189,11 @@ PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalk
   t.orders = K;
   t.wavelengths = L;
   t.replicates = plan.replicates;
+  const HemisphereMap map(kPolarizationMapResolution);
+  const int npix = map.size();
+  t.pixels = npix;
   const std::size_t width = static_cast<std::size_t>(K + 1) * L * 16;
+  const std::size_t map_width = width * npix;
   const std::uint64_t n = plan.per_replicate();
   const std::uint64_t nchunks = (n + kChunk - 1) / kChunk, batches = path_batches(n);
   const std::uint64_t units = static_cast<std::uint64_t>(plan.replicates) * batches;
@@ -173,45 +215,67 @@ PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalk
     Mueller M[kMaxWavelengths];
     walk_path_muellers(su.wi, facets, e.direction, materials, L, M);
     const int k = std::min(e.order, K) - 1;
+    // A finite object's ray reflected below the base plane counts in the albedo only.
+    const int px = e.direction.z() > 0.0 ? map.pixel_of(e.direction) : -1;
     for (int slot : {k, K})
       for (int l = 0; l < L; ++l) {
         double* p = acc.sums.data() + (static_cast<std::size_t>(slot) * L + l) * 16;
+        double* q = px < 0 ? nullptr : acc.map.data() + ((static_cast<std::size_t>(slot) * L + l) * npix + px) * 16;
         for (int a = 0; a < 4; ++a)
-          for (int b = 0; b < 4; ++b) p[4 * a + b] += su.ray_weight * M[l](a, b);
+          for (int b = 0; b < 4; ++b) {
+            const double w = su.ray_weight * M[l](a, b);
+            p[4 * a + b] += w;
+            if (q) q[4 * a + b] += w;
+          }
       }
   };
 
-  std::vector<UnitSums> parts(units);
-  tbb::parallel_for(std::uint64_t(0), units, [&](std::uint64_t w) {
-    const int q = static_cast<int>(w / batches);
-    const std::uint64_t bt = w % batches;
-    const std::uint64_t c0 = nchunks * bt / batches, c1 = nchunks * (bt + 1) / batches;
-    parts[w] = tbb::parallel_deterministic_reduce(
-        tbb::blocked_range<std::uint64_t>(c0, c1, 1), UnitSums(),
-        [&](const tbb::blocked_range<std::uint64_t>& range, UnitSums acc) {
-          if (acc.sums.empty()) acc.sums.assign(width, 0.0);
-          for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
-            const std::uint64_t end = std::min(n, (c + 1) * kChunk);
-            for (std::uint64_t i = c * kChunk; i < end; ++i) path(q, i, acc);
-          }
-          return acc;
-        },
-        [](UnitSums a, const UnitSums& b) {
-          a += b;
-          return a;
-        });
-  });
-  // Each replicate from a zero sum, its batches in order; the replicates in order.
+  // Units (replicate, batch) run a pass at a time; each replicate's sum starts at zero and adds
+  // its batches in order, then the replicates are added in order.
   t.total.assign(width, 0.0);
   t.replicate.assign(width * plan.replicates, 0.0);
-  for (int q = 0; q < plan.replicates; ++q) {
-    double* rep = t.replicate.data() + width * q;
-    for (std::uint64_t bt = 0; bt < batches; ++bt) {
-      const UnitSums& u = parts[q * batches + bt];
-      for (std::size_t i = 0; i < width; ++i) rep[i] += u.sums[i];
-      t.paths += u.paths;
+  t.map_total.assign(map_width, 0.0);
+  t.map_replicate.assign(map_width * plan.replicates, 0.0);
+  const std::uint64_t per_pass =
+      std::max<std::uint64_t>(16, static_cast<std::uint64_t>(kPassBytes / (8.0 * (width + map_width))));
+  for (std::uint64_t u = 0; u < units; u += per_pass) {
+    const std::uint64_t u1 = std::min(units, u + per_pass);
+    std::vector<UnitSums> parts(u1 - u);
+    tbb::parallel_for(u, u1, [&](std::uint64_t w) {
+      const int q = static_cast<int>(w / batches);
+      const std::uint64_t bt = w % batches;
+      const std::uint64_t c0 = nchunks * bt / batches, c1 = nchunks * (bt + 1) / batches;
+      parts[w - u] = tbb::parallel_deterministic_reduce(
+          tbb::blocked_range<std::uint64_t>(c0, c1, 1), UnitSums(),
+          [&](const tbb::blocked_range<std::uint64_t>& range, UnitSums acc) {
+            if (acc.sums.empty()) {
+              acc.sums.assign(width, 0.0);
+              acc.map.assign(map_width, 0.0);
+            }
+            for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
+              const std::uint64_t end = std::min(n, (c + 1) * kChunk);
+              for (std::uint64_t i = c * kChunk; i < end; ++i) path(q, i, acc);
+            }
+            return acc;
+          },
+          [](UnitSums a, const UnitSums& b) {
+            a += b;
+            return a;
+          });
+    });
+    for (std::uint64_t w = u; w < u1; ++w) {
+      const std::size_t q = w / batches;
+      const UnitSums& part = parts[w - u];
+      double* rep = t.replicate.data() + width * q;
+      for (std::size_t i = 0; i < width; ++i) rep[i] += part.sums[i];
+      double* rep_map = t.map_replicate.data() + map_width * q;
+      for (std::size_t i = 0; i < map_width; ++i) rep_map[i] += part.map[i];
+      t.paths += part.paths;
     }
-    for (std::size_t i = 0; i < width; ++i) t.total[i] += rep[i];
+  }
+  for (int q = 0; q < plan.replicates; ++q) {
+    for (std::size_t i = 0; i < width; ++i) t.total[i] += t.replicate[width * q + i];
+    for (std::size_t i = 0; i < map_width; ++i) t.map_total[i] += t.map_replicate[map_width * q + i];
   }
   return t;
 }
@@ -238,6 +302,7 @@ Json polarization_json(const PolarizationTally& t, const std::vector<double>& wa
   Json j;
   j["frames"] = "in: stokes_frame(l), out: stokes_frame(o) of each path's exit direction";
   j["wavelengths_nm"] = wavelengths_nm;
+  j["map_resolution"] = kPolarizationMapResolution;
   Json reflected = Json::object();
   for (int k = 0; k <= t.orders; ++k) {
     Json per_l = Json::array();
@@ -256,6 +321,14 @@ Json polarization_json(const PolarizationTally& t, const std::vector<double>& wa
       }
       e["degree_of_polarization"] = dop;
       e["degree_of_polarization_stderr"] = dop_se;
+      Json rdop = Json::object(), rdop_se = Json::object();
+      for (const NamedStokes& in : polarization_inputs()) {
+        const Estimate d = t.resolved_degree_of_polarization(k, l, in.s);
+        rdop[in.name] = d.mean;
+        rdop_se[in.name] = d.stderr_;
+      }
+      e["resolved_degree_of_polarization"] = rdop;
+      e["resolved_degree_of_polarization_stderr"] = rdop_se;
       const Estimate ev = coherency_min_eigenvalue(t, k, l);
       e["coherency_min_eigenvalue"] = ev.mean;
       e["coherency_min_eigenvalue_stderr"] = ev.stderr_;

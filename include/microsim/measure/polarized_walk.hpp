@@ -24,13 +24,20 @@ namespace microsim {
 class Tracer;
 struct WalkFacet;
 
+// The equal-area map (HemisphereMap) of the direction-resolved sums: coarse, so that each pixel
+// gathers paths of every order.
+constexpr int kPolarizationMapResolution = 8;
+
 // The reflected Mueller sums of a run: per replicate, order slot and wavelength, 16 elements
-// (row-major).
+// (row-major); and the same per pixel of a coarse hemisphere map of the exit directions (each
+// path's matrix in the frame of its own direction).
 struct PolarizationTally {
-  int orders = 0, wavelengths = 1, replicates = 0;
+  int orders = 0, wavelengths = 1, replicates = 0, pixels = 0;
   std::uint64_t paths = 0;          // all replicates
   std::vector<double> total;        // [k][l][16]: sum of w0 * M over reflected paths
   std::vector<double> replicate;    // [q][k][l][16]: the same per replicate
+  std::vector<double> map_total;      // [k][l][pixel][16]
+  std::vector<double> map_replicate;  // [q][k][l][pixel][16]
 
   int slots() const { return orders + 1; }
   std::size_t index(int k, int l) const { return (static_cast<std::size_t>(k) * wavelengths + l) * 16; }
@@ -42,6 +49,10 @@ struct PolarizationTally {
   // A scalar linear-or-not function g of the mean matrix, with the standard error of g over the
   // replicate means (sd / sqrt(R)).
   Estimate statistic(int k, int l, const std::function<double(const models::Mueller&)>& g) const;
+  // The degree of polarization of the reflected light direction by direction for the input s:
+  // sum over pixels of |(s1, s2, s3)| of M_pixel s over the sum of its s0 (the flux-weighted mean
+  // of the pixels' degrees of polarization), with its error over the replicates.
+  Estimate resolved_degree_of_polarization(int k, int l, const models::Stokes& s) const;
 };
 
 // The inputs of the polarized walk: what measure_bsdf uses for its own paths.
