@@ -24,6 +24,12 @@ using models::Mueller;
 namespace {
 // The Fresnel matrix of one event for one material, in the facet's s/p frames.
 Mueller facet_mueller(const WalkFacet& f, const Material& mat) {
+  if (mat.kind == MaterialKind::Conductor) {
+    // models::facet_reflection_mueller with the amplitudes computed once: the same values
+    // (fresnel_conductor squares these amplitudes).
+    const models::FresnelAmplitudes a = models::fresnel_conductor_amplitudes(f.cos_i, mat.eta, mat.k);
+    return models::fresnel_mueller(std::norm(a.rs), std::norm(a.rp), a.rs * std::conj(a.rp));
+  }
   if (f.refracted) return models::facet_transmission_mueller(mat, f.cos_i, f.front);
   return models::facet_reflection_mueller(mat, f.cos_i, f.front);
 }
