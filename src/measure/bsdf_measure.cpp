@@ -592,6 +592,12 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
   return t;
 }
 
+void check_polarized_options(const BsdfOptions& o, const Microsurface& s) {
+  if (!o.polarized) return;
+  if (o.split) throw UsageError("--polarized: polarized runs are not split over shards or MPI ranks");
+  if (is_vcavity(s)) throw UsageError("--polarized: V-cavity ensembles are not walked with Mueller matrices");
+}
+
 }  // namespace
 
 BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
@@ -604,6 +610,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
   if (o.orders < 1 || o.orders > 64) throw ParameterError("{orders} must be in [1, 64]");
   if (o.resolution < 1 || o.resolution > 4096) throw ParameterError("{resolution} must be in [1, 4096]");
   check_spectral_options(o, s);
+  check_polarized_options(o, s);
   const auto t0 = std::chrono::steady_clock::now();
 
   BsdfResult r;
@@ -710,6 +717,10 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
       exchange_paths(*o.split, "bsdf", reps, false, kept);
       for (const BsdfTally& rep : kept) r.measured.add_replicate(rep);
     }
+    if (o.polarized)
+      r.polarization = measure_polarization(
+          tracer, {wi, window.origin0, window.e1, window.e2, ray_weight, finite, o.seed, stream, o.rays,
+                   o.replicates, K, o.max_events, mat, o.spectral});
   }
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 

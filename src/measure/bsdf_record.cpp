@@ -218,6 +218,7 @@ BsdfTableOptions bsdf_table_options(const BsdfRequest& o, const Microsurface& s,
   to.base.resolution = o.resolution;
   to.base.replicates = o.replicates;
   to.base.models = o.models;
+  to.base.polarized = o.polarized;
   to.base.model_walks = s.nominal && o.models ? to.base.rays : 0;
   for (double t : o.theta_i_deg) to.theta_i.push_back(rad(t));
   for (double p : o.phi_i_deg) to.phi_i.push_back(rad(p));
@@ -517,6 +518,7 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
   }
   j["albedo_models"] = models;
   if (!r.spectral.empty()) j["spectral"] = spectral_albedo_json(r);
+  if (r.polarization) j["polarization"] = polarization_json(*r.polarization, r.options.wavelengths_nm);
 
   // --- the tables: measured beside the models per side and order, and the in-plane lobe
   j["rows"] = albedo_table(r, am).rows;
@@ -580,6 +582,7 @@ void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Mi
                      {"smith_multiple_walks", r.options.model_walks},
                      {"models", o.models}};
   if (o.format == "bsdf") parameters["table_resolution"] = o.table_resolution;
+  if (o.polarized) parameters["polarized"] = true;
   if (!r.spectral.empty()) {
     const auto table = bsdf_index_table(o);
     parameters["metal"] = o.metal.empty() ? Json(nullptr) : Json(o.metal);

@@ -5,13 +5,14 @@ namespace microsim {
 WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir0,
                        const models::Material& mat, CounterRng& rng, int max_events, bool finite,
                        TraceCounters& counters, std::uint64_t& events,
-                       const SpectralWeights* spectral) {
+                       const SpectralWeights* spectral, std::vector<WalkFacet>* facets) {
   using models::MaterialKind;
   const Microsurface& s = tracer.surface();
   WalkEnd e;
   Vec3 dir = dir0;
   RaySide side = RaySide::Front;
   TraceHit hit = tracer.first_hit(origin, dir, nullptr, counters);
+  if (facets) facets->clear();
   for (int order = 0;; ++order) {
     e.order = order;
     e.direction = dir;
@@ -44,6 +45,9 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
     const Vec3 v = -dir;
     const double vm = std::max(0.0, v.dot(m));
     const bool front = side == RaySide::Front;
+    const Vec3 travel = dir;
+    bool refracted = false;
+    double probability = 1.0;
     switch (mat.kind) {
       case MaterialKind::Mirror:
         dir = models::reflect(v, m);  // [GeomBSDF24, eq. 13a]
@@ -60,20 +64,25 @@ WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir
         const double F = mat.reflectance(vm, front);
         if (rng.uniform() < F) {
           dir = models::reflect(v, m);
+          probability = F;
         } else {
+          probability = 1.0 - F;
           const double n = front ? mat.eta : 1.0 / mat.eta;  // far side over near side
           Vec3 t_dir;
           if (models::refract(v, m, 1.0 / n, &t_dir)) {  // [GeomBSDF24, eq. 15a]
             dir = t_dir;
             side = front ? RaySide::Back : RaySide::Front;
+            refracted = true;
           } else {
-            dir = models::reflect(v, m);
+            dir = models::reflect(v, m);  // F < 1 under total reflection only by rounding
+            probability = 1.0;
           }
         }
         break;
       }
     }
     dir.normalize();
+    if (facets) facets->push_back({hit.normal, travel, vm, front, refracted, probability});
     // The plane left is formed only if a candidate hit is nearly parallel to it (SourceFacet).
     const SourceFacet left{hit.facet, hit.normal};
     hit = tracer.first_hit(hit.point, dir, left, counters, side);

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "microsim/io/output.hpp"
+#include "microsim/measure/polarized_walk.hpp"
 #include "microsim/measure/shards.hpp"
 #include "microsim/models/microfacet_bsdf.hpp"
 #include "microsim/models/smith_random_walk.hpp"
@@ -138,6 +139,10 @@ struct BsdfOptions {
   // Independent randomized replicates the explicit surface's rays are split into: standard
   // errors of the replicate means (measure/replicates.hpp).
   int replicates = 32;
+  // Mueller matrices along every reflected path, per order and wavelength
+  // (measure/polarized_walk.hpp): the paths are walked a second time with the same random
+  // numbers. Periodic tiles and finite objects in one process.
+  bool polarized = false;
   // Called from the calling thread with the fraction of work done (progress display).
   std::function<void(double)> progress;
   // Other processes sharing the replicates and the model's batches (measure/shards.hpp);
@@ -222,6 +227,7 @@ struct BsdfResult {
   std::optional<BsdfTally> smith_walk;  // the model's tallies (nominal NDF available)
   WalkBudget model_budget;              // how many walks, for which error
   std::optional<models::Ndf> nominal;
+  std::optional<PolarizationTally> polarization;  // options.polarized: the reflected Mueller sums
   double seconds = 0, model_seconds = 0;
 
   int wavelengths() const { return static_cast<int>(spectral.size()); }

@@ -43,6 +43,7 @@ struct BsdfRequest {
   std::uint64_t seed = 1;
   int replicates = 32;
   bool models = true;
+  bool polarized = false;     // Mueller matrices along the paths (measure/polarized_walk.hpp)
   int resolution = 64;        // hemisphere map R; also the in-plane bins
   int table_resolution = 64;  // .bsdf tables
   std::string format = "json";  // json, exr, bsdf (RGL tensor file) or binary (MERL)

@@ -5,6 +5,7 @@
 // tile, finite objects and the V-cavity ensemble (each groove traced on its own).
 #pragma once
 #include <cstdint>
+#include <vector>
 
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/exit_counts.hpp"
@@ -33,15 +34,27 @@ struct SpectralWeights {
   double* weights = nullptr;
 };
 
+// One scattering event of a walk, as a polarized tally needs it (measure/polarized_walk.hpp):
+// the facet's normal out of the material (the hit's front normal), the direction of travel
+// before the event, the cosine the walk's Fresnel factor used, the side the ray came from, whether
+// it refracted, and the probability of the branch taken (a dielectric's F or 1 - F; 1 otherwise).
+struct WalkFacet {
+  Vec3 normal, travel;
+  double cos_i = 1.0;
+  bool front = true, refracted = false;
+  double probability = 1.0;
+};
+
 // `finite`: the surface is a finite object. Its rays that miss it at once are Missed, and a ray
 // that leaves it outside after at least one event is reflected whatever its direction (walls send
 // light below the base plane: [GeomBSDF24, "Inherent Assumptions"], the visible area exceeds the
-// macrosurface's). On a periodic tile a reflected ray leaves upward, a transmitted one downward
+// macrosurface's). `facets` (optional): cleared, then every event appended in order. On a periodic tile a reflected ray leaves upward, a transmitted one downward
 // from inside the slab; anything else is Lost. `events` counts the scattering events.
 WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir,
                        const models::Material& mat, CounterRng& rng, int max_events, bool finite,
                        TraceCounters& counters, std::uint64_t& events,
-                       const SpectralWeights* spectral = nullptr);
+                       const SpectralWeights* spectral = nullptr,
+                       std::vector<WalkFacet>* facets = nullptr);
 
 // Adds a walk's end to the tallies with the path's starting weight w0: exits with their order
 // and direction (binned when they point into their side's hemisphere: a finite object's

@@ -1,0 +1,100 @@
+// Mueller matrices carried along the BSDF walk (`measure bsdf --polarized`, docs/guide/polarization.md):
+// every path of the explicit surface is walked again with the same random numbers as the
+// unpolarized tallies (same seed, streams, strata), its facets are kept, and the path's Mueller
+// matrix is built from them (models/mueller.hpp: the s/p frame of each facet, the Fresnel
+// matrix, the rotations between frames), from the Stokes frame of the light's direction to the
+// frame of the exit direction, once per wavelength (the geometry is shared, only r_s and r_p
+// change). A dielectric's path matrix is divided by the probabilities of the branches the walk
+// chose, so its M00 estimates the same albedo as the unpolarized weight of 1.
+//
+// Tallied: the reflected paths' matrices per order slot (orders 1 .. K-1, K+ and the total, as
+// the albedo tallies) and wavelength, summed per replicate in the unpolarized tallies' order,
+// so for a mirror, and for a conductor's single scattering, M00 equals the unpolarized albedo
+// bit for bit. Errors: the spread of the replicate means, as the albedo's.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "microsim/io/output.hpp"
+#include "microsim/models/mueller.hpp"
+
+namespace microsim {
+
+class Tracer;
+struct WalkFacet;
+
+// The equal-area map (HemisphereMap) of the direction-resolved sums: coarse, so that each pixel
+// gathers paths of every order.
+constexpr int kPolarizationMapResolution = 8;
+
+// The reflected Mueller sums of a run: per replicate, order slot and wavelength, 16 elements
+// (row-major); and the same per pixel of a coarse hemisphere map of the exit directions (each
+// path's matrix in the frame of its own direction).
+struct PolarizationTally {
+  int orders = 0, wavelengths = 1, replicates = 0, pixels = 0;
+  std::uint64_t paths = 0;          // all replicates
+  std::vector<double> total;        // [k][l][16]: sum of w0 * M over reflected paths
+  std::vector<double> replicate;    // [q][k][l][16]: the same per replicate
+  std::vector<double> map_total;      // [k][l][pixel][16]
+  std::vector<double> map_replicate;  // [q][k][l][pixel][16]
+
+  int slots() const { return orders + 1; }
+  std::size_t index(int k, int l) const { return (static_cast<std::size_t>(k) * wavelengths + l) * 16; }
+  // Per-path mean of slot k at wavelength l, and its standard error per element.
+  models::Mueller mean(int k, int l) const;
+  models::Mueller stderr_(int k, int l) const;
+  // Replicate q's per-path mean.
+  models::Mueller replicate_mean(int q, int k, int l) const;
+  // A scalar linear-or-not function g of the mean matrix, with the standard error of g over the
+  // replicate means (sd / sqrt(R)).
+  Estimate statistic(int k, int l, const std::function<double(const models::Mueller&)>& g) const;
+  // The degree of polarization of the reflected light direction by direction for the input s:
+  // sum over pixels of |(s1, s2, s3)| of M_pixel s over the sum of its s0 (the flux-weighted mean
+  // of the pixels' degrees of polarization), with its error over the replicates.
+  Estimate resolved_degree_of_polarization(int k, int l, const models::Stokes& s) const;
+};
+
+// The inputs of the polarized walk: what measure_bsdf uses for its own paths.
+struct PolarizedWalkSetup {
+  Vec3 wi;                       // light direction
+  Vec3 origin0, e1, e2;          // the ray window
+  double ray_weight = 1.0;
+  bool finite = false;
+  std::uint64_t seed = 1, stream = 0;
+  std::uint64_t rays = 0;        // as BsdfOptions::rays
+  int replicates = 32;           // requested (ReplicatePlan)
+  int orders = 4, max_events = 10000;
+  models::Material material;     // single index (spectral empty)
+  std::vector<models::Material> spectral;
+};
+
+PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalkSetup& setup);
+
+// The Mueller matrix of a walked path for each of `count` materials (the geometry shared): from
+// the Stokes frame of wi to that of `exit` (models::stokes_frame), divided by the product of the
+// branch probabilities. out[l] for l < count.
+void walk_path_muellers(const Vec3& wi, const std::vector<WalkFacet>& facets, const Vec3& exit,
+                        const models::Material* materials, int count, models::Mueller* out);
+
+// Fully polarized inputs of the record, in the incident frame (x = the azimuthal axis of the
+// light's direction, the s axis of the specular plane): unpolarized, s, p, 45 degrees, circular
+// (s3 > 0, docs/theory/polarization.md).
+struct NamedStokes {
+  const char* name;
+  models::Stokes s;
+};
+std::vector<NamedStokes> polarization_inputs();
+
+// The lowest eigenvalue of the coherency matrix of the mean of slot k, wavelength l, with its
+// standard error: the spread over the replicate means of v^H H(M_q) v for the eigenvector v
+// of the mean's lowest eigenvalue (linear in M, so the error of a fixed quadratic form).
+Estimate coherency_min_eigenvalue(const PolarizationTally& t, int k, int l);
+
+// The record's `polarization` block of one incidence (docs/reference: the record fields):
+// per order key, one entry per wavelength with the mean Mueller matrix, its errors, the degree of
+// polarization of the reflected light for each of polarization_inputs() with its error, and the
+// coherency matrix's lowest eigenvalue with its error. `wavelengths_nm` empty: a single index.
+Json polarization_json(const PolarizationTally& t, const std::vector<double>& wavelengths_nm);
+
+}  // namespace microsim

@@ -1,0 +1,349 @@
+#include "microsim/measure/polarized_walk.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+
+#include "microsim/measure/bsdf_walk.hpp"
+#include "microsim/measure/replicates.hpp"
+
+namespace microsim {
+
+using models::Material;
+using models::MaterialKind;
+using models::Mueller;
+
+// ---------------------------------------------------------------------------------------------
+// One path's matrices
+
+namespace {
+// The Fresnel matrix of one event for one material, in the facet's s/p frames.
+Mueller facet_mueller(const WalkFacet& f, const Material& mat) {
+  if (mat.kind == MaterialKind::Conductor) {
+    // models::facet_reflection_mueller with the amplitudes computed once: the same values
+    // (fresnel_conductor squares these amplitudes).
+    const models::FresnelAmplitudes a = models::fresnel_conductor_amplitudes(f.cos_i, mat.eta, mat.k);
+    return models::fresnel_mueller(std::norm(a.rs), std::norm(a.rp), a.rs * std::conj(a.rp));
+  }
+  if (f.refracted) return models::facet_transmission_mueller(mat, f.cos_i, f.front);
+  return models::facet_reflection_mueller(mat, f.cos_i, f.front);
+}
+}  // namespace
+
+void walk_path_muellers(const Vec3& wi, const std::vector<WalkFacet>& facets, const Vec3& exit,
+                        const Material* materials, int count, Mueller* out) {
+  // The rotations into each facet's s axis, and the last one into the exit's frame, are the
+  // same for every material: computed once.
+  thread_local std::vector<Mueller> rotations;
+  rotations.resize(facets.size() + 1);
+  Vec3 x = models::stokes_frame(wi);
+  double probability = 1.0;
+  for (std::size_t e = 0; e < facets.size(); ++e) {
+    const WalkFacet& f = facets[e];
+    const Vec3 d = f.travel.normalized();
+    Vec3 s = f.normal.normalized().cross(d);
+    const double sn = s.norm();
+    s = sn > 1e-12 ? Vec3(s / sn) : x;  // normal incidence: every axis is an s axis
+    rotations[e] = models::frame_change(d, x, s);
+    x = s;
+    probability *= f.probability;
+  }
+  const Vec3 d_out = exit.normalized();
+  rotations[facets.size()] = models::frame_change(d_out, x, models::stokes_frame(d_out));
+  for (int l = 0; l < count; ++l) {
+    Mueller M = Mueller::Identity();
+    for (std::size_t e = 0; e < facets.size(); ++e) M = facet_mueller(facets[e], materials[l]) * (rotations[e] * M);
+    M = rotations[facets.size()] * M;
+    out[l] = probability == 1.0 ? M : Mueller(M / probability);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The tally
+
+namespace {
+Mueller read_matrix(const double* p, double scale) {
+  Mueller M;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) M(i, j) = p[4 * i + j] * scale;
+  return M;
+}
+}  // namespace
+
+Mueller PolarizationTally::mean(int k, int l) const {
+  return read_matrix(total.data() + index(k, l), paths ? 1.0 / static_cast<double>(paths) : 0.0);
+}
+
+Mueller PolarizationTally::replicate_mean(int q, int k, int l) const {
+  const std::size_t per_rep = static_cast<std::size_t>(slots()) * wavelengths * 16;
+  const double n = paths ? static_cast<double>(paths) / replicates : 0.0;
+  return read_matrix(replicate.data() + q * per_rep + index(k, l), n > 0 ? 1.0 / n : 0.0);
+}
+
+Mueller PolarizationTally::stderr_(int k, int l) const {
+  Mueller out;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) out(i, j) = statistic(k, l, [i, j](const Mueller& M) { return M(i, j); }).stderr_;
+  return out;
+}
+
+Estimate PolarizationTally::statistic(int k, int l, const std::function<double(const Mueller&)>& g) const {
+  Estimate e;
+  e.n = paths;
+  if (paths == 0) return e;
+  e.mean = g(mean(k, l));
+  if (replicates < 2) return e;
+  double sum = 0.0, sum2 = 0.0;
+  for (int q = 0; q < replicates; ++q) {
+    const double x = g(replicate_mean(q, k, l));
+    sum += x;
+    sum2 += x * x;
+  }
+  const double m = sum / replicates;
+  const double var = std::max(0.0, sum2 / replicates - m * m) * replicates / (replicates - 1.0);
+  e.stderr_ = std::sqrt(var / replicates);
+  return e;
+}
+
+namespace {
+// sum_px |pol(M_px s)| / sum_px s0(M_px s) over a [k][l][pixel][16] block starting at p.
+double resolved_dop(const double* p, int pixels, const models::Stokes& s) {
+  double pol = 0.0, flux = 0.0;
+  for (int px = 0; px < pixels; ++px) {
+    const models::Stokes out = read_matrix(p + 16 * static_cast<std::size_t>(px), 1.0) * s;
+    pol += out.tail<3>().norm();
+    flux += out[0];
+  }
+  return flux > 0.0 ? pol / flux : 0.0;
+}
+}  // namespace
+
+Estimate PolarizationTally::resolved_degree_of_polarization(int k, int l, const models::Stokes& s) const {
+  Estimate e;
+  e.n = paths;
+  if (paths == 0 || pixels == 0) return e;
+  const std::size_t block = static_cast<std::size_t>(pixels) * 16;
+  const std::size_t at = (static_cast<std::size_t>(k) * wavelengths + l) * block;
+  e.mean = resolved_dop(map_total.data() + at, pixels, s);
+  if (replicates < 2) return e;
+  const std::size_t per_rep = static_cast<std::size_t>(slots()) * wavelengths * block;
+  double sum = 0.0, sum2 = 0.0;
+  for (int q = 0; q < replicates; ++q) {
+    const double x = resolved_dop(map_replicate.data() + q * per_rep + at, pixels, s);
+    sum += x;
+    sum2 += x * x;
+  }
+  const double m = sum / replicates;
+  const double var = std::max(0.0, sum2 / replicates - m * m) * replicates / (replicates - 1.0);
+  e.stderr_ = std::sqrt(var / replicates);
+  return e;
+}
+
+Estimate coherency_min_eigenvalue(const PolarizationTally& t, int k, int l) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4cd> es(models::coherency_matrix(t.mean(k, l)));
+  const Eigen::Vector4cd v = es.eigenvectors().col(0);  // the lowest eigenvalue's
+  Estimate e = t.statistic(k, l, [&v](const Mueller& M) {
+    return (v.adjoint() * models::coherency_matrix(M) * v)(0, 0).real();
+  });
+  e.mean = es.eigenvalues()(0);
+  return e;
+}
+
+std::vector<NamedStokes> polarization_inputs() {
+  return {{"unpolarized", models::Stokes(1, 0, 0, 0)}, {"s", models::Stokes(1, 1, 0, 0)},
+          {"p", models::Stokes(1, -1, 0, 0)},          {"45", models::Stokes(1, 0, 1, 0)},
+          {"circular", models::Stokes(1, 0, 0, 1)}};
+}
+
+// ---------------------------------------------------------------------------------------------
+// The walk
+
+namespace {
+// Chunks and batches as the unpolarized tallies sum them (measure/bsdf_measure.cpp), so the sums
+// are added in the same order: 2^13 paths a chunk, at most 64 batches a replicate, each batch a
+// deterministic reduce over its chunks.
+constexpr std::uint64_t kChunk = 1 << 13;
+std::uint64_t path_batches(std::uint64_t n) { return std::min<std::uint64_t>((n + kChunk - 1) / kChunk, 64); }
+
+struct UnitSums {
+  std::vector<double> sums;  // [k][l][16]
+  std::vector<double> map;   // [k][l][pixel][16]
+  std::uint64_t paths = 0;
+  UnitSums& operator+=(const UnitSums& o) {
+    if (sums.empty()) return *this = o;
+    for (std::size_t i = 0; i < sums.size(); ++i) sums[i] += o.sums[i];
+    for (std::size_t i = 0; i < map.size(); ++i) map[i] += o.map[i];
+    paths += o.paths;
+    return *this;
+  }
+};
+// Units run at once: at most this many bytes of unit sums.
+constexpr double kPassBytes = 64.0 * 1024 * 1024;
+}  // namespace
+
+PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalkSetup& su) {
+  const ReplicatePlan plan(su.rays, su.replicates);
+  const int K = su.orders;
+  const int L = su.spectral.empty() ? 1 : static_cast<int>(su.spectral.size());
+  const Material* materials = su.spectral.empty() ? &su.material : su.spectral.data();
+  PolarizationTally t;
+  t.orders = K;
+  t.wavelengths = L;
+  t.replicates = plan.replicates;
+  const HemisphereMap map(kPolarizationMapResolution);
+  const int npix = map.size();
+  t.pixels = npix;
+  const std::size_t width = static_cast<std::size_t>(K + 1) * L * 16;
+  const std::size_t map_width = width * npix;
+  const std::uint64_t n = plan.per_replicate();
+  const std::uint64_t nchunks = (n + kChunk - 1) / kChunk, batches = path_batches(n);
+  const std::uint64_t units = static_cast<std::uint64_t>(plan.replicates) * batches;
+
+  auto path = [&](int q, std::uint64_t i, UnitSums& acc) {
+    thread_local std::vector<WalkFacet> facets;
+    CounterRng rng(su.seed, ReplicatePlan::stream(su.stream, q), i);
+    ++acc.paths;
+    const Vec2 ab = plan.strata.point(i, rng);
+    TraceCounters counters;
+    std::uint64_t events = 0;
+    double weights[kMaxWavelengths];
+    std::fill(weights, weights + L, 1.0);
+    const SpectralWeights sw{su.spectral.data(), L, weights};
+    const WalkEnd e = walk_bsdf_path(tracer, su.origin0 + ab.x() * su.e1 + ab.y() * su.e2, -su.wi, su.material, rng,
+                                     su.max_events, su.finite, counters, events,
+                                     su.spectral.empty() ? nullptr : &sw, &facets);
+    if (e.kind != WalkEnd::Reflected) return;
+    Mueller M[kMaxWavelengths];
+    walk_path_muellers(su.wi, facets, e.direction, materials, L, M);
+    const int k = std::min(e.order, K) - 1;
+    // A finite object's ray reflected below the base plane counts in the albedo only.
+    const int px = e.direction.z() > 0.0 ? map.pixel_of(e.direction) : -1;
+    for (int slot : {k, K})
+      for (int l = 0; l < L; ++l) {
+        double* p = acc.sums.data() + (static_cast<std::size_t>(slot) * L + l) * 16;
+        double* q = px < 0 ? nullptr : acc.map.data() + ((static_cast<std::size_t>(slot) * L + l) * npix + px) * 16;
+        for (int a = 0; a < 4; ++a)
+          for (int b = 0; b < 4; ++b) {
+            const double w = su.ray_weight * M[l](a, b);
+            p[4 * a + b] += w;
+            if (q) q[4 * a + b] += w;
+          }
+      }
+  };
+
+  // Units (replicate, batch) run a pass at a time; each replicate's sum starts at zero and adds
+  // its batches in order, then the replicates are added in order.
+  t.total.assign(width, 0.0);
+  t.replicate.assign(width * plan.replicates, 0.0);
+  t.map_total.assign(map_width, 0.0);
+  t.map_replicate.assign(map_width * plan.replicates, 0.0);
+  const std::uint64_t per_pass =
+      std::max<std::uint64_t>(16, static_cast<std::uint64_t>(kPassBytes / (8.0 * (width + map_width))));
+  for (std::uint64_t u = 0; u < units; u += per_pass) {
+    const std::uint64_t u1 = std::min(units, u + per_pass);
+    std::vector<UnitSums> parts(u1 - u);
+    tbb::parallel_for(u, u1, [&](std::uint64_t w) {
+      const int q = static_cast<int>(w / batches);
+      const std::uint64_t bt = w % batches;
+      const std::uint64_t c0 = nchunks * bt / batches, c1 = nchunks * (bt + 1) / batches;
+      parts[w - u] = tbb::parallel_deterministic_reduce(
+          tbb::blocked_range<std::uint64_t>(c0, c1, 1), UnitSums(),
+          [&](const tbb::blocked_range<std::uint64_t>& range, UnitSums acc) {
+            if (acc.sums.empty()) {
+              acc.sums.assign(width, 0.0);
+              acc.map.assign(map_width, 0.0);
+            }
+            for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
+              const std::uint64_t end = std::min(n, (c + 1) * kChunk);
+              for (std::uint64_t i = c * kChunk; i < end; ++i) path(q, i, acc);
+            }
+            return acc;
+          },
+          [](UnitSums a, const UnitSums& b) {
+            a += b;
+            return a;
+          });
+    });
+    for (std::uint64_t w = u; w < u1; ++w) {
+      const std::size_t q = w / batches;
+      const UnitSums& part = parts[w - u];
+      double* rep = t.replicate.data() + width * q;
+      for (std::size_t i = 0; i < width; ++i) rep[i] += part.sums[i];
+      double* rep_map = t.map_replicate.data() + map_width * q;
+      for (std::size_t i = 0; i < map_width; ++i) rep_map[i] += part.map[i];
+      t.paths += part.paths;
+    }
+  }
+  for (int q = 0; q < plan.replicates; ++q) {
+    for (std::size_t i = 0; i < width; ++i) t.total[i] += t.replicate[width * q + i];
+    for (std::size_t i = 0; i < map_width; ++i) t.map_total[i] += t.map_replicate[map_width * q + i];
+  }
+  return t;
+}
+
+}  // namespace microsim
+
+namespace microsim {
+
+namespace {
+Json matrix_json(const Mueller& M) {
+  Json rows = Json::array();
+  for (int i = 0; i < 4; ++i) rows.push_back({M(i, 0), M(i, 1), M(i, 2), M(i, 3)});
+  return rows;
+}
+// Slot k's key, as the albedo's (order_key in measure/bsdf_measure.hpp).
+std::string slot_key(int k, int orders) {
+  if (k == orders) return "total";
+  if (k == orders - 1) return "order_" + std::to_string(orders) + "plus";
+  return "order_" + std::to_string(k + 1);
+}
+}  // namespace
+
+Json polarization_json(const PolarizationTally& t, const std::vector<double>& wavelengths_nm) {
+  Json j;
+  j["frames"] = "in: stokes_frame(l), out: stokes_frame(o) of each path's exit direction";
+  j["wavelengths_nm"] = wavelengths_nm;
+  j["map_resolution"] = kPolarizationMapResolution;
+  Json reflected = Json::object();
+  for (int k = 0; k <= t.orders; ++k) {
+    Json per_l = Json::array();
+    for (int l = 0; l < t.wavelengths; ++l) {
+      Json e;
+      e["mueller"] = matrix_json(t.mean(k, l));
+      e["mueller_stderr"] = matrix_json(t.stderr_(k, l));
+      Json dop = Json::object(), dop_se = Json::object();
+      for (const NamedStokes& in : polarization_inputs()) {
+        const models::Stokes s = in.s;
+        const Estimate d = t.statistic(k, l, [s](const Mueller& M) {
+          return models::degree_of_polarization(M * s);
+        });
+        dop[in.name] = d.mean;
+        dop_se[in.name] = d.stderr_;
+      }
+      e["degree_of_polarization"] = dop;
+      e["degree_of_polarization_stderr"] = dop_se;
+      Json rdop = Json::object(), rdop_se = Json::object();
+      for (const NamedStokes& in : polarization_inputs()) {
+        const Estimate d = t.resolved_degree_of_polarization(k, l, in.s);
+        rdop[in.name] = d.mean;
+        rdop_se[in.name] = d.stderr_;
+      }
+      e["resolved_degree_of_polarization"] = rdop;
+      e["resolved_degree_of_polarization_stderr"] = rdop_se;
+      const Estimate ev = coherency_min_eigenvalue(t, k, l);
+      e["coherency_min_eigenvalue"] = ev.mean;
+      e["coherency_min_eigenvalue_stderr"] = ev.stderr_;
+      per_l.push_back(e);
+    }
+    reflected[slot_key(k, t.orders)] = per_l;
+  }
+  j["reflected"] = reflected;
+  return j;
+}
+
+}  // namespace microsim
