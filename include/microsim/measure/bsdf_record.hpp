@@ -31,7 +31,7 @@ constexpr int kMaxBsdfResolution = 1024;
 constexpr int kMinTableResolution = 2, kMaxTableResolution = 512;
 
 // Incidence azimuths an isotropic renderer table averages by default.
-constexpr int kDefaultTableAzimuths = 1;
+constexpr int kDefaultTableAzimuths = 16;
 constexpr int kMaxTableAzimuths = 360;
 
 struct BsdfRequest {
