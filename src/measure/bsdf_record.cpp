@@ -578,7 +578,7 @@ void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Mi
                      {"theta_i_deg", single ? Json(o.theta_i_deg[0]) : Json(o.theta_i_deg)},
                      {"phi_i_deg", single ? Json(o.phi_i_deg[0]) : Json(o.phi_i_deg)},
                      {"orders", o.orders},
-                     {"rays", r.measured.paths},
+                     {"rays", t.paths(0, 0)},  // over every azimuth of an averaged table
                      {"rays_requested", o.rays},
                      {"seed", o.seed},
                      {"replicates", r.options.replicates},
