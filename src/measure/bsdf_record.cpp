@@ -165,9 +165,6 @@ void check_bsdf_request(BsdfRequest& o) {
                      std::to_string(o.table_azimuths) + ")");
   // Runs per incidence: an isotropic renderer table measures table_azimuths azimuths.
   const bool averaged = (ext == "bsdf" || ext == "binary") && phis.size() == 1 && o.table_azimuths > 1;
-  if (averaged && o.rays < o.table_azimuths)
-    throw UsageError("--table-azimuths " + std::to_string(o.table_azimuths) + " splits --rays over as many "
-                     "azimuths: give at least that many rays (got " + std::to_string(o.rays) + ")");
   const double runs = averaged ? o.table_azimuths : 1.0;
   const std::size_t n_inc = o.theta_i_deg.size() * phis.size();
   if (n_inc > 100000) throw UsageError("--theta-i x --phi-i: more than 100000 incidences");
@@ -197,6 +194,9 @@ void check_bsdf_request(BsdfRequest& o) {
     throw UsageError("--resolution " + std::to_string(o.resolution) + " with --orders " +
                      std::to_string(o.orders) + " and " + std::to_string(n_inc) + " incidences needs about " +
                      fixed(need / (1 << 30), 1) + " GiB of tallies, more than half of this machine's memory");
+  if (averaged && o.rays < o.table_azimuths)
+    throw UsageError("--table-azimuths " + std::to_string(o.table_azimuths) + " splits --rays over as many "
+                     "azimuths: give at least that many rays (got " + std::to_string(o.rays) + ")");
 }
 
 void check_bsdf_surface(const BsdfRequest& o, const Microsurface& s, const std::string& name) {
