@@ -170,6 +170,13 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
                   "-o .bsdf: vertices per side of the per-incidence sample grid (vndf, spectra)")
       ->capture_default_str()
       ->check(integer_in(kMinTableResolution, kMaxTableResolution));
+  cmd->add_option("--table-azimuths", o->request.table_azimuths,
+                  "-o .bsdf / .binary with one --phi-i: incidence azimuths the isotropic table averages "
+                  "(phi_i + 360 k / N degrees, --rays split evenly, outgoing directions turned back "
+                  "to phi_i), so it holds the surface's statistics rather than one azimuth's lobe; "
+                  "the record's rows are the run at phi_i (rays / N walks). 1: phi_i alone")
+      ->capture_default_str()
+      ->check(integer_in(1, kMaxTableAzimuths));
   cmd->add_option("--orders", o->request.orders, "Scattering orders tallied: 1 .. K-1 separately, K+ together")
       ->capture_default_str()
       ->check(integer_in(1, kMaxBsdfOrders));

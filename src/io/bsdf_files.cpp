@@ -46,8 +46,11 @@ std::string rgl_description(const BsdfRequest& o, const Microsurface& s, const B
     for (double nm : t.results[0].options.wavelengths_nm) d += " " + fixed(nm, 1);
     d += " nm (rgb: linear sRGB, CIE 1931 2-degree observer, equal-energy white)";
   }
-  d += "; reflection, all scattering orders; " + std::to_string(t.results[0].measured.paths) +
-       " random walks per incidence, seed " + std::to_string(o.seed);
+  d += "; reflection, all scattering orders; " + std::to_string(t.paths(0, 0)) +
+       " random walks per incidence";
+  if (t.azimuths() > 1)
+    d += " over " + std::to_string(t.azimuths()) + " incidence azimuths (the azimuthal mean)";
+  d += ", seed " + std::to_string(o.seed);
   if (o.material == "dielectric") d += "; the reflected part only (transmission is not in this table)";
   return d;
 }
@@ -73,6 +76,7 @@ void write_bsdf_tables(const std::string& path, const BsdfRequest& o, const Bsdf
                   {"ndf_shape", {rgl.ndf_phi, rgl.ndf_theta}},
                   {"sigma_shape", {rgl.sigma_phi, rgl.sigma_theta}},
                   {"description", rgl.description},
+                  {"azimuths", t.azimuths()},
                   {"seconds", seconds_since(tb)}};
   } else if (o.format == "binary") {
     write_merl(path, t);
@@ -80,6 +84,7 @@ void write_bsdf_tables(const std::string& path, const BsdfRequest& o, const Bsdf
                   {"filling", "measured f (reflected, all orders) at cell centres, bilinear on the "
                               "hemisphere maps, linear in theta_i between measured incidences, held "
                               "constant outside them; 0 below the horizon"},
+                  {"azimuths", t.azimuths()},
                   {"seconds", seconds_since(tb)}};
     if (t.results[0].wavelengths() > 0)
       j["table"]["channels"] = "R, G, B: linear sRGB of the per-wavelength f (CIE 1931 2-degree "

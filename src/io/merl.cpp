@@ -24,11 +24,11 @@ double table_f(const BsdfTable& t, const Vec3& wi0, const Vec3& wo0, int lambda)
   const auto& th = t.theta_i;
   const int K = t.results[0].options.orders;
   const int n = static_cast<int>(th.size());
-  if (n == 1 || theta <= th.front()) return interpolate_f(t.at(0, 0), 0, K, wo, lambda);
-  if (theta >= th.back()) return interpolate_f(t.at(0, n - 1), 0, K, wo, lambda);
+  if (n == 1 || theta <= th.front()) return table_f(t, 0, 0, 0, K, wo, lambda);
+  if (theta >= th.back()) return table_f(t, 0, n - 1, 0, K, wo, lambda);
   const int k = static_cast<int>(std::upper_bound(th.begin(), th.end(), theta) - th.begin()) - 1;
   const double w = (theta - th[k]) / (th[k + 1] - th[k]);
-  return (1 - w) * interpolate_f(t.at(0, k), 0, K, wo, lambda) + w * interpolate_f(t.at(0, k + 1), 0, K, wo, lambda);
+  return (1 - w) * table_f(t, 0, k, 0, K, wo, lambda) + w * table_f(t, 0, k + 1, 0, K, wo, lambda);
 }
 
 namespace {

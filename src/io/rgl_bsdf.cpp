@@ -439,8 +439,8 @@ RglTable build_rgl_table(const BsdfTable& t, const Microsurface& s, const RglOpt
       // f of every wavelength at wo into f_l, and the luminance (wavelength independent: f).
       std::vector<double> f_l(std::max(L, 1));
       auto measured_f = [&](const Vec3& wo) {
-        if (L == 0) return interpolate_f(r, 0, K, wo);
-        for (int l = 0; l < L; ++l) f_l[l] = interpolate_f(r, 0, K, wo, l);
+        if (L == 0) return table_f(t, p, q, 0, K, wo);
+        for (int l = 0; l < L; ++l) f_l[l] = table_f(t, p, q, 0, K, wo, l);
         return colour->luminance(f_l.data());
       };
       std::vector<double> vis(slice, 0.0), lit(slice, 0.0), all(slice, 0.0);

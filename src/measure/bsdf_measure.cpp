@@ -594,8 +594,8 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
 
 void check_polarized_options(const BsdfOptions& o, const Microsurface& s) {
   if (!o.polarized) return;
-  if (o.split) throw UsageError("--polarized: polarized runs are not split over shards or MPI ranks");
-  if (is_vcavity(s)) throw UsageError("--polarized: V-cavity ensembles are not walked with Mueller matrices");
+  if (o.split) throw ParameterError("{polarized}: polarized runs are not split over shards or MPI ranks");
+  if (is_vcavity(s)) throw ParameterError("{polarized}: V-cavity ensembles are not walked with Mueller matrices");
 }
 
 }  // namespace

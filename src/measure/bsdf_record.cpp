@@ -160,7 +160,13 @@ void check_bsdf_request(BsdfRequest& o) {
                          std::to_string(o.resolution) + ")");
   if (o.table_resolution < kMinTableResolution || o.table_resolution > kMaxTableResolution)
     throw ParameterError("{table_resolution} must be in [" + std::to_string(kMinTableResolution) + ", " +
-                         std::to_string(kMaxTableResolution) + "] (got " + std::to_string(o.table_resolution) + ")");
+                     std::to_string(kMaxTableResolution) + "] (got " + std::to_string(o.table_resolution) + ")");
+  if (o.table_azimuths < 1 || o.table_azimuths > kMaxTableAzimuths)
+    throw ParameterError("{table_azimuths} must be in [1, " + std::to_string(kMaxTableAzimuths) + "] (got " +
+                     std::to_string(o.table_azimuths) + ")");
+  // Runs per incidence: an isotropic renderer table measures table_azimuths azimuths.
+  const bool averaged = (ext == "bsdf" || ext == "binary") && phis.size() == 1 && o.table_azimuths > 1;
+  const double runs = averaged ? o.table_azimuths : 1.0;
   const std::size_t n_inc = o.theta_i_deg.size() * phis.size();
   if (n_inc > 100000) throw ParameterError("{theta_i} x {phi_i}: more than 100000 incidences");
   if (ext == "binary" && phis.size() > 1)
@@ -183,12 +189,15 @@ void check_bsdf_request(BsdfRequest& o) {
   const double tally = 2.0 * (o.orders + 1) * (static_cast<double>(o.resolution) * o.resolution + o.resolution) * 2 * 8;
   const int threads = o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency();
   // (a spectral run's results: a tally per wavelength beside the first wavelength's)
-  const double need = tally * (3.0 * threads + 4.0 + 2.0 * n_inc * (1.0 + wavelengths));
+  const double need = tally * (3.0 * threads + 4.0 + 2.0 * n_inc * runs * (1.0 + wavelengths));
   const double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
   if (need > 0.5 * have)
     throw ParameterError("{resolution} " + std::to_string(o.resolution) + " with {orders} " +
-                         std::to_string(o.orders) + " and " + std::to_string(n_inc) + " incidences needs about " +
-                         fixed(need / (1 << 30), 1) + " GiB of tallies, more than half of this machine's memory");
+                     std::to_string(o.orders) + " and " + std::to_string(n_inc) + " incidences needs about " +
+                     fixed(need / (1 << 30), 1) + " GiB of tallies, more than half of this machine's memory");
+  if (averaged && o.rays < o.table_azimuths)
+    throw ParameterError("{table_azimuths} " + std::to_string(o.table_azimuths) + " splits {rays} over as many "
+                     "azimuths: give at least that many rays (got " + std::to_string(o.rays) + ")");
 }
 
 void check_bsdf_surface(const BsdfRequest& o, const Microsurface& s, const std::string& name) {
@@ -222,6 +231,8 @@ BsdfTableOptions bsdf_table_options(const BsdfRequest& o, const Microsurface& s,
   to.base.model_walks = s.nominal && o.models ? to.base.rays : 0;
   for (double t : o.theta_i_deg) to.theta_i.push_back(rad(t));
   for (double p : o.phi_i_deg) to.phi_i.push_back(rad(p));
+  const bool renderer_table = o.format == "bsdf" || o.format == "binary";
+  to.table_azimuths = renderer_table && to.phi_i.size() == 1 ? o.table_azimuths : 1;
   return to;
 }
 
@@ -571,7 +582,7 @@ void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Mi
                      {"theta_i_deg", single ? Json(o.theta_i_deg[0]) : Json(o.theta_i_deg)},
                      {"phi_i_deg", single ? Json(o.phi_i_deg[0]) : Json(o.phi_i_deg)},
                      {"orders", o.orders},
-                     {"rays", r.measured.paths},
+                     {"rays", t.paths(0, 0)},  // over every azimuth of an averaged table
                      {"rays_requested", o.rays},
                      {"seed", o.seed},
                      {"replicates", r.options.replicates},

@@ -30,6 +30,10 @@ constexpr int kMaxBsdfOrders = 16;
 constexpr int kMaxBsdfResolution = 1024;
 constexpr int kMinTableResolution = 2, kMaxTableResolution = 512;
 
+// Incidence azimuths an isotropic renderer table averages by default.
+constexpr int kDefaultTableAzimuths = 16;
+constexpr int kMaxTableAzimuths = 360;
+
 struct BsdfRequest {
   std::string material;         // mirror, conductor or dielectric
   std::optional<double> eta, k;  // as given (conductor: both; dielectric: eta)
@@ -46,6 +50,8 @@ struct BsdfRequest {
   bool polarized = false;     // Mueller matrices along the paths (measure/polarized_walk.hpp)
   int resolution = 64;        // hemisphere map R; also the in-plane bins
   int table_resolution = 64;  // .bsdf tables
+  // Isotropic .bsdf / .binary tables (one phi_i): incidence azimuths averaged (BsdfTableOptions).
+  int table_azimuths = kDefaultTableAzimuths;
   std::string format = "json";  // json, exr, bsdf (RGL tensor file) or binary (MERL)
   int threads = 0;              // for the memory estimate (0: all processors)
 };
