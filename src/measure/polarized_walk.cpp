@@ -97,16 +97,9 @@ Estimate PolarizationTally::statistic(int k, int l, const std::function<double(c
   e.n = paths;
   if (paths == 0) return e;
   e.mean = g(mean(k, l));
-  if (replicates < 2) return e;
-  double sum = 0.0, sum2 = 0.0;
-  for (int q = 0; q < replicates; ++q) {
-    const double x = g(replicate_mean(q, k, l));
-    sum += x;
-    sum2 += x * x;
-  }
-  const double m = sum / replicates;
-  const double var = std::max(0.0, sum2 / replicates - m * m) * replicates / (replicates - 1.0);
-  e.stderr_ = std::sqrt(var / replicates);
+  std::vector<double> x(std::max(replicates, 0));
+  for (int q = 0; q < replicates; ++q) x[q] = g(replicate_mean(q, k, l));
+  e.stderr_ = microsim::replicate_mean(x).stderr_;  // the replicate values' spread
   return e;
 }
 
@@ -130,17 +123,10 @@ Estimate PolarizationTally::resolved_degree_of_polarization(int k, int l, const 
   const std::size_t block = static_cast<std::size_t>(pixels) * 16;
   const std::size_t at = (static_cast<std::size_t>(k) * wavelengths + l) * block;
   e.mean = resolved_dop(map_total.data() + at, pixels, s);
-  if (replicates < 2) return e;
   const std::size_t per_rep = static_cast<std::size_t>(slots()) * wavelengths * block;
-  double sum = 0.0, sum2 = 0.0;
-  for (int q = 0; q < replicates; ++q) {
-    const double x = resolved_dop(map_replicate.data() + q * per_rep + at, pixels, s);
-    sum += x;
-    sum2 += x * x;
-  }
-  const double m = sum / replicates;
-  const double var = std::max(0.0, sum2 / replicates - m * m) * replicates / (replicates - 1.0);
-  e.stderr_ = std::sqrt(var / replicates);
+  std::vector<double> x(std::max(replicates, 0));
+  for (int q = 0; q < replicates; ++q) x[q] = resolved_dop(map_replicate.data() + q * per_rep + at, pixels, s);
+  e.stderr_ = microsim::replicate_mean(x).stderr_;
   return e;
 }
 
