@@ -397,6 +397,20 @@ TEST(ValidateSuite, MalformedSuitesAreRefusedWithTheField) {
   EXPECT_THROW(mv::find_suite("no-such-suite", {suites_dir()}), UsageError);
 }
 
+// A suite directory searched twice (source and build tree hold the same suites) names each
+// known suite once in the refusal.
+TEST(Suite, UnknownSuiteNamesEachKnownSuiteOnce) {
+  try {
+    mv::find_suite("no-such-suite", {suites_dir(), suites_dir()});
+    FAIL() << "an unknown suite was accepted";
+  } catch (const UsageError& e) {
+    const std::string m = e.what();
+    const auto first = m.find("smoke");
+    ASSERT_NE(first, std::string::npos) << m;
+    EXPECT_EQ(m.find("smoke", first + 1), std::string::npos) << m;
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // The command line
 

@@ -179,9 +179,12 @@ std::string find_suite(const std::string& name, const std::vector<std::string>& 
     fs::path p = fs::path(d) / (name + ".json");
     if (fs::is_regular_file(p)) return p.string();
   }
-  std::string known;
+  // A suite found in several directories (source and build tree) is named once.
+  std::set<std::string> names;
   for (const std::string& d : dirs)
-    for (const std::string& n : list_suites(d)) known += (known.empty() ? "" : ", ") + n;
+    for (const std::string& n : list_suites(d)) names.insert(n);
+  std::string known;
+  for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
   throw ParameterError("{suite} " + literal_text(name) + ": no such suite (known: " +
                        literal_text(known.empty() ? "none" : known) + ")");
 }
