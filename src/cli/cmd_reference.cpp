@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cli_common.hpp"
+#include "microsim/measure/albedo_measure.hpp"
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/bsdf_record.hpp"
 #include "microsim/measure/g1_measure.hpp"
@@ -167,6 +168,15 @@ std::vector<RecordTable> record_tables() {
        "In-plane rows of one incidence: side x bin of outgoing angle in the plane of incidence (shown "
        "for --orders " + std::to_string(orders) + "; the f_ columns follow the orders). " + kOneSurfaceNominal,
        false, bsdf_in_plane_spec(orders)},
+      {"measure albedo", "rows",
+       "One row per surface and mu node (the lookup table's rows and columns; shown for a dielectric with --orders " +
+           std::to_string(orders) + ": a mirror or conductor has no transmitted_ columns). Each surface is "
+           "measured on its own (no merge).",
+       false, albedo_nodes_spec(orders, true)},
+      {"measure albedo", "averages",
+       "One row per surface and albedo series: E_avg = 2 int_0^1 E(mu) mu dmu with its statistical and "
+       "quadrature errors.",
+       false, albedo_average_spec()},
   };
 }
 
