@@ -2,7 +2,7 @@
 # Runs one long study at the sizes of its published record and writes its page:
 #   analysis/run_study.sh NAME BUILD_DIR
 # writes BUILD_DIR/studies/study_NAME.md (the page of docs/findings/records/, regenerated).
-# NAME: convergence, converged_models, guard_band_bias, structured_surfaces, walk_audit.
+# NAME: convergence, converged_models, guard_band_bias, structured_surfaces, walk_audit, albedo_lut.
 # Hours for convergence and converged_models, tens of minutes for the others, on 2 cores.
 set -eu
 SRC=$(cd "$(dirname "$0")/.." && pwd)
@@ -37,5 +37,8 @@ case "$NAME" in
   walk_audit)
     OUT_FILE="$RAW" "$SRC/analysis/walk_audit.sh" "$BUILD" >&2
     page "Mirror walk audit of orders 4 and above" ;;
+  albedo_lut)
+    "$SRC/analysis/albedo_lut.sh" "$BUILD" "$OUT/albedo_lut" > "$RAW"
+    page "Albedo lookup tables of mirror heightfields" ;;
   *) echo "unknown study: $NAME" >&2; exit 2 ;;
 esac

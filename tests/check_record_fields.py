@@ -74,6 +74,8 @@ def check(microsim, work, sections, page):
         ("measure vndf", ["rows"], ["measure", "vndf", "s1.exr", "s2.exr", "--theta", "40", *small, "-o", "vndfe.json"]),
         ("measure bsdf", ["rows", "in_plane"], ["measure", "bsdf", "s1.exr", "--material", "dielectric", "--eta", "1.5",
                                                 "--theta-i", "30", *small, "-o", "bsdf.json"]),
+        ("measure albedo", ["rows", "averages"], ["measure", "albedo", "s1.exr", "s2.exr", "--material", "dielectric",
+                                                  "--eta", "1.5", "--mu-nodes", "3", *small, "-o", "albedo.json"]),
     ]
     failures = 0
     for command, tables, words in runs:

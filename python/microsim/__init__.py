@@ -17,7 +17,8 @@ exits 1 (the run failed); both are defined once, in the compiled core, and raise
 from ._core import RuntimeFailure, Surface, UsageError, _help, _run, load, models, surface_kinds
 
 __all__ = ["Surface", "UsageError", "RuntimeFailure", "ValidationFailed", "generate", "load",
-           "measure_ndf", "measure_g1", "measure_g2", "measure_vndf", "measure_bsdf", "validate",
+           "measure_ndf", "measure_g1", "measure_g2", "measure_vndf", "measure_bsdf", "measure_albedo",
+           "validate",
            "help", "models", "surface_kinds"]
 
 
@@ -135,6 +136,14 @@ def measure_bsdf(surface, **options):
     """BSDF per scattering order (``microsim measure bsdf``); ``output="t.exr"`` (or .bsdf, .binary)
     also writes the table."""
     return _measure("bsdf", surface, options)
+
+
+def measure_albedo(surfaces, **options):
+    """Directional albedo E(mu) per scattering order at Gauss-Legendre nodes in mu and its average
+    E_avg with statistical and quadrature errors (``microsim measure albedo``):
+    ``measure_albedo([s1, s2], material="mirror", mu_nodes=8, rays=100000)``. Each surface is
+    measured on its own; ``output="lut.exr"`` also writes the lookup table E(mu, alpha)."""
+    return _measure("albedo", surfaces, options)
 
 
 def validate(surfaces=None, **options):

@@ -77,6 +77,7 @@ std::unique_ptr<MicrosimApp> build_app(GlobalOptions& g, TallyReplay* replay) {
   register_measure_vndf(*measure, g);
   register_validate(app, g);
   register_measure_bsdf(*measure, g);
+  register_measure_albedo(*measure, g);
   register_render(app, g);
   register_merge(app, g);
   register_reference(app);

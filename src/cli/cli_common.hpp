@@ -90,6 +90,7 @@ void register_measure_g1(CLI::App& measure, const GlobalOptions& g);
 void register_measure_g2(CLI::App& measure, const GlobalOptions& g);
 void register_measure_vndf(CLI::App& measure, const GlobalOptions& g);
 void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g);
+void register_measure_albedo(CLI::App& measure, const GlobalOptions& g);
 void register_demo(CLI::App& app, const GlobalOptions& g);
 void register_validate(CLI::App& app, const GlobalOptions& g);
 void register_render(CLI::App& app, const GlobalOptions& g);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cli_common.hpp"
+#include "microsim/measure/albedo_measure.hpp"
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/bsdf_record.hpp"
 #include "microsim/measure/g1_measure.hpp"
@@ -143,12 +144,19 @@ struct RecordTable {
   std::string about;    // one sentence
   bool ensembles;       // the command merges several surfaces' tables
   Table table;          // the specification (no rows)
+  // How several surface files are treated when the command neither merges them nor takes one
+  // (empty: "One surface per run." or the ensemble's sentence).
+  std::string surfaces = {};
 };
 
 // table.hpp one_surface_nominal_z, as the bsdf record applies it.
 const std::string kOneSurfaceNominal =
     "A comparison with a nominal model made on one surface is no verdict on the model: its z is null "
     "and its value in units of the ray-count error is kept as z_..._rays at the end of the row.";
+
+const std::string kAlbedoSurfaces =
+    "Several surface files are each measured on their own (no merge): their rows follow one another, "
+    "in the order given.";
 
 std::vector<RecordTable> record_tables() {
   const int orders = BsdfOptions{}.orders;
@@ -167,6 +175,14 @@ std::vector<RecordTable> record_tables() {
        "In-plane rows of one incidence: side x bin of outgoing angle in the plane of incidence (shown "
        "for --orders " + std::to_string(orders) + "; the f_ columns follow the orders). " + kOneSurfaceNominal,
        false, bsdf_in_plane_spec(orders)},
+      {"measure albedo", "rows",
+       "One row per surface and mu node (the lookup table's rows and columns; shown for a dielectric with --orders " +
+           std::to_string(orders) + ": a mirror or conductor has no transmitted_ columns).",
+       false, albedo_nodes_spec(orders, true), kAlbedoSurfaces},
+      {"measure albedo", "averages",
+       "One row per surface and albedo series: E_avg = 2 int_0^1 E(mu) mu dmu with its statistical and "
+       "quadrature errors.",
+       false, albedo_average_spec(), kAlbedoSurfaces},
   };
 }
 
@@ -244,8 +260,9 @@ void print_fields(std::ostream& os, const std::vector<Column>& fields, const Rec
 
 void print_record_table(std::ostream& os, const RecordTable& t) {
   os << "## " << code(t.command) << ": " << code(t.field) << "\n\n" << escaped(t.about) << " ";
-  os << (t.ensembles ? "Several surface files give the ensemble's rows, merged column by column."
-                     : "One surface per run.")
+  os << (!t.surfaces.empty() ? t.surfaces
+           : t.ensembles       ? "Several surface files give the ensemble's rows, merged column by column."
+                               : "One surface per run.")
      << "\n\n";
   print_columns(os, t.table.spec.columns, t);
   print_comparisons(os, t.table.spec.comparisons, t.ensembles);

@@ -18,13 +18,15 @@ bool is_mesh_file(const std::string& path) {
   return e == "ply" || e == "obj" || e == "off";
 }
 
-// measure bsdf writes its record beside a table: the same name, .json.
-std::string record_beside(const std::string& path) {
+// measure bsdf and measure albedo write their record beside a table: the same name, .json
+// (measure albedo's lookup table also its rows, .csv).
+std::string file_beside(const std::string& path, const std::string& ext) {
   const auto slash = path.find_last_of('/');
   const auto dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return path + ".json";
-  return path.substr(0, dot + 1) + "json";
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return path + "." + ext;
+  return path.substr(0, dot + 1) + ext;
 }
+std::string record_beside(const std::string& path) { return file_beside(path, "json"); }
 
 // The option's value(s): what was given, else its default (demo's --out-dir).
 std::vector<std::string> values_of(const CLI::Option& op) {
@@ -54,7 +56,9 @@ bool same_file(const std::string& a, const std::string& b) {
 }  // namespace
 
 std::vector<NamedPath> command_outputs(const CLI::App& cmd, const std::string& shard_text) {
-  const bool bsdf = cmd.get_name() == "bsdf" && cmd.get_parent() && cmd.get_parent()->get_name() == "measure";
+  const bool measure = cmd.get_parent() && cmd.get_parent()->get_name() == "measure";
+  const bool bsdf = measure && cmd.get_name() == "bsdf";
+  const bool albedo = measure && cmd.get_name() == "albedo";
   std::vector<NamedPath> out;
   for (const CLI::Option* op : cmd.get_options()) {
     if (!is_output_option(*op)) continue;
@@ -68,7 +72,8 @@ std::vector<NamedPath> command_outputs(const CLI::App& cmd, const std::string& s
       }
       out.push_back({label, v});
       if (is_mesh_file(v)) out.push_back({label + " " + v + ": its sidecar", v + ".json"});
-      if (bsdf && extension_of(v) != "json") out.push_back({label + " " + v + ": its record", record_beside(v)});
+      if ((bsdf || albedo) && extension_of(v) != "json") out.push_back({label + " " + v + ": its record", record_beside(v)});
+      if (albedo && extension_of(v) == "exr") out.push_back({label + " " + v + ": its rows", file_beside(v, "csv")});
       if (!shard_text.empty()) {
         try {
           const auto [k, n] = parse_shard(shard_text);
