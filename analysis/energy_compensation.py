@@ -127,13 +127,20 @@ def mean_se(xs):
     return float(xs.mean()), float(xs.std(ddof=1) / math.sqrt(len(xs)))
 
 
+def hellinger(M, f, g):
+    """M.hellinger_distance, NaN when a map holds no power (no path of orders >= 2 left through it)."""
+    if not (np.sum(np.maximum(f, 0)) > 0 and np.sum(np.maximum(g, 0)) > 0):
+        return float("nan")
+    return M.hellinger_distance(f, g)
+
+
 def jackknife_distance(M, maps, model):
     """Hellinger distance of the model to the mean explicit map, with the leave-one-tile-out jackknife error."""
     K = len(maps)
-    d = M.hellinger_distance(np.mean(maps, axis=0), model)
+    d = hellinger(M, np.mean(maps, axis=0), model)
     if K < 2:
         return d, float("nan")
-    loo = [M.hellinger_distance(np.mean([m for j, m in enumerate(maps) if j != k], axis=0), model) for k in range(K)]
+    loo = [hellinger(M, np.mean([m for j, m in enumerate(maps) if j != k], axis=0), model) for k in range(K)]
     se = math.sqrt((K - 1) / K * sum((x - np.mean(loo)) ** 2 for x in loo))
     return d, se
 
@@ -143,7 +150,7 @@ def noise_floor(M, maps):
     (each half holds K/2 tiles, so the floor is that of K/2 tiles: about sqrt(2) times the full mean's)."""
     if len(maps) < 2:
         return float("nan")
-    return M.hellinger_distance(np.mean(maps[0::2], axis=0), np.mean(maps[1::2], axis=0))
+    return hellinger(M, np.mean(maps[0::2], axis=0), np.mean(maps[1::2], axis=0))
 
 
 # ------------------------------------------------------------------------------------------------ study
