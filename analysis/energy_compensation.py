@@ -43,11 +43,13 @@ def parse():
     p.add_argument("--walks", type=int, default=2000000, help="Smith walks per model map")
     p.add_argument("--small", action="store_true")
     p.add_argument("--no-figures", action="store_true")
+    p.add_argument("--figures", action="store_true", help="with --small: draw the figures too")
+    p.add_argument("--report-only", action="store_true", help="tables and figures from the saved results")
     a = p.parse_args()
     if a.small:
         a.ndfs, a.alphas, a.thetas, a.seeds, a.rays, a.tile = "beckmann", "1.0", "0,60", 4, 100000, 512
         a.resolution = 8
-        a.materials, a.walks, a.no_figures = "mirror", 200000, True
+        a.materials, a.walks, a.no_figures = "mirror", 200000, not a.figures
     return a
 
 
@@ -220,24 +222,37 @@ NAMES = {"smith_single": "Smith single", "vcavity_single": "V-cavity single", "h
          "kulla_conty": "Kulla-Conty", "turquin": "Turquin"}
 
 
-def table_md(rows, material):
-    out = []
-    out.append(f"| NDF | α | θi | E₁ explicit | E≥2 explicit | E_ss | " +
-               " | ".join(f"ΔE≥2 {NAMES[m]}" for m in MODELS) + " | " +
-               " | ".join(f"H {NAMES[m]}" for m in MODELS) + " | H floor |")
-    out.append("|" + "---|" * (6 + 2 * len(MODELS) + 1))
+def table_albedo_md(rows, material):
+    """Albedos: explicit (mean of tiles +- standard error between tiles) and each model's minus explicit."""
+    out = ["| NDF | α | θi | E₁ explicit | E≥2 explicit | E total explicit | ΔE₁ Smith | ΔE₁ V-cavity | "
+           "ΔE≥2 Heitz16 walk | ΔE≥2 Kulla-Conty | ΔE≥2 Turquin | ΔE total Smith single | ΔE total Heitz16 walk | "
+           "ΔE total Kulla-Conty | ΔE total Turquin |",
+           "|" + "---|" * 15]
     for r in rows:
         if r["material"] != material:
             continue
         e = r["explicit"]
-        cells = [r["ndf"], f"{r['alpha']:g}", f"{r['theta']:g}", f"{e['order_1'][0]:.4f}±{e['order_1'][1]:.4f}",
-                 f"{e['ms'][0]:.4f}±{e['ms'][1]:.4f}", f"{r['E_ss']:.4f}"]
+        cells = [r["ndf"], f"{r['alpha']:g}", f"{r['theta']:g}"]
+        cells += [f"{e[k][0]:.4f} ± {e[k][1]:.4f}" for k in ("order_1", "ms", "total")]
+        cells += [f"{r['total_models'][m] - e['order_1'][0]:+.4f}" for m in ("smith_single", "vcavity_single")]
+        cells += [f"{r['ms_models'][m] - e['ms'][0]:+.4f}" for m in MODELS]
+        cells += [f"{r['total_models'][m] - e['total'][0]:+.4f}" for m in ["smith_single"] + MODELS]
+        out.append("| " + " | ".join(cells) + " |")
+    return "\n".join(out)
+
+
+def table_lobe_md(rows, material):
+    """Hellinger distances of the orders >= 2 lobes to the explicit mean lobe (jackknife errors), noise floor."""
+    out = ["| NDF | α | θi | E≥2 explicit | H Heitz16 walk | H Kulla-Conty | H Turquin | H noise floor |",
+           "|" + "---|" * 8]
+    for r in rows:
+        if r["material"] != material:
+            continue
+        cells = [r["ndf"], f"{r['alpha']:g}", f"{r['theta']:g}", f"{r['explicit']['ms'][0]:.4f}"]
         for m in MODELS:
-            cells.append(f"{r['ms_models'][m] - e['ms'][0]:+.4f}")
-        for m in MODELS:
-            d, s = r["lobe_distance"][m]
-            cells.append(f"{d:.3f}±{s:.3f}")
-        cells.append(f"{r['noise_floor']:.3f}")
+            d, se = r["lobe_distance"][m]
+            cells.append("–" if d != d else f"{d:.3f} ± {se:.3f}")
+        cells.append("–" if r["noise_floor"] != r["noise_floor"] else f"{r['noise_floor']:.3f}")
         out.append("| " + " | ".join(cells) + " |")
     return "\n".join(out)
 
@@ -296,17 +311,24 @@ def figures(a, rows, lobes):
     fig, axes = plt.subplots(2, len(thetas), figsize=(3.5 * len(thetas), 6), squeeze=False)
     for ti, th in enumerate(thetas):
         for ndf, mk in zip(sorted({r["ndf"] for r in rows}), ["o", "s"]):
+            # albedo errors of the material with Fresnel (with a mirror the three models agree: 1 - E_ss)
             rs = [r for r in rows if r["ndf"] == ndf and r["theta"] == th and r["material"] == mats[-1]]
             x = [r["alpha"] for r in rs]
             for m, c in zip(MODELS, ["C0", "C1", "C2"]):
-                axes[0][ti].plot(x, [r["ms_models"][m] - r["explicit"]["ms"][0] for r in rs], mk + "-", color=c,
-                                 label=f"{NAMES[m]} ({ndf})", alpha=0.8)
+                axes[0][ti].errorbar(x, [r["ms_models"][m] - r["explicit"]["ms"][0] for r in rs],
+                                     yerr=[r["explicit"]["ms"][1] for r in rs], fmt=mk + "-", color=c, capsize=2,
+                                     label=f"{NAMES[m]} ({ndf})", alpha=0.8)
+            # lobe shapes of the mirror
+            rs = [r for r in rows if r["ndf"] == ndf and r["theta"] == th and r["material"] == mats[0]]
+            x = [r["alpha"] for r in rs]
+            for m, c in zip(MODELS, ["C0", "C1", "C2"]):
                 axes[1][ti].errorbar(x, [r["lobe_distance"][m][0] for r in rs],
                                      yerr=[r["lobe_distance"][m][1] for r in rs], fmt=mk + "-", color=c, capsize=2,
                                      alpha=0.8)
-            axes[1][ti].plot(x, [r["noise_floor"] for r in rs], mk + ":", color="gray", label="noise floor")
+            axes[1][ti].plot(x, [r["noise_floor"] for r in rs], mk + ":", color="gray", label=f"noise floor ({ndf})")
         axes[0][ti].axhline(0, color="k", lw=0.5)
-        axes[0][ti].set_title(f"θi={th:g}°, {mats[-1]}", fontsize=9)
+        axes[0][ti].set_title(f"θi={th:g}°: albedo, {mats[-1]}", fontsize=9)
+        axes[1][ti].set_title(f"θi={th:g}°: lobe shape, {mats[0]}", fontsize=9)
         axes[0][ti].set_ylabel("model − explicit, albedo of orders ≥ 2")
         axes[1][ti].set_ylabel("Hellinger distance of the ≥ 2 lobe")
         axes[1][ti].set_xlabel("α")
@@ -341,13 +363,32 @@ def small_checks(rows, lobes):
 def main():
     a = parse()
     os.makedirs(a.out, exist_ok=True)
-    rows, lobes = study(a)
-    with open(os.path.join(a.out, "energy_compensation.json"), "w") as f:
-        json.dump(rows, f, indent=1)
+    saved = os.path.join(a.out, "energy_compensation_maps.npz")
+    if a.report_only:
+        with open(os.path.join(a.out, "energy_compensation.json")) as f:
+            rows = json.load(f)
+        z = np.load(saved)
+        lobes = {}
+        for r in rows:
+            key = (r["material"], r["ndf"], r["alpha"], r["theta"])
+            tag = "_".join(str(x) for x in key)
+            lobes[key] = (z[tag + "_explicit"], {m: z[tag + "_" + m] for m in MODELS}, z[tag + "_order_1"])
+    else:
+        rows, lobes = study(a)
+        with open(os.path.join(a.out, "energy_compensation.json"), "w") as f:
+            json.dump(rows, f, indent=1)
+        arrays = {}
+        for key, (expl, mm, o1) in lobes.items():
+            tag = "_".join(str(x) for x in key)
+            arrays[tag + "_explicit"], arrays[tag + "_order_1"] = expl, o1
+            for m, v in mm.items():
+                arrays[tag + "_" + m] = v
+        np.savez_compressed(saved, **arrays)
     md = [f"Tiles: {a.seeds} seeds of {a.tile}² (16 cells per correlation length), {a.rays} rays per incidence, "
           f"maps {a.resolution}², Smith walk maps {a.walks} walks.", ""]
     for mat in a.materials.split(","):
-        md += [f"### {mat}", "", table_md(rows, mat), ""]
+        md += [f"### {mat}: albedos", "", table_albedo_md(rows, mat), "",
+               f"### {mat}: shape of the orders ≥ 2 lobe", "", table_lobe_md(rows, mat), ""]
     with open(os.path.join(a.out, "energy_compensation.md"), "w") as f:
         f.write("\n".join(md))
     print("\n".join(md))
