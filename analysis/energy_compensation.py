@@ -7,11 +7,12 @@ order and the Smith random walk's [Heitz16] (smith_multiple), the EXR the orders
 (order_2 + order_3 + order_4plus). Beside them the models of microsim.models: single scattering (E_ss),
 Kulla-Conty [KullaConty17], Turquin [Turquin19], the Smith walk's orders >= 2 map.
 
-  energy_compensation.py --microsim build/microsim --out DIR [--small] [--seeds 4] [--rays 300000] ...
+  energy_compensation.py --microsim build/microsim --out DIR [--small] [--seeds 6] [--rays 300000] ...
 
 Writes DIR/energy_compensation.md (tables), DIR/energy_compensation.json (numbers) and the figures
-DIR/ec_albedo_<ndf>.png, DIR/ec_lobes_<ndf>_a<alpha>.png, DIR/ec_error_vs_alpha.png. Runs are skipped when their
-record exists. --small: one alpha, two seeds, few rays, then checks that the pipeline tells a wrong lobe apart
+DIR/ec_albedo_<ndf>.png, DIR/ec_lobes_<ndf>.png (largest alpha), DIR/ec_error_vs_alpha.png, and the maps
+DIR/energy_compensation_maps.npz (for --report-only). Runs are skipped when their
+record exists. --small: one alpha, four 512^2 tiles, two incidences, then checks that the pipeline tells a wrong lobe apart
 (exit 1 otherwise): the CTest energy_compensation_small.
 """
 import argparse
