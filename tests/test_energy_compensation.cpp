@@ -44,7 +44,7 @@ TEST(EnergyCompensation, EssMatchesMonteCarloOfTheSmithBrdf) {
       const double e = models::directional_albedo_ss(ndf, i.z());
       const auto [mc, se] = albedo_monte_carlo({ndf, Material::mirror(), models::Masking::SmithHeightCorrelated}, i, 1 << 20);
       EXPECT_NEAR(e, mc, 4.0 * se) << ndf.alpha_x << " " << th;
-      // The same Monte Carlo tells the separable G2 apart: the check resolves a G2 error.
+      // The same Monte Carlo tells the V-cavity G2 apart at 80 degrees: the check resolves an error of G2.
       const auto sep = models::single_scattering_albedos(ndf, Material::mirror(), i, 256).vcavity.reflected;
       if (th == 80.0) {
         EXPECT_GT(std::abs(sep - mc), 10.0 * se) << "V-cavity G2 not resolved";
