@@ -73,7 +73,10 @@ models::Masking masking_of(const std::string& name) {
 
 }  // namespace
 
+void bind_compensation(py::module_& m);
+
 void bind_models(py::module_& m) {
+  bind_compensation(m);
   m.def("direction", [](py::array_t<double> theta, py::array_t<double> phi) {
     py::tuple b = py::module_::import("numpy").attr("broadcast_arrays")(theta, phi);
     Array t = Array::ensure(b[0]), p = Array::ensure(b[1]);

@@ -153,3 +153,23 @@ def test_spectral_conductor_tables_and_colour():
     R = [((n - 1) ** 2 + k ** 2) / ((n + 1) ** 2 + k ** 2) for n, k in (M.metal_index("Au", x) for x in nm)]
     r, g, b = M.spectrum_to_rgb(nm, R)
     assert r > g > b
+
+
+def test_compensation_maps_in_the_exr_orientation():
+    """Energy-compensation maps (image order of the measure bsdf EXR): the Kulla-Conty map integrates to
+    1 - E_ss, and the single-scattering lobe for light from +x peaks on the -x side (left columns), where the
+    Smith walk's exits (all orders) peak too."""
+    R = 16
+    c = M.hemisphere_cos_integrals(R)
+    assert abs(c.sum() - math.pi) < 1e-12
+    t = M.EssTable(M.NDF("beckmann", 0.5))
+    i = [math.sin(math.radians(60)), 0.0, math.cos(math.radians(60))]
+    kc = M.compensation_map(t, M.Material.mirror(), "kulla_conty", i, R)
+    assert abs((kc * c).sum() - (1 - float(t.E(0.5)))) < 2e-5
+    single = M.compensation_map(t, M.Material.mirror(), "single", i, R)
+    walk1, _ = M.smith_walk_map(M.NDF("beckmann", 0.5), M.Material.mirror(), i, R, 1, 100000)
+    col = np.unravel_index(np.argmax(single), single.shape)[1]
+    assert col < R // 2
+    assert np.unravel_index(np.argmax(walk1), walk1.shape)[1] == col
+    assert M.hellinger_distance(single, walk1) < 0.1
+    assert M.hellinger_distance(single, single[:, ::-1]) > 0.5
