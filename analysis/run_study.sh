@@ -2,7 +2,9 @@
 # Runs one long study at the sizes of its published record and writes its page:
 #   analysis/run_study.sh NAME BUILD_DIR
 # writes BUILD_DIR/studies/study_NAME.md (the page of docs/findings/records/, regenerated).
-# NAME: convergence, converged_models, guard_band_bias, structured_surfaces, walk_audit.
+# NAME: convergence, converged_models, guard_band_bias, structured_surfaces, walk_audit,
+# spectral_polarized (also writes the figures of docs/findings/spectral-polarized.md to
+# BUILD_DIR/studies/spectral_polarized/img).
 # Hours for convergence and converged_models, tens of minutes for the others, on 2 cores.
 set -eu
 SRC=$(cd "$(dirname "$0")/.." && pwd)
@@ -37,5 +39,10 @@ case "$NAME" in
   walk_audit)
     OUT_FILE="$RAW" "$SRC/analysis/walk_audit.sh" "$BUILD" >&2
     page "Mirror walk audit of orders 4 and above" ;;
+  spectral_polarized)
+    /usr/bin/python3 "$SRC/analysis/spectral_polarized.py" --build "$BUILD" --out "$OUT/spectral_polarized" \
+      --check >&2
+    cp "$OUT/spectral_polarized/spectral_polarized.md" "$RAW"
+    page "Spectral and polarized multiple scattering" ;;
   *) echo "unknown study: $NAME" >&2; exit 2 ;;
 esac

@@ -42,11 +42,13 @@ ORDER_LABEL = {"order_1": "1", "order_2": "2", "order_3": "3", "order_4plus": "4
 FLAT_NM = [450.0, 550.0, 650.0]
 MAP_NM = 550.0
 SEED = 1
-CONVERGED = "surfaces/beckmann-1.0-converged.toml"  # 16 cells per correlation length
+CONVERGED = "surfaces/beckmann-1.0-converged.toml"
+CELLS_PER_LENGTH = 16  # the converged grid (docs/findings/discretization.md)
 
 PROFILES = {
-    # tile cells per side (32 correlation lengths), rays per incidence, wavelengths; cost runs
-    "published": dict(resolution=512, rays=1_000_000, wavelengths="400:800:25", cost_rays=200_000,
+    # tile cells per side (1024: the converged tile, 64 correlation lengths), rays per incidence,
+    # wavelengths; cost runs
+    "published": dict(resolution=1024, rays=1_000_000, wavelengths="400:800:25", cost_rays=200_000,
                       cost_args=[]),
     "small": dict(resolution=64, rays=4000, wavelengths="400:800:50", cost_rays=2000,
                   cost_args=["--resolution", 8, "--table-resolution", 8]),
@@ -124,11 +126,12 @@ def run_all(r, prof):
     res = prof["resolution"]
     r.run(["generate", "flat", "--config", r.src / "surfaces/flat.toml", "-o", "flat.exr"],
           "microsim generate flat --config surfaces/flat.toml -o flat.exr")
+    ell = CELLS_PER_LENGTH / res  # the preset's 16 cells per correlation length on this tile
     for a in ALPHAS:
         r.run(["generate", "gaussian", "--config", r.src / CONVERGED, "--alpha", a, "--resolution", res,
-               "--seed", SEED, "-o", tile_name(a)],
+               "--correlation-length", ell, "--seed", SEED, "-o", tile_name(a)],
               f"microsim generate gaussian --config {CONVERGED} --alpha {a} --resolution {res} "
-              f"--seed {SEED} -o {tile_name(a)}")
+              f"--correlation-length {ell} --seed {SEED} -o {tile_name(a)}")
     thetas = ",".join(map(str, THETAS))
     data = {"flat": {}, "rough": {}, "maps": {}}
     for metal in METALS:
@@ -148,6 +151,9 @@ def run_all(r, prof):
             maps = "maps_" + name
             r.run(["polarization_maps", tile_name(a), metal, f"{MAP_NM:g}", thetas, prof["rays"], SEED, maps])
             data["rough"][(metal, a)] = load(r.out / name)
+            cells = data["rough"][(metal, a)]["surface"]["cells_per_correlation_length"]
+            if cells != CELLS_PER_LENGTH:
+                raise CheckFailed(f"{tile_name(a)}: {cells} cells per correlation length, not {CELLS_PER_LENGTH}")
             data["maps"][(metal, a)] = load(r.out / maps)
     return data
 
@@ -263,7 +269,7 @@ def cost_table(r, prof):
     cases = [("one index (--eta/--k)", ["--eta", f"{eta:.6g}", "--k", f"{k:.6g}"])]
     cases += [(f"Au, {n} wavelength{'s' if n != '1' else ''}", ["--metal", "Au", "--wavelengths", w])
               for n, w in COST_WAVELENGTHS]
-    cached = r.out / "cost.json"
+    cached = r.out / "cost_table.json"  # not cost.json: the runs write their record there
     if r.reuse and cached.exists():
         saved = load(cached)
         r.commands += saved["commands"]
@@ -305,9 +311,10 @@ def figure_albedo(data, theta, path):
                 ax.set_xlabel("wavelength (nm)")
             if col == 0:
                 ax.set_ylabel("reflected albedo")
-    axes[0][0].legend(fontsize=7.5, ncol=2, loc="lower right")
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=8, ncol=6, loc="lower center")
     fig.suptitle(f"Albedo per scattering order, θi = {theta}°, Beckmann tiles", fontsize=11)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.05, 1, 1))
     fig.savefig(path, dpi=90)
     plt.close(fig)
 
@@ -347,7 +354,7 @@ def figure_dop(data, path):
 
 def figure_maps(maps, metal, alpha, path):
     import numpy as np
-    fig, axes = plt.subplots(3, 4, figsize=(8.6, 6.6), sharex=True, sharey=True)
+    fig, axes = plt.subplots(3, 4, figsize=(8.6, 6.2), sharex=True, sharey=True, layout="constrained")
     cmap = plt.get_cmap("viridis").copy()
     cmap.set_bad("0.85")
     for row, m in enumerate(maps["incidences"]):
@@ -458,7 +465,8 @@ def markdown(data, checks, cost, prof):
         rows, (eta, k) = cost
         w("## Cost\n")
         w(f"`measure bsdf` on the α 0.7 tile, θi 0, 45, 80°, {prof['cost_rays']} paths per incidence, "
-          "default map and table resolutions, `-o cost.bsdf` (16 table azimuths), `--no-models`; "
+          + (" ".join(f"`{x}`" if str(x).startswith("--") else str(x) for x in prof["cost_args"]) or
+             "default map and table resolutions (64)") + ", `-o cost.bsdf` (16 table azimuths), `--no-models`; "
           f"the one-index run uses gold's index at {MAP_NM:g} nm (n = {eta:.4g}, k = {k:.4g}). "
           "One run each, wall time and peak resident memory from `/usr/bin/time -v`, on a 2-core "
           "machine shared with other jobs:\n")
@@ -496,8 +504,8 @@ def main():
     out = Path(a.out)
     (out / "img").mkdir(parents=True, exist_ok=True)
     r = Runner(Path(a.build).resolve(), out, src, a.reuse)
-    data = run_all(r, prof)
     try:
+        data = run_all(r, prof)
         checks = run_checks(data)
     except CheckFailed as e:
         sys.exit(f"spectral_polarized: check failed: {e}")
