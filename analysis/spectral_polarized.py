@@ -56,6 +56,7 @@ PROFILES = {
 # The cost table's spectral cases: label -> --wavelengths (1, 5 and 16 wavelengths).
 COST_WAVELENGTHS = [("1", "550"), ("5", "450:650:50"), ("16", "400:775:25")]
 TOLERANCE = 1e-12
+COST_REPEATS = 2  # runs per cost case: the spread of their wall times shows the shared machine's noise
 
 
 class CheckFailed(Exception):
@@ -278,9 +279,9 @@ def cost_table(r, prof):
     for label, args in cases:
         for polarized in (False, True):
             argv = ["measure", "bsdf", tile, "--material", "conductor"] + args + (["--polarized"] if polarized else [])
-            wall, mb = r.timed(argv + common)
+            runs = [r.timed(argv + common) for _ in range(COST_REPEATS)]
             r.commands.append("/usr/bin/time -v microsim -q " + " ".join(map(str, argv + common)))
-            rows.append((label, polarized, wall, mb))
+            rows.append((label, polarized, [w for w, _ in runs], [m for _, m in runs]))
     cached.write_text(json.dumps({"rows": rows, "index": [eta, k], "commands": r.commands[first:]}))
     return rows, (eta, k)
 
@@ -386,7 +387,15 @@ def figure_maps(maps, metal, alpha, path):
 
 # ---- tables -------------------------------------------------------------------------------
 
+def cite(key):
+    """A bibliography link from a page of docs/findings/records."""
+    return f"[[{key}]](../../theory/bibliography.md#{key.lower()})"
+
+
 def pm(v, e, digits=4):
+    """v ± e, with at least `digits` decimals and enough to show two significant digits of e."""
+    if e > 0:
+        digits = min(7, max(digits, 1 - math.floor(math.log10(e))))
     return f"{v:.{digits}f} ± {e:.{digits}f}"
 
 
@@ -396,8 +405,8 @@ def markdown(data, checks, cost, prof):
     w("# Spectral and polarized multiple scattering\n")
     w(f"Beckmann tiles of {prof['resolution']}² cells, 16 cells per correlation length "
       f"({prof['resolution'] // 16} lengths per side), seed {SEED}; {prof['rays']} paths per incidence; "
-      f"wavelengths {prof['wavelengths']} nm; gold (Au, [JohnsonChristy72]) and aluminium "
-      "(Al, [McPeak15]) tables of the program.\n")
+      f"wavelengths {prof['wavelengths']} nm; gold (Au, {cite('JohnsonChristy72')}) and aluminium "
+      f"(Al, {cite('McPeak15')}) tables of the program.\n")
     w("## Flat plane against the closed form\n")
     w("Order-1 albedo of the flat plane at normal incidence against ((n − 1)² + k²) / ((n + 1)² + k²) "
       "of the record's own n and k:\n")
@@ -468,15 +477,20 @@ def markdown(data, checks, cost, prof):
           + (" ".join(f"`{x}`" if str(x).startswith("--") else str(x) for x in prof["cost_args"]) or
              "default map and table resolutions (64)") + ", `-o cost.bsdf` (16 table azimuths), `--no-models`; "
           f"the one-index run uses gold's index at {MAP_NM:g} nm (n = {eta:.4g}, k = {k:.4g}). "
-          "One run each, wall time and peak resident memory from `/usr/bin/time -v`, on a 2-core "
+          f"{COST_REPEATS} runs each, wall time and peak resident memory from `/usr/bin/time -v`, on a 2-core "
           "machine shared with other jobs:\n")
         w("| index | unpolarized: wall (s) | peak memory (MB) | `--polarized`: wall (s) | peak memory (MB) |")
         w("|---|---|---|---|---|")
-        base = rows[0]
+        base_wall, base_mb = min(rows[0][2]), max(rows[0][3])
         for i in range(0, len(rows), 2):
-            u, p = rows[i], rows[i + 1]
-            w(f"| {u[0]} | {u[2]:.1f} ({u[2] / base[2]:.1f}×) | {u[3]:.0f} ({u[3] / base[3]:.1f}×) | "
-              f"{p[2]:.1f} ({p[2] / base[2]:.1f}×) | {p[3]:.0f} ({p[3] / base[3]:.1f}×) |")
+            cells = []
+            for _, _, walls, mbs in (rows[i], rows[i + 1]):
+                spread = f"{min(walls):.1f}" + (f"–{max(walls):.1f}" if len(walls) > 1 else "")
+                cells.append(f"{spread} ({min(walls) / base_wall:.1f}×)")
+                cells.append(f"{max(mbs):.0f} ({max(mbs) / base_mb:.1f}×)")
+            w(f"| {rows[i][0]} | " + " | ".join(cells) + " |")
+        w(f"\nWall time: the fastest and slowest of {COST_REPEATS} runs (the ratio: fastest against the "
+          "fastest one-index run); memory: the larger peak.")
         w("")
     return out
 
