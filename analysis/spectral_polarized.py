@@ -267,7 +267,7 @@ def cost_table(r, prof):
     au = incidence(load(r.out / measure_name("Au", 0.7)), 0)["spectral"]
     l = au["wavelengths_nm"].index(MAP_NM)
     eta, k = au["eta"][l], au["k"][l]
-    cases = [("one index (--eta/--k)", ["--eta", f"{eta:.6g}", "--k", f"{k:.6g}"])]
+    cases = [("one index (`--eta`/`--k`)", ["--eta", f"{eta:.6g}", "--k", f"{k:.6g}"])]
     cases += [(f"Au, {n} wavelength{'s' if n != '1' else ''}", ["--metal", "Au", "--wavelengths", w])
               for n, w in COST_WAVELENGTHS]
     cached = r.out / "cost_table.json"  # not cost.json: the runs write their record there
