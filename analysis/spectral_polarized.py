@@ -49,14 +49,14 @@ PROFILES = {
     # tile cells per side (1024: the converged tile, 64 correlation lengths), rays per incidence,
     # wavelengths; cost runs
     "published": dict(resolution=1024, rays=1_000_000, wavelengths="400:800:25", cost_rays=200_000,
-                      cost_args=[]),
+                      cost_args=[], cost_repeats=2),
     "small": dict(resolution=64, rays=4000, wavelengths="400:800:50", cost_rays=2000,
-                  cost_args=["--resolution", 8, "--table-resolution", 8]),
+                  cost_args=["--resolution", 8, "--table-resolution", 8], cost_repeats=1),
 }
+# cost_repeats: runs per cost case (the spread of their wall times shows the shared machine's noise).
 # The cost table's spectral cases: label -> --wavelengths (1, 5 and 16 wavelengths).
 COST_WAVELENGTHS = [("1", "550"), ("5", "450:650:50"), ("16", "400:775:25")]
 TOLERANCE = 1e-12
-COST_REPEATS = 2  # runs per cost case: the spread of their wall times shows the shared machine's noise
 
 
 class CheckFailed(Exception):
@@ -99,7 +99,7 @@ class Runner:
             argv = [self.maps] + args[1:]
         else:
             argv = [self.microsim, "-q"] + args
-        self.commands.append(shown or " ".join(["microsim" if args[0] != "polarization_maps" else ""] + args).strip())
+        self.commands.append(shown or " ".join(args if args[0] == "polarization_maps" else ["microsim"] + args))
         if self.reuse and (self.out / args[-1]).exists():  # every run's output is its last argument
             return
         subprocess.run(argv, check=True, cwd=self.out, stdout=subprocess.DEVNULL)
@@ -174,7 +174,8 @@ def flat_rows(flat_record):
     """Per wavelength at normal incidence: nm, n, k, the closed form, the flat run's order-1 albedo."""
     sp = incidence(flat_record, 0)["spectral"]
     a1 = sp["albedo"]["reflected"]["order_1"]
-    return [(nm, n, k, fresnel_normal(n, k), a) for nm, n, k, a in zip(sp["wavelengths_nm"], sp["eta"], sp["k"], a1)]
+    return [(nm, n, k, fresnel_normal(n, k), a)
+            for nm, n, k, a in zip(sp["wavelengths_nm"], sp["eta"], sp["k"], a1)]
 
 
 def check_flat(flat_record):
@@ -209,7 +210,8 @@ def check_maps(record, maps):
         pol = incidence(record, m["theta_i_deg"])["polarization"]["reflected"]
         for key in ORDERS:
             for field, inp in (("dop_s", "s"), ("dop_unpolarized", "unpolarized")):
-                worst = max(worst, abs(map_mean_dop(m, key, field) - pol[key][l]["resolved_degree_of_polarization"][inp]))
+                recorded = pol[key][l]["resolved_degree_of_polarization"][inp]
+                worst = max(worst, abs(map_mean_dop(m, key, field) - recorded))
     if not worst <= TOLERANCE:
         raise CheckFailed(f"map mean degree of polarization differs from the record's by {worst:.3g}")
     return worst
@@ -278,8 +280,9 @@ def cost_table(r, prof):
     rows, first = [], len(r.commands)
     for label, args in cases:
         for polarized in (False, True):
-            argv = ["measure", "bsdf", tile, "--material", "conductor"] + args + (["--polarized"] if polarized else [])
-            runs = [r.timed(argv + common) for _ in range(COST_REPEATS)]
+            argv = (["measure", "bsdf", tile, "--material", "conductor"] + args
+                    + (["--polarized"] if polarized else []))
+            runs = [r.timed(argv + common) for _ in range(prof["cost_repeats"])]
             r.commands.append("/usr/bin/time -v microsim -q " + " ".join(map(str, argv + common)))
             rows.append((label, polarized, [w for w, _ in runs], [m for _, m in runs]))
     cached.write_text(json.dumps({"rows": rows, "index": [eta, k], "commands": r.commands[first:]}))
@@ -473,12 +476,13 @@ def markdown(data, checks, cost, prof):
     if cost:
         rows, (eta, k) = cost
         w("## Cost\n")
+        sizes = " ".join(f"`{x}`" if str(x).startswith("--") else str(x) for x in prof["cost_args"])
+        repeats = prof["cost_repeats"]
         w(f"`measure bsdf` on the α 0.7 tile, θi 0, 45, 80°, {prof['cost_rays']} paths per incidence, "
-          + (" ".join(f"`{x}`" if str(x).startswith("--") else str(x) for x in prof["cost_args"]) or
-             "default map and table resolutions (64)") + ", `-o cost.bsdf` (16 table azimuths), `--no-models`; "
-          f"the one-index run uses gold's index at {MAP_NM:g} nm (n = {eta:.4g}, k = {k:.4g}). "
-          f"{COST_REPEATS} runs each, wall time and peak resident memory from `/usr/bin/time -v`, on a 2-core "
-          "machine shared with other jobs:\n")
+          f"{sizes or 'default map and table resolutions (64)'}, `-o cost.bsdf` (16 table azimuths), "
+          f"`--no-models`; the one-index run uses gold's index at {MAP_NM:g} nm (n = {eta:.4g}, "
+          f"k = {k:.4g}). {repeats} run{'s' if repeats > 1 else ''} each, wall time and peak resident "
+          "memory from `/usr/bin/time -v`, on a 2-core machine shared with other jobs:\n")
         w("| index | unpolarized: wall (s) | peak memory (MB) | `--polarized`: wall (s) | peak memory (MB) |")
         w("|---|---|---|---|---|")
         base_wall, base_mb = min(rows[0][2]), max(rows[0][3])
@@ -489,7 +493,7 @@ def markdown(data, checks, cost, prof):
                 cells.append(f"{spread} ({min(walls) / base_wall:.1f}×)")
                 cells.append(f"{max(mbs):.0f} ({max(mbs) / base_mb:.1f}×)")
             w(f"| {rows[i][0]} | " + " | ".join(cells) + " |")
-        w(f"\nWall time: the fastest and slowest of {COST_REPEATS} runs (the ratio: fastest against the "
+        w(f"\nWall time: the fastest and slowest of {repeats} runs (the ratio: fastest against the "
           "fastest one-index run); memory: the larger peak.")
         w("")
     return out
