@@ -501,7 +501,8 @@ def markdown(data, checks, cost, prof):
 
 def commands_section(commands):
     lines = ["## Commands\n", "Run in one directory (`polarization_maps` is the analysis program of "
-             "`analysis/polarization_maps.cpp`, built by the target of that name):\n", "```sh"]
+             "`analysis/polarization_maps.cpp`, built by the target of that name):\n", "```sh",
+             "# long example"]
     lines += commands
     lines += ["```", ""]
     return lines
