@@ -2,7 +2,9 @@
 # Runs one long study at the sizes of its published record and writes its page:
 #   analysis/run_study.sh NAME BUILD_DIR
 # writes BUILD_DIR/studies/study_NAME.md (the page of docs/findings/records/, regenerated).
-# NAME: convergence, converged_models, guard_band_bias, structured_surfaces, walk_audit, albedo_lut.
+# NAME: convergence, converged_models, guard_band_bias, structured_surfaces, walk_audit, albedo_lut,
+# spectral_polarized (also writes the figures of docs/findings/spectral-polarized.md to
+# BUILD_DIR/studies/spectral_polarized/img).
 # Hours for convergence and converged_models, tens of minutes for the others, on 2 cores.
 set -eu
 SRC=$(cd "$(dirname "$0")/.." && pwd)
@@ -40,5 +42,10 @@ case "$NAME" in
   albedo_lut)
     "$SRC/analysis/albedo_lut.sh" "$BUILD" "$OUT/albedo_lut" > "$RAW"
     page "Albedo lookup tables of mirror heightfields" ;;
+  spectral_polarized)
+    /usr/bin/python3 "$SRC/analysis/spectral_polarized.py" --build "$BUILD" --out "$OUT/spectral_polarized" \
+      --check >&2
+    cp "$OUT/spectral_polarized/spectral_polarized.md" "$RAW"
+    page "Spectral and polarized multiple scattering" ;;
   *) echo "unknown study: $NAME" >&2; exit 2 ;;
 esac

@@ -13,8 +13,19 @@ import sys
 HEADING = re.compile(r"^(#{1,6})\s")
 
 
+def unfenced(lines):
+    """The indices of the lines outside fenced code blocks."""
+    out, fenced = [], False
+    for k, line in enumerate(lines):
+        if line.startswith("```"):
+            fenced = not fenced
+        elif not fenced:
+            out.append(k)
+    return out
+
+
 def shifted_headings(lines):
-    levels = [len(m.group(1)) for m in map(HEADING.match, lines) if m]
+    levels = [len(m.group(1)) for m in (HEADING.match(lines[k]) for k in unfenced(lines)) if m]
     if not levels:
         return lines
     shift = 2 - min(levels)
@@ -32,8 +43,9 @@ def shifted_headings(lines):
 
 
 def without_sole_title(lines):
-    """The study's own title, when it has exactly one, gives way to the page title."""
-    titles = [k for k, l in enumerate(lines) if l.startswith("# ")]
+    """The study's own title, when it has exactly one, gives way to the page title (a `# `
+    comment inside a fenced block is not a title)."""
+    titles = [k for k in unfenced(lines) if lines[k].startswith("# ")]
     return lines[:titles[0]] + lines[titles[0] + 1:] if len(titles) == 1 else lines
 
 

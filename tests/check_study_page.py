@@ -16,4 +16,9 @@ single = subprocess.run([sys.executable, str(tool), "Page", "study_x"], input="#
                         capture_output=True, check=True).stdout
 if [l for l in single.splitlines() if l.startswith("#")] != ["# Page", "## a"]:
     sys.exit("a study's sole title must give way to the page title:\n" + single)
+commented = subprocess.run([sys.executable, str(tool), "Page", "study_x"],
+                           input="# Own title\n## a\n## b\n```sh\n# long example\nrun\n```\n", text=True,
+                           capture_output=True, check=True).stdout
+if [l for l in commented.splitlines() if l.startswith("#")] != ["# Page", "## a", "## b", "# long example"]:
+    sys.exit("a comment in a fenced block is not a second title:\n" + commented)
 print("study pages: headings ok")
