@@ -241,3 +241,36 @@ TEST(PolarizedWalk, OffByDefault) {
   o.polarized = false;
   EXPECT_FALSE(measure_bsdf(tracer, o).polarization);
 }
+
+// The per-bin Mueller BSDF: M00 of every pixel and in-plane bin is the unpolarized f of the same
+// paths bit for bit where the path's M00 is its weight (a mirror's every order; a conductor's
+// single scattering in the in-plane bins), with the same standard errors.
+TEST(PolarizedWalk, BinM00IsTheUnpolarizedBsdfOnTheSamePaths) {
+  const Microsurface s = beckmann_tile(48, 5, 0.8);
+  const Tracer tracer(s);
+  BsdfOptions o = polarized_options(mm::Material::mirror(), 40.0, 40000);
+  o.resolution = 12;
+  const BsdfResult r = measure_bsdf(tracer, o);
+  const PolarizationTally& t = *r.polarization;
+  ASSERT_EQ(t.bin_resolution, 12);
+  ASSERT_EQ(t.plane_bins, 12);
+  int nonzero = 0;
+  for (int px = 0; px < t.bin_pixels; ++px) {
+    const Estimate f = r.f_pixel(0, 4, px);
+    EXPECT_EQ(t.pixel_f(0, px)(0, 0), f.mean) << px;
+    EXPECT_NEAR(t.pixel_f_stderr(0, px)(0, 0), f.stderr_, 1e-9 * f.mean + 1e-300) << px;
+    nonzero += f.mean > 0;
+  }
+  EXPECT_GT(nonzero, 50);
+  for (int k = 0; k <= 4; ++k)
+    for (int b = 0; b < t.plane_bins; ++b) EXPECT_EQ(t.plane_f(k, 0, b)(0, 0), r.f_plane(0, k, b).mean) << k << " " << b;
+  // A conductor: order 1 equal, order 2 not (the first facet polarizes the light).
+  o.material = mm::Material::conductor(0.47, 2.4);
+  const BsdfResult c = measure_bsdf(tracer, o);
+  int differ = 0;
+  for (int b = 0; b < c.polarization->plane_bins; ++b) {
+    EXPECT_EQ(c.polarization->plane_f(0, 0, b)(0, 0), c.f_plane(0, 0, b).mean) << b;
+    differ += c.polarization->plane_f(1, 0, b)(0, 0) != c.f_plane(0, 1, b).mean;
+  }
+  EXPECT_GT(differ, 3);
+}

@@ -645,6 +645,17 @@ void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Mi
         "reflected_rgb: linear sRGB of the reflected albedo spectrum (CIE 1931 2-degree observer "
         "by the fit of [Wyman13], equal-energy illuminant, each channel divided by a constant "
         "spectrum's: a mirror is (1, 1, 1)); n and k linear in the wavelength between table rows";
+  if (o.polarized)
+    j["definitions"]["polarization"] =
+        "Mueller matrices of the reflected paths (row-major 4 x 4, Stokes vectors with s3 = -2 Im(Ex Ey*) "
+        "for exp(-i omega t)); input frame: the light travelling along -l with reference axis "
+        "normalize(z x l); output frame: each path's exit direction o with axis normalize(z x o) "
+        "(0, 1, 0 on the normal). reflected.<order>: the Mueller albedo per wavelength. bins: the "
+        "Mueller BSDF f = sum of the paths' matrices / (paths * int_pixel |cos theta_o| d omega) per "
+        "pixel of the equal-area hemisphere map of bins.resolution = min(resolution, 32) (all orders; "
+        "pixel j * R + i, the map of the EXR tables), f[wavelength][pixel]; in_plane.<order>: the same "
+        "per in-plane bin (the bins of in_plane), f[wavelength][bin]; *_stderr: the spread of the "
+        "replicate means. M00 is the BSDF of unpolarized light";
   const Json incidences = bsdf_incidences_json(t, s);
   if (single)
     for (auto it = incidences[0].begin(); it != incidences[0].end(); ++it)
