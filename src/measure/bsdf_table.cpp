@@ -42,7 +42,11 @@ BsdfTable measure_bsdf_table(const Tracer& tracer, const BsdfTableOptions& o) {
         if (o.progress) b.progress = [&, k](double f) { o.progress((k + f) / n); };
         else b.progress = nullptr;
         if (a == 0) table.results.push_back(measure_bsdf(tracer, b));
-        else table.turned[t].push_back(measure_bsdf(tracer, b));
+        else {
+          table.turned[t].push_back(measure_bsdf(tracer, b));
+          // The turned runs enter the table's averages, not the record: their errors' replicate sums go.
+          if (table.turned[t].back().polarization) table.turned[t].back().polarization->drop_replicates();
+        }
         ++k;
       }
   table.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -102,32 +102,39 @@ Mueller bin_mean(const std::vector<double>& total, std::size_t at, std::uint64_t
   for (int i = 0; i < 16; ++i) M(i / 4, i % 4) = total[at + i] / static_cast<double>(paths) * (1.0 / cos_integral);
   return M;
 }
-// The standard error of each element: the spread of the replicates' per-path means.
-Mueller bin_stderr(const std::vector<double>& reps, std::size_t per_rep, std::size_t at, int replicates,
-                   std::uint64_t paths, double cos_integral) {
-  Mueller E = Mueller::Zero();
-  if (paths == 0 || replicates < 2) return E;
+// The standard errors of f element by element at each of `blocks` 16-element blocks from the
+// replicates' sums [q][block][16]: the spread of the replicates' per-path means.
+std::vector<double> bin_stderrs(const std::vector<double>& reps, std::size_t blocks, int replicates,
+                                std::uint64_t paths, const std::vector<double>& cos_integral) {
+  std::vector<double> out(blocks * 16, 0.0);
+  if (paths == 0 || replicates < 2) return out;
   const double n = static_cast<double>(paths) / replicates;
+  const std::size_t per_rep = blocks * 16;
   std::vector<double> x(replicates);
-  for (int i = 0; i < 16; ++i) {
-    for (int q = 0; q < replicates; ++q) x[q] = reps[q * per_rep + at + i] / n * (1.0 / cos_integral);
-    E(i / 4, i % 4) = microsim::replicate_mean(x).stderr_;
+  for (std::size_t at = 0; at < per_rep; ++at) {
+    const double c = cos_integral[(at / 16) % cos_integral.size()];
+    for (int q = 0; q < replicates; ++q) x[q] = reps[q * per_rep + at] / n * (1.0 / c);
+    out[at] = microsim::replicate_mean(x).stderr_;
   }
-  return E;
+  return out;
+}
+Mueller block_at(const std::vector<double>& v, std::size_t at) {
+  Mueller M;
+  for (int i = 0; i < 16; ++i) M(i / 4, i % 4) = v[at + i];
+  return M;
 }
 }  // namespace
 
 Mueller PolarizationTally::pixel_f(int l, int px) const { return bin_mean(bins_total, pixel_index(l, px), paths, bin_cos[px]); }
-Mueller PolarizationTally::pixel_f_stderr(int l, int px) const {
-  return bin_stderr(bins_replicate, static_cast<std::size_t>(wavelengths) * bin_pixels * 16, pixel_index(l, px),
-                    replicates, paths, bin_cos[px]);
-}
+Mueller PolarizationTally::pixel_f_stderr(int l, int px) const { return block_at(bins_stderr, pixel_index(l, px)); }
 Mueller PolarizationTally::plane_f(int k, int l, int b) const {
   return bin_mean(plane_total, plane_index(k, l, b), paths, plane_cos[b]);
 }
-Mueller PolarizationTally::plane_f_stderr(int k, int l, int b) const {
-  return bin_stderr(plane_replicate, static_cast<std::size_t>(slots()) * wavelengths * plane_bins * 16,
-                    plane_index(k, l, b), replicates, paths, plane_cos[b]);
+Mueller PolarizationTally::plane_f_stderr(int k, int l, int b) const { return block_at(plane_stderr, plane_index(k, l, b)); }
+
+void PolarizationTally::drop_replicates() {
+  std::vector<double>().swap(replicate);
+  std::vector<double>().swap(map_replicate);
 }
 
 Estimate PolarizationTally::statistic(int k, int l, const std::function<double(const Mueller&)>& g) const {
@@ -298,9 +305,9 @@ PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalk
   t.map_total.assign(map_width, 0.0);
   t.map_replicate.assign(map_width * plan.replicates, 0.0);
   t.bins_total.assign(bins_width, 0.0);
-  t.bins_replicate.assign(bins_width * plan.replicates, 0.0);
+  std::vector<double> bins_replicate(bins_width * plan.replicates, 0.0);
   t.plane_total.assign(plane_width, 0.0);
-  t.plane_replicate.assign(plane_width * plan.replicates, 0.0);
+  std::vector<double> plane_replicate(plane_width * plan.replicates, 0.0);
   const std::uint64_t per_pass = std::max<std::uint64_t>(
       16, static_cast<std::uint64_t>(kPassBytes / (8.0 * (width + map_width + bins_width + plane_width))));
   for (std::uint64_t u = 0; u < units; u += per_pass) {
@@ -337,9 +344,9 @@ PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalk
       for (std::size_t i = 0; i < width; ++i) rep[i] += part.sums[i];
       double* rep_map = t.map_replicate.data() + map_width * q;
       for (std::size_t i = 0; i < map_width; ++i) rep_map[i] += part.map[i];
-      double* rep_bins = t.bins_replicate.data() + bins_width * q;
+      double* rep_bins = bins_replicate.data() + bins_width * q;
       for (std::size_t i = 0; i < bins_width; ++i) rep_bins[i] += part.bins[i];
-      double* rep_plane = t.plane_replicate.data() + plane_width * q;
+      double* rep_plane = plane_replicate.data() + plane_width * q;
       for (std::size_t i = 0; i < plane_width; ++i) rep_plane[i] += part.plane[i];
       t.paths += part.paths;
     }
@@ -347,8 +354,12 @@ PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalk
   for (int q = 0; q < plan.replicates; ++q) {
     for (std::size_t i = 0; i < width; ++i) t.total[i] += t.replicate[width * q + i];
     for (std::size_t i = 0; i < map_width; ++i) t.map_total[i] += t.map_replicate[map_width * q + i];
-    for (std::size_t i = 0; i < bins_width; ++i) t.bins_total[i] += t.bins_replicate[bins_width * q + i];
-    for (std::size_t i = 0; i < plane_width; ++i) t.plane_total[i] += t.plane_replicate[plane_width * q + i];
+    for (std::size_t i = 0; i < bins_width; ++i) t.bins_total[i] += bins_replicate[bins_width * q + i];
+    for (std::size_t i = 0; i < plane_width; ++i) t.plane_total[i] += plane_replicate[plane_width * q + i];
+  }
+  if (per_bin) {
+    t.bins_stderr = bin_stderrs(bins_replicate, bins_width / 16, t.replicates, t.paths, t.bin_cos);
+    t.plane_stderr = bin_stderrs(plane_replicate, plane_width / 16, t.replicates, t.paths, t.plane_cos);
   }
   return t;
 }

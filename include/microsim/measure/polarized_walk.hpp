@@ -52,8 +52,11 @@ struct PolarizationTally {
   std::vector<double> map_replicate;  // [q][k][l][pixel][16]
   int bin_resolution = 0, bin_pixels = 0, plane_bins = 0;
   std::vector<double> bin_cos, plane_cos;            // int_bin |cos theta_o| d omega per pixel / in-plane bin
-  std::vector<double> bins_total, bins_replicate;    // [l][pixel][16], [q][l][pixel][16] (all orders)
-  std::vector<double> plane_total, plane_replicate;  // [k][l][b][16], [q][k][l][b][16]
+  // Sums over the paths (all replicates), and the standard errors of f element by element (the
+  // spread of the replicate means, computed once at the end of the run: the replicates' sums of
+  // every bin are not kept).
+  std::vector<double> bins_total, bins_stderr;    // [l][pixel][16] (all orders)
+  std::vector<double> plane_total, plane_stderr;  // [k][l][b][16]
 
   int slots() const { return orders + 1; }
   std::size_t index(int k, int l) const { return (static_cast<std::size_t>(k) * wavelengths + l) * 16; }
@@ -75,6 +78,9 @@ struct PolarizationTally {
   std::size_t plane_index(int k, int l, int b) const {
     return ((static_cast<std::size_t>(k) * wavelengths + l) * plane_bins + b) * 16;
   }
+  // Frees the replicate sums (the errors of the albedo, the degrees of polarization and the
+  // coherency eigenvalue): for the runs a table averages without reporting them.
+  void drop_replicates();
   // The degree of polarization of the reflected light direction by direction for the input s:
   // sum over pixels of |(s1, s2, s3)| of M_pixel s over the sum of its s0 (the flux-weighted mean
   // of the pixels' degrees of polarization), with its error over the replicates.
