@@ -8,14 +8,21 @@ that pair, bilinear between pixel centres of the equal-area map and linear in th
 them from microsim's Stokes frames (axis normalize(z x w) of each direction) to the frames Mitsuba
 3's measured_polarized builds for the pair, and compares with the stored block (float32).
 
+--run MICROSIM: first writes a small table with that program (a Gaussian tile, gold at the five
+default wavelengths, theta_i 0:80:20, one azimuth) into a temporary directory and checks it.
+
 --power: the same comparison with a deliberately wrong table (every block transposed, or the
 frames left unconverted, or the rotation's sign flipped) must fail; the run fails otherwise.
 numpy only (/usr/bin/python3).
 """
 import argparse
 import json
+import os
+import shutil
 import struct
+import subprocess
 import sys
+import tempfile
 
 import numpy as np
 
@@ -160,13 +167,28 @@ def worst_deviation(table, incidences, phi_i, variant="plugin", nodes_step=1):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("pbsdf")
-    ap.add_argument("record", help="the run's JSON record")
+    ap.add_argument("pbsdf", nargs="?")
+    ap.add_argument("record", nargs="?", help="the run's JSON record")
+    ap.add_argument("--run", metavar="MICROSIM", help="write a small table with this program first")
     ap.add_argument("--tolerance", type=float, default=1e-5, help="largest deviation / M00 (float32 storage)")
     ap.add_argument("--power", action="store_true", help="also require wrong tables to fail")
     a = ap.parse_args()
+    if a.run:
+        tmp = tempfile.mkdtemp(prefix="pbsdf_check_")
+        surface = os.path.join(tmp, "gaussian.exr")
+        a.pbsdf, a.record = os.path.join(tmp, "gold.pbsdf"), os.path.join(tmp, "gold.json")
+        subprocess.run([a.run, "-q", "generate", "gaussian", "--alpha", "0.5", "--resolution", "64", "-o", surface],
+                       check=True)
+        subprocess.run([a.run, "-q", "measure", "bsdf", surface, "--material", "conductor", "--metal", "Au",
+                        "--theta-i", "0:80:20", "--phi-i", "30", "--rays", "20000", "--resolution", "16",
+                        "--table-resolution", "16", "--table-azimuths", "1", "--no-models", "--polarized",
+                        "-o", a.pbsdf], check=True)
+    elif not a.pbsdf or not a.record:
+        ap.error("give PBSDF and RECORD, or --run MICROSIM")
     table = read_tensor_file(a.pbsdf)
     rec = json.load(open(a.record))
+    if a.run:
+        shutil.rmtree(os.path.dirname(a.pbsdf))
     if rec["table"]["azimuths"] != 1:
         sys.exit("the record lists one incidence azimuth's bins: write the table with one azimuth")
     phi_i = np.radians(rec["parameters"]["phi_i_deg"][0])

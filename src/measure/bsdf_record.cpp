@@ -143,7 +143,7 @@ namespace {
 void check_pbsdf_request(const BsdfRequest& o) {
   if (!o.polarized) throw ParameterError("{output} .pbsdf holds Mueller matrices: give {polarized}");
   if (o.material == "dielectric")
-    throw ParameterError("{output} .pbsdf: conductors and mirrors only (a dielectric's table would miss its transmission)");
+    throw ParameterError("{output} .pbsdf: {material} conductor or mirror only (a dielectric's table would miss its transmission)");
   if (sorted_unique(o.phi_i_deg).size() != 1)
     throw ParameterError("{output} .pbsdf: Mitsuba's measured_polarized tables are isotropic; give one {phi_i}");
   const std::vector<double> nm = bsdf_wavelengths(o);
