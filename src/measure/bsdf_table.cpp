@@ -44,8 +44,8 @@ BsdfTable measure_bsdf_table(const Tracer& tracer, const BsdfTableOptions& o) {
         if (a == 0) table.results.push_back(measure_bsdf(tracer, b));
         else {
           table.turned[t].push_back(measure_bsdf(tracer, b));
-          // The turned runs enter the table's averages, not the record: their errors' replicate sums go.
-          if (table.turned[t].back().polarization) table.turned[t].back().polarization->drop_replicates();
+          // The turned runs enter the table's averages, not the record: only the table's sums stay.
+          if (table.turned[t].back().polarization) table.turned[t].back().polarization->keep_table_sums_only();
         }
         ++k;
       }

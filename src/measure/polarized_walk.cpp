@@ -132,9 +132,9 @@ Mueller PolarizationTally::plane_f(int k, int l, int b) const {
 }
 Mueller PolarizationTally::plane_f_stderr(int k, int l, int b) const { return block_at(plane_stderr, plane_index(k, l, b)); }
 
-void PolarizationTally::drop_replicates() {
-  std::vector<double>().swap(replicate);
-  std::vector<double>().swap(map_replicate);
+void PolarizationTally::keep_table_sums_only() {
+  for (std::vector<double>* v : {&replicate, &map_replicate, &map_total, &bins_stderr, &plane_total, &plane_stderr})
+    std::vector<double>().swap(*v);
 }
 
 Estimate PolarizationTally::statistic(int k, int l, const std::function<double(const Mueller&)>& g) const {

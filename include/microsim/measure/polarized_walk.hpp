@@ -78,9 +78,10 @@ struct PolarizationTally {
   std::size_t plane_index(int k, int l, int b) const {
     return ((static_cast<std::size_t>(k) * wavelengths + l) * plane_bins + b) * 16;
   }
-  // Frees the replicate sums (the errors of the albedo, the degrees of polarization and the
-  // coherency eigenvalue): for the runs a table averages without reporting them.
-  void drop_replicates();
+  // Keeps only what a table reads (bins_total, paths and the bin geometry): for the runs an
+  // azimuth-averaged table adds without reporting them; frees the replicate sums, the errors,
+  // the albedo and map sums and the in-plane sums.
+  void keep_table_sums_only();
   // The degree of polarization of the reflected light direction by direction for the input s:
   // sum over pixels of |(s1, s2, s3)| of M_pixel s over the sum of its s0 (the flux-weighted mean
   // of the pixels' degrees of polarization), with its error over the replicates.
