@@ -135,3 +135,26 @@ TEST_F(CliBsdf, NoModelsMeasuresTheSameAndLeavesTheModelsOut) {
   std::remove(with.c_str());
   std::remove(without.c_str());
 }
+
+// -o .pbsdf: Mueller matrices of a conductor or mirror, one azimuth, the five wavelengths the
+// plugin reads; each refusal names the option. A mirror's table is written (five copies of its
+// single matrix) and the record says how it was filled.
+TEST_F(CliBsdf, PolarizedTableRefusalsNameTheOption) {
+  const std::string out = tmp("p.pbsdf");
+  const std::string base = "measure bsdf " + surface_ + " --theta-i 30 --rays 1000 --no-models --table-resolution 8 -o " + out;
+  expect_usage_error(base + " --material mirror", out, "--polarized");
+  expect_usage_error(base + " --material dielectric --eta 1.5 --polarized", out, "--material");
+  expect_usage_error(base + " --material conductor --metal Au --wavelengths 450:650:100 --polarized", out,
+                     "--wavelengths");
+  expect_usage_error(base + " --material conductor --metal Au --wavelengths 450,500,550,600,650.5 --polarized", out,
+                     "--wavelengths");
+  expect_usage_error(base + " --material mirror --polarized --phi-i 0,90", out, "--phi-i");
+  const Result r = run(base + " --material mirror --polarized --table-azimuths 2");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(exists(out));
+  std::ifstream in(tmp("p.json"));
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["table"]["shape"], nlohmann::json({9, 5, 5, 5, 4, 4}));
+  EXPECT_EQ(j["table"]["wavelengths_nm"], nlohmann::json({450, 500, 550, 600, 650}));
+  EXPECT_EQ(j["incidences"][0]["polarization"]["bins"]["resolution"], 32);
+}

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <complex>
+#include <random>
 
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/bsdf_walk.hpp"
@@ -240,4 +241,111 @@ TEST(PolarizedWalk, OffByDefault) {
   const Tracer tracer(s);
   o.polarized = false;
   EXPECT_FALSE(measure_bsdf(tracer, o).polarization);
+}
+
+// The per-bin Mueller BSDF: M00 of every pixel and in-plane bin is the unpolarized f of the same
+// paths bit for bit where the path's M00 is its weight (a mirror's every order; a conductor's
+// single scattering in the in-plane bins), with the same standard errors.
+TEST(PolarizedWalk, BinM00IsTheUnpolarizedBsdfOnTheSamePaths) {
+  const Microsurface s = beckmann_tile(48, 5, 0.8);
+  const Tracer tracer(s);
+  BsdfOptions o = polarized_options(mm::Material::mirror(), 40.0, 40000);
+  o.resolution = 12;
+  const BsdfResult r = measure_bsdf(tracer, o);
+  const PolarizationTally& t = *r.polarization;
+  ASSERT_EQ(t.bin_resolution, 12);
+  ASSERT_EQ(t.plane_bins, 12);
+  int nonzero = 0;
+  for (int px = 0; px < t.bin_pixels; ++px) {
+    const Estimate f = r.f_pixel(0, 4, px);
+    EXPECT_EQ(t.pixel_f(0, px)(0, 0), f.mean) << px;
+    EXPECT_NEAR(t.pixel_f_stderr(0, px)(0, 0), f.stderr_, 1e-9 * f.mean + 1e-300) << px;
+    nonzero += f.mean > 0;
+  }
+  EXPECT_GT(nonzero, 50);
+  for (int k = 0; k <= 4; ++k)
+    for (int b = 0; b < t.plane_bins; ++b) EXPECT_EQ(t.plane_f(k, 0, b)(0, 0), r.f_plane(0, k, b).mean) << k << " " << b;
+  // A conductor: order 1 equal, order 2 not (the first facet polarizes the light).
+  o.material = mm::Material::conductor(0.47, 2.4);
+  const BsdfResult c = measure_bsdf(tracer, o);
+  int differ = 0;
+  for (int b = 0; b < c.polarization->plane_bins; ++b) {
+    EXPECT_EQ(c.polarization->plane_f(0, 0, b)(0, 0), c.f_plane(0, 0, b).mean) << b;
+    differ += c.polarization->plane_f(1, 0, b)(0, 0) != c.f_plane(0, 1, b).mean;
+  }
+  EXPECT_GT(differ, 3);
+}
+
+namespace {
+// Largest |z| over the 16 elements of M(o <- i) - Q M(i <- o)^T Q (or, `plain`, M(i <- o)^T),
+// with the elements' standard errors combined.
+double reciprocity_z(const mm::Mueller& fwd, const mm::Mueller& fwd_se, const mm::Mueller& rev, const mm::Mueller& rev_se,
+                     bool plain) {
+  const mm::Mueller expected = plain ? mm::Mueller(rev.transpose()) : mm::reversed_path_mueller(rev);
+  const mm::Mueller expected_se = rev_se.transpose();  // Q only changes signs
+  double worst = 0.0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) {
+      const double se = combined(fwd_se(i, j), expected_se(i, j));
+      const double d = fwd(i, j) - expected(i, j);
+      if (se > 0) worst = std::max(worst, std::abs(d) / se);
+      else if (std::abs(d) > 1e-12) worst = std::max(worst, 1e300);
+    }
+  return worst;
+}
+}  // namespace
+
+// Reciprocity of the per-bin Mueller BSDF in matched frames, bin to bin. An explicit surface's
+// single scattering is a set of specular spikes (one per facet normal), so a bin's f for one exact
+// incidence is not the reverse of another bin's: the comparison integrates the incidence over a
+// pixel too. For pixels A and B of the equal-area map (equal solid angles), N incidences drawn
+// uniformly in A (by solid angle), each run's pixel-B matrix times cos theta_i, averaged, times
+// int_B |cos| d omega, is int_A int_B M(o <- i) cos cos d omega d omega; the same from B into A is
+// its reverse: E_AB = Q E_BA^T Q. Errors: the spread over the N independent incidences (it holds
+// the rays' noise and the incidence's). Light near 30 degrees (azimuth 0) and 55 degrees (azimuth
+// 180), in plane; the plain transpose is refused.
+TEST(PolarizedWalk, BinsAreReciprocalWithinTheirErrors) {
+  const Microsurface s = beckmann_tile(64, 7, 0.6);
+  const Tracer tracer(s);
+  const HemisphereMap map(12);
+  const int A = map.pixel_of(direction_from_angles(rad(30), 0.0)), B = map.pixel_of(direction_from_angles(rad(55), kPi));
+  constexpr int N = 32;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  // Mean over N incidences drawn in pixel `from` of cos theta_i M_to * int_to |cos|, per element,
+  // with the standard error of the mean.
+  auto bin_to_bin = [&](int from, int to, mm::Mueller* mean, mm::Mueller* se) {
+    std::vector<mm::Mueller> y;
+    for (int n = 0; n < N; ++n) {
+      const int i = from % 12, j = from / 12;
+      const Vec3 d = map.from_square(-1 + (i + u(rng)) * 2.0 / 12, -1 + (j + u(rng)) * 2.0 / 12);
+      BsdfOptions o = polarized_options(mm::Material::conductor(0.47, 2.4), 0.0, 25000);
+      o.resolution = 12;
+      o.theta_i = std::acos(d.z());
+      o.phi_i = std::atan2(d.y(), d.x());
+      o.seed = 100 + n;
+      const BsdfResult r = measure_bsdf(tracer, o);
+      y.push_back(d.z() * r.polarization->pixel_f(0, to) * r.polarization->bin_cos[to]);
+    }
+    *mean = mm::Mueller::Zero();
+    for (const auto& m : y) *mean += m / N;
+    *se = mm::Mueller::Zero();
+    for (const auto& m : y) *se += (m - *mean).cwiseProduct(m - *mean);
+    *se = (*se / (N - 1.0) / N).cwiseSqrt();
+  };
+  mm::Mueller ab, ab_se, ba, ba_se;
+  bin_to_bin(A, B, &ab, &ab_se);
+  bin_to_bin(B, A, &ba, &ba_se);
+  const double z = reciprocity_z(ab, ab_se, ba, ba_se, false), zp = reciprocity_z(ab, ab_se, ba, ba_se, true);
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 4; ++j) {
+      const double rev = mm::reversed_path_mueller(ba)(i, j);
+      std::printf(" %8.5f/%8.5f(%5.1f)", ab(i, j), rev, (ab(i, j) - rev) / combined(ab_se(i, j), ba_se(j, i)));
+    }
+    std::printf("\n");
+  }
+  std::printf("pixels %d -> %d: max |z| of E_AB - Q E_BA^T Q %.2f; plain transpose %.1f\n", A, B, z, zp);
+  EXPECT_GT(ab(0, 0), 20 * ab_se(0, 0));
+  EXPECT_LT(z, 4.0);  // 16 z-values
+  EXPECT_GT(zp, 8.0);
 }

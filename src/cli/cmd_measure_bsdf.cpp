@@ -1,7 +1,7 @@
-// microsim measure bsdf FILE --material ... -o OUT.exr|OUT.json|OUT.bsdf|OUT.binary: the BSDF per
+// microsim measure bsdf FILE --material ... -o OUT.exr|OUT.json|OUT.bsdf|OUT.binary|OUT.pbsdf: the BSDF per
 // scattering order by random walks on the explicit surface, beside the single-scattering models
 // and the Smith random-walk multiple-scattering model, at every incidence of --theta-i x --phi-i;
-// .bsdf (RGL tensor file) and .binary (MERL) are tables renderers load.
+// .bsdf (RGL tensor file), .binary (MERL) and .pbsdf (polarized) are tables renderers load.
 #include <iomanip>
 #include <iostream>
 
@@ -99,7 +99,7 @@ void print_incidences(const Json& j, const BsdfRequest& o, bool nominal, double 
 }
 
 int run_measure_bsdf(BsdfCliOptions& o, const GlobalOptions& g) {
-  require_extension(o.output, {"exr", "json", "bsdf", "binary"});
+  require_extension(o.output, {"exr", "json", "bsdf", "binary", "pbsdf"});
   BsdfRequest& r = o.request;
   r.format = extension_of(o.output);
   r.threads = g.threads;
@@ -140,7 +140,8 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
   cmd->add_option("surface", o->surface, "Surface file (a periodic tile, a finite object or a vcavity ensemble)")->required();
   cmd->add_option("-o,--output", o->output,
                   "Output: .exr (hemisphere tables of every incidence), .bsdf (RGL tensor file for "
-                  "Mitsuba 3 / pbrt-v4), .binary (MERL, isotropic) -- the JSON record goes beside "
+                  "Mitsuba 3 / pbrt-v4), .binary (MERL, isotropic), .pbsdf (Mitsuba 3 measured_polarized, "
+                  "with --polarized; conductor or mirror, isotropic) -- the JSON record goes beside "
                   "them, same name .json -- or .json (record only)")
       ->required();
   cmd->add_option("--material", o->request.material, "mirror, conductor or dielectric")->required();
@@ -167,11 +168,12 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
                   "Incidence azimuths in degrees (same syntax); every theta_i x phi_i is measured")
       ->capture_default_str();
   cmd->add_option("--table-resolution", o->request.table_resolution,
-                  "-o .bsdf: vertices per side of the per-incidence sample grid (vndf, spectra)")
+                  "-o .bsdf: vertices per side of the per-incidence sample grid (vndf, spectra); -o .pbsdf: "
+                  "N gives N/2 + 1 theta_h and theta_d nodes and N + 1 phi_d nodes")
       ->capture_default_str()
       ->check(integer_in(kMinTableResolution, kMaxTableResolution));
   cmd->add_option("--table-azimuths", o->request.table_azimuths,
-                  "-o .bsdf / .binary with one --phi-i: incidence azimuths the isotropic table averages "
+                  "-o .bsdf / .binary / .pbsdf with one --phi-i: incidence azimuths the isotropic table averages "
                   "(phi_i + 360 k / N degrees, --rays split evenly, outgoing directions turned back "
                   "to phi_i), so it holds the surface's statistics rather than one azimuth's lobe; "
                   "the record's rows are the run at phi_i (rays / N walks). 1: phi_i alone")

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "microsim/io/merl.hpp"
+#include "microsim/io/pbsdf.hpp"
 #include "microsim/io/rgl_bsdf.hpp"
 #include "microsim/version.hpp"
 
@@ -78,6 +79,25 @@ void write_bsdf_tables(const std::string& path, const BsdfRequest& o, const Bsdf
                   {"description", rgl.description},
                   {"azimuths", t.azimuths()},
                   {"seconds", seconds_since(tb)}};
+  } else if (o.format == "pbsdf") {
+    const PolarizedTable pt = measured_pbsdf(t, o.table_resolution);
+    write_pbsdf(path, pt);
+    Json nm = Json::array();
+    for (std::uint16_t w : pt.wavelengths) nm.push_back(w);
+    j["table"] = {{"format", "Mitsuba 3 measured_polarized polarized BRDF (RGL tensor file: theta_h, theta_d, "
+                             "phi_d, wvls, M)"},
+                  {"shape", {pt.phi_d.size(), pt.theta_d.size(), pt.theta_h.size(), pt.wavelengths.size(), 4, 4}},
+                  {"wavelengths_nm", nm},
+                  {"filling", "the Mueller BRDF f (reflected, all orders; no cosine factor: the plugin multiplies "
+                              "by the light's cosine) of polarization.bins: bilinear between pixel centres, linear "
+                              "in theta_i between measured incidences, held constant outside them; the mean over "
+                              "the incidence azimuths; NaN where the light or the view is below the horizon"},
+                  {"frames", "both beams of a node (light l, view v) with the reference axis normalize(l x v), the "
+                             "s axis of the half vector h (the plugin's frames before its own rotation)"},
+                  {"azimuths", t.azimuths()},
+                  {"seconds", seconds_since(tb)}};
+    if (t.results[0].wavelengths() == 0)
+      j["table"]["single_index"] = "one index: the same matrix at each of the five wavelengths";
   } else if (o.format == "binary") {
     write_merl(path, t);
     j["table"] = {{"format", "MERL isotropic BRDF (90 x 90 x 180 doubles per channel)"},

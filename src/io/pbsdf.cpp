@@ -2,9 +2,11 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
 
 #include "microsim/io/rgl_reader.hpp"
 
@@ -143,6 +145,106 @@ std::vector<float> evenly_spaced(double lo, double hi, int n) {
   std::vector<float> v(static_cast<std::size_t>(std::max(n, 0)));
   for (int k = 0; k < n; ++k) v[k] = static_cast<float>(n == 1 ? lo : lo + (hi - lo) * k / (n - 1));
   return v;
+}
+
+// ---------------------------------------------------------------------------------------------
+// A table from a polarized measurement
+
+PbsdfGrid pbsdf_grid(int n) { return {n / 2 + 1, n / 2 + 1, n + 1}; }
+
+namespace {
+// The run's Mueller BSDF (all orders) at the direction wo: bilinear between the pixel centres of
+// its bin map, in the map's square coordinates (edge pixels held to the border), as interpolate_f.
+Mueller interpolate_mueller(const BsdfResult& r, const Vec3& wo, int l) {
+  const PolarizationTally& t = *r.polarization;
+  const int R = t.bin_resolution;
+  auto pixel = [&](int i, int j) { return t.pixel_f(l, j * R + i); };
+  if (R == 1) return pixel(0, 0);
+  thread_local std::optional<HemisphereMap> map;  // built once per thread and resolution
+  if (!map || map->resolution() != R) map.emplace(R);
+  const Vec2 sq = map->to_square(wo);
+  const double x = std::clamp((sq.x() + 1.0) * 0.5 * R - 0.5, 0.0, R - 1.0);
+  const double y = std::clamp((sq.y() + 1.0) * 0.5 * R - 0.5, 0.0, R - 1.0);
+  const int i = std::min(static_cast<int>(x), R - 2), j = std::min(static_cast<int>(y), R - 2);
+  const double fx = x - i, fy = y - j;
+  return (1 - fy) * ((1 - fx) * pixel(i, j) + fx * pixel(i + 1, j)) + fy * ((1 - fx) * pixel(i, j + 1) + fx * pixel(i + 1, j + 1));
+}
+// Incidence t's matrix toward wo (in the frame of the nominal azimuth): the walk-weighted mean over
+// the table's azimuths, each run reading wo turned by its azimuth offset (table_f's rule).
+Mueller incidence_mueller(const BsdfTable& table, int t, const Vec3& wo, int l) {
+  const BsdfResult& r0 = table.at(0, t);
+  if (table.turned.empty()) return interpolate_mueller(r0, wo, l);
+  double walks = static_cast<double>(r0.polarization->paths);
+  Mueller sum = walks * interpolate_mueller(r0, wo, l);
+  const auto& runs = table.turned[static_cast<std::size_t>(t)];
+  for (std::size_t a = 0; a < runs.size(); ++a) {
+    const double w = static_cast<double>(runs[a].polarization->paths);
+    sum += w * interpolate_mueller(runs[a], turn_about_normal(wo, table.turns[a + 1]), l);
+    walks += w;
+  }
+  return sum / walks;
+}
+void check_measured_table(const BsdfTable& t) {
+  if (t.phi_i.size() != 1)
+    throw ParameterError("{output} .pbsdf: Mitsuba's measured_polarized tables are isotropic; give one {phi_i}");
+  for (std::size_t k = 1; k < t.theta_i.size(); ++k)
+    if (!(t.theta_i[k] > t.theta_i[k - 1])) throw ParameterError("{theta_i} must be increasing for a .pbsdf");
+  auto polarized = [](const BsdfResult& r) { return r.polarization && r.polarization->bin_pixels > 0; };
+  for (const BsdfResult& r : t.results)
+    if (!polarized(r)) throw ParameterError("{output} .pbsdf holds Mueller matrices: give {polarized}");
+  for (const auto& runs : t.turned)
+    for (const BsdfResult& r : runs)
+      if (!polarized(r)) throw ParameterError("{output} .pbsdf holds Mueller matrices: give {polarized}");
+}
+}  // namespace
+
+Mueller measured_mueller(const BsdfTable& t, const Vec3& light, const Vec3& view, int l) {
+  // Below the horizon: zero; grazing directions (z down to -1e-6, fill_pbsdf's rounding of the
+  // float32 grid) are read at theta = 90 degrees.
+  constexpr double kGrazing = 1e-6;
+  if (light.z() < -kGrazing || view.z() < -kGrazing) return Mueller::Zero();
+  // Turn the pair about the normal so that the light has the measured azimuth; stokes_frame turns
+  // with the directions, so the matrix in microsim's frames is that of the turned pair.
+  const double turn = t.phi_i[0] - std::atan2(light.y(), light.x());
+  const Vec3 wo = turn_about_normal(view, turn);
+  const double theta = std::acos(std::clamp(light.z() / light.norm(), -1.0, 1.0));
+  const auto& th = t.theta_i;
+  const int n = static_cast<int>(th.size());
+  if (n == 1 || theta <= th.front()) return incidence_mueller(t, 0, wo, l);
+  if (theta >= th.back()) return incidence_mueller(t, n - 1, wo, l);
+  const int k = static_cast<int>(std::upper_bound(th.begin(), th.end(), theta) - th.begin()) - 1;
+  const double w = (theta - th[k]) / (th[k + 1] - th[k]);
+  return (1 - w) * incidence_mueller(t, k, wo, l) + w * incidence_mueller(t, k + 1, wo, l);
+}
+
+PolarizedTable measured_pbsdf(const BsdfTable& t, int table_resolution) {
+  check_measured_table(t);
+  const BsdfResult& r0 = t.results.front();
+  std::vector<std::uint16_t> nm;
+  const bool spectral = r0.polarization->wavelengths > 1 || !r0.options.wavelengths_nm.empty();
+  if (spectral) {
+    if (r0.options.wavelengths_nm.size() != kPbsdfWavelengths)
+      throw ParameterError("{wavelengths}: Mitsuba's measured_polarized reads exactly " + std::to_string(kPbsdfWavelengths) +
+                           " wavelengths for {output} .pbsdf (got " + std::to_string(r0.options.wavelengths_nm.size()) + ")");
+    for (double x : r0.options.wavelengths_nm) {
+      if (x != std::round(x) || x < 1 || x > 65535)
+        throw ParameterError("{wavelengths}: a .pbsdf stores whole nanometres");
+      nm.push_back(static_cast<std::uint16_t>(x));
+    }
+  } else {
+    nm = pbsdf_single_index_wavelengths();
+  }
+  // The wavelength index of each written wavelength: the run's own, or its single index.
+  std::vector<int> index_of(nm.size(), 0);
+  if (spectral)
+    for (std::size_t l = 0; l < nm.size(); ++l) index_of[l] = static_cast<int>(l);
+  const PbsdfGrid g = pbsdf_grid(table_resolution);
+  const std::vector<std::uint16_t> written = nm;
+  return fill_pbsdf(evenly_spaced(0, 0.5 * kPi, g.theta_h), evenly_spaced(0, 0.5 * kPi, g.theta_d),
+                    evenly_spaced(-kPi, kPi, g.phi_d), nm, [&](const Vec3& light, const Vec3& view, double w) {
+                      const auto at = std::find(written.begin(), written.end(), static_cast<std::uint16_t>(w));
+                      return measured_mueller(t, light, view, index_of[static_cast<std::size_t>(at - written.begin())]);
+                    });
 }
 
 }  // namespace microsim

@@ -720,7 +720,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
     if (o.polarized)
       r.polarization = measure_polarization(
           tracer, {wi, window.origin0, window.e1, window.e2, ray_weight, finite, o.seed, stream, o.rays,
-                   o.replicates, K, o.max_events, mat, o.spectral});
+                   o.replicates, K, o.max_events, mat, o.spectral, o.phi_i, o.resolution});
   }
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <functional>
 
+#include "microsim/io/pbsdf.hpp"
 #include "microsim/measure/groove_models.hpp"
 #include "microsim/measure/single_scattering_albedos.hpp"
 #include "microsim/models/spectral_rgb.hpp"
@@ -135,11 +136,33 @@ models::Material bsdf_material(const BsdfRequest& o) {
   throw ParameterError("{material} must be mirror, conductor or dielectric (got '" + literal_text(o.material) + "')");
 }
 
+namespace {
+// A polarized table (Mitsuba 3's measured_polarized): reflection of a conductor or mirror measured
+// with Mueller matrices, one incidence azimuth (isotropic), and the five whole-nanometre
+// wavelengths the plugin reads (a single index is written at kPbsdfWavelengthsNm).
+void check_pbsdf_request(const BsdfRequest& o) {
+  if (!o.polarized) throw ParameterError("{output} .pbsdf holds Mueller matrices: give {polarized}");
+  if (o.material == "dielectric")
+    throw ParameterError("{output} .pbsdf: {material} conductor or mirror only (a dielectric's table would miss its transmission)");
+  if (sorted_unique(o.phi_i_deg).size() != 1)
+    throw ParameterError("{output} .pbsdf: Mitsuba's measured_polarized tables are isotropic; give one {phi_i}");
+  const std::vector<double> nm = bsdf_wavelengths(o);
+  if (nm.empty()) return;
+  if (nm.size() != kPbsdfWavelengths)
+    throw ParameterError("{wavelengths}: Mitsuba's measured_polarized reads exactly " + std::to_string(kPbsdfWavelengths) +
+                         " wavelengths for {output} .pbsdf (got " + std::to_string(nm.size()) + ")");
+  for (double x : nm)
+    if (x != std::round(x) || x < 1 || x > 65535)
+      throw ParameterError("{wavelengths}: a .pbsdf stores whole nanometres (got " + fixed(x, 3) + ")");
+}
+}  // namespace
+
 void check_bsdf_request(BsdfRequest& o) {
   const std::string& ext = o.format;
-  if (ext != "exr" && ext != "json" && ext != "bsdf" && ext != "binary")
-    throw UsageError("the output must be .exr, .json, .bsdf or .binary (got ." + ext + ")");
+  if (ext != "exr" && ext != "json" && ext != "bsdf" && ext != "binary" && ext != "pbsdf")
+    throw UsageError("the output must be .exr, .json, .bsdf, .binary or .pbsdf (got ." + ext + ")");
   bsdf_material(o);
+  if (ext == "pbsdf") check_pbsdf_request(o);
   o.theta_i_deg = sorted_unique(o.theta_i_deg);
   o.phi_i_deg = sorted_unique(o.phi_i_deg);
   if (o.theta_i_deg.empty() || o.phi_i_deg.empty()) throw ParameterError("{theta_i} and {phi_i} need at least one angle");
@@ -165,7 +188,7 @@ void check_bsdf_request(BsdfRequest& o) {
     throw ParameterError("{table_azimuths} must be in [1, " + std::to_string(kMaxTableAzimuths) + "] (got " +
                      std::to_string(o.table_azimuths) + ")");
   // Runs per incidence: an isotropic renderer table measures table_azimuths azimuths.
-  const bool averaged = (ext == "bsdf" || ext == "binary") && phis.size() == 1 && o.table_azimuths > 1;
+  const bool averaged = (ext == "bsdf" || ext == "binary" || ext == "pbsdf") && phis.size() == 1 && o.table_azimuths > 1;
   const double runs = averaged ? o.table_azimuths : 1.0;
   const std::size_t n_inc = o.theta_i_deg.size() * phis.size();
   if (n_inc > 100000) throw ParameterError("{theta_i} x {phi_i}: more than 100000 incidences");
@@ -184,6 +207,11 @@ void check_bsdf_request(BsdfRequest& o) {
     require_memory(vertex_bytes * static_cast<double>(n_inc) * o.table_resolution * o.table_resolution,
                    "{table_resolution} " + std::to_string(o.table_resolution) + " with " + std::to_string(n_inc) +
                        " incidences");
+  if (ext == "pbsdf") {
+    const PbsdfGrid g = pbsdf_grid(o.table_resolution);
+    require_memory(4.0 * 16 * kPbsdfWavelengths * g.theta_h * g.theta_d * g.phi_d,
+                   "{table_resolution} " + std::to_string(o.table_resolution) + " for a .pbsdf");
+  }
   // Tallies: f and f^2 per side, slot and pixel, one per worker plus the merge tree, and the
   // finished results of every incidence.
   const double tally = 2.0 * (o.orders + 1) * (static_cast<double>(o.resolution) * o.resolution + o.resolution) * 2 * 8;
@@ -202,12 +230,15 @@ void check_bsdf_request(BsdfRequest& o) {
 
 void check_bsdf_surface(const BsdfRequest& o, const Microsurface& s, const std::string& name) {
   const std::string& ext = o.format;
-  if (s.macro().finite_object() && (ext == "bsdf" || ext == "binary"))
+  if (s.macro().finite_object() && (ext == "bsdf" || ext == "binary" || ext == "pbsdf"))
     throw ParameterError(literal_text(name) + ": {output} ." + ext + " tables need a periodic tile (this surface is a finite object)");
   const bool anisotropic_surface = s.nominal && std::abs(s.nominal->alpha_x - s.nominal->alpha_y) > 1e-12;
   if (ext == "binary" && anisotropic_surface)
     throw ParameterError(literal_text(name) + ": {output} .binary needs an isotropic surface (MERL tables are isotropic; nominal "
                          "alpha_x != alpha_y); write a .bsdf with {phi_i} -180:180:STEP instead");
+  if (ext == "pbsdf" && anisotropic_surface)
+    throw ParameterError(literal_text(name) + ": {output} .pbsdf needs an isotropic surface (Mitsuba's measured_polarized "
+                         "tables are isotropic; nominal alpha_x != alpha_y)");
   if (ext == "bsdf" && anisotropic_surface && o.phi_i_deg.size() == 1)
     throw ParameterError(literal_text(name) + ": an anisotropic surface (alpha_x != alpha_y) needs {phi_i} over the full "
                          "circle for a .bsdf (e.g. {phi_i} -180:180:30)");
@@ -231,7 +262,7 @@ BsdfTableOptions bsdf_table_options(const BsdfRequest& o, const Microsurface& s,
   to.base.model_walks = s.nominal && o.models ? to.base.rays : 0;
   for (double t : o.theta_i_deg) to.theta_i.push_back(rad(t));
   for (double p : o.phi_i_deg) to.phi_i.push_back(rad(p));
-  const bool renderer_table = o.format == "bsdf" || o.format == "binary";
+  const bool renderer_table = o.format == "bsdf" || o.format == "binary" || o.format == "pbsdf";
   to.table_azimuths = renderer_table && to.phi_i.size() == 1 ? o.table_azimuths : 1;
   return to;
 }
@@ -645,6 +676,17 @@ void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Mi
         "reflected_rgb: linear sRGB of the reflected albedo spectrum (CIE 1931 2-degree observer "
         "by the fit of [Wyman13], equal-energy illuminant, each channel divided by a constant "
         "spectrum's: a mirror is (1, 1, 1)); n and k linear in the wavelength between table rows";
+  if (o.polarized)
+    j["definitions"]["polarization"] =
+        "Mueller matrices of the reflected paths (row-major 4 x 4, Stokes vectors with s3 = -2 Im(Ex Ey*) "
+        "for exp(-i omega t)); input frame: the light travelling along -l with reference axis "
+        "normalize(z x l); output frame: each path's exit direction o with axis normalize(z x o) "
+        "(0, 1, 0 on the normal). reflected.<order>: the Mueller albedo per wavelength. bins: the "
+        "Mueller BSDF f = sum of the paths' matrices / (paths * int_pixel |cos theta_o| d omega) per "
+        "pixel of the equal-area hemisphere map of bins.resolution = min(resolution, 32) (all orders; "
+        "pixel j * R + i, the map of the EXR tables), f[wavelength][pixel]; in_plane.<order>: the same "
+        "per in-plane bin (the bins of in_plane), f[wavelength][bin]; *_stderr: the spread of the "
+        "replicate means. M00 is the BSDF of unpolarized light";
   const Json incidences = bsdf_incidences_json(t, s);
   if (single)
     for (auto it = incidences[0].begin(); it != incidences[0].end(); ++it)

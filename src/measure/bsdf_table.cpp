@@ -42,7 +42,11 @@ BsdfTable measure_bsdf_table(const Tracer& tracer, const BsdfTableOptions& o) {
         if (o.progress) b.progress = [&, k](double f) { o.progress((k + f) / n); };
         else b.progress = nullptr;
         if (a == 0) table.results.push_back(measure_bsdf(tracer, b));
-        else table.turned[t].push_back(measure_bsdf(tracer, b));
+        else {
+          table.turned[t].push_back(measure_bsdf(tracer, b));
+          // The turned runs enter the table's averages, not the record: only the table's sums stay.
+          if (table.turned[t].back().polarization) table.turned[t].back().polarization->keep_table_sums_only();
+        }
         ++k;
       }
   table.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

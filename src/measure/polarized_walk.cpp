@@ -92,6 +92,51 @@ Mueller PolarizationTally::stderr_(int k, int l) const {
   return out;
 }
 
+namespace {
+// The per-path mean of the 16 sums at `at`, divided by a bin's cos integral, with the arithmetic
+// of BsdfTally::estimate (sum / paths * (1 / cos)), so that a sum equal to the unpolarized one
+// gives the same f bit for bit.
+Mueller bin_mean(const std::vector<double>& total, std::size_t at, std::uint64_t paths, double cos_integral) {
+  Mueller M = Mueller::Zero();
+  if (paths == 0) return M;
+  for (int i = 0; i < 16; ++i) M(i / 4, i % 4) = total[at + i] / static_cast<double>(paths) * (1.0 / cos_integral);
+  return M;
+}
+// The standard errors of f element by element at each of `blocks` 16-element blocks from the
+// replicates' sums [q][block][16]: the spread of the replicates' per-path means.
+std::vector<double> bin_stderrs(const std::vector<double>& reps, std::size_t blocks, int replicates,
+                                std::uint64_t paths, const std::vector<double>& cos_integral) {
+  std::vector<double> out(blocks * 16, 0.0);
+  if (paths == 0 || replicates < 2) return out;
+  const double n = static_cast<double>(paths) / replicates;
+  const std::size_t per_rep = blocks * 16;
+  std::vector<double> x(replicates);
+  for (std::size_t at = 0; at < per_rep; ++at) {
+    const double c = cos_integral[(at / 16) % cos_integral.size()];
+    for (int q = 0; q < replicates; ++q) x[q] = reps[q * per_rep + at] / n * (1.0 / c);
+    out[at] = microsim::replicate_mean(x).stderr_;
+  }
+  return out;
+}
+Mueller block_at(const std::vector<double>& v, std::size_t at) {
+  Mueller M;
+  for (int i = 0; i < 16; ++i) M(i / 4, i % 4) = v[at + i];
+  return M;
+}
+}  // namespace
+
+Mueller PolarizationTally::pixel_f(int l, int px) const { return bin_mean(bins_total, pixel_index(l, px), paths, bin_cos[px]); }
+Mueller PolarizationTally::pixel_f_stderr(int l, int px) const { return block_at(bins_stderr, pixel_index(l, px)); }
+Mueller PolarizationTally::plane_f(int k, int l, int b) const {
+  return bin_mean(plane_total, plane_index(k, l, b), paths, plane_cos[b]);
+}
+Mueller PolarizationTally::plane_f_stderr(int k, int l, int b) const { return block_at(plane_stderr, plane_index(k, l, b)); }
+
+void PolarizationTally::keep_table_sums_only() {
+  for (std::vector<double>* v : {&replicate, &map_replicate, &map_total, &bins_stderr, &plane_total, &plane_stderr})
+    std::vector<double>().swap(*v);
+}
+
 Estimate PolarizationTally::statistic(int k, int l, const std::function<double(const Mueller&)>& g) const {
   Estimate e;
   e.n = paths;
@@ -157,13 +202,17 @@ constexpr std::uint64_t kChunk = 1 << 13;
 std::uint64_t path_batches(std::uint64_t n) { return std::min<std::uint64_t>((n + kChunk - 1) / kChunk, 64); }
 
 struct UnitSums {
-  std::vector<double> sums;  // [k][l][16]
-  std::vector<double> map;   // [k][l][pixel][16]
+  std::vector<double> sums;   // [k][l][16]
+  std::vector<double> map;    // [k][l][pixel][16]
+  std::vector<double> bins;   // [l][bin pixel][16]
+  std::vector<double> plane;  // [k][l][b][16]
   std::uint64_t paths = 0;
   UnitSums& operator+=(const UnitSums& o) {
     if (sums.empty()) return *this = o;
     for (std::size_t i = 0; i < sums.size(); ++i) sums[i] += o.sums[i];
     for (std::size_t i = 0; i < map.size(); ++i) map[i] += o.map[i];
+    for (std::size_t i = 0; i < bins.size(); ++i) bins[i] += o.bins[i];
+    for (std::size_t i = 0; i < plane.size(); ++i) plane[i] += o.plane[i];
     paths += o.paths;
     return *this;
   }
@@ -186,6 +235,19 @@ PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalk
   t.pixels = npix;
   const std::size_t width = static_cast<std::size_t>(K + 1) * L * 16;
   const std::size_t map_width = width * npix;
+  // Per-bin tallies (su.resolution > 0): a hemisphere map of all orders, the in-plane bins per slot.
+  const bool per_bin = su.resolution > 0;
+  const HemisphereMap bin_map(per_bin ? polarized_bin_resolution(su.resolution) : 1);
+  const InPlaneBins plane(su.phi_i, per_bin ? su.resolution : 1);
+  if (per_bin) {
+    t.bin_resolution = bin_map.resolution();
+    t.bin_pixels = bin_map.size();
+    t.plane_bins = plane.size();
+    for (int px = 0; px < t.bin_pixels; ++px) t.bin_cos.push_back(bin_map.pixel_cos_integral(px));
+    for (int b = 0; b < t.plane_bins; ++b) t.plane_cos.push_back(plane.cos_integral(b));
+  }
+  const std::size_t bins_width = static_cast<std::size_t>(L) * t.bin_pixels * 16;
+  const std::size_t plane_width = width * t.plane_bins;
   const std::uint64_t n = plan.per_replicate();
   const std::uint64_t nchunks = (n + kChunk - 1) / kChunk, batches = path_batches(n);
   const std::uint64_t units = static_cast<std::uint64_t>(plan.replicates) * batches;
@@ -208,7 +270,21 @@ PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalk
     walk_path_muellers(su.wi, facets, e.direction, materials, L, M);
     const int k = std::min(e.order, K) - 1;
     // A finite object's ray reflected below the base plane counts in the albedo only.
-    const int px = e.direction.z() > 0.0 ? map.pixel_of(e.direction) : -1;
+    const bool above = e.direction.z() > 0.0;
+    const int px = above ? map.pixel_of(e.direction) : -1;
+    if (per_bin && above) {
+      const int bp = bin_map.pixel_of(e.direction), b = plane.bin_of(e.direction);
+      for (int l = 0; l < L; ++l) {
+        double* p = acc.bins.data() + (static_cast<std::size_t>(l) * t.bin_pixels + bp) * 16;
+        for (int a = 0; a < 16; ++a) p[a] += su.ray_weight * M[l](a / 4, a % 4);
+      }
+      if (b >= 0)
+        for (int slot : {k, K})
+          for (int l = 0; l < L; ++l) {
+            double* p = acc.plane.data() + ((static_cast<std::size_t>(slot) * L + l) * t.plane_bins + b) * 16;
+            for (int a = 0; a < 16; ++a) p[a] += su.ray_weight * M[l](a / 4, a % 4);
+          }
+    }
     for (int slot : {k, K})
       for (int l = 0; l < L; ++l) {
         double* p = acc.sums.data() + (static_cast<std::size_t>(slot) * L + l) * 16;
@@ -228,8 +304,12 @@ PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalk
   t.replicate.assign(width * plan.replicates, 0.0);
   t.map_total.assign(map_width, 0.0);
   t.map_replicate.assign(map_width * plan.replicates, 0.0);
-  const std::uint64_t per_pass =
-      std::max<std::uint64_t>(16, static_cast<std::uint64_t>(kPassBytes / (8.0 * (width + map_width))));
+  t.bins_total.assign(bins_width, 0.0);
+  std::vector<double> bins_replicate(bins_width * plan.replicates, 0.0);
+  t.plane_total.assign(plane_width, 0.0);
+  std::vector<double> plane_replicate(plane_width * plan.replicates, 0.0);
+  const std::uint64_t per_pass = std::max<std::uint64_t>(
+      16, static_cast<std::uint64_t>(kPassBytes / (8.0 * (width + map_width + bins_width + plane_width))));
   for (std::uint64_t u = 0; u < units; u += per_pass) {
     const std::uint64_t u1 = std::min(units, u + per_pass);
     std::vector<UnitSums> parts(u1 - u);
@@ -243,6 +323,8 @@ PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalk
             if (acc.sums.empty()) {
               acc.sums.assign(width, 0.0);
               acc.map.assign(map_width, 0.0);
+              acc.bins.assign(bins_width, 0.0);
+              acc.plane.assign(plane_width, 0.0);
             }
             for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
               const std::uint64_t end = std::min(n, (c + 1) * kChunk);
@@ -262,12 +344,22 @@ PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalk
       for (std::size_t i = 0; i < width; ++i) rep[i] += part.sums[i];
       double* rep_map = t.map_replicate.data() + map_width * q;
       for (std::size_t i = 0; i < map_width; ++i) rep_map[i] += part.map[i];
+      double* rep_bins = bins_replicate.data() + bins_width * q;
+      for (std::size_t i = 0; i < bins_width; ++i) rep_bins[i] += part.bins[i];
+      double* rep_plane = plane_replicate.data() + plane_width * q;
+      for (std::size_t i = 0; i < plane_width; ++i) rep_plane[i] += part.plane[i];
       t.paths += part.paths;
     }
   }
   for (int q = 0; q < plan.replicates; ++q) {
     for (std::size_t i = 0; i < width; ++i) t.total[i] += t.replicate[width * q + i];
     for (std::size_t i = 0; i < map_width; ++i) t.map_total[i] += t.map_replicate[map_width * q + i];
+    for (std::size_t i = 0; i < bins_width; ++i) t.bins_total[i] += bins_replicate[bins_width * q + i];
+    for (std::size_t i = 0; i < plane_width; ++i) t.plane_total[i] += plane_replicate[plane_width * q + i];
+  }
+  if (per_bin) {
+    t.bins_stderr = bin_stderrs(bins_replicate, bins_width / 16, t.replicates, t.paths, t.bin_cos);
+    t.plane_stderr = bin_stderrs(plane_replicate, plane_width / 16, t.replicates, t.paths, t.plane_cos);
   }
   return t;
 }
@@ -329,6 +421,36 @@ Json polarization_json(const PolarizationTally& t, const std::vector<double>& wa
     reflected[slot_key(k, t.orders)] = per_l;
   }
   j["reflected"] = reflected;
+  if (t.bin_pixels > 0) {
+    Json f = Json::array(), se = Json::array();
+    for (int l = 0; l < t.wavelengths; ++l) {
+      Json fl = Json::array(), sel = Json::array();
+      for (int px = 0; px < t.bin_pixels; ++px) {
+        fl.push_back(matrix_json(t.pixel_f(l, px)));
+        sel.push_back(matrix_json(t.pixel_f_stderr(l, px)));
+      }
+      f.push_back(fl);
+      se.push_back(sel);
+    }
+    j["bins"] = {{"resolution", t.bin_resolution}, {"order", "total"}, {"f", f}, {"f_stderr", se}};
+  }
+  if (t.plane_bins > 0) {
+    Json plane = Json::object();
+    for (int k = 0; k <= t.orders; ++k) {
+      Json f = Json::array(), se = Json::array();
+      for (int l = 0; l < t.wavelengths; ++l) {
+        Json fl = Json::array(), sel = Json::array();
+        for (int b = 0; b < t.plane_bins; ++b) {
+          fl.push_back(matrix_json(t.plane_f(k, l, b)));
+          sel.push_back(matrix_json(t.plane_f_stderr(k, l, b)));
+        }
+        f.push_back(fl);
+        se.push_back(sel);
+      }
+      plane[slot_key(k, t.orders)] = {{"f", f}, {"f_stderr", se}};
+    }
+    j["in_plane"] = plane;
+  }
   return j;
 }
 

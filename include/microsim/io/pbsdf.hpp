@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "microsim/io/rgl_bsdf.hpp"
+#include "microsim/measure/bsdf_table.hpp"
 #include "microsim/models/mueller.hpp"
 
 namespace microsim {
@@ -72,5 +73,35 @@ PolarizedTable fill_pbsdf(std::vector<float> theta_h, std::vector<float> theta_d
                           std::vector<std::uint16_t> wavelengths, const PolarizedBrdf& f);
 // n values evenly spaced from lo to hi (both included).
 std::vector<float> evenly_spaced(double lo, double hi, int n);
+
+// ---------------------------------------------------------------------------------------------
+// A table from a polarized measurement (measure bsdf --polarized -o X.pbsdf)
+
+// The plugin copies exactly this many wavelengths from the file.
+constexpr std::size_t kPbsdfWavelengths = 5;
+// The wavelengths written for a single index (mirror, one conductor index): the same matrix at each.
+inline std::vector<std::uint16_t> pbsdf_single_index_wavelengths() { return {450, 500, 550, 600, 650}; }
+
+// The node counts of a measured table of resolution n (the request's table resolution):
+// theta_h and theta_d n / 2 + 1 nodes over [0, pi/2], phi_d n + 1 nodes over [-pi, pi], so that
+// the spacing is 90 / (n / 2) degrees along each angle.
+struct PbsdfGrid {
+  int theta_h = 0, theta_d = 0, phi_d = 0;
+};
+PbsdfGrid pbsdf_grid(int table_resolution);
+
+// The measured Mueller BRDF of an isotropic polarized table (one phi_i, every run with per-bin
+// tallies) for light from `light` seen from `view` at wavelength index l, in microsim's frames
+// (axes stokes_frame(light) in, stokes_frame(view) out): the pair turned about z so that the light
+// has the table's azimuth (the frames turn with it, so the matrix does not change); then, as the
+// unpolarized tables (table_f): bilinear between the pixel centres of the bin map (all orders),
+// linear in theta_i between measured incidences and held constant outside them, the mean over the
+// table's incidence azimuths weighted by walks. Zero when either direction is below the horizon.
+models::Mueller measured_mueller(const BsdfTable& t, const Vec3& light, const Vec3& view, int l);
+// The .pbsdf of a measured table: the grid of pbsdf_grid(table_resolution), each valid node
+// measured_mueller re-expressed in the plugin's frames (fill_pbsdf), the run's wavelengths (a
+// single index: pbsdf_single_index_wavelengths with the same matrix at each). UsageError unless
+// the runs are polarized with per-bin tallies, one azimuth and five whole-nanometre wavelengths.
+PolarizedTable measured_pbsdf(const BsdfTable& t, int table_resolution);
 
 }  // namespace microsim

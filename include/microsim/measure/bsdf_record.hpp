@@ -49,10 +49,10 @@ struct BsdfRequest {
   bool models = true;
   bool polarized = false;     // Mueller matrices along the paths (measure/polarized_walk.hpp)
   int resolution = 64;        // hemisphere map R; also the in-plane bins
-  int table_resolution = 64;  // .bsdf tables
+  int table_resolution = 64;  // .bsdf tables; .pbsdf grids (io/pbsdf.hpp pbsdf_grid)
   // Isotropic .bsdf / .binary tables (one phi_i): incidence azimuths averaged (BsdfTableOptions).
   int table_azimuths = kDefaultTableAzimuths;
-  std::string format = "json";  // json, exr, bsdf (RGL tensor file) or binary (MERL)
+  std::string format = "json";  // json, exr, bsdf (RGL tensor file), binary (MERL) or pbsdf (polarized)
   int threads = 0;              // for the memory estimate (0: all processors)
 };
 

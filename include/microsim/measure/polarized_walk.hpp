@@ -27,10 +27,22 @@ struct WalkFacet;
 // The equal-area map (HemisphereMap) of the direction-resolved sums: coarse, so that each pixel
 // gathers paths of every order.
 constexpr int kPolarizationMapResolution = 8;
+// The per-bin Mueller BSDF's hemisphere map: the record's resolution R up to this one
+// (min(R, 32)), so that its replicate sums (R^2 x 16 per wavelength and replicate) stay small.
+constexpr int kMaxPolarizedBinResolution = 32;
+inline int polarized_bin_resolution(int resolution) { return resolution < kMaxPolarizedBinResolution ? resolution : kMaxPolarizedBinResolution; }
 
 // The reflected Mueller sums of a run: per replicate, order slot and wavelength, 16 elements
 // (row-major); and the same per pixel of a coarse hemisphere map of the exit directions (each
 // path's matrix in the frame of its own direction).
+//
+// The Mueller BSDF per outgoing bin: the same sums per pixel of an equal-area hemisphere map of
+// resolution polarized_bin_resolution(R) (all orders together) and per in-plane bin of the
+// record (InPlaneBins of R bins, every order slot). A bin's matrix maps the Stokes vector of the
+// incident light (travelling along -l, reference axis stokes_frame(l)) to that of the light
+// leaving through the bin, each path in the frame of its own exit direction o (reference axis
+// stokes_frame(o) = normalize(z x o)); f = sum / (paths * int_bin |cos theta_o| d omega), the
+// unpolarized f_pixel / f_plane's normalisation, so M00 is the BSDF of unpolarized light.
 struct PolarizationTally {
   int orders = 0, wavelengths = 1, replicates = 0, pixels = 0;
   std::uint64_t paths = 0;          // all replicates
@@ -38,6 +50,13 @@ struct PolarizationTally {
   std::vector<double> replicate;    // [q][k][l][16]: the same per replicate
   std::vector<double> map_total;      // [k][l][pixel][16]
   std::vector<double> map_replicate;  // [q][k][l][pixel][16]
+  int bin_resolution = 0, bin_pixels = 0, plane_bins = 0;
+  std::vector<double> bin_cos, plane_cos;            // int_bin |cos theta_o| d omega per pixel / in-plane bin
+  // Sums over the paths (all replicates), and the standard errors of f element by element (the
+  // spread of the replicate means, computed once at the end of the run: the replicates' sums of
+  // every bin are not kept).
+  std::vector<double> bins_total, bins_stderr;    // [l][pixel][16] (all orders)
+  std::vector<double> plane_total, plane_stderr;  // [k][l][b][16]
 
   int slots() const { return orders + 1; }
   std::size_t index(int k, int l) const { return (static_cast<std::size_t>(k) * wavelengths + l) * 16; }
@@ -49,6 +68,20 @@ struct PolarizationTally {
   // A scalar linear-or-not function g of the mean matrix, with the standard error of g over the
   // replicate means (sd / sqrt(R)).
   Estimate statistic(int k, int l, const std::function<double(const models::Mueller&)>& g) const;
+  // The Mueller BSDF of pixel px (all orders) / of in-plane bin b (slot k) at wavelength l, and
+  // the standard errors of its elements (the spread of the replicate means).
+  models::Mueller pixel_f(int l, int px) const;
+  models::Mueller pixel_f_stderr(int l, int px) const;
+  models::Mueller plane_f(int k, int l, int b) const;
+  models::Mueller plane_f_stderr(int k, int l, int b) const;
+  std::size_t pixel_index(int l, int px) const { return (static_cast<std::size_t>(l) * bin_pixels + px) * 16; }
+  std::size_t plane_index(int k, int l, int b) const {
+    return ((static_cast<std::size_t>(k) * wavelengths + l) * plane_bins + b) * 16;
+  }
+  // Keeps only what a table reads (bins_total, paths and the bin geometry): for the runs an
+  // azimuth-averaged table adds without reporting them; frees the replicate sums, the errors,
+  // the albedo and map sums and the in-plane sums.
+  void keep_table_sums_only();
   // The degree of polarization of the reflected light direction by direction for the input s:
   // sum over pixels of |(s1, s2, s3)| of M_pixel s over the sum of its s0 (the flux-weighted mean
   // of the pixels' degrees of polarization), with its error over the replicates.
@@ -67,6 +100,9 @@ struct PolarizedWalkSetup {
   int orders = 4, max_events = 10000;
   models::Material material;     // single index (spectral empty)
   std::vector<models::Material> spectral;
+  double phi_i = 0.0;            // the in-plane bins' plane of incidence
+  int resolution = 0;            // the record's R: in-plane bins, and the bin map's resolution
+                                 // polarized_bin_resolution(R); 0: no per-bin tallies
 };
 
 PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalkSetup& setup);
@@ -95,6 +131,8 @@ Estimate coherency_min_eigenvalue(const PolarizationTally& t, int k, int l);
 // per order key, one entry per wavelength with the mean Mueller matrix, its errors, the degree of
 // polarization of the reflected light for each of polarization_inputs() with its error, and the
 // coherency matrix's lowest eigenvalue with its error. `wavelengths_nm` empty: a single index.
+// With the per-bin tallies, `bins` (the hemisphere map, all orders) and `in_plane` (per slot):
+// per wavelength the matrices f and their errors of every bin (docs/guide/polarization.md).
 Json polarization_json(const PolarizationTally& t, const std::vector<double>& wavelengths_nm);
 
 }  // namespace microsim
