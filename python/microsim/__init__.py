@@ -7,14 +7,14 @@ compared with the analytic models of :mod:`microsim.models`.
 Keyword arguments are the command line's long options with ``_`` for ``-``
 (``correlation_length=0.02`` is ``--correlation-length 0.02``); lists of angles are given as
 lists, numbers or the command line's text (``theta=[30, 80]`` is ``--theta 30,80``), ``True`` a
-flag. ``help("measure g1")`` lists them. generate, measure_ndf, measure_g1, measure_g2 and
-measure_vndf set the fields of the library's requests (``_core.G1Request`` ...) directly;
-measure_bsdf and validate run the command line's code in memory. Records are the command's JSON
-as dicts and lists, numeric arrays as numpy arrays, bit for bit what ``-o record.json`` writes at
+flag. ``help("measure g1")`` lists them. generate, measure_ndf, measure_g1, measure_g2,
+measure_vndf and validate set the fields of the library's requests (``_core.G1Request`` ...)
+directly; measure_bsdf runs the command line's code in memory. Records are the command's JSON as
+dicts and lists, numeric arrays as numpy arrays, bit for bit what ``-o record.json`` writes at
 the same seed. Errors raise the library's message, its parameters named as the keywords
 (``rays: must be ...``), as :class:`UsageError` (a ``ValueError``) where the command line exits 2
-(an option, a file or a model argument refused) and as :class:`RuntimeFailure` (a ``RuntimeError``) where it
-exits 1 (the run failed); both are defined once, in the compiled core, and raised by
+(an option, a file or a model argument refused) and as :class:`RuntimeFailure` (a
+``RuntimeError``) where it exits 1 (the run failed); both are defined once, in the compiled core, and raised by
 :mod:`microsim.models` too. Measurements release the GIL.
 """
 from . import _core
@@ -156,6 +156,8 @@ def _set_field(request, command, key, v):
                          "output, threads)")
     if key in _ANGLE_LISTS:
         v = _angle_text(key, v)
+    elif key == "checks" and isinstance(v, (list, tuple)):
+        v = ",".join(map(str, v))
     elif hasattr(v, "item") and getattr(v, "ndim", 1) == 0:  # numpy scalar
         v = v.item()
     if isinstance(v, bool):
@@ -217,8 +219,20 @@ def measure_bsdf(surface, **options):
 def validate(surfaces=None, **options):
     """Every applicable check (``microsim validate``) of a surface, an ensemble, or
     ``suite="smoke"``; raises :class:`ValidationFailed` (with ``.record``) when an exact identity fails."""
-    names, by_name = ([], {}) if surfaces is None else _surfaces(surfaces)
-    record, _ = _command(["validate"], names, by_name, options, "record.json")
+    _refuse_shard(options)
+    output = options.pop("output", None)
+    threads = options.pop("threads", None) or 0
+    options.pop("quiet", None)  # nothing is printed here but the warnings
+    request = _core.ValidateRequest()
+    if surfaces is not None:
+        names, by_name = _surfaces(surfaces)
+        request.surfaces = [(n, by_name[n]) for n in names]
+    for key, v in options.items():
+        if v is not None:
+            _set_field(request, "validate", key, v)
+    record, failure = _core._validate(request, output, threads)
+    if failure is not None:
+        raise ValidationFailed(failure, record)
     return record
 
 

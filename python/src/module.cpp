@@ -1,7 +1,7 @@
 // The compiled part of the Python module `microsim` (microsim._core): surfaces as numpy views,
-// the library's requests (requests.cpp, generate.cpp), the command tree of the command line run in
-// memory for the commands without a request yet (measure bsdf, validate, help), and the analytic
-// models (models.cpp). python/microsim/__init__.py turns keyword arguments into request
+// the library's requests (requests.cpp, generate.cpp, validate.cpp), the command tree of the
+// command line run in memory for the commands without a request yet (measure bsdf, help), and
+// the analytic models (models.cpp). python/microsim/__init__.py turns keyword arguments into request
 // fields or, for those commands, into the command's options.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -24,6 +24,7 @@ namespace microsim::python {
 void bind_models(py::module_& m);
 void bind_requests(py::module_& m);
 void bind_generate(py::module_& m);
+void bind_validate(py::module_& m);
 }
 
 namespace {
@@ -239,6 +240,7 @@ PYBIND11_MODULE(_core, m) {
 
   python::bind_requests(m);
   python::bind_generate(m);
+  python::bind_validate(m);
   m.def("_help", &help, py::arg("command"), "The command line's help of a command");
   m.def("surface_kinds", &surface_kinds_table,
         "Every surface kind of generate(kind, **options) with its options: name, keyword, type, default, "

@@ -112,3 +112,21 @@ def test_generate_names_a_missing_required_keyword():
     with pytest.raises(microsim.UsageError) as e:
         microsim.generate("heightmap")
     assert str(e.value) == "input is required"
+
+
+def test_validate_equals_the_program(tiles, cli, tmp_path):
+    a, b = tiles
+    out = tmp_path / "v.json"
+    p = cli("validate", a.path, b.path, "--checks", "d_identities,g1", "--theta", 30, "--rays", 4000, "-o", out,
+            check=False)
+    expected = json.loads(out.read_text())
+    record = microsim.validate([a, b], checks=["d_identities", "g1"], theta=30, rays=4000)
+    assert p.returncode == 0 and record["files"] == [a.path, b.path]
+    assert differences(record, expected, skip=VOLATILE | {"seconds"}) == []
+    assert record["parameters"]["overrides"]["checks"] == "d_identities,g1"
+    assert differences(microsim.validate([a, b], checks="d_identities,g1", theta=30, rays=4000, seed=2), expected)
+
+
+def test_validate_needs_surfaces_or_a_suite():
+    with pytest.raises(microsim.UsageError, match=r"^validate: give either surface FILE\(s\) or suite NAME \(known suites: .*smoke"):
+        microsim.validate()

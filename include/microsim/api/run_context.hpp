@@ -1,5 +1,6 @@
 // What a measurement's record needs to know of the run beyond its request: the threads and MPI
-// ranks it ran on, the shards or ranks it shares its tallies with, and where its progress goes.
+// ranks it ran on, the shards or ranks it shares its tallies with, and where its progress and
+// warnings go.
 #pragma once
 #include <functional>
 #include <string>
@@ -17,6 +18,9 @@ struct RunContext {
   TallySplit* split = nullptr;
   // Called with the fraction of the run done (0 to 1); may be empty.
   std::function<void(double)> progress;
+  // Called with each warning of the run (e.g. a generated heightmap that is not periodic); may be
+  // empty.
+  std::function<void(const std::string&)> warning;
 };
 
 // The fields every record starts with: command, microsim_version, schema_version, threads (and
