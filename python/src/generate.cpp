@@ -2,7 +2,6 @@
 // are the table's options, checked and built as `microsim generate KIND` checks and builds them.
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
-#include <tbb/global_control.h>
 
 #include <iostream>
 #include <memory>
@@ -12,7 +11,7 @@
 #include <vector>
 
 #include "held_surface.hpp"
-#include "microsim/api/request_checks.hpp"
+#include "thread_limit.hpp"
 #include "microsim/surface/surface_io.hpp"
 #include "microsim/surface/surface_spec.hpp"
 
@@ -40,10 +39,8 @@ SurfaceRequest surface_request(const std::string& kind, const std::vector<std::p
 Surface generate(const std::string& kind, const std::vector<std::pair<std::string, std::string>>& options,
                  const std::optional<std::string>& config, const std::string& path, bool save, int threads) {
   const SurfaceRequest r = surface_request(kind, options, config);
-  require_integer_in(threads, 0, 4096, "threads");
+  const auto limit = thread_limit(threads);
   py::gil_scoped_release nogil;
-  std::unique_ptr<tbb::global_control> limit;
-  if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
   auto s = std::make_shared<const Microsurface>(generate_surface(r, path));
   if (save) save_surface(*s, path);
   for (const auto& w : surface_report(r, *s, path, false).warnings) std::cerr << "microsim: warning: " << w << "\n";

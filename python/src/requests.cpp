@@ -3,7 +3,6 @@
 // library's, the same as the command line's -o record.json.
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
-#include <tbb/global_control.h>
 
 #include <memory>
 #include <optional>
@@ -13,6 +12,7 @@
 
 #include "held_surface.hpp"
 #include "json_to_python.hpp"
+#include "thread_limit.hpp"
 #include "microsim/api/g1_request.hpp"
 #include "microsim/api/g2_request.hpp"
 #include "microsim/api/ndf_request.hpp"
@@ -34,13 +34,6 @@ std::vector<SurfaceInput> held(const NamedSurfaces& given) {
   std::vector<SurfaceInput> out;
   for (const auto& [name, s] : given) out.push_back(surface_held(name, s.s));
   return out;
-}
-
-// The TBB limit of `threads` (0: all cores, no limit), held while a request runs.
-std::unique_ptr<tbb::global_control> thread_limit(int threads) {
-  require_integer_in(threads, 0, 4096, "threads");
-  if (threads == 0) return nullptr;
-  return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
 }
 
 // Runs record(r) on `threads` threads without the GIL; the record is also written to `output`

@@ -1,7 +1,6 @@
 // microsim.validate on the library's ValidateRequest (microsim/api/validate_request.hpp).
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
-#include <tbb/global_control.h>
 
 #include <iostream>
 #include <memory>
@@ -12,8 +11,8 @@
 
 #include "held_surface.hpp"
 #include "json_to_python.hpp"
+#include "thread_limit.hpp"
 #include "microsim/api/record_file.hpp"
-#include "microsim/api/request_checks.hpp"
 #include "microsim/api/validate_request.hpp"
 
 #ifndef MICROSIM_DATA_DIR
@@ -31,12 +30,10 @@ namespace {
 py::tuple validate(const ValidateRequest& r, const std::optional<std::string>& output, int threads) {
   require_surfaces_or_suite(!r.surfaces.empty(), !r.suite.empty(), r.suite_dirs);
   if (output) require_output_format(*output, {"json", "csv"});
-  require_integer_in(threads, 0, 4096, "threads");
+  const auto limit = thread_limit(threads);
   ValidateRun run;
   {
     py::gil_scoped_release nogil;  // the checks run on TBB threads without the GIL
-    std::unique_ptr<tbb::global_control> limit;
-    if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
     RunContext ctx;
     ctx.threads = threads;
     ctx.warning = [](const std::string& w) { std::cerr << "microsim: warning: " << w << "\n"; };
