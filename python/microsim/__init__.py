@@ -5,15 +5,19 @@ with the same code, options and records as the command line (``microsim measure 
 compared with the analytic models of :mod:`microsim.models`.
 
 Keyword arguments are the command line's long options with ``_`` for ``-``
-(``correlation_length=0.02`` is ``--correlation-length 0.02``); lists become comma-separated
-values (``theta=[30, 80]`` is ``--theta 30,80``), ``True`` a flag. ``help("measure g1")``
-lists them. Records are the command's JSON as dicts and lists, numeric arrays as numpy arrays,
-bit for bit what ``-o record.json`` writes at the same seed. Errors raise the command line's
-message as :class:`UsageError` (a ``ValueError``) where the command line exits 2 (an option, a
-file or a model argument refused) and as :class:`RuntimeFailure` (a ``RuntimeError``) where it
-exits 1 (the run failed); both are defined once, in the compiled core, and raised by
+(``correlation_length=0.02`` is ``--correlation-length 0.02``); lists of angles are given as
+lists, numbers or the command line's text (``theta=[30, 80]`` is ``--theta 30,80``), ``True`` a
+flag. ``help("measure g1")`` lists them. generate, measure_ndf, measure_g1, measure_g2,
+measure_vndf and validate set the fields of the library's requests (``_core.G1Request`` ...)
+directly; measure_bsdf runs the command line's code in memory. Records are the command's JSON as
+dicts and lists, numeric arrays as numpy arrays, bit for bit what ``-o record.json`` writes at
+the same seed. Errors raise the library's message, its parameters named as the keywords
+(``rays: must be ...``), as :class:`UsageError` (a ``ValueError``) where the command line exits 2
+(an option, a file or a model argument refused) and as :class:`RuntimeFailure` (a
+``RuntimeError``) where it exits 1 (the run failed); both are defined once, in the compiled core, and raised by
 :mod:`microsim.models` too. Measurements release the GIL.
 """
+from . import _core
 from ._core import RuntimeFailure, Surface, UsageError, _help, _run, load, models, surface_kinds
 
 __all__ = ["Surface", "UsageError", "RuntimeFailure", "ValidationFailed", "generate", "load",
@@ -77,12 +81,16 @@ def _surfaces(surfaces):
     return names, by_name
 
 
-def _command(words, positional, by_name, options, default_output):
+def _refuse_shard(options):
     # A shard's tallies are a part of a run, meaningful only merged with the others: a record
     # finalised from them would look whole and be wrong.
     if options.get("shard") is not None:
         raise UsageError("shard: a partial run is written by the command line (--shard K/N) and "
                          "read back by its merge; Python measures whole runs")
+
+
+def _command(words, positional, by_name, options, default_output):
+    _refuse_shard(options)
     output = options.pop("output", None)
     args = list(words) + list(positional) + ["-o", output or default_output] + _options(options)
     record, generated, failure = _run(args, by_name, output is not None)
@@ -99,9 +107,18 @@ def generate(kind, **options):
     ``output="file.exr"`` also saves it."""
     # Nothing is written unless output is given; the default name only passes the extension
     # checks (a heightmap is saved as .exr, every other kind accepts a mesh file).
+    _refuse_shard(options)
+    output = options.pop("output", None)
+    threads = options.pop("threads", None) or 0
+    config = options.pop("config", None)
+    options.pop("quiet", None)  # nothing is printed here but the warnings
+    given = []
+    for key, v in options.items():
+        if v is None or v is False:
+            continue
+        given.append((key.replace("_", "-"), "true" if v is True else _item_text(key, v)))
     default = "surface.exr" if kind == "heightmap" else "surface.ply"
-    _, generated = _command(["generate", kind], [], {}, options, default)
-    return generated[0]
+    return _core._generate(kind, given, config, output or default, output is not None, threads)
 
 
 def _measure(quantity, surfaces, options):
@@ -110,26 +127,88 @@ def _measure(quantity, surfaces, options):
     return record
 
 
+# The requests' fields that are lists of angles: given as a list, a number or the command line's
+# text; the record's parameters echo the text.
+_ANGLE_LISTS = {"theta", "phi", "theta_o", "phi_o", "theta_i", "phi_i"}
+
+
+def _item_text(name, v):
+    if hasattr(v, "item") and getattr(v, "ndim", 1) == 0:  # numpy scalar
+        v = v.item()
+    if isinstance(v, bool) or not isinstance(v, (int, float, str)):
+        raise UsageError(f"{name}: unsupported value {v!r}")
+    return repr(v) if isinstance(v, float) else str(v)  # shortest text that reads back as the same double
+
+
+def _angle_text(name, v):
+    if isinstance(v, (list, tuple)) or (hasattr(v, "tolist") and getattr(v, "ndim", 0) > 0):
+        items = v.tolist() if hasattr(v, "tolist") else v
+        return ",".join(_item_text(name, x) for x in items)
+    return _item_text(name, v)
+
+
+def _fields(request):
+    return [k for k in dir(request) if not k.startswith("_") and k not in ("surface", "surfaces")]
+
+
+def _set_field(request, command, key, v):
+    if key not in _fields(request):
+        raise UsageError(f"unknown keyword '{key}' for {command} (known: {', '.join(_fields(request))}, "
+                         "output, threads)")
+    if key in _ANGLE_LISTS:
+        v = _angle_text(key, v)
+    elif key == "checks" and isinstance(v, (list, tuple)):
+        v = ",".join(map(str, v))
+    elif hasattr(v, "item") and getattr(v, "ndim", 1) == 0:  # numpy scalar
+        v = v.item()
+    if isinstance(v, bool):
+        raise UsageError(f"{key}: unsupported value {v!r}")
+    try:
+        setattr(request, key, v)
+    except TypeError:
+        raise UsageError(f"{key}: unsupported value {v!r}") from None
+
+
+def _run_request(quantity, request, run, surfaces, options, one_surface=False):
+    """Sets the request's fields from the keyword arguments and runs it (the library's record)."""
+    _refuse_shard(options)
+    output = options.pop("output", None)
+    threads = options.pop("threads", None) or 0
+    options.pop("quiet", None)  # nothing is printed here
+    names, by_name = _surfaces(surfaces)
+    if one_surface:
+        if len(names) != 1:
+            raise UsageError(f"measure_{quantity} measures one surface (got {len(names)})")
+        request.surface = (names[0], by_name[names[0]])
+    else:
+        request.surfaces = [(n, by_name[n]) for n in names]
+    for key, v in options.items():
+        if v is not None:
+            _set_field(request, f"measure_{quantity}", key, v)
+    return run(request, output, threads)
+
+
 def measure_ndf(surface, **options):
-    """D over the sphere from the facets (``microsim measure ndf``); one surface."""
-    return _measure("ndf", surface, options)
+    """D over the sphere from the facets (``microsim measure ndf``); one surface. ``output="d.exr"``
+    writes the EXR table instead of a record (and returns None)."""
+    return _run_request("ndf", _core.NdfRequest(), _core._measure_ndf, surface, options, one_surface=True)
 
 
 def measure_g1(surfaces, **options):
     """Masking G1 (``microsim measure g1``): ``measure_g1(s, theta=[30, 80], phi=0, rays=100000, seed=4)``.
 
     A list of surfaces is an ensemble (rows with the between-surface standard error)."""
-    return _measure("g1", surfaces, options)
+    return _run_request("g1", _core.G1Request(), _core._measure_g1, surfaces, options)
 
 
 def measure_g2(surfaces, **options):
     """Masking-shadowing G2 (``microsim measure g2``)."""
-    return _measure("g2", surfaces, options)
+    return _run_request("g2", _core.G2Request(), _core._measure_g2, surfaces, options)
 
 
 def measure_vndf(surfaces, **options):
     """Distribution of visible normals (``microsim measure vndf``)."""
-    return _measure("vndf", surfaces, options)
+    return _run_request("vndf", _core.VndfRequest(), _core._measure_vndf, surfaces, options)
 
 
 def measure_bsdf(surface, **options):
@@ -149,8 +228,20 @@ def measure_albedo(surfaces, **options):
 def validate(surfaces=None, **options):
     """Every applicable check (``microsim validate``) of a surface, an ensemble, or
     ``suite="smoke"``; raises :class:`ValidationFailed` (with ``.record``) when an exact identity fails."""
-    names, by_name = ([], {}) if surfaces is None else _surfaces(surfaces)
-    record, _ = _command(["validate"], names, by_name, options, "record.json")
+    _refuse_shard(options)
+    output = options.pop("output", None)
+    threads = options.pop("threads", None) or 0
+    options.pop("quiet", None)  # nothing is printed here but the warnings
+    request = _core.ValidateRequest()
+    if surfaces is not None:
+        names, by_name = _surfaces(surfaces)
+        request.surfaces = [(n, by_name[n]) for n in names]
+    for key, v in options.items():
+        if v is not None:
+            _set_field(request, "validate", key, v)
+    record, failure = _core._validate(request, output, threads)
+    if failure is not None:
+        raise ValidationFailed(failure, record)
     return record
 
 

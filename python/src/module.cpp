@@ -1,7 +1,8 @@
 // The compiled part of the Python module `microsim` (microsim._core): surfaces as numpy views,
-// the command tree of the command line run in memory (the same options, checks and records as
-// the program), and the analytic models (models.cpp). python/microsim/__init__.py turns keyword
-// arguments into the command's options.
+// the library's requests (requests.cpp, generate.cpp, validate.cpp), the command tree of the
+// command line run in memory for the commands without a request yet (measure bsdf, help), and
+// the analytic models (models.cpp). python/microsim/__init__.py turns keyword arguments into request
+// fields or, for those commands, into the command's options.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -11,6 +12,7 @@
 #include <optional>
 
 #include "../../src/cli/app.hpp"
+#include "held_surface.hpp"
 #include "json_to_python.hpp"
 #include "microsim/surface/surface_io.hpp"
 #include "microsim/surface/surface_spec.hpp"
@@ -20,15 +22,14 @@ using namespace microsim;
 
 namespace microsim::python {
 void bind_models(py::module_& m);
+void bind_requests(py::module_& m);
+void bind_generate(py::module_& m);
+void bind_validate(py::module_& m);
 }
 
 namespace {
 
-// A surface held by Python: the geometry is shared (never copied) between Python objects.
-struct Surface {
-  std::shared_ptr<const Microsurface> s;
-  std::optional<std::string> path;  // the file it was loaded from
-};
+using python::Surface;
 
 // A read-only numpy view of `data` kept alive by `owner`.
 template <class T>
@@ -134,30 +135,8 @@ std::string help(const std::vector<std::string>& command) {
   return level->help();
 }
 
-}  // namespace
-
-PYBIND11_MODULE(_core, m) {
-  m.doc() = "microsim: explicit microsurface Monte Carlo simulator (compiled core)";
-  static py::exception<UsageError> usage_error(m, "UsageError", PyExc_ValueError);
-  static py::exception<RuntimeFailure> runtime_failure(m, "RuntimeFailure", PyExc_RuntimeError);
-  py::register_exception_translator([](std::exception_ptr p) {
-    try {
-      if (p) std::rethrow_exception(p);
-    } catch (const UsageError& e) {
-      usage_error(spelled_message(e, keyword_spelling).c_str());
-    } catch (const CLI::ParseError& e) {
-      usage_error(e.what());
-    } catch (const RuntimeFailure& e) {
-      runtime_failure(e.what());
-    } catch (const py::builtin_exception&) {
-      throw;  // pybind11's own (TypeError of a wrong argument, ...) keep their Python classes
-    } catch (const std::exception& e) {
-      // What the command line reports as "failed" with exit 1 (std::bad_alloc, a file that
-      // cannot be written, ...): RuntimeFailure, as an exit code of 1 is.
-      runtime_failure(e.what());
-    }
-  });
-
+// microsim.Surface: the geometry as read-only numpy views, the description and the macrosurface.
+void bind_surface(py::module_& m) {
   py::class_<Surface>(m, "Surface", "A microsurface (heightfield or mesh) with its macrosurface")
       .def_property_readonly("kind", [](const Surface& s) {
         return s.s->kind() == Microsurface::Kind::Heightfield ? "heightfield" : "mesh";
@@ -204,6 +183,33 @@ PYBIND11_MODULE(_core, m) {
         if (s.path) r += ", " + *s.path;
         return r + ">";
       });
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "microsim: explicit microsurface Monte Carlo simulator (compiled core)";
+  static py::exception<UsageError> usage_error(m, "UsageError", PyExc_ValueError);
+  static py::exception<RuntimeFailure> runtime_failure(m, "RuntimeFailure", PyExc_RuntimeError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const UsageError& e) {
+      usage_error(spelled_message(e, keyword_spelling).c_str());
+    } catch (const CLI::ParseError& e) {
+      usage_error(e.what());
+    } catch (const RuntimeFailure& e) {
+      runtime_failure(e.what());
+    } catch (const py::builtin_exception&) {
+      throw;  // pybind11's own (TypeError of a wrong argument, ...) keep their Python classes
+    } catch (const std::exception& e) {
+      // What the command line reports as "failed" with exit 1 (std::bad_alloc, a file that
+      // cannot be written, ...): RuntimeFailure, as an exit code of 1 is.
+      runtime_failure(e.what());
+    }
+  });
+
+  bind_surface(m);
 
   m.def("load", [](const std::string& path) {
     Surface s;
@@ -232,6 +238,9 @@ PYBIND11_MODULE(_core, m) {
      "Run a command (arguments without the program name) on surfaces in memory; returns "
      "(record or None, generated surfaces, failure message or None)");
 
+  python::bind_requests(m);
+  python::bind_generate(m);
+  python::bind_validate(m);
   m.def("_help", &help, py::arg("command"), "The command line's help of a command");
   m.def("surface_kinds", &surface_kinds_table,
         "Every surface kind of generate(kind, **options) with its options: name, keyword, type, default, "

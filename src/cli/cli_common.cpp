@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "microsim/api/record_file.hpp"
 #include "microsim/io/checks.hpp"
 #include "microsim/version.hpp"
 #include "microsim/io/output.hpp"
@@ -37,19 +38,10 @@ void Progress::finish() {
 }
 
 void require_extension(const std::string& path, std::initializer_list<const char*> allowed) {
-  std::string ext = extension_of(path);
-  std::string list;
-  for (const char* a : allowed) {
-    if (ext == a) return;
-    list += std::string(list.empty() ? "" : ", ") + "." + a;
-  }
-  throw UsageError("-o " + path + ": unsupported output format (use " + list + ")");
+  require_output_format(path, allowed);
 }
 
-void write_record(const std::string& path, const Json& j) {
-  if (extension_of(path) == "csv") write_csv_rows(path, j);
-  else write_json(path, j);
-}
+void write_record(const std::string& path, const Json& j) { write_record_file(path, j); }
 
 void write_record(const GlobalOptions& g, const std::string& path, const Json& j) {
   if (g.keep_record) g.keep_record(path, j);
@@ -58,6 +50,26 @@ void write_record(const GlobalOptions& g, const std::string& path, const Json& j
 
 Microsurface input_surface(const GlobalOptions& g, const std::string& path) {
   return g.surface_by_name ? g.surface_by_name(path) : load_surface(path);
+}
+
+SurfaceInput input_surface_source(const GlobalOptions& g, const std::string& path) {
+  if (!g.surface_by_name) return surface_file(path);
+  auto by_name = g.surface_by_name;
+  return {path, [by_name, path] { return std::make_shared<const Microsurface>(by_name(path)); }};
+}
+
+std::vector<SurfaceInput> input_surface_sources(const GlobalOptions& g, const std::vector<std::string>& paths) {
+  std::vector<SurfaceInput> sources;
+  for (const std::string& p : paths) sources.push_back(input_surface_source(g, p));
+  return sources;
+}
+
+RunContext run_context(const GlobalOptions& g) {
+  RunContext ctx;
+  ctx.threads = g.threads;
+  ctx.ranks = g.ranks;
+  ctx.split = g.split;
+  return ctx;
 }
 
 void output_surface(const GlobalOptions& g, const Microsurface& s, const std::string& path) {
@@ -86,54 +98,28 @@ std::string cell(const Json& x, int precision, int width) {
 }
 
 Json run_header(const std::string& command, const GlobalOptions& g) {
-  Json j = {{"command", command},
-            {"microsim_version", version()},
-            {"schema_version", kRecordSchemaVersion},
-            {"threads", g.threads > 0 ? g.threads : tbb::this_task_arena::max_concurrency()}};
-  if (g.ranks > 0) j["ranks"] = g.ranks;  // MPI processes that shared the work
-  return j;
+  return record_header(command, run_context(g));
 }
 
+namespace {
+// The library's name of the parameter an option sets: "--theta-i" is theta_i.
+std::string parameter_of(const std::string& option) {
+  std::string name = option.substr(option.find_first_not_of('-'));
+  std::replace(name.begin(), name.end(), '-', '_');
+  return name;
+}
+}  // namespace
+
 std::vector<double> parse_angle_list(const std::string& text, const std::string& option) {
-  auto number = [&](const std::string& s) {
-    try {
-      std::size_t used = 0;
-      double x = std::stod(s, &used);
-      if (used != s.size() || !std::isfinite(x)) throw std::invalid_argument(s);
-      return x;
-    } catch (const std::exception&) {
-      throw UsageError(option + " '" + text + "': expected a number, a,b,c or start:stop:step");
-    }
-  };
-  std::vector<double> out;
-  if (text.find(':') != std::string::npos) {
-    const std::vector<std::string> parts = split_items(text, ':', option);
-    if (parts.size() != 3) throw UsageError(option + " '" + text + "': expected start:stop:step");
-    double a = number(parts[0]), b = number(parts[1]), step = number(parts[2]);
-    if (!(step > 0) || b < a)
-      throw UsageError(option + " '" + text + "': need step > 0 and stop >= start");
-    if ((b - a) / step > 100000) throw UsageError(option + " '" + text + "': too many values");
-    for (int k = 0; a + k * step <= b + 1e-9; ++k) out.push_back(a + k * step);
-  } else {
-    for (const std::string& p : split_items(text, ',', option)) out.push_back(number(p));
-  }
-  if (out.empty()) throw UsageError(option + " is empty");
-  return out;
+  return angle_list(text, parameter_of(option)).degrees;
 }
 
 std::vector<double> parse_azimuth_list(const std::string& text, const std::string& option) {
-  std::vector<double> phis = parse_angle_list(text, option);
-  for (double p : phis)
-    if (!(std::abs(p) <= kMaxAzimuthDeg))
-      throw UsageError(option + " must be azimuths in [-" + fmt(kMaxAzimuthDeg, 0) + ", " + fmt(kMaxAzimuthDeg, 0) +
-                       "] degrees (got " + number_text(p) + ")");
-  return phis;
+  return azimuth_list(text, parameter_of(option)).degrees;
 }
 
 void require_above_horizon(const std::vector<double>& thetas, const std::string& option) {
-  for (double t : thetas)
-    if (!(t >= 0 && t < 90))
-      throw UsageError(option + " must be in [0, 90) degrees (got " + fmt(t, 2) + ")");
+  microsim::require_above_horizon(thetas, parameter_of(option));
 }
 
 }  // namespace microsim::cli

@@ -9,6 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "microsim/api/angle_list.hpp"
+#include "microsim/api/run_context.hpp"
+#include "microsim/api/surface_input.hpp"
 #include "microsim/common.hpp"
 #include "microsim/surface/microsurface.hpp"
 
@@ -38,6 +41,11 @@ struct GlobalOptions {
 
 // A command's input surface: the file `path`, or the surface of that name when embedded.
 Microsurface input_surface(const GlobalOptions& g, const std::string& path);
+// The same as a request's surface: the file, or the surface of that name when embedded.
+SurfaceInput input_surface_source(const GlobalOptions& g, const std::string& path);
+std::vector<SurfaceInput> input_surface_sources(const GlobalOptions& g, const std::vector<std::string>& paths);
+// The run as a request's record knows it: threads, MPI ranks and the shards/MPI split of g.
+RunContext run_context(const GlobalOptions& g);
 // A command's output surface: saved to `path`, or handed over when embedded.
 void output_surface(const GlobalOptions& g, const Microsurface& s, const std::string& path);
 
@@ -71,14 +79,12 @@ std::string fmt(const Json& x, int precision = 4);
 std::string cell(const Json& x, int precision, int width);
 // Fields every JSON record starts with: command, version, threads (and ranks under MPI).
 Json run_header(const std::string& command, const GlobalOptions& g);
+// The library's angle lists (microsim/api/angle_list.hpp) named by their option ("--theta-i"):
 // "a:b:step" (inclusive), "a,b,c" or "a", in degrees.
 std::vector<double> parse_angle_list(const std::string& text, const std::string& option);
-// Largest accepted |azimuth| in degrees (ten turns; the same bound as measure bsdf's --phi-i): a
-// larger one has lost its fractional degrees to rounding, and 1e308 makes no direction at all.
-constexpr double kMaxAzimuthDeg = 3600;
-// parse_angle_list, then UsageError naming `option` unless every |azimuth| <= kMaxAzimuthDeg.
+// parse_angle_list, then an error naming `option` unless every |azimuth| <= kMaxAzimuthDeg.
 std::vector<double> parse_azimuth_list(const std::string& text, const std::string& option);
-// UsageError unless every angle is in [0, 90).
+// An error naming `option` unless every angle is in [0, 90).
 void require_above_horizon(const std::vector<double>& thetas_deg, const std::string& option);
 
 // Registration of each command (definitions in cmd_*.cpp).

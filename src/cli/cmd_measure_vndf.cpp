@@ -1,6 +1,6 @@
 // microsim measure vndf FILE... : histogram of first-hit normals of rays along -v against the
 // analytic distribution of visible normals [Heitz14, eq. 13], and a chi-square test of the VNDF
-// sampler of the surface's nominal NDF.
+// sampler of the surface's nominal NDF (the library's VndfRequest).
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -8,13 +8,7 @@
 #include "cli_common.hpp"
 #include "measure_options.hpp"
 #include "option_checks.hpp"
-#include "ensemble.hpp"
-#include "microsim/io/output.hpp"
-#include "microsim/measure/stats.hpp"
-#include "microsim/measure/vcavity_measure.hpp"
-#include "microsim/measure/vndf_measure.hpp"
-#include "microsim/surface/generators.hpp"
-#include "microsim/trace/tracer.hpp"
+#include "microsim/api/vndf_request.hpp"
 
 namespace microsim::cli {
 
@@ -29,15 +23,6 @@ struct VndfCliOptions {
   std::uint64_t seed = 1;
   int theta_bins = 18, phi_bins = 16;
 };
-
-const char* const kGrooveByGroove =
-    "true for a V-cavity ensemble: [Heitz14, Sec. 6.1] made explicit, every ray picks a groove uniformly "
-    "(equal macro areas) and a uniform origin on its tile and is traced on that groove alone, an "
-    "infinite periodic V-groove";
-const char* const kChi2Vcavity =
-    "*_vcavity: the chi-square test of the hit histogram against the V-cavity model's bin "
-    "probabilities over the ensemble's facets, sum_f A_f (v.m_f)+ G1_vcavity(v, m_f) ([Heitz14, eq. 13] "
-    "with eq. 24), exact for separate grooves";
 
 void print_vndf_table(const Json& rows, bool ensemble) {
   std::cout << std::setw(7) << "theta" << std::setw(6) << "phi" << std::setw(11) << "chi2/dof"
@@ -62,123 +47,29 @@ void print_vndf_table(const Json& rows, bool ensemble) {
 
 int run_measure_vndf(const VndfCliOptions& o, const GlobalOptions& g) {
   require_extension(o.output, {"json", "csv"});
-  const std::vector<double> thetas = parse_angle_list(o.theta, "--theta");
-  const std::vector<double> phis = parse_azimuth_list(o.phi, "--phi");
-  require_above_horizon(thetas, "--theta");
-  if (o.rays <= 0)
-    throw UsageError("--rays must be a positive integer (got " + std::to_string(o.rays) + ")");
-  if (o.sampler_samples < 0)
-    throw UsageError("--sampler-samples must be >= 0 (got " + std::to_string(o.sampler_samples) + ")");
-  if (o.theta_bins < 1 || o.theta_bins > 360)
-    throw UsageError("--theta-bins must be in [1, 360] (got " + std::to_string(o.theta_bins) + ")");
-  if (o.phi_bins < 1 || o.phi_bins > 720)
-    throw UsageError("--phi-bins must be in [1, 720] (got " + std::to_string(o.phi_bins) + ")");
-  auto t0 = std::chrono::steady_clock::now();
-
-  VndfOptions vo = estimator_options<VndfOptions>(o.rays, o.seed, g);
-  vo.theta_bins = o.theta_bins;
-  vo.phi_bins = o.phi_bins;
-  vo.sampler_samples = static_cast<std::uint64_t>(o.sampler_samples);
-  Json j = measure_record("measure vndf", o.files, g);
-  j["parameters"] = {{"theta", o.theta},
-                     {"phi", o.phi},
-                     {"rays", o.rays},
-                     {"sampler_samples", o.sampler_samples},
-                     {"seed", o.seed},
-                     {"replicates", nullptr},
-                     {"normal_bins", {{"theta", o.theta_bins}, {"phi", o.phi_bins}, {"theta_max_deg", 90}}},
-                     {"family_alpha", vo.family_alpha}};
-  j["definitions"] = {
-      {"dv", "histogram of the normals of front-face first hits of parallel rays along -v: "
-             "(hits in bin / hits) / solid angle of the bin ([GeomBSDF24, eq. 3b], [Heitz14, eq. 13])"},
-      {"dv_model", "bin average of the nominal NDF's D_v(m) = G1(v) max(0,v.m) D(m) / (v.n) "
-                   "[Heitz14, eq. 13], by quadrature"},
-      {"dv_smith_numeric", "Smith's D_v with the surface's own facets: sum_f in bin A_f "
-                           "max(0,v.m_f) / sum_f A_f max(0,v.m_f) / solid angle"},
-      {"z", "per bin (dv - dv_model) / stderr, the binomial stderr under the model (ensembles: "
-            "the between-surface stderr); max_abs_z over bins holding >= 5 expected hits "
-            "(ensembles: >= 0.2% of the visible normals) against sidak_z, the two-sided threshold "
-            "for family_alpha Sidak-corrected over bins_tested (ensembles of K surfaces: the "
-            "Student t quantile with K - 1 degrees of freedom)"},
-      {"chi2", "Pearson chi-square of the hit histogram against the nominal bin probabilities "
-               "(bins with >= 5 expected hits, the rest pooled), p_value its upper tail; "
-               "*_smith_numeric the same against dv_smith_numeric"},
-      {"sampler_*", "the same chi-square test for sampler_samples normals drawn by the nominal "
-                    "NDF's VNDF sampler (models/ndf.hpp sample_visible_normal)"},
-      {"replicates", "null: the ray origins are i.i.d. uniform (not stratified), so the bin "
-                     "counts are multinomial and the binomial standard error is exact"},
-      {"stderr", o.files.size() == 1 ? "ray-count (binomial) standard error of this one surface"
-                                     : "between-surface standard error (sd / sqrt(K)); "
-                                       "per_surface holds each surface's rows"}};
+  VndfRequest request;
+  request.surfaces = input_surface_sources(g, o.files);
+  request.theta = angle_list(o.theta, "theta");
+  request.phi = azimuth_list(o.phi, "phi");
+  request.rays = o.rays;
+  request.sampler_samples = o.sampler_samples;
+  request.seed = o.seed;
+  request.theta_bins = o.theta_bins;
+  request.phi_bins = o.phi_bins;
   Progress progress("measure vndf", g.quiet);
-  const std::size_t total = o.files.size() * thetas.size() * phis.size();
-  std::size_t done = 0;
-  vo.progress = [&](double f) { progress.update((done + f) / total); };
-  TraceCounters counters;
-  std::uint64_t lost = 0;
-  std::vector<Table> per_surface = measure_over_surfaces(g, o.files, [&](const Microsurface& s, std::size_t k) {
-    // A V-cavity ensemble is measured groove by groove [Heitz14, Sec. 6.1], each groove an infinite
-    // periodic V-groove of its own; its stored strips traced together would mask each other.
-    const bool grooves = is_vcavity(s);
-    if (k == 0) {
-      j["surface"] = s.description;
-      j["groove_by_groove"] = grooves;
-      if (grooves) {
-        j["definitions"]["groove_by_groove"] = kGrooveByGroove;
-        j["definitions"]["chi2_vcavity"] = kChi2Vcavity;
-      }
-    }
-    const DirectionBinning bins = vndf_binning(vo);
-    std::unique_ptr<Tracer> tracer;
-    FacetTable table;
-    if (!grooves) {
-      tracer = std::make_unique<Tracer>(s);
-      table = build_facet_table(s, bins);
-    }
-    Table rows = vndf_table(vo.family_alpha);
-    for (double p : phis)
-      for (double t : thetas) {
-        const Vec3 v = direction_from_angles(rad(t), rad(p));
-        VndfResult r = grooves ? measure_vcavity_vndf(s, v, vo) : measure_vndf(*tracer, v, vo, &table);
-        counters += r.counters;
-        lost += !s.macro().finite_object() ? r.counters.lost_below + r.counters.unresolved : r.counters.unresolved;
-        std::optional<SamplerTest> sampler;
-        // The sampler does not depend on the surface: tested once, with the first one.
-        if (s.nominal && vo.sampler_samples > 0 && k == 0)
-          sampler = test_vndf_sampler(*s.nominal, v, vo.sampler_samples, bins, vo.seed,
-                                      vo.family_alpha);
-        Json& row = add_row(rows, r, s, vo, sampler);
-        if (grooves) {  // the V-cavity model's VNDF over the ensemble's own facets (exact here)
-          const GofResult gof =
-              histogram_gof(r.bin_hits, r.hits, vcavity_vndf_probabilities(s, r.v, r.binning), vo.family_alpha);
-          row["chi2_vcavity"] = gof.chi2;
-          row["dof_vcavity"] = gof.dof;
-          row["p_value_vcavity"] = gof.p_value;
-          row["max_abs_z_vcavity"] = gof.max_abs_z;
-          row["pass_vcavity"] = gof.pass();
-        }
-        row["theta_deg"] = t;
-        row["phi_deg"] = p;
-        ++done;
-      }
-    return rows;
-  });
+  RunContext ctx = run_context(g);
+  ctx.progress = [&](double f) { progress.update(f); };
+  const Json j = measure_vndf_record(request, ctx);
   progress.finish();
-  put_rows(j, o.files, per_surface);
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  j["wall_seconds"] = wall;
-  j["total_rays"] = counters.rays;
-  j["lost_rays"] = lost;
-  j["backface_hits"] = counters.backface_hits;
   write_record(g, o.output, j);
   if (!g.quiet) {
     std::cout << "VNDF of "
               << (o.files.size() == 1 ? o.files[0] : std::to_string(o.files.size()) + " surfaces")
-              << "  (" << vo.rays << " rays per direction; " << o.theta_bins << " x "
+              << "  (" << o.rays << " rays per direction; " << o.theta_bins << " x "
               << o.phi_bins << " normal bins)\n";
     print_vndf_table(j["rows"], o.files.size() > 1);
-    std::cout << "rays lost " << lost << ", back-face hits "
-              << counters.backface_hits << "; wrote " << o.output << "\n";
+    std::cout << "rays lost " << j["lost_rays"].get<std::uint64_t>() << ", back-face hits "
+              << j["backface_hits"].get<std::uint64_t>() << "; wrote " << o.output << "\n";
   }
   return 0;
 }

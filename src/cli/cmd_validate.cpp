@@ -3,9 +3,6 @@
 // table of measured vs model with z-scores and verdicts. Exit 1 only when an exact identity fails.
 #include <unistd.h>
 
-#include <filesystem>
-#include <optional>
-#include <sstream>
 #include <iostream>
 #include <memory>
 
@@ -13,7 +10,7 @@
 #include "option_checks.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/surface/surface_io.hpp"
-#include "microsim/validate/validate.hpp"
+#include "microsim/api/validate_request.hpp"
 
 #ifndef MICROSIM_DATA_DIR
 #define MICROSIM_DATA_DIR ""
@@ -22,8 +19,6 @@
 namespace microsim::cli {
 
 namespace {
-
-namespace fs = std::filesystem;
 
 struct ValidateOptions {
   std::vector<std::string> files;
@@ -36,146 +31,62 @@ struct ValidateOptions {
        checks_given = false, significance_given = false;
 };
 
-// Where `--suite NAME` is looked up: ./surfaces/suites, then beside the executable
-// (BUILD/../surfaces/suites), then the source tree the binary was built from.
-std::vector<std::string> suite_dirs() {
-  std::vector<std::string> dirs = {"surfaces/suites"};
-  std::error_code ec;
-  fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) dirs.push_back((exe.parent_path().parent_path() / "surfaces" / "suites").string());
-  if (std::string(MICROSIM_DATA_DIR).size() > 0) dirs.push_back(std::string(MICROSIM_DATA_DIR) + "/suites");
-  return dirs;
+// Where `--suite NAME` is looked up (the library's list, with the source tree of this build).
+std::vector<std::string> suite_dirs() { return suite_search_dirs(MICROSIM_DATA_DIR); }
+
+// The options given as the library's request (the defaults of the checks where none is given).
+ValidateRequest validate_request(const ValidateOptions& o, const GlobalOptions& g) {
+  ValidateRequest r;
+  r.surfaces = input_surface_sources(g, o.files);
+  r.suite = o.suite;
+  r.suite_dirs = suite_dirs();
+  r.surfaces_dir = o.surfaces_dir;
+  // Parsed (and checked) whether given or not, as the defaults are used for surfaces.
+  AngleList theta = angle_list(o.theta, "theta");
+  require_above_horizon(theta.degrees, "theta");
+  AngleList phi = azimuth_list(o.phi, "phi");
+  if (o.theta_given) r.theta = theta;
+  if (o.phi_given) r.phi = phi;
+  if (o.rays_given) r.rays = o.rays;
+  if (o.seed_given) r.seed = o.seed;
+  if (o.checks_given) r.checks = o.checks;
+  if (o.significance_given) r.significance = o.significance;
+  return r;
 }
 
+void print_validation(const ValidateOptions& o, const ValidateRun& run) {
+  const validation::Result& result = run.result;
+  std::cout << "validate " << (o.suite.empty() ? o.files[0] : "--suite " + o.suite) << ": "
+            << result.rows.size() << " rows (groups of per-bin rows shown by their worst row)\n"
+            << validation::format_table(result) << result.count("pass") << " pass, "
+            << result.count("FAIL") << " FAIL, " << result.count("agrees") << " agree, "
+            << result.count("deviates (finding)") << " deviate (finding), "
+            << result.count("measured") << " measured only; |z| threshold "
+            << fmt(result.z_threshold, 2) << " (Sidak over " << run.record["comparisons"].get<std::size_t>()
+            << " z-tests, family-wise significance " << run.significance
+            << "; rows with the spread of K surfaces: Student t, K - 1 dof, column |z|max)\n";
+  if (!o.output.empty()) std::cout << "wrote " << o.output << "\n";
+}
 
-int run_validate(ValidateOptions o, const GlobalOptions& g) {
-  if (o.files.empty() == o.suite.empty())
-    throw UsageError("validate: give either surface FILE(s) or --suite NAME (known suites: " +
-                     [] {
-                       std::string s;
-                       for (const auto& d : suite_dirs())
-                         for (const auto& n : validation::list_suites(d))
-                           if (s.find(n) == std::string::npos) s += (s.empty() ? "" : ", ") + n;
-                       return s.empty() ? std::string("none") : s;
-                     }() + ")");
+int run_validate(const ValidateOptions& o, const GlobalOptions& g) {
+  require_surfaces_or_suite(!o.files.empty(), !o.suite.empty(), suite_dirs());
   if (!o.output.empty()) require_extension(o.output, {"json", "csv"});
-  if (!(o.significance > 0 && o.significance < 1))
-    throw UsageError("--significance must be in (0, 1) (got " + fmt(o.significance, 4) + ")");
-  if (o.rays <= 0) throw UsageError("--rays must be a positive integer (got " + std::to_string(o.rays) + ")");
-  // Command-line overrides of the checks' options (for FILE always; for a suite when given).
-  validation::Options cli_options;
-  cli_options.theta_deg = parse_angle_list(o.theta, "--theta");
-  require_above_horizon(cli_options.theta_deg, "--theta");
-  cli_options.phi_deg = parse_azimuth_list(o.phi, "--phi");
-  cli_options.rays = static_cast<std::uint64_t>(o.rays);
-  cli_options.seed = o.seed;
-  // An empty --checks would run every check: a list given is a list of at least one check.
-  if (o.checks_given) cli_options.checks = split_items(o.checks, ',', "--checks");
-  auto apply_overrides = [&](validation::Options& opt) {
-    if (o.theta_given) opt.theta_deg = cli_options.theta_deg;
-    if (o.phi_given) opt.phi_deg = cli_options.phi_deg;
-    if (o.rays_given) opt.rays = cli_options.rays;
-    if (o.seed_given) opt.seed = cli_options.seed;
-    if (o.checks_given) opt.checks = cli_options.checks;
-  };
-
-  auto t0 = std::chrono::steady_clock::now();
-  Json j = run_header("validate", g);
-  std::vector<validation::SurfaceSet> sets;
-  double significance = o.significance;
-  std::unique_ptr<TemporaryFolder> temp_dir;  // removed at the end (or on interrupt) unless --surfaces-dir
-  // The surfaces generated into --surfaces-dir (and the folders created for them) are placed as
-  // they are generated and kept once the run has ended; a failure or an interrupt before that
-  // removes them.
-  OutputTransaction generated_surfaces;
-  if (!o.files.empty()) {
-    validation::SurfaceSet set;
-    set.name = fs::path(o.files[0]).stem().string();
-    for (const auto& f : o.files) {
-      set.surfaces.push_back(input_surface(g, f));
-      set.labels.push_back(o.files.size() > 1 ? fs::path(f).filename().string() : "");
-    }
-    set.options = cli_options;
-    set.options.split = g.split;  // shards and MPI ranks (scaleout.hpp)
-    sets.push_back(std::move(set));
-    j["files"] = o.files;
-  } else {
-    const std::string path = validation::find_suite(o.suite, suite_dirs());
-    validation::Suite suite = validation::load_suite(path);
-    validation::require_safe_entry_names(suite, path);
-    if (!o.significance_given) significance = suite.significance;
-    j["suite"] = {{"name", suite.name}, {"file", path}, {"description", suite.description}};
-    fs::path dir;
-    if (!o.surfaces_dir.empty()) {
-      dir = o.surfaces_dir;
-      if (!create_output_folder(o.surfaces_dir))
-        throw UsageError("--surfaces-dir " + o.surfaces_dir + ": cannot create the folder");
-    } else {
-      temp_dir = std::make_unique<TemporaryFolder>("microsim-validate");
-      dir = temp_dir->path();
-    }
-    Json generated = Json::array();
-    {
-      for (const auto& e : suite.entries) {
-        validation::SurfaceSet set;
-        set.name = e.name;
-        set.options = e.options;
-        apply_overrides(set.options);
-        set.options.split = g.split;  // shards and MPI ranks (scaleout.hpp)
-        const std::string ext = e.format;
-        std::vector<std::optional<std::uint64_t>> seeds;
-        for (auto s : e.seeds) seeds.emplace_back(s);
-        if (seeds.empty()) seeds.emplace_back(std::nullopt);
-        for (const auto& seed : seeds) {
-          const std::string file =
-              (dir / (e.name + (seed ? "-seed" + std::to_string(*seed) : "") + "." + ext)).string();
-          std::vector<std::string> warnings;
-          set.surfaces.push_back(validation::generate_entry(e, path, seed, file, &warnings));
-          for (const auto& w : warnings) std::cerr << "microsim: warning: " << w << "\n";
-          set.labels.push_back(seed ? "seed " + std::to_string(*seed) : "");
-          generated.push_back({{"entry", e.name}, {"file", file}});
-        }
-        sets.push_back(std::move(set));
-      }
-    }
-    if (!temp_dir) j["surface_files"] = generated;
-  }
-  j["parameters"] = {{"significance", significance},
-                     {"overrides", {{"theta", o.theta_given ? Json(o.theta) : Json(nullptr)},
-                                    {"phi", o.phi_given ? Json(o.phi) : Json(nullptr)},
-                                    {"rays", o.rays_given ? Json(o.rays) : Json(nullptr)},
-                                    {"seed", o.seed_given ? Json(o.seed) : Json(nullptr)},
-                                    {"checks", o.checks_given ? Json(o.checks) : Json(nullptr)}}}};
-
+  const ValidateRequest request = validate_request(o, g);
   Progress progress("validate", g.quiet);
-  validation::Result result = validation::run(sets, significance, [&](double f) { progress.update(f); });
+  RunContext ctx = run_context(g);
+  ctx.progress = [&](double f) { progress.update(f); };
+  ctx.warning = [](const std::string& w) { std::cerr << "microsim: warning: " << w << "\n"; };
+  ValidateRun run = run_validate_request(request, ctx);
   progress.finish();
-  temp_dir.reset();
-  j.update(validation::result_to_json(result));
-  j["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!o.output.empty()) {
     // The record is kept even when an identity FAILED below (exit 1 with the evidence).
     OutputTransaction record;
-    write_record(g, o.output, j);
+    write_record(g, o.output, run.record);
     if (!g.partial) record.commit();
   }
-  generated_surfaces.commit();
-  if (!g.quiet) {
-    std::cout << "validate " << (o.suite.empty() ? o.files[0] : "--suite " + o.suite) << ": "
-              << result.rows.size() << " rows (groups of per-bin rows shown by their worst row)\n"
-              << validation::format_table(result) << result.count("pass") << " pass, "
-              << result.count("FAIL") << " FAIL, " << result.count("agrees") << " agree, "
-              << result.count("deviates (finding)") << " deviate (finding), "
-              << result.count("measured") << " measured only; |z| threshold "
-              << fmt(result.z_threshold, 2) << " (Sidak over " << j["comparisons"].get<std::size_t>()
-              << " z-tests, family-wise significance " << significance
-              << "; rows with the spread of K surfaces: Student t, K - 1 dof, column |z|max)\n";
-    if (!o.output.empty()) std::cout << "wrote " << o.output << "\n";
-  }
-  if (result.any_failure() && !g.partial)
-    throw RuntimeFailure(std::to_string(result.count("FAIL")) +
-                         " exact identities FAILED (rows with verdict FAIL" +
-                         (o.output.empty() ? "" : " in " + o.output) + ")");
+  run.generated_surfaces->commit();
+  if (!g.quiet) print_validation(o, run);
+  if (run.result.any_failure() && !g.partial) throw RuntimeFailure(validation_failure(run.result, o.output));
   return 0;
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <string_view>
 
+#include "microsim/api/request_checks.hpp"
 #include "microsim/common.hpp"
 #include "microsim/io/checks.hpp"
 
@@ -30,8 +31,7 @@ void add_replicates_option(CLI::App& cmd, int& replicates);
 // A seed: a decimal integer in [0, 2^64 - 1] (no negative values wrapping around).
 CLI::Validator seed_value();
 
-// Largest accepted --rays: about a day of tracing at 10 Mrays/s on one direction.
-constexpr long long kMaxRays = 1000000000000LL;
+// Largest accepted --rays: the library's kMaxRays (microsim/api/request_checks.hpp).
 
 // Adds --config FILE (a TOML preset of this command's options) to cmd.
 void add_preset_option(CLI::App& cmd, const std::string& help);
