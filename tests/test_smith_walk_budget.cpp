@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "microsim/measure/bsdf_measure.hpp"
@@ -31,16 +32,18 @@ struct Rng {
 struct OrderMeans {
   std::vector<double> mean, se;  // [side * K + k]
 };
+// `forced`: forced continuation through the orders 1 .. K - 1 (walk_with_forced_continuation) instead.
 OrderMeans order_means(const mm::SmithRandomWalk& walk, const Vec3& wi, int K, std::uint64_t n, bool expected,
-                       std::uint64_t stream, double bias = 1.0) {
+                       std::uint64_t stream, double bias = 1.0, bool forced = false) {
   std::vector<double> sum(2 * K, 0.0), sum2(2 * K, 0.0), x(2 * K);
   for (std::uint64_t i = 0; i < n; ++i) {
     Rng rng{CounterRng(7, stream, i)};
     std::fill(x.begin(), x.end(), 0.0);
     auto slot = [&](bool reflected, int order) { return (reflected ? 0 : K) + std::min(order, K) - 1; };
-    const mm::WalkExit e = walk.walk_with_expected_escapes(
-        wi, rng, [](const mm::WalkVertex&) {}, expected ? K - 1 : 0,
-        [&](const mm::WalkEscape& s) { x[slot(s.reflected, s.order)] += bias * s.weight; });
+    auto tally = [&](const mm::WalkEscape& s) { x[slot(s.reflected, s.order)] += bias * s.weight; };
+    const mm::WalkExit e =
+        forced ? walk.walk_with_forced_continuation(wi, rng, [](const mm::WalkVertex&) {}, K - 1, tally)
+               : walk.walk_with_expected_escapes(wi, rng, [](const mm::WalkVertex&) {}, expected ? K - 1 : 0, tally);
     if (!e.lost && e.order >= 1 && (!expected || e.order >= K)) x[slot(e.reflected, e.order)] += e.weight;
     for (int k = 0; k < 2 * K; ++k) {
       sum[k] += x[k];
@@ -100,6 +103,134 @@ TEST(SmithWalkExpectedEscapes, WrongWeightIsDetected) {
   const OrderMeans drawn = order_means(walk, wi, K, 60000, false, 1);
   const OrderMeans wrong = order_means(walk, wi, K, 60000, true, 2, 1.05);
   EXPECT_GT(largest_z(drawn, wrong), kZ);
+}
+
+TEST(SmithWalkForcedContinuation, SameMeanPerOrderAsDrawnEscapes) {
+  const int K = 4;
+  const std::uint64_t n = 60000;
+  double worst = 0.0;
+  for (const mm::Material& mat :
+       {mm::Material::mirror(), mm::Material::conductor(0.47, 2.4), mm::Material::dielectric(1.5)})
+    for (double alpha : {0.3, 0.8})
+      for (double theta : {0.0, 60.0}) {
+        const mm::SmithRandomWalk walk(mm::Ndf::beckmann(alpha, alpha), mat);
+        const Vec3 wi = direction_from_angles(rad(theta), 0.0);
+        const OrderMeans drawn = order_means(walk, wi, K, n, false, 1);
+        const OrderMeans forced = order_means(walk, wi, K, n, true, 3, 1.0, true);
+        const double z = largest_z(drawn, forced);
+        worst = std::max(worst, z);
+        EXPECT_LT(z, kZ) << to_string(mat.kind) << " alpha " << alpha << " theta " << theta;
+        // Every walk reaches order 3: the reflected order 3's error is smaller (the point of the estimator; a
+        // dielectric's reflected order 3 also needs the drawn refractions, its error is about the same).
+        if (mat.kind != mm::MaterialKind::Dielectric && drawn.se[2] > 0.0) {
+          EXPECT_LT(forced.se[2], drawn.se[2]) << to_string(mat.kind) << " alpha " << alpha << " theta " << theta;
+        }
+      }
+  RecordProperty("largest_z", std::to_string(worst));
+}
+
+TEST(SmithWalkForcedContinuation, WrongWeightIsDetected) {
+  // Power: the forced escapes tallied 3% too heavy are rejected at the same threshold.
+  const int K = 4;
+  const mm::SmithRandomWalk walk(mm::Ndf::beckmann(0.5, 0.5), mm::Material::mirror());
+  const Vec3 wi = direction_from_angles(rad(30.0), 0.0);
+  const OrderMeans drawn = order_means(walk, wi, K, 60000, false, 1);
+  const OrderMeans wrong = order_means(walk, wi, K, 60000, true, 2, 1.03, true);
+  EXPECT_GT(largest_z(drawn, wrong), kZ);
+}
+
+TEST(SmithWalkForcedContinuation, MirrorWalkAddsUpToOne) {
+  // The weights telescope: the forced escapes of orders 1 .. K - 1 and the drawn exit of order K or above
+  // add up to 1 for every mirror walk.
+  const int K = 4;
+  const mm::SmithRandomWalk walk(mm::Ndf::beckmann(0.5, 0.5), mm::Material::mirror());
+  for (double theta : {0.0, 45.0, 85.0}) {
+    const Vec3 wi = direction_from_angles(rad(theta), 0.7);
+    for (std::uint64_t i = 0; i < 3000; ++i) {
+      Rng rng{CounterRng(9, 4, i)};
+      double sum = 0.0;
+      int escapes = 0;
+      const mm::WalkExit e = walk.walk_with_forced_continuation(
+          wi, rng, [](const mm::WalkVertex&) {}, K - 1, [&](const mm::WalkEscape& s) {
+            sum += s.weight;
+            ++escapes;
+          });
+      ASSERT_FALSE(e.lost);
+      if (e.order >= K) {
+        sum += e.weight;
+        EXPECT_LE(escapes, K - 1);  // one per upward leg (a leg may point down)
+      }
+      EXPECT_NEAR(sum, 1.0, 1e-12) << "theta " << theta << " walk " << i;
+    }
+  }
+}
+
+namespace {
+// Per-order means of n walks with the weight window [low, high] (walk_with_weight_window; order-0 corrections
+// left out: they belong to the total); `total`: per walk the sum of all its tallies with the corrections.
+OrderMeans window_means(const mm::SmithRandomWalk& walk, const Vec3& wi, int K, std::uint64_t n, double low,
+                        double high, std::uint64_t stream, std::vector<double>* total = nullptr, double bias = 1.0) {
+  std::vector<double> sum(2 * K, 0.0), sum2(2 * K, 0.0), x(2 * K);
+  for (std::uint64_t i = 0; i < n; ++i) {
+    Rng rng{CounterRng(7, stream, i)};
+    std::fill(x.begin(), x.end(), 0.0);
+    double all = 0.0;
+    walk.walk_with_weight_window(wi, rng, K - 1, low, high, [&](const mm::WalkEscape& s) {
+      all += s.weight;
+      if (s.order >= 1) x[(s.reflected ? 0 : K) + std::min(s.order, K) - 1] += (s.order < K ? bias : 1.0) * s.weight;
+    });
+    if (total) total->push_back(all);
+    for (int k = 0; k < 2 * K; ++k) {
+      sum[k] += x[k];
+      sum2[k] += x[k] * x[k];
+    }
+  }
+  OrderMeans m;
+  for (int k = 0; k < 2 * K; ++k) {
+    const double mu = sum[k] / n;
+    m.mean.push_back(mu);
+    m.se.push_back(std::sqrt(std::max(0.0, sum2[k] / n - mu * mu) / (n - 1)));
+  }
+  return m;
+}
+}  // namespace
+
+TEST(SmithWalkWeightWindow, SameMeanPerOrderAsDrawnEscapes) {
+  // Splitting and roulette keep every order's mean (a window around 0.1, so that both act on every walk);
+  // power: the forced escapes 3% too heavy are rejected.
+  const int K = 4;
+  const std::uint64_t n = 60000;
+  double worst = 0.0;
+  for (const mm::Material& mat :
+       {mm::Material::mirror(), mm::Material::conductor(0.47, 2.4), mm::Material::dielectric(1.5)})
+    for (double alpha : {0.3, 0.8})
+      for (double theta : {0.0, 60.0}) {
+        const mm::SmithRandomWalk walk = mm::SmithRandomWalk(mm::Ndf::beckmann(alpha, alpha), mat).with_fast_slope_sampler();
+        const Vec3 wi = direction_from_angles(rad(theta), 0.0);
+        const OrderMeans drawn = order_means(walk, wi, K, n, false, 1);
+        const OrderMeans window = window_means(walk, wi, K, n, 0.025, 0.2, 5);
+        const double z = largest_z(drawn, window);
+        worst = std::max(worst, z);
+        EXPECT_LT(z, kZ) << to_string(mat.kind) << " alpha " << alpha << " theta " << theta;
+      }
+  RecordProperty("largest_z", std::to_string(worst));
+  const mm::SmithRandomWalk walk(mm::Ndf::beckmann(0.5, 0.5), mm::Material::mirror());
+  const Vec3 wi = direction_from_angles(rad(30.0), 0.0);
+  const OrderMeans drawn = order_means(walk, wi, K, n, false, 1);
+  EXPECT_GT(largest_z(drawn, window_means(walk, wi, K, n, 0.025, 0.2, 5, nullptr, 1.03)), kZ);
+}
+
+TEST(SmithWalkWeightWindow, MirrorTotalIsOneAndHigherOrdersAreSharper) {
+  // With the roulette's corrections a mirror walk's tallies still add up to 1; against plain forced
+  // continuation ([0, inf]) the window lowers the order-3 error at fewer events per walk.
+  const int K = 4;
+  const mm::SmithRandomWalk walk(mm::Ndf::beckmann(0.5, 0.5), mm::Material::mirror());
+  const Vec3 wi = direction_from_angles(rad(0.0), 0.0);
+  std::vector<double> total;
+  const OrderMeans window = window_means(walk, wi, K, 40000, 0.015, 0.12, 6, &total);
+  for (double x : total) ASSERT_NEAR(x, 1.0, 1e-12);
+  const OrderMeans forced = window_means(walk, wi, K, 40000, 0.0, std::numeric_limits<double>::infinity(), 6);
+  EXPECT_LT(1.5 * window.se[2], forced.se[2]);
 }
 
 TEST(SmithWalkExpectedEscapes, NoExpectedOrdersIsTheDrawnWalk) {

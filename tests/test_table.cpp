@@ -174,3 +174,25 @@ TEST(Table, NominalComparisonIsCalibratedAndWrongErrorsFail) {
   EXPECT_GT(over_rays, 0.5 * trials);             // ray-count error for a nominal model: nonsense
   EXPECT_GT(over_shifted, alpha * trials + tol);  // a wrong model is seen
 }
+
+// Merge::Sharpest: a Monte Carlo model run beside every surface; the merged row takes the value and the error
+// of the surface whose error is smallest (not the first surface's, which Copy would take).
+TEST(Table, SharpestTakesTheModelRunWithTheSmallestError) {
+  auto table = [](double model, double model_se) {
+    Table t;
+    t.spec.columns = {{"theta_deg", Merge::Copy}, {"walk", Merge::Sharpest}, {"walk_stderr", Merge::Sharpest}};
+    t.rows.push_back({{"theta_deg", 30.0}, {"walk", model}, {"walk_stderr", model_se}});
+    return t;
+  };
+  const Table a = table(0.50, 0.004), b = table(0.51, 0.001), c = table(0.49, 0.002);
+  const Table m = merge({&a, &b, &c});
+  EXPECT_EQ(m.rows[0]["walk"].get<double>(), 0.51);
+  EXPECT_EQ(m.rows[0]["walk_stderr"].get<double>(), 0.001);
+  // a tie keeps the first surface's run; a surface without an error is never preferred
+  const Table d = table(0.52, 0.004);
+  Table e = table(0.53, 0.0);
+  e.rows[0].erase("walk_stderr");
+  const Table tie = merge({&a, &d, &e});
+  EXPECT_EQ(tie.rows[0]["walk"].get<double>(), 0.50);
+  EXPECT_STREQ(merge_name(Merge::Sharpest), "sharpest");
+}

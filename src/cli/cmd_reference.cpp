@@ -289,7 +289,7 @@ void print_records_reference(std::ostream& os) {
     os << "- " << code(error_kind_name(k)) << ": " << escaped(error_kind_meaning(k)) << "\n";
   os << "\n## Merge rules\n\nHow a column of one surface's table becomes the ensemble's column:\n\n";
   for (Merge m : {Merge::Copy, Merge::Key, Merge::Count, Merge::Measured, Merge::Spread, Merge::Mean,
-                  Merge::Direction})
+                  Merge::Direction, Merge::Sharpest})
     os << "- " << code(merge_name(m)) << ": " << escaped(merge_meaning(m)) << "\n";
   os << "\n";
   for (const RecordTable& t : record_tables()) print_record_table(os, t);

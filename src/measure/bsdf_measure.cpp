@@ -561,6 +561,7 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
   const int K = o.orders, npix = r.map.size(), nplane = r.plane.size();
   const int R = std::max(1, o.replicates);
   const std::uint64_t cap = std::max<std::uint64_t>(1, o.model_walks * kWalkCapFactor / static_cast<std::uint64_t>(R));
+  const WalkWindow window = walk_window(walk, r.wi, K, o.seed, mstream);
   auto run = [&](std::uint64_t m, std::uint64_t salt, double p0, double span) {
     std::vector<WalkStrata> strata(R);
     tbb::parallel_for(0, R, [&](int q) {
@@ -570,7 +571,7 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
     run_replicate_paths<BsdfTally, BsdfTally>(
         0, R, m, TallyShape{K, npix, nplane}, progress ? std::function<void(double)>([&](double f) { progress(p0 + span * f); }) : nullptr, 1.0,
         [&](int q, std::uint64_t j, BsdfTally& acc) {
-          smith_walk_expected_path(walk, r.wi, o.seed, ReplicatePlan::stream(mstream ^ salt, q), j, strata[q], r, acc);
+          smith_walk_expected_path(walk, r.wi, o.seed, ReplicatePlan::stream(mstream ^ salt, q), j, strata[q], r, acc, window);
         },
         [&](int, BsdfTally&& rep) { t.add_replicate(rep); });
     return t;
@@ -583,7 +584,7 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
     r.model_budget = smith_walk_budget(t, r, o.model_error_fraction, cap);
     std::uint64_t next = r.model_budget.walks / static_cast<std::uint64_t>(R);
     if (next <= m) break;
-    if (2 * next > cap) next = cap;  // near the cap: the cap at once (no run that a re-check would discard)
+    next = std::min(next, cap);
     m = next;
     t = run(m, mix64(0x9E3779B97F4A7C15ull * static_cast<std::uint64_t>(pass)), share + 0.1 * (1.0 - share),
             0.9 * (1.0 - share));
@@ -744,7 +745,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
       leave(t, e.reflected, e.order, e.weight, e.direction);
     };
     if (o.model_error_fraction > 0.0) {
-      r.smith_walk = smith_walks_to_error(walk, r, mstream, o.progress, share);
+      r.smith_walk = smith_walks_to_error(walk.with_fast_slope_sampler(), r, mstream, o.progress, share);
     } else if (!o.split) {
       r.smith_walk = run_paths(o.model_walks, K, npix, nplane, o.progress, share, 1.0 - share, model_path);
     } else {

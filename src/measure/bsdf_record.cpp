@@ -279,9 +279,9 @@ Table bsdf_albedo_spec() {
       {"order", Merge::Key, N, "",
        "slot of scattering orders: order_1 .. order_{K-1} alone, order_Kplus (K and above), total"},
       {"albedo", Merge::Measured, R, "1", "share of the incident power leaving on this side after the slot's orders"},
-      {"smith_multiple", Merge::Copy, R, "1",
+      {"smith_multiple", Merge::Sharpest, R, "1",
        "the same share for the Smith multiple-scattering random walk on the nominal NDF (null without one)"},
-      {"smith_multiple_stderr", Merge::Copy, N, "1", "the Monte Carlo standard error of smith_multiple"},
+      {"smith_multiple_stderr", Merge::Sharpest, N, "1", "the Monte Carlo standard error of smith_multiple"},
       {"smith_single", Merge::Copy, N, "1",
        "single-scattering albedo of the nominal NDF's BSDF with height-correlated Smith G2 (order_1 rows)"},
       {"vcavity_single", Merge::Copy, N, "1",
@@ -320,11 +320,11 @@ Table bsdf_in_plane_spec(int orders) {
                             "the nominal NDF's single-scattering BSDF (height-correlated Smith G2) averaged "
                             "like f (null without a nominal NDF)"});
   t.spec.columns.push_back({"vcavity_single", Merge::Copy, N, "1/sr", "the same with V-cavity G2"});
-  t.spec.columns.push_back({"smith_multiple", Merge::Copy, R, "1/sr",
+  t.spec.columns.push_back({"smith_multiple", Merge::Sharpest, R, "1/sr",
                             "the Smith multiple-scattering random walk's BSDF, all orders, averaged like f"});
-  t.spec.columns.push_back({"smith_multiple_stderr", Merge::Copy, N, "1/sr", "the Monte Carlo standard error of smith_multiple"});
+  t.spec.columns.push_back({"smith_multiple_stderr", Merge::Sharpest, N, "1/sr", "the Monte Carlo standard error of smith_multiple"});
   for (int k = 0; k < K; ++k)
-    t.spec.row_fields.push_back({"smith_multiple_" + order_key(k, K), Merge::Copy, R, "1/sr",
+    t.spec.row_fields.push_back({"smith_multiple_" + order_key(k, K), Merge::Sharpest, R, "1/sr",
                                  "the Smith random walk's BSDF in the slot " + order_key(k, K) + ", averaged like f"});
   const std::string f1 = "f_" + order_key(0, K), f_total = "f_" + order_key(K, K);
   t.spec.comparisons = {

@@ -60,6 +60,38 @@ void add_walk_escapes(BsdfTally& t, const std::vector<models::WalkEscape>& escap
   add_cells(b, t.plane, t.plane2);
 }
 
+void add_forced_walk_escapes(BsdfTally& t, const std::vector<models::WalkEscape>& escapes,
+                             const models::WalkExit* drawn, const HemisphereMap& map, const InPlaneBins& plane) {
+  const int K = t.orders;
+  thread_local std::vector<std::pair<std::size_t, double>> a, p, b;
+  a.clear();
+  p.clear();
+  b.clear();
+  double both = 0.0;
+  auto add = [&](int s, int order, double w, const Vec3& d) {
+    const int px = map.pixel_of(d), bin = plane.bin_of(d);
+    for (int slot : {std::min(order, K) - 1, K}) {
+      a.push_back({t.a_index(s, slot), w});
+      if (px >= 0) p.push_back({t.p_index(s, slot, px), w});
+      if (bin >= 0) b.push_back({t.b_index(s, slot, bin), w});
+    }
+    both += w;
+  };
+  for (const models::WalkEscape& e : escapes) {
+    if (e.order >= 1) {
+      add(e.reflected ? 0 : 1, e.order, e.weight, e.direction);
+    } else {  // order 0: a correction of the total alone
+      a.push_back({t.a_index(e.reflected ? 0 : 1, K), e.weight});
+      both += e.weight;
+    }
+  }
+  if (drawn && drawn->order >= K) add(drawn->reflected ? 0 : 1, drawn->order, drawn->weight, drawn->direction);
+  t.both2 += both * both;
+  add_cells(a, t.albedo, t.albedo2);
+  add_cells(p, t.pix, t.pix2);
+  add_cells(b, t.plane, t.plane2);
+}
+
 WalkStrata walk_strata(std::uint64_t seed, std::uint64_t stream, std::uint64_t n) {
   WalkStrata s;
   s.n = n;
@@ -74,9 +106,28 @@ WalkStrata walk_strata(std::uint64_t seed, std::uint64_t stream, std::uint64_t n
   return s;
 }
 
+WalkWindow walk_window(const models::SmithRandomWalk& walk, const Vec3& wi, int orders, std::uint64_t seed,
+                       std::uint64_t stream) {
+  struct Rng {
+    CounterRng c;
+    double uniform() { return c.uniform(); }
+  };
+  double continuing = 0.0;
+  for (std::uint64_t j = 0; j < kWindowWalks; ++j) {
+    Rng rng{CounterRng(seed, stream ^ 0x3D1A0C0000000000ull, j)};
+    double first = 0.0;
+    walk.walk_with_weight_window(wi, rng, orders - 1, 0.0, std::numeric_limits<double>::infinity(), [&](const models::WalkEscape& e) {
+      if (e.order == 1) first += e.weight;
+    });
+    continuing += 1.0 - first;
+  }
+  const double w = std::max(continuing / static_cast<double>(kWindowWalks), kWindowFloor);
+  return {kWindowLow * w, kWindowHigh * w};
+}
+
 void smith_walk_expected_path(const models::SmithRandomWalk& walk, const Vec3& wi, std::uint64_t seed,
                               std::uint64_t stream, std::uint64_t j, const WalkStrata& strata,
-                              const BsdfResult& r, BsdfTally& t) {
+                              const BsdfResult& r, BsdfTally& t, const WalkWindow& window) {
   struct Rng {
     CounterRng c;
     const WalkStrata& s;
@@ -93,12 +144,11 @@ void smith_walk_expected_path(const models::SmithRandomWalk& walk, const Vec3& w
   const int expected_orders = t.orders - 1;
   thread_local std::vector<models::WalkEscape> escapes;
   escapes.clear();
-  const models::WalkExit e = walk.walk_with_expected_escapes(
-      wi, rng, [](const models::WalkVertex&) {}, expected_orders,
-      [&](const models::WalkEscape& x) { escapes.push_back(x); });
-  t.events += static_cast<std::uint64_t>(e.order);
-  if (e.lost) ++t.unterminated;
-  add_walk_escapes(t, escapes, e.lost ? nullptr : &e, r.map, r.plane);
+  std::uint64_t lost = 0;
+  t.events += walk.walk_with_weight_window(wi, rng, expected_orders, window.low, window.high,
+                                           [&](const models::WalkEscape& x) { escapes.push_back(x); }, &lost);
+  t.unterminated += lost;
+  add_forced_walk_escapes(t, escapes, nullptr, r.map, r.plane);
 }
 
 WalkBudget smith_walk_budget(const BsdfTally& pilot, const BsdfResult& r, double fraction,

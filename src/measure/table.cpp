@@ -64,6 +64,7 @@ const char* merge_name(Merge merge) {
     case Merge::Spread: return "spread";
     case Merge::Mean: return "mean";
     case Merge::Direction: return "direction";
+    case Merge::Sharpest: return "sharpest";
   }
   return "";
 }
@@ -71,6 +72,9 @@ const char* merge_name(Merge merge) {
 const char* merge_meaning(Merge merge) {
   switch (merge) {
     case Merge::Copy: return "the first surface's value (the same on every surface)";
+    case Merge::Sharpest:
+      return "the value of the surface whose NAME_stderr (NAME itself for an error column) is smallest, the "
+             "first on a tie (a Monte Carlo model whose run may differ between surfaces)";
     case Merge::Key: return "copied; identifies the row or bin across surfaces (bins are matched on every key)";
     case Merge::Count: return "the number of surfaces K, and t_dof = K - 1 beside it";
     case Merge::Measured:
@@ -113,6 +117,15 @@ void merge_columns(Json& out, const std::vector<const Json*>& rows, const std::v
       case Merge::Key:
         out[key] = rows[0]->contains(key) ? (*rows[0])[key] : Json(nullptr);
         break;
+      case Merge::Sharpest: {
+        const std::string err = key.size() > 7 && key.compare(key.size() - 7, 7, "_stderr") == 0 ? key : key + "_stderr";
+        const Json* best = rows[0];
+        for (const Json* r : rows)
+          if (has_number(*r, err) && (!has_number(*best, err) || (*r)[err].get<double>() < (*best)[err].get<double>()))
+            best = r;
+        out[key] = best->contains(key) ? (*best)[key] : Json(nullptr);
+        break;
+      }
       case Merge::Count:
         out[key] = rows.size();
         out["t_dof"] = rows.size() - 1;

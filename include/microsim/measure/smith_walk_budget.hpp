@@ -1,10 +1,11 @@
 // The Smith random-walk model column of a bsdf measurement (models/smith_random_walk.hpp) at the
-// measurement's accuracy: walks with expected escapes (walk_with_expected_escapes) tallied per walk, and
+// measurement's accuracy: walks with forced continuation (walk_with_forced_continuation) tallied per walk, and
 // the number of walks chosen from a pilot so that the walk's standard error of every albedo slot is at
 // most a stated fraction of the measurement's standard error of the same slot.
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "microsim/measure/bsdf_measure.hpp"
@@ -18,6 +19,13 @@ namespace microsim {
 void add_walk_escapes(BsdfTally& t, const std::vector<models::WalkEscape>& escapes, const models::WalkExit* drawn,
                       const HemisphereMap& map, const InPlaneBins& plane);
 
+// Adds one walk with forced continuation (models::SmithRandomWalk::walk_with_forced_continuation) to the
+// tally: its expected escapes of the orders 1 .. K - 1 and its drawn exit of order K or above (`drawn`,
+// nullptr for a lost walk) to their slots, and all of them to the total (a mirror's walk adds exactly 1 there,
+// to rounding: the weights telescope). Per walk one term per cell.
+void add_forced_walk_escapes(BsdfTally& t, const std::vector<models::WalkEscape>& escapes,
+                             const models::WalkExit* drawn, const HemisphereMap& map, const InPlaneBins& plane);
+
 // The walk's error target: its standard error of an albedo slot at most this fraction of the
 // measurement's standard error of that slot.
 constexpr double kWalkErrorFraction = 1.0;
@@ -28,7 +36,7 @@ constexpr double kWalkErrorFloor = 1e-9;
 // model never costs more walks than requested; the record states the error reached). The pilot's error
 // estimate from 32 replicates is itself uncertain by ~13%: the walks are chosen for the target error
 // divided by kWalkPilotMargin.
-constexpr std::uint64_t kWalkPilotPerReplicate = 128;
+constexpr std::uint64_t kWalkPilotPerReplicate = 64;
 constexpr std::uint64_t kWalkCapFactor = 1;
 constexpr double kWalkPilotMargin = 1.25;
 // Runs after the pilot, each with the walks its predecessor's errors ask for.
@@ -46,12 +54,27 @@ struct WalkStrata {
 };
 WalkStrata walk_strata(std::uint64_t seed, std::uint64_t stream, std::uint64_t n);
 
-// Walk j of a replicate (CounterRng(seed, stream, j), its first uniforms from `strata`) with expected
-// escapes at the orders 1 .. K - 1 (models::SmithRandomWalk::walk_with_expected_escapes), added to t
-// (add_walk_escapes); the drawn escape of orders K and above as one more escape.
+// Walk j of a replicate (CounterRng(seed, stream, j), its first uniforms from `strata`) with forced
+// continuation through the orders 1 .. K - 1 and its branches' weights in `window`
+// (models::SmithRandomWalk::walk_with_weight_window: every walk adds to the orders up to K), added to t
+// (add_forced_walk_escapes); the drawn escapes of orders K and above as more escapes. The default window
+// [0, inf] is plain forced continuation.
+// The weight window of the walks (models::SmithRandomWalk::walk_with_weight_window) of one incidence:
+// [kWindowLow, kWindowHigh] times the mean weight that goes on after the first event (1 - the order-1 albedo
+// for a mirror), estimated from kWindowWalks forced walks of their own stream (at least kWindowFloor). Branches
+// near that weight carry the orders 2 and up; much lighter ones are rouletted, much heavier ones (a first
+// reflection downward keeps the weight 1) split.
+struct WalkWindow {
+  double low = 0.0, high = std::numeric_limits<double>::infinity();
+};
+constexpr std::uint64_t kWindowWalks = 256;
+constexpr double kWindowLow = 0.25, kWindowHigh = 2.0, kWindowFloor = 1e-6;
+WalkWindow walk_window(const models::SmithRandomWalk& walk, const Vec3& wi, int orders, std::uint64_t seed,
+                       std::uint64_t stream);
+
 void smith_walk_expected_path(const models::SmithRandomWalk& walk, const Vec3& wi, std::uint64_t seed,
                               std::uint64_t stream, std::uint64_t j, const WalkStrata& strata,
-                              const BsdfResult& r, BsdfTally& t);
+                              const BsdfResult& r, BsdfTally& t, const WalkWindow& window = {});
 
 // The walks per replicate m = m_pilot (kWalkPilotMargin stderr_pilot / (fraction * stderr_measured))^2, the largest over the
 // albedo slots whose measured error is above kWalkErrorFloor (the error of the replicate means falls at least

@@ -46,6 +46,8 @@ enum class Merge {
   Spread,     // mean and NAME_stderr between surfaces (a model from each surface's own facets)
   Mean,       // mean only
   Direction,  // a 3-vector: the sum over surfaces, normalized
+  Sharpest,   // a Monte Carlo model run beside every surface (its run may differ between surfaces): the value of
+              // the surface whose NAME_stderr (NAME itself for an error column) is smallest, the first on a tie
 };
 
 const char* merge_name(Merge merge);

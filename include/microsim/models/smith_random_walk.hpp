@@ -45,6 +45,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "microsim/models/beckmann_slope_sampler.hpp"
 #include "microsim/models/microfacet_bsdf.hpp"
 #include "microsim/models/ndf.hpp"
 
@@ -143,6 +144,38 @@ inline Vec3 sample_visible_normal_any(const Ndf& ndf, const Vec3& u, double u1, 
   return Vec3(-sx, -sy, 1.0).normalized();
 }
 
+// sample_visible_normal_any with the Beckmann slope quantiles of beckmann_slope_sampler.hpp (the same
+// function to ~1e-14, several times faster: the walk inverts two slope CDFs per event); GGX unchanged.
+// leg_lambda (optional): Lambda of the ray's leg that arrives along -u, i.e. Lambda(u) for u.z > 0 and
+// Lambda(-u) for u.z < 0, which gives the slope CDF's normalization without erfc: mu (1 + Lambda(u)),
+// resp. -mu Lambda(-u) (mu = cot of the stretched view).
+inline Vec3 sample_visible_normal_fast(const Ndf& ndf, const Vec3& u, double u1, double u2,
+                                       double leg_lambda = std::numeric_limits<double>::quiet_NaN()) {
+  if (ndf.kind != Distribution::Beckmann) return sample_visible_normal_any(ndf, u, u1, u2);
+  constexpr double one_minus = 1.0 - 0x1p-53;
+  u1 = std::clamp(u1, 0.0, one_minus);
+  u2 = std::clamp(u2, 0.0, one_minus);
+  const Vec3 vs = Vec3(ndf.alpha_x * u.x(), ndf.alpha_y * u.y(), u.z()).normalized();
+  const double lensq = vs.x() * vs.x() + vs.y() * vs.y();
+  double cphi = 1.0, sphi = 0.0, mu = detail::kInf;
+  if (lensq > 0.0) {
+    const double len = std::sqrt(lensq);
+    cphi = vs.x() / len;
+    sphi = vs.y() / len;
+    mu = vs.z() / len;
+    if (u.z() < 0.0) mu = std::max(mu, -20.0);  // as sample_visible_normal_any
+  } else if (!(u.z() > 0.0)) {
+    return Vec3(0.0, 0.0, 1.0);  // straight down: nothing visible (never hit)
+  }
+  double norm = std::numeric_limits<double>::quiet_NaN();
+  if (std::isfinite(mu) && mu > -20.0 && std::isfinite(leg_lambda)) norm = u.z() > 0.0 ? mu * (1.0 + leg_lambda) : -mu * leg_lambda;
+  const double xt = detail::fast_beckmann_visible_slope_quantile(mu, std::max(u1, 1e-300), norm);
+  const double yt = detail::fast_beckmann_visible_slope_quantile(detail::kInf, std::max(u2, 1e-300));
+  const double sx = ndf.alpha_x * (cphi * xt - sphi * yt);
+  const double sy = ndf.alpha_y * (sphi * xt + cphi * yt);
+  return Vec3(-sx, -sy, 1.0).normalized();
+}
+
 // ---------------------------------------------------------------------------------------------
 // The walk
 // ---------------------------------------------------------------------------------------------
@@ -180,6 +213,14 @@ class SmithRandomWalk {
                   HeightDistribution heights = HeightDistribution::Uniform, int max_order = 100000)
       : ndf_(ndf), material_(material), heights_{heights}, max_order_(max_order) {}
 
+  // The same walk with the Beckmann slopes of sample_visible_normal_fast (equal to ~1e-14, faster).
+  SmithRandomWalk with_fast_slope_sampler() const {
+    SmithRandomWalk w = *this;
+    w.fast_slopes_ = true;
+    return w;
+  }
+  bool fast_slope_sampler() const { return fast_slopes_; }
+
   const Ndf& ndf() const { return ndf_; }
   const Material& material() const { return material_; }
   HeightDistribution heights() const { return heights_.kind; }
@@ -207,6 +248,173 @@ class SmithRandomWalk {
   template <class Rng, class Visitor, class EscapeVisitor>
   WalkExit walk_with_expected_escapes(const Vec3& wi, Rng& rng, Visitor&& at_vertex, int expected_orders,
                                       EscapeVisitor&& at_escape) const {
+    return escape_walk(wi, rng, at_vertex, expected_orders, false, at_escape);
+  }
+
+  // The walk with the escapes after the events 1 .. forced_orders tallied by their expectations and not
+  // drawn (docs/theory/bsdf.md "Forced continuation"): where walk() draws whether a ray leaving upward from
+  // height h escapes (probability g = C1(h)^Lambda(w)), this walk calls at_escape({order, side, direction,
+  // W g}) and always goes on, with weight W (1 - g) and the next height drawn given no escape (U uniform in
+  // (g, 1], one uniform as in walk()). Every walk thus reaches the event forced_orders + 1 (unless g = 1:
+  // then it ends there with weight 0) and adds to every order up to it; from there on it is walk() (the
+  // escape drawn; the returned exit has the weight W). Each order's expected tally is walk()'s: the
+  // escaping and the continuing branch are both followed, each with its probability as a weight. For a
+  // mirror the tallies of a walk sum to 1 (the weights telescope).
+  template <class Rng, class Visitor, class EscapeVisitor>
+  WalkExit walk_with_forced_continuation(const Vec3& wi, Rng& rng, Visitor&& at_vertex, int forced_orders,
+                                         EscapeVisitor&& at_escape) const {
+    return escape_walk(wi, rng, at_vertex, forced_orders, true, at_escape);
+  }
+
+  // Forced continuation (as walk_with_forced_continuation) through the orders 1 .. forced_orders, with the
+  // branch weights held in the window [w_low, w_high] by splitting and Russian roulette (docs/theory/bsdf.md
+  // "Weight window"): before each leg after the events 1 .. forced_orders, a branch heavier than w_high goes on
+  // as n = ceil(W / w_high) branches of weight W / n (at most kMaxSplit, and none while kMaxBranches are
+  // pending), each drawing its own path from there; a branch lighter than w_low goes on with probability
+  // W / w_low and weight w_low, else ends. Each order's expected tally is walk()'s (splitting divides a weight
+  // among copies of the same branch; the roulette keeps its expectation). Every expected escape of the orders
+  // 1 .. forced_orders and every drawn exit of the orders above (their order > forced_orders tells them apart)
+  // goes to at_escape, and for conductors and mirrors the roulette's zero-mean correction of the reflected
+  // total as an escape of order 0 (no direction); returns the events of all branches, *lost: branches that
+  // exceeded max_order.
+  // w_low = 0, w_high = inf: walk_with_forced_continuation's tallies.
+  static constexpr int kMaxSplit = 64, kMaxBranches = 256;
+  template <class Rng, class EscapeVisitor>
+  std::uint64_t walk_with_weight_window(const Vec3& wi, Rng& rng, int forced_orders, double w_low, double w_high,
+                                        EscapeVisitor&& at_escape, std::uint64_t* lost = nullptr) const {
+    struct Branch {
+      Vec3 w;       // direction of travel (current frame)
+      double h;     // height (current frame)
+      bool above;   // frame
+      double weight;
+      int order;    // events so far
+      bool resume;  // a split copy: the escape of this leg is tallied; the next height is still to draw
+      double g;     // with resume: the escape probability of this leg
+    };
+    Branch pending[kMaxBranches];
+    int npending = 0;
+    std::uint64_t events = 0;
+    pending[npending++] = Branch{-wi, detail::kInf, true, 1.0, 0, false, 0.0};
+    while (npending > 0) {
+      Branch b = pending[--npending];
+      for (;;) {
+        const double c = (b.h == detail::kInf) ? 1.0 : heights_.C1(b.h);
+        const bool up = b.w.z() > 0.0;
+        const double lambda = up ? ndf_.Lambda(b.w) : ndf_.Lambda(-b.w);
+        double g = b.g, U_next = -1.0;  // U_next: a drawn escape's refused uniform, reused for the next height
+        if (!b.resume) {
+          const bool forced = b.order >= 1 && b.order <= forced_orders;
+          if (up) {
+            g = (lambda == 0.0) ? 1.0 : std::pow(c, lambda);
+            const Vec3 out = b.above ? b.w : mirror_z(b.w);
+            if (forced) {
+              at_escape(WalkEscape{b.order, b.above, out, b.weight * g});
+              b.weight *= 1.0 - g;
+            } else {
+              const double U = rng.uniform();
+              if (U < g) {  // drawn escape
+                at_escape(WalkEscape{b.order, b.above, out, b.weight});
+                break;
+              }
+              U_next = U;
+            }
+          }
+          if (forced) {
+            if (!(b.weight > 0.0)) break;
+            if (b.weight < w_low) {  // Russian roulette
+              const bool survives = rng.uniform() * w_low < b.weight;
+              // the roulette's change of the branch's weight, W - (w_low or 0), has mean 0: a correction of the
+              // total (order 0) that keeps a mirror walk's total exactly 1 (its branches' weights all leave, above)
+              if (material_.kind != MaterialKind::Dielectric)
+                at_escape(WalkEscape{0, true, Vec3::UnitZ(), b.weight - (survives ? w_low : 0.0)});
+              if (!survives) break;
+              b.weight = w_low;
+            } else if (b.weight > w_high) {  // splitting: this branch and n - 1 pending copies
+              const int n = static_cast<int>(
+                  std::min<double>({double(kMaxSplit), double(kMaxBranches - npending), std::ceil(b.weight / w_high)}));
+              if (n > 1) {
+                b.weight /= n;
+                Branch copy = b;
+                copy.resume = true;
+                copy.g = g;
+                for (int k = 1; k < n; ++k) pending[npending++] = copy;
+              }
+            }
+          }
+        }
+        b.resume = false;
+        // --- next intersection height, given no escape
+        double c_next;
+        if (up) {
+          const double U = U_next >= 0.0 ? U_next : g + (1.0 - g) * (1.0 - rng.uniform());  // on [g, 1]
+          c_next = c * std::pow(std::min(U, 1.0), -1.0 / lambda);
+        } else if (b.w.z() < 0.0) {
+          const double U = 1.0 - rng.uniform();  // (0, 1]
+          c_next = c * std::pow(U, 1.0 / (1.0 + lambda));
+        } else {
+          c_next = c;
+        }
+        b.h = heights_.invC1(std::clamp(c_next, 0.0, 1.0));
+        if (b.order + 1 > max_order_ || !scatter_at(rng, b.w, b.h, b.above, b.weight, lambda)) {
+          if (lost) ++*lost;
+          break;
+        }
+        ++b.order;
+        ++events;
+      }
+    }
+    return events;
+  }
+
+ private:
+  // One scattering event of walk_with_weight_window at height h: a visible normal of the arriving direction
+  // w (leg_lambda: Lambda of the leg, see sample_visible_normal_fast), then the material's choice; w, h, above
+  // and weight updated. False where no visible normal was found.
+  template <class Rng>
+  bool scatter_at(Rng& rng, Vec3& w, double& h, bool& above, double& weight, double leg_lambda) const {
+    const Vec3 v = -w;
+    Vec3 m;
+    double vm = 0.0;
+    for (int tries = 0; tries < 16 && !(vm > 0.0); ++tries) {
+      const double u1 = rng.uniform(), u2 = rng.uniform();
+      m = fast_slopes_ ? sample_visible_normal_fast(ndf_, v, u1, u2, leg_lambda) : sample_visible_normal_any(ndf_, v, u1, u2);
+      vm = v.dot(m);
+    }
+    if (!(vm > 0.0)) return false;
+    switch (material_.kind) {
+      case MaterialKind::Mirror:
+        w = reflect(v, m);
+        break;
+      case MaterialKind::Conductor:
+        weight *= material_.reflectance(vm, true);
+        w = reflect(v, m);
+        break;
+      case MaterialKind::Dielectric: {
+        const double F = material_.reflectance(vm, above);
+        if (rng.uniform() < F) {
+          w = reflect(v, m);
+        } else {
+          Vec3 t;
+          const double n = above ? material_.eta : 1.0 / material_.eta;
+          if (!refract(v, m, 1.0 / n, &t)) {
+            w = reflect(v, m);
+          } else {
+            w = mirror_z(t).normalized();
+            h = -h;
+            above = !above;
+          }
+        }
+        break;
+      }
+    }
+    w.normalize();
+    return true;
+  }
+
+  // walk_with_expected_escapes (forced = false) and walk_with_forced_continuation (forced = true).
+  template <class Rng, class Visitor, class EscapeVisitor>
+  WalkExit escape_walk(const Vec3& wi, Rng& rng, Visitor&& at_vertex, int expected_orders, bool forced,
+                       EscapeVisitor&& at_escape) const {
     WalkExit out;
     Vec3 w = -wi;       // propagation direction in the current frame
     double h = detail::kInf;
@@ -221,14 +429,28 @@ class SmithRandomWalk {
         if (order <= expected_orders) {
           // expected escape W g1 tallied; the escape itself still drawn (continuing with W, probability 1 - g1)
           at_escape(WalkEscape{order, above, above ? w : mirror_z(w), out.weight * g1});
-          const double U = rng.uniform();
-          if (U < g1) {
-            out.reflected = above;
-            out.order = order;
-            out.direction = above ? w : mirror_z(w);
-            return out;
+          if (forced) {
+            // continue with the weight of no escape; U uniform in (g1, 1]
+            const double U = g1 + (1.0 - g1) * (1.0 - rng.uniform());
+            out.weight *= 1.0 - g1;
+            if (!(out.weight > 0.0) || !(U > 0.0)) {  // g1 = 1: nothing continues
+              out.weight = 0.0;
+              out.reflected = above;
+              out.order = order;
+              out.direction = above ? w : mirror_z(w);
+              return out;
+            }
+            c_next = c * std::pow(std::min(U, 1.0), -1.0 / lambda);
+          } else {
+            const double U = rng.uniform();
+            if (U < g1) {
+              out.reflected = above;
+              out.order = order;
+              out.direction = above ? w : mirror_z(w);
+              return out;
+            }
+            c_next = c * std::pow(U, -1.0 / lambda);
           }
-          c_next = c * std::pow(U, -1.0 / lambda);
         } else {
           const double U = rng.uniform();
           if (U < g1) {  // escapes
@@ -260,7 +482,7 @@ class SmithRandomWalk {
       // v.m > 0 by construction; a rounding-level v.m <= 0 (grazing visible normal) is redrawn.
       for (int tries = 0; tries < 16 && !(vm > 0.0); ++tries) {
         const double u1 = rng.uniform(), u2 = rng.uniform();
-        m = sample_visible_normal_any(ndf_, v, u1, u2);
+        m = fast_slopes_ ? sample_visible_normal_fast(ndf_, v, u1, u2) : sample_visible_normal_any(ndf_, v, u1, u2);
         vm = v.dot(m);
       }
       if (!(vm > 0.0)) {
@@ -306,6 +528,7 @@ class SmithRandomWalk {
   Material material_;
   SmithHeights heights_;
   int max_order_;
+  bool fast_slopes_ = false;
 };
 
 // Per-order albedos of n walks (serial; the measure layer runs the parallel, binned version).
