@@ -73,7 +73,9 @@ TEST(AlbedoQuadrature, GaussLegendreInMuIsExactOnPolynomials) {
         low += q.low_weight[j] * std::pow(q.mu[j], p);
       }
       EXPECT_NEAR(high, 2.0 / (p + 2), 1e-13) << N << " " << p;
-      if (p <= low_degree) EXPECT_NEAR(low, 2.0 / (p + 2), 1e-12) << N << " " << p;
+      if (p <= low_degree) {
+        EXPECT_NEAR(low, 2.0 / (p + 2), 1e-12) << N << " " << p;
+      }
     }
     // Power: one degree beyond its subset, the lower rule is no longer exact, so that |Q - Q_low|
     // sees what the nodes do not resolve.

@@ -229,8 +229,9 @@ TEST(PolarizedWalk, DegreeOfPolarizationFallsFromFirstToSecondOrder) {
                   " of the hemisphere sum: %.4f, %.4f, %.4f\n",
                   theta, in.name, dop[0].mean, dop[0].stderr_, dop[1].mean, dop[1].stderr_, dop[2].mean,
                   dop[2].stderr_, sum_dop[0].mean, sum_dop[1].mean, sum_dop[2].mean);
-      if (theta < 60.0)
+      if (theta < 60.0) {
         EXPECT_GT(dop[0].mean - dop[1].mean, 3.0 * combined(dop[0].stderr_, dop[1].stderr_)) << theta << " " << in.name;
+      }
     }
   }
 }
