@@ -136,7 +136,7 @@ TEST(AlbedoAverageQuadrature, FlatConductorMatchesIndependentFresnelIntegral) {
     r.mu_nodes = 8;
     check_albedo_request(r);
     const AlbedoSurface a = measure_albedo(s, "flat", r);
-    auto F = [&](double mu) { return mm::fresnel_conductor(mu, eta, k).unpolarized(); };
+    auto F = [&, eta = eta, k = k](double mu) { return mm::fresnel_conductor(mu, eta, k).unpolarized(); };
     for (const AlbedoNode& n : a.nodes) EXPECT_NEAR(n.total.mean, F(n.mu), 1e-12) << n.mu;
     const AlbedoAverage avg = average_albedo(albedo_quadrature(r), albedo_series_values(a, "albedo"));
     const double exact = simpson_average(F);
