@@ -14,29 +14,40 @@ import numpy as np
 import OpenImageIO as oiio
 
 
-def main(src, dst):
+def rewrite_heightfield(src, dst, tool, transform, flag, source_key):
+    """Reads a microsim heightfield EXR, applies transform(pixels, channel_names) and writes it
+    with `flag` toggled and `source_key` = src in its description."""
     inp = oiio.ImageInput.open(src)
     if inp is None:
-        sys.exit(f"flip_heightfield: cannot read {src}")
+        sys.exit(f"{tool}: cannot read {src}")
     spec = inp.spec()
     pixels = inp.read_image(oiio.FLOAT)
     inp.close()
     names = list(spec.channelnames)
     if "Z" not in names or spec.getattribute("microsim_surface") != "heightfield":
-        sys.exit(f"flip_heightfield: {src} is not a microsim heightfield")
+        sys.exit(f"{tool}: {src} is not a microsim heightfield")
     pixels = np.array(pixels, dtype=np.float32).reshape(spec.height, spec.width, spec.nchannels)
-    pixels[:, :, names.index("Z")] *= -1.0
+    pixels = transform(pixels, names)
     out_spec = oiio.ImageSpec(spec)
     out_spec.set_format(oiio.FLOAT)
     desc = json.loads(spec.getattribute("microsim_description"))
-    desc["flipped"] = not desc.get("flipped", False)
-    desc["flipped_from"] = src
+    desc[flag] = not desc.get(flag, False)
+    desc[source_key] = src
     out_spec.attribute("microsim_description", json.dumps(desc))
     out = oiio.ImageOutput.create(dst)
     if out is None or not out.open(dst, out_spec):
-        sys.exit(f"flip_heightfield: cannot write {dst}")
+        sys.exit(f"{tool}: cannot write {dst}")
     out.write_image(pixels)
     out.close()
+
+
+def negate_heights(pixels, names):
+    pixels[:, :, names.index("Z")] *= -1.0
+    return pixels
+
+
+def main(src, dst):
+    rewrite_heightfield(src, dst, "flip_heightfield", negate_heights, "flipped", "flipped_from")
 
 
 if __name__ == "__main__":

@@ -14,30 +14,16 @@ import sys
 import numpy as np
 import OpenImageIO as oiio
 
+from flip_heightfield import rewrite_heightfield
+
+
+def mirror_x(pixels, names):
+    # x is the image's column index: column i -> (N - i) mod N keeps sample 0 in place
+    return np.roll(pixels[:, ::-1, :], 1, axis=1)
+
 
 def main(src, dst):
-    inp = oiio.ImageInput.open(src)
-    if inp is None:
-        sys.exit(f"mirror_heightfield: cannot read {src}")
-    spec = inp.spec()
-    pixels = inp.read_image(oiio.FLOAT)
-    inp.close()
-    if "Z" not in list(spec.channelnames) or spec.getattribute("microsim_surface") != "heightfield":
-        sys.exit(f"mirror_heightfield: {src} is not a microsim heightfield")
-    pixels = np.array(pixels, dtype=np.float32).reshape(spec.height, spec.width, spec.nchannels)
-    # x is the image's column index: column i -> (N - i) mod N keeps sample 0 in place
-    pixels = np.roll(pixels[:, ::-1, :], 1, axis=1)
-    out_spec = oiio.ImageSpec(spec)
-    out_spec.set_format(oiio.FLOAT)
-    desc = json.loads(spec.getattribute("microsim_description"))
-    desc["mirrored_x"] = not desc.get("mirrored_x", False)
-    desc["mirrored_from"] = src
-    out_spec.attribute("microsim_description", json.dumps(desc))
-    out = oiio.ImageOutput.create(dst)
-    if out is None or not out.open(dst, out_spec):
-        sys.exit(f"mirror_heightfield: cannot write {dst}")
-    out.write_image(pixels)
-    out.close()
+    rewrite_heightfield(src, dst, "mirror_heightfield", mirror_x, "mirrored_x", "mirrored_from")
 
 
 if __name__ == "__main__":
