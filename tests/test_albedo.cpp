@@ -30,7 +30,7 @@ AlbedoRequest mirror_request(long long rays, std::uint64_t seed = 1) {
   r.rays = rays;
   r.seed = seed;
   r.mu_nodes = 8;
-  check_albedo_request(r);
+  r.check();
   return r;
 }
 
@@ -134,7 +134,7 @@ TEST(AlbedoAverageQuadrature, FlatConductorMatchesIndependentFresnelIntegral) {
     r.k = k;
     r.rays = 2000;
     r.mu_nodes = 8;
-    check_albedo_request(r);
+    r.check();
     const AlbedoSurface a = measure_albedo(s, "flat", r);
     auto F = [&, eta = eta, k = k](double mu) { return mm::fresnel_conductor(mu, eta, k).unpolarized(); };
     for (const AlbedoNode& n : a.nodes) EXPECT_NEAR(n.total.mean, F(n.mu), 1e-12) << n.mu;
@@ -166,7 +166,7 @@ TEST(AlbedoErrors, ReplicateErrorsCalibratedBetweenSeeds) {
   r1.eta = 1.5;
   r1.rays = 8000;
   r1.mu_nodes = 6;
-  check_albedo_request(r1);
+  r1.check();
   AlbedoRequest r2 = r1;
   r2.seed = 2;
   const AlbedoSurface a = measure_albedo(s, "b", r1), b = measure_albedo(s, "b", r2);
@@ -197,22 +197,22 @@ TEST(AlbedoRequestChecks, ParametersNamedInMessages) {
   AlbedoRequest r;
   r.material = "mirror";
   r.mu_nodes = 1;
-  EXPECT_THROW(check_albedo_request(r), ParameterError);
+  EXPECT_THROW(r.check(), ParameterError);
   r.mu_nodes = 8;
   r.rays = 10;  // fewer than the replicates
   try {
-    check_albedo_request(r);
+    r.check();
     FAIL();
   } catch (const ParameterError& e) {
     EXPECT_NE(std::string(e.what()).find("{rays}"), std::string::npos) << e.what();
   }
   r.rays = 1000;
   r.material = "conductor";
-  EXPECT_THROW(check_albedo_request(r), ParameterError);  // no eta, k
+  EXPECT_THROW(r.check(), ParameterError);  // no eta, k
   r.metal = "Au";
-  check_albedo_request(r);
+  r.check();
   r.wavelength_nm = 5000;  // outside the table
-  EXPECT_THROW(check_albedo_request(r), ParameterError);
+  EXPECT_THROW(r.check(), ParameterError);
 }
 
 TEST(AlbedoCommand, LookupTableRowsAreSurfacesColumnsAreMu) {

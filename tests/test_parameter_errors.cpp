@@ -59,7 +59,7 @@ TEST(ParameterErrors, ALibraryMessageSpelledBothWays) {
   r.material = "mirror";
   r.theta_i_deg = {95};
   r.phi_i_deg = {0};
-  const ParameterError angle = parameter_error([&] { check_bsdf_request(r); });
+  const ParameterError angle = parameter_error([&] { r.check(); });
   EXPECT_EQ(cli::cli_message(angle), "--theta-i must be in [0, 90) degrees (got 95.00)");
   EXPECT_EQ(spelled_message(angle, keyword), "theta_i must be in [0, 90) degrees (got 95.00)");
 
@@ -72,7 +72,7 @@ TEST(ParameterErrors, ALibraryMessageSpelledBothWays) {
   r.eta.reset();
   r.phi_i_deg = {0, 10};
   r.format = "binary";
-  const ParameterError output = parameter_error([&] { check_bsdf_request(r); });
+  const ParameterError output = parameter_error([&] { r.check(); });
   EXPECT_EQ(cli::cli_message(output), "-o .binary: MERL tables are isotropic; give one --phi-i (got 2 azimuths)");
   EXPECT_EQ(spelled_message(output, keyword), "output .binary: MERL tables are isotropic; give one phi_i (got 2 azimuths)");
 }

@@ -1,16 +1,17 @@
 // microsim measure albedo SURFACE... --material ... -o OUT.json|OUT.csv|OUT.exr: the directional
 // albedo E(mu) per scattering order and in total at the nodes of a quadrature in mu, and
 // E_avg = 2 int E(mu) mu dmu with its statistical and quadrature errors, per surface; .exr is the
-// lookup table E(mu, alpha) (rows: surfaces, columns: mu) with its error map. The library does
-// the work (measure/albedo_measure.hpp); this is the command line's adapter.
+// lookup table E(mu, alpha) (rows: surfaces, columns: mu) with its error map. The library's
+// AlbedoRequest does the work; this is the command line's adapter.
 #include <iomanip>
 #include <iostream>
 
 #include "cli_common.hpp"
 #include "option_checks.hpp"
+#include "microsim/api/albedo_request.hpp"
+#include "microsim/api/bsdf_request.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/measure/albedo_measure.hpp"
-#include "microsim/measure/bsdf_record.hpp"
 
 namespace microsim::cli {
 
@@ -22,13 +23,6 @@ struct AlbedoCliOptions {
   double eta = 0.0, k = 0.0;
   AlbedoRequest request;
 };
-
-std::string beside(const std::string& path, const std::string& ext) {
-  const auto slash = path.find_last_of('/');
-  const auto dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return path + "." + ext;
-  return path.substr(0, dot + 1) + ext;
-}
 
 void print_albedo(const Json& j, const std::string& written) {
   std::cout << "directional albedo E(mu), " << j["parameters"]["material"].get<std::string>() << ", "
@@ -61,37 +55,15 @@ int run_measure_albedo(AlbedoCliOptions& o, const GlobalOptions& g) {
   require_extension(o.output, {"json", "csv", "exr"});
   AlbedoRequest& r = o.request;
   r.format = extension_of(o.output);
-  if (!o.theta_i.empty()) {
-    r.theta_i_deg = parse_angle_list(o.theta_i, "--theta-i");
-    require_above_horizon(r.theta_i_deg, "--theta-i");
-  }
-  check_albedo_request(r);
-  const auto t0 = std::chrono::steady_clock::now();
+  r.surfaces = input_surface_sources(g, o.surfaces);
+  if (!o.theta_i.empty()) r.theta_i_deg = parse_angle_list(o.theta_i, "--theta-i");
   Progress progress("measure albedo (" + std::to_string(o.surfaces.size()) + " surfaces)", g.quiet);
-  std::vector<AlbedoSurface> measured;
-  const double n = static_cast<double>(o.surfaces.size());
-  for (std::size_t i = 0; i < o.surfaces.size(); ++i) {
-    const Microsurface s = input_surface(g, o.surfaces[i]);
-    measured.push_back(measure_albedo(s, o.surfaces[i], r, [&](double f) { progress.update((i + f) / n); }));
-  }
+  RunContext ctx = run_context(g);
+  ctx.progress = [&](double f) { progress.update(f); };
+  const AlbedoRun run = run_albedo_request(r, ctx);
   progress.finish();
-  Json j = run_header("measure albedo", g);
-  put_albedo_record(j, r, measured);
-  j["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::string written = o.output;
-  if (r.format == "exr") {
-    write_exr(o.output, albedo_lut_exr(r, measured));
-    write_record(g, beside(o.output, "csv"), j);
-    write_record(g, beside(o.output, "json"), j);
-    written += ", " + beside(o.output, "csv") + " and " + beside(o.output, "json");
-  } else if (r.format == "csv") {
-    write_record(g, o.output, j);
-    write_record(g, beside(o.output, "json"), j);
-    written += " and " + beside(o.output, "json");
-  } else {
-    write_record(g, o.output, j);
-  }
-  if (!g.quiet) print_albedo(j, written);
+  const std::string written = write_albedo_outputs(o.output, r, run);
+  if (!g.quiet) print_albedo(run.record, written);
   return 0;
 }
 

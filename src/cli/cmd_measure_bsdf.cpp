@@ -1,17 +1,15 @@
 // microsim measure bsdf FILE --material ... -o OUT.exr|OUT.json|OUT.bsdf|OUT.binary|OUT.pbsdf: the BSDF per
 // scattering order by random walks on the explicit surface, beside the single-scattering models
 // and the Smith random-walk multiple-scattering model, at every incidence of --theta-i x --phi-i;
-// .bsdf (RGL tensor file), .binary (MERL) and .pbsdf (polarized) are tables renderers load.
+// .bsdf (RGL tensor file), .binary (MERL) and .pbsdf (polarized) are tables renderers load. The
+// library's BsdfRequest does the work; this is the command line's adapter.
 #include <iomanip>
 #include <iostream>
 
 #include "cli_common.hpp"
 #include "option_checks.hpp"
+#include "microsim/api/bsdf_request.hpp"
 #include "microsim/io/output.hpp"
-#include "microsim/io/bsdf_files.hpp"
-#include "microsim/measure/bsdf_record.hpp"
-#include "microsim/surface/surface_io.hpp"
-#include "microsim/trace/tracer.hpp"
 
 namespace microsim::cli {
 
@@ -63,13 +61,6 @@ void print_spectral(const Json& sp) {
             << fmt(c[2].get<double>(), 4) << "\n";
 }
 
-std::string replace_extension(const std::string& path, const std::string& ext) {
-  const auto slash = path.find_last_of('/');
-  const auto dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return path + "." + ext;
-  return path.substr(0, dot + 1) + ext;
-}
-
 void print_incidences(const Json& j, const BsdfRequest& o, bool nominal, double seconds,
                       const std::string& written) {
   const std::size_t n_inc = j["incidences"].size();
@@ -102,31 +93,21 @@ int run_measure_bsdf(BsdfCliOptions& o, const GlobalOptions& g) {
   require_extension(o.output, {"exr", "json", "bsdf", "binary", "pbsdf"});
   BsdfRequest& r = o.request;
   r.format = extension_of(o.output);
-  r.threads = g.threads;
+  r.surface = input_surface_source(g, o.surface);
   r.theta_i_deg = parse_angle_list(o.theta_i, "--theta-i");
   r.phi_i_deg = parse_angle_list(o.phi_i, "--phi-i");
   if (!o.wavelengths.empty()) r.wavelengths_nm = parse_angle_list(o.wavelengths, "--wavelengths");
-  check_bsdf_request(r);
-  const Microsurface s = input_surface(g, o.surface);
-  check_bsdf_surface(r, s, o.surface);
-  const auto t0 = std::chrono::steady_clock::now();
-  BsdfTableOptions to = bsdf_table_options(r, s, g.split);  // shards and MPI ranks (scaleout.hpp)
-  const std::size_t n_inc = to.theta_i.size() * to.phi_i.size();
+  const std::size_t n_inc = r.theta_i_deg.size() * r.phi_i_deg.size();
   Progress progress(n_inc > 1 ? "measure bsdf (" + std::to_string(n_inc) + " incidences)" : "measure bsdf", g.quiet);
-  to.progress = [&](double f) { progress.update(f); };
-  const Tracer tracer(s);
-  const BsdfTable table = measure_bsdf_table(tracer, to);
+  RunContext ctx = run_context(g);
+  ctx.progress = [&](double f) { progress.update(f); };
+  const BsdfRun run = run_bsdf_request(r, ctx, o.output);
   progress.finish();
-
-  Json j = run_header("measure bsdf", g);
-  put_bsdf_record(j, r, table, s, o.surface);
-  const bool json_only = r.format == "json";
-  const std::string json_path = json_only ? o.output : replace_extension(o.output, "json");
-  const std::string written = json_only ? o.output : o.output + " and " + json_path;
-  write_bsdf_tables(o.output, r, table, s, j, json_path);
-  j["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  write_record(g, json_path, j);
-  if (!g.quiet) print_incidences(j, r, s.nominal.has_value(), table.seconds, written);
+  const std::string json_path = bsdf_record_path(o.output);
+  write_record(g, json_path, run.record);
+  if (!g.quiet)
+    print_incidences(run.record, r, run.nominal_ndf, run.seconds,
+                     r.format == "json" ? o.output : o.output + " and " + json_path);
   return 0;
 }
 

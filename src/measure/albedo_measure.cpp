@@ -18,12 +18,6 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 const char* const kSideName[2] = {"reflected", "transmitted"};
 
-std::string fixed(double x, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, x);
-  return buf;
-}
-
 // Every other node (0, 2, 4, ...), and the last one when `keep_last`.
 std::vector<std::size_t> every_other(std::size_t n, bool keep_last) {
   std::vector<std::size_t> s;
@@ -160,7 +154,6 @@ AlbedoAverage average_albedo(const MuQuadrature& q, const std::vector<Estimate>&
 // ---------------------------------------------------------------------------------------------
 // Request
 
-namespace {
 models::Material albedo_material(const AlbedoRequest& o) {
   if (!o.metal.empty()) {
     if (o.material != "conductor") throw ParameterError("{metal} applies to {material} conductor only");
@@ -175,33 +168,6 @@ models::Material albedo_material(const AlbedoRequest& o) {
   b.eta = o.eta;
   b.k = o.k;
   return bsdf_material(b);
-}
-}  // namespace
-
-void check_albedo_request(AlbedoRequest& o) {
-  if (o.format != "json" && o.format != "csv" && o.format != "exr")
-    throw UsageError("the output must be .json, .csv or .exr (got ." + o.format + ")");
-  albedo_material(o);
-  std::sort(o.theta_i_deg.begin(), o.theta_i_deg.end());
-  o.theta_i_deg.erase(std::unique(o.theta_i_deg.begin(), o.theta_i_deg.end()), o.theta_i_deg.end());
-  for (double t : o.theta_i_deg)
-    if (!(t >= 0 && t < 90)) throw ParameterError("{theta_i} must be in [0, 90) degrees (got " + fixed(t, 2) + ")");
-  if (o.theta_i_deg.empty()) gauss_legendre_mu(o.mu_nodes);  // checks mu_nodes
-  if (!std::isfinite(o.phi_i_deg) || std::abs(o.phi_i_deg) > 3600)
-    throw ParameterError("{phi_i} must be a finite angle in degrees, |phi| <= 3600");
-  if (o.azimuths < 0 || o.azimuths > kMaxAlbedoAzimuths)
-    throw ParameterError("{azimuths} must be in [0, " + std::to_string(kMaxAlbedoAzimuths) + "] (got " +
-                         std::to_string(o.azimuths) + ")");
-  if (o.orders < 1 || o.orders > kMaxBsdfOrders)
-    throw ParameterError("{orders} must be in [1, " + std::to_string(kMaxBsdfOrders) + "] (got " +
-                         std::to_string(o.orders) + ")");
-  if (o.rays <= 0 || o.rays > 1000000000000LL)
-    throw ParameterError("{rays} must be in [1, 1e12] (got " + std::to_string(o.rays) + ")");
-  if (o.replicates < 2) throw ParameterError("{replicates} must be at least 2");
-  const long long azimuths = o.azimuths > 0 ? o.azimuths : 1;
-  if (o.rays < azimuths * o.replicates)
-    throw ParameterError("{rays} must be at least {replicates} per azimuth (" + std::to_string(azimuths * o.replicates) +
-                         " here; got " + std::to_string(o.rays) + ")");
 }
 
 MuQuadrature albedo_quadrature(const AlbedoRequest& o) {

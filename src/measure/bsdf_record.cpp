@@ -1,8 +1,4 @@
 #include "microsim/measure/bsdf_record.hpp"
-#include "microsim/io/checks.hpp"
-
-#include <tbb/task_arena.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -10,7 +6,6 @@
 #include <cstdio>
 #include <functional>
 
-#include "microsim/io/pbsdf.hpp"
 #include "microsim/measure/groove_models.hpp"
 #include "microsim/measure/single_scattering_albedos.hpp"
 #include "microsim/models/spectral_rgb.hpp"
@@ -26,13 +21,6 @@ std::string fixed(double x, int digits) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", digits, x);
   return buf;
-}
-
-// Sorted, without repeats (a table's axes must increase).
-std::vector<double> sorted_unique(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  v.erase(std::unique(v.begin(), v.end(), [](double a, double b) { return std::abs(a - b) < 1e-9; }), v.end());
-  return v;
 }
 
 // Comparisons of one surface's row: the table's rule (compare in table.hpp) without p-values.
@@ -134,98 +122,6 @@ models::Material bsdf_material(const BsdfRequest& o) {
     return models::Material::dielectric(*o.eta);
   }
   throw ParameterError("{material} must be mirror, conductor or dielectric (got '" + literal_text(o.material) + "')");
-}
-
-namespace {
-// A polarized table (Mitsuba 3's measured_polarized): reflection of a conductor or mirror measured
-// with Mueller matrices, one incidence azimuth (isotropic), and the five whole-nanometre
-// wavelengths the plugin reads (a single index is written at kPbsdfWavelengthsNm).
-void check_pbsdf_request(const BsdfRequest& o) {
-  if (!o.polarized) throw ParameterError("{output} .pbsdf holds Mueller matrices: give {polarized}");
-  if (o.material == "dielectric")
-    throw ParameterError("{output} .pbsdf: {material} conductor or mirror only (a dielectric's table would miss its transmission)");
-  if (sorted_unique(o.phi_i_deg).size() != 1)
-    throw ParameterError("{output} .pbsdf: Mitsuba's measured_polarized tables are isotropic; give one {phi_i}");
-  const std::vector<double> nm = bsdf_wavelengths(o);
-  if (nm.empty()) return;
-  if (nm.size() != kPbsdfWavelengths)
-    throw ParameterError("{wavelengths}: Mitsuba's measured_polarized reads exactly " + std::to_string(kPbsdfWavelengths) +
-                         " wavelengths for {output} .pbsdf (got " + std::to_string(nm.size()) + ")");
-  for (double x : nm)
-    if (x != std::round(x) || x < 1 || x > 65535)
-      throw ParameterError("{wavelengths}: a .pbsdf stores whole nanometres (got " + fixed(x, 3) + ")");
-}
-}  // namespace
-
-void check_bsdf_request(BsdfRequest& o) {
-  const std::string& ext = o.format;
-  if (ext != "exr" && ext != "json" && ext != "bsdf" && ext != "binary" && ext != "pbsdf")
-    throw UsageError("the output must be .exr, .json, .bsdf, .binary or .pbsdf (got ." + ext + ")");
-  bsdf_material(o);
-  if (ext == "pbsdf") check_pbsdf_request(o);
-  o.theta_i_deg = sorted_unique(o.theta_i_deg);
-  o.phi_i_deg = sorted_unique(o.phi_i_deg);
-  if (o.theta_i_deg.empty() || o.phi_i_deg.empty()) throw ParameterError("{theta_i} and {phi_i} need at least one angle");
-  for (double t : o.theta_i_deg)
-    if (!(t >= 0 && t < 90))
-      throw ParameterError("{theta_i} must be in [0, 90) degrees (got " + fixed(t, 2) + ")");
-  const std::vector<double>& phis = o.phi_i_deg;
-  for (double p : phis)
-    if (!std::isfinite(p) || std::abs(p) > 3600)
-      throw ParameterError("{phi_i} must be finite angles in degrees, |phi| <= 3600");
-  if (o.orders < 1 || o.orders > kMaxBsdfOrders)
-    throw ParameterError("{orders} must be in [1, " + std::to_string(kMaxBsdfOrders) + "] (got " +
-                         std::to_string(o.orders) + ")");
-  if (o.rays <= 0 || o.rays > 1000000000000LL)
-    throw ParameterError("{rays} must be in [1, 1e12] (got " + std::to_string(o.rays) + ")");
-  if (o.resolution < 1 || o.resolution > kMaxBsdfResolution)
-    throw ParameterError("{resolution} must be in [1, " + std::to_string(kMaxBsdfResolution) + "] (got " +
-                         std::to_string(o.resolution) + ")");
-  if (o.table_resolution < kMinTableResolution || o.table_resolution > kMaxTableResolution)
-    throw ParameterError("{table_resolution} must be in [" + std::to_string(kMinTableResolution) + ", " +
-                     std::to_string(kMaxTableResolution) + "] (got " + std::to_string(o.table_resolution) + ")");
-  if (o.table_azimuths < 1 || o.table_azimuths > kMaxTableAzimuths)
-    throw ParameterError("{table_azimuths} must be in [1, " + std::to_string(kMaxTableAzimuths) + "] (got " +
-                     std::to_string(o.table_azimuths) + ")");
-  // Runs per incidence: an isotropic renderer table measures table_azimuths azimuths.
-  const bool averaged = (ext == "bsdf" || ext == "binary" || ext == "pbsdf") && phis.size() == 1 && o.table_azimuths > 1;
-  const double runs = averaged ? o.table_azimuths : 1.0;
-  const std::size_t n_inc = o.theta_i_deg.size() * phis.size();
-  if (n_inc > 100000) throw ParameterError("{theta_i} x {phi_i}: more than 100000 incidences");
-  if (ext == "binary" && phis.size() > 1)
-    throw ParameterError("{output} .binary: MERL tables are isotropic; give one {phi_i} (got " +
-                         std::to_string(phis.size()) + " azimuths)");
-  if (ext == "bsdf" && phis.size() > 1 && (std::abs(phis.front() + 180) > 1e-9 || std::abs(phis.back() - 180) > 1e-9))
-    throw ParameterError("{phi_i}: an anisotropic .bsdf needs azimuths over the full circle from -180 to 180 "
-                         "(e.g. {phi_i} -180:180:30), or one azimuth for an isotropic table");
-  // -o .bsdf: the RGL tables hold vndf, luminance and two spectra values (floats) per vertex of
-  // the table_resolution^2 grid of every incidence.
-  // A spectral run: a spectra value per wavelength and three rgb values.
-  const double wavelengths = static_cast<double>(bsdf_wavelengths(o).size());
-  const double vertex_bytes = wavelengths > 0 ? 4.0 * (2 + wavelengths + 3) : 16.0;
-  if (ext == "bsdf")
-    require_memory(vertex_bytes * static_cast<double>(n_inc) * o.table_resolution * o.table_resolution,
-                   "{table_resolution} " + std::to_string(o.table_resolution) + " with " + std::to_string(n_inc) +
-                       " incidences");
-  if (ext == "pbsdf") {
-    const PbsdfGrid g = pbsdf_grid(o.table_resolution);
-    require_memory(4.0 * 16 * kPbsdfWavelengths * g.theta_h * g.theta_d * g.phi_d,
-                   "{table_resolution} " + std::to_string(o.table_resolution) + " for a .pbsdf");
-  }
-  // Tallies: f and f^2 per side, slot and pixel, one per worker plus the merge tree, and the
-  // finished results of every incidence.
-  const double tally = 2.0 * (o.orders + 1) * (static_cast<double>(o.resolution) * o.resolution + o.resolution) * 2 * 8;
-  const int threads = o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency();
-  // (a spectral run's results: a tally per wavelength beside the first wavelength's)
-  const double need = tally * (3.0 * threads + 4.0 + 2.0 * n_inc * runs * (1.0 + wavelengths));
-  const double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
-  if (need > 0.5 * have)
-    throw ParameterError("{resolution} " + std::to_string(o.resolution) + " with {orders} " +
-                     std::to_string(o.orders) + " and " + std::to_string(n_inc) + " incidences needs about " +
-                     fixed(need / (1 << 30), 1) + " GiB of tallies, more than half of this machine's memory");
-  if (averaged && o.rays < o.table_azimuths)
-    throw ParameterError("{table_azimuths} " + std::to_string(o.table_azimuths) + " splits {rays} over as many "
-                     "azimuths: give at least that many rays (got " + std::to_string(o.rays) + ")");
 }
 
 void check_bsdf_surface(const BsdfRequest& o, const Microsurface& s, const std::string& name) {

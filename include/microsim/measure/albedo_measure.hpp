@@ -35,18 +35,13 @@
 #include <string>
 #include <vector>
 
+#include "microsim/api/albedo_request.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/measure/bsdf_table.hpp"
 #include "microsim/measure/table.hpp"
 #include "microsim/surface/microsurface.hpp"
 
 namespace microsim {
-
-// Ranges of the request (the command line's help uses them).
-constexpr int kMinMuNodes = 2, kMaxMuNodes = 64;
-constexpr int kMaxAlbedoAzimuths = 360;
-// Azimuths averaged on an anisotropic surface when the request leaves it open (azimuths = 0).
-constexpr int kAnisotropicAlbedoAzimuths = 8;
 
 // A quadrature of 2 int_0^1 E(mu) mu dmu on measured nodes, with a lower-order rule on a subset
 // of them for the error estimate. Nodes increase in mu.
@@ -73,26 +68,9 @@ struct AlbedoAverage {
 };
 AlbedoAverage average_albedo(const MuQuadrature& q, const std::vector<Estimate>& e);
 
-struct AlbedoRequest {
-  std::string material;           // mirror, conductor or dielectric
-  std::optional<double> eta, k;   // as in BsdfRequest
-  // A conductor from a shipped metal's table (models/metals.hpp) at one wavelength.
-  std::string metal;
-  double wavelength_nm = 550.0;
-  int mu_nodes = 8;                 // Gauss-Legendre nodes in mu (when theta_i_deg is empty)
-  std::vector<double> theta_i_deg;  // given incidences instead: the trapezoid rule in mu
-  double phi_i_deg = 0.0;
-  int azimuths = 0;  // incidence azimuths averaged; 0: 1 (isotropic), kAnisotropicAlbedoAzimuths (anisotropic)
-  int orders = 4;
-  long long rays = 200000;  // per mu node and surface
-  std::uint64_t seed = 1;
-  int replicates = 32;
-  int max_events = 10000;
-  std::string format = "json";  // json, csv or exr (the lookup table)
-};
-
-// Checks the request (UsageError naming its parameters); sorts the angles.
-void check_albedo_request(AlbedoRequest& request);
+// The material the request names (a conductor from a metal's table: its index at wavelength_nm);
+// ParameterError for a wrong name or missing / misplaced indices.
+models::Material albedo_material(const AlbedoRequest& request);
 // The quadrature the request asks for.
 MuQuadrature albedo_quadrature(const AlbedoRequest& request);
 

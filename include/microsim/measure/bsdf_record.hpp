@@ -1,8 +1,8 @@
 // The record of a BSDF measurement (measure/bsdf_measure.hpp, measure/bsdf_table.hpp).
 //
-// A request states a measurement as the command line and the Python module give it (material
-// by name, angles in degrees, the output format); it is checked here, so that every caller gets
-// the same limits and messages. Each incidence's result becomes two Tables (measure/table.hpp):
+// The request (api/bsdf_request.hpp) states a measurement as the command line and the Python
+// module give it; its material and indices are resolved here. Each incidence's result becomes
+// two Tables (measure/table.hpp):
 // the albedo per side and scattering order with the models beside it, and the in-plane lobe per
 // bin; the JSON record, the EXR file and the renderer tables' descriptions only format them
 // (the files: io/bsdf_files.hpp).
@@ -18,43 +18,13 @@
 #include <string>
 #include <vector>
 
+#include "microsim/api/bsdf_request.hpp"
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/bsdf_table.hpp"
 #include "microsim/measure/table.hpp"
 #include "microsim/models/metals.hpp"
 
 namespace microsim {
-
-// Ranges of the request's counts: check_bsdf_request and the command line's help both use them.
-constexpr int kMaxBsdfOrders = 16;
-constexpr int kMaxBsdfResolution = 1024;
-constexpr int kMinTableResolution = 2, kMaxTableResolution = 512;
-
-// Incidence azimuths an isotropic renderer table averages by default.
-constexpr int kDefaultTableAzimuths = 16;
-constexpr int kMaxTableAzimuths = 360;
-
-struct BsdfRequest {
-  std::string material;         // mirror, conductor or dielectric
-  std::optional<double> eta, k;  // as given (conductor: both; dielectric: eta)
-  // A spectral conductor (instead of eta and k): a shipped metal's table (models/metals.hpp) or
-  // a CSV file of wavelength_nm, n, k; the wavelengths in nm (empty: default_wavelengths_nm).
-  std::string metal, ior_file;
-  std::vector<double> wavelengths_nm;
-  std::vector<double> theta_i_deg, phi_i_deg;  // check_bsdf_request sorts them, without repeats
-  int orders = 4;
-  long long rays = 1000000;
-  std::uint64_t seed = 1;
-  int replicates = 32;
-  bool models = true;
-  bool polarized = false;     // Mueller matrices along the paths (measure/polarized_walk.hpp)
-  int resolution = 64;        // hemisphere map R; also the in-plane bins
-  int table_resolution = 64;  // .bsdf tables; .pbsdf grids (io/pbsdf.hpp pbsdf_grid)
-  // Isotropic .bsdf / .binary tables (one phi_i): incidence azimuths averaged (BsdfTableOptions).
-  int table_azimuths = kDefaultTableAzimuths;
-  std::string format = "json";  // json, exr, bsdf (RGL tensor file), binary (MERL) or pbsdf (polarized)
-  int threads = 0;              // for the memory estimate (0: all processors)
-};
 
 // The index table of a spectral request (--metal or --ior-file), or nullopt; UsageError for a
 // misplaced or unknown metal and an unreadable or malformed file.
@@ -63,9 +33,6 @@ std::optional<models::IndexTable> bsdf_index_table(const BsdfRequest& request);
 std::vector<double> bsdf_wavelengths(const BsdfRequest& request);
 // The material the request names (a spectral conductor: its index at the first wavelength); UsageError for a wrong name or missing / misplaced indices.
 models::Material bsdf_material(const BsdfRequest& request);
-// Checks the counts, angles, output format against the angles and the memory the tallies need;
-// sorts the angle lists. UsageError with the command line's option names.
-void check_bsdf_request(BsdfRequest& request);
 // The checks that need the surface: the renderer tables need a periodic tile, and an anisotropic
 // surface needs azimuths over the full circle (`name`: the surface file, for messages).
 void check_bsdf_surface(const BsdfRequest& request, const Microsurface& s, const std::string& name);

@@ -1,0 +1,77 @@
+// measure bsdf as a request of the library: the BSDF per scattering order by random walks on one
+// surface (mirror, conductor, dielectric, or a spectral conductor), at every incidence of
+// theta_i x phi_i, its record (definitions included) and the renderer tables beside it.
+//
+// A request states a measurement as the command line and the Python module give it (material
+// by name, angles in degrees, the output format); check() holds every limit, so that each front
+// end refuses the same requests with the same words (measure/bsdf_record.hpp builds the record).
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "microsim/api/run_context.hpp"
+#include "microsim/api/surface_input.hpp"
+
+namespace microsim {
+
+// Ranges of the request's counts: check() and the command line's help both use them.
+constexpr int kMaxBsdfOrders = 16;
+constexpr int kMaxBsdfResolution = 1024;
+constexpr int kMinTableResolution = 2, kMaxTableResolution = 512;
+
+// Incidence azimuths an isotropic renderer table averages by default.
+constexpr int kDefaultTableAzimuths = 16;
+constexpr int kMaxTableAzimuths = 360;
+
+struct BsdfRequest {
+  SurfaceInput surface;          // a periodic tile, a finite object or a vcavity ensemble
+  std::string material;          // mirror, conductor or dielectric
+  std::optional<double> eta, k;  // as given (conductor: both; dielectric: eta)
+  // A spectral conductor (instead of eta and k): a shipped metal's table (models/metals.hpp) or
+  // a CSV file of wavelength_nm, n, k; the wavelengths in nm (empty: default_wavelengths_nm).
+  std::string metal, ior_file;
+  std::vector<double> wavelengths_nm;
+  // Incidences: every theta_i x phi_i, measured sorted, without repeats.
+  std::vector<double> theta_i_deg;
+  std::vector<double> phi_i_deg = {0.0};
+  int orders = 4;
+  long long rays = 1000000;
+  std::uint64_t seed = 1;
+  int replicates = 32;
+  bool models = true;
+  bool polarized = false;     // Mueller matrices along the paths (measure/polarized_walk.hpp)
+  int resolution = 64;        // hemisphere map R; also the in-plane bins
+  int table_resolution = 64;  // .bsdf tables; .pbsdf grids (io/pbsdf.hpp pbsdf_grid)
+  // Isotropic .bsdf / .binary tables (one phi_i): incidence azimuths averaged (BsdfTableOptions).
+  int table_azimuths = kDefaultTableAzimuths;
+  std::string format = "json";  // json, exr, bsdf (RGL tensor file), binary (MERL) or pbsdf (polarized)
+  int threads = 0;              // for the memory estimate (0: all processors; the run sets its own)
+  // ParameterError naming what is out of range: counts, angles, the material and its indices,
+  // the output format against the angles, and the memory the tallies need.
+  void check() const;
+};
+
+// The output formats of measure bsdf: the table files and the record alone.
+constexpr const char* kBsdfFormats[] = {"exr", "json", "bsdf", "binary", "pbsdf"};
+
+// The record's path for an output `path`: itself for .json, else the same name with .json (the
+// record goes beside the table).
+std::string bsdf_record_path(const std::string& path);
+
+// A run of the request: the record and what the command line prints beside it.
+struct BsdfRun {
+  Json record;
+  bool nominal_ndf = false;  // the surface has a nominal NDF (the microfacet models are beside)
+  double seconds = 0.0;      // the walks' time over every incidence
+};
+
+// Checks the request, loads and checks the surface, measures every incidence and returns the
+// record (command "measure bsdf"). A table format (exr, bsdf, binary, pbsdf) is written to
+// `table_path` and adds its fields to the record; the EXR header names bsdf_record_path(table_path).
+BsdfRun run_bsdf_request(const BsdfRequest& r, const RunContext& ctx, const std::string& table_path = "");
+// The record of run_bsdf_request.
+Json measure_bsdf_record(const BsdfRequest& r, const RunContext& ctx, const std::string& table_path = "");
+
+}  // namespace microsim

@@ -1,0 +1,183 @@
+#include "microsim/api/bsdf_request.hpp"
+
+#include <tbb/task_arena.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "microsim/api/request_checks.hpp"
+#include "microsim/io/bsdf_files.hpp"
+#include "microsim/io/checks.hpp"
+#include "microsim/io/output.hpp"
+#include "microsim/io/pbsdf.hpp"
+#include "microsim/measure/bsdf_record.hpp"
+#include "microsim/surface/microsurface.hpp"
+#include "microsim/trace/tracer.hpp"
+
+namespace microsim {
+
+namespace {
+
+// Sorted, without repeats (a table's axes must increase).
+std::vector<double> sorted_unique(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end(), [](double a, double b) { return std::abs(a - b) < 1e-9; }), v.end());
+  return v;
+}
+
+// The request as it is measured: its incidence angles sorted, without repeats.
+BsdfRequest normalized(const BsdfRequest& r) {
+  BsdfRequest n = r;
+  n.theta_i_deg = sorted_unique(r.theta_i_deg);
+  n.phi_i_deg = sorted_unique(r.phi_i_deg);
+  return n;
+}
+
+bool renderer_table(const std::string& format) { return format == "bsdf" || format == "binary" || format == "pbsdf"; }
+
+// A polarized table (Mitsuba 3's measured_polarized): reflection of a conductor or mirror measured
+// with Mueller matrices, one incidence azimuth (isotropic), and the five whole-nanometre
+// wavelengths the plugin reads (a single index is written at kPbsdfWavelengthsNm).
+void check_pbsdf_request(const BsdfRequest& o) {
+  if (!o.polarized) throw ParameterError("{output} .pbsdf holds Mueller matrices: give {polarized}");
+  if (o.material == "dielectric")
+    throw ParameterError("{output} .pbsdf: {material} conductor or mirror only (a dielectric's table would miss its transmission)");
+  if (o.phi_i_deg.size() != 1)
+    throw ParameterError("{output} .pbsdf: Mitsuba's measured_polarized tables are isotropic; give one {phi_i}");
+  const std::vector<double> nm = bsdf_wavelengths(o);
+  if (nm.empty()) return;
+  if (nm.size() != kPbsdfWavelengths)
+    throw ParameterError("{wavelengths}: Mitsuba's measured_polarized reads exactly " + std::to_string(kPbsdfWavelengths) +
+                         " wavelengths for {output} .pbsdf (got " + std::to_string(nm.size()) + ")");
+  for (double x : nm)
+    if (x != std::round(x) || x < 1 || x > 65535)
+      throw ParameterError("{wavelengths}: a .pbsdf stores whole nanometres (got " + fixed_text(x, 3) + ")");
+}
+
+// The incidence angles: at least one, zeniths above the horizon, azimuths finite.
+void check_incidences(const BsdfRequest& o) {
+  if (o.theta_i_deg.empty() || o.phi_i_deg.empty()) throw ParameterError("{theta_i} and {phi_i} need at least one angle");
+  for (double t : o.theta_i_deg)
+    if (!(t >= 0 && t < 90))
+      throw ParameterError("{theta_i} must be in [0, 90) degrees (got " + fixed_text(t, 2) + ")");
+  for (double p : o.phi_i_deg)
+    if (!std::isfinite(p) || std::abs(p) > 3600)
+      throw ParameterError("{phi_i} must be finite angles in degrees, |phi| <= 3600");
+}
+
+// The counts, with the words of the command line's option checks.
+void check_counts(const BsdfRequest& o) {
+  require_integer_in(o.orders, 1, kMaxBsdfOrders, "orders");
+  require_integer_in(o.rays, 1, kMaxRays, "rays");
+  require_integer_in(o.replicates, 2, kMaxReplicates, "replicates");
+  require_integer_in(o.resolution, 1, kMaxBsdfResolution, "resolution");
+  require_integer_in(o.table_resolution, kMinTableResolution, kMaxTableResolution, "table_resolution");
+  require_integer_in(o.table_azimuths, 1, kMaxTableAzimuths, "table_azimuths");
+}
+
+// The output format against the incidences, and the memory of its tables and of the tallies.
+void check_tables(const BsdfRequest& o) {
+  const std::string& ext = o.format;
+  const std::vector<double>& phis = o.phi_i_deg;
+  // Runs per incidence: an isotropic renderer table measures table_azimuths azimuths.
+  const bool averaged = renderer_table(ext) && phis.size() == 1 && o.table_azimuths > 1;
+  const double runs = averaged ? o.table_azimuths : 1.0;
+  const std::size_t n_inc = o.theta_i_deg.size() * phis.size();
+  if (n_inc > 100000) throw ParameterError("{theta_i} x {phi_i}: more than 100000 incidences");
+  if (ext == "binary" && phis.size() > 1)
+    throw ParameterError("{output} .binary: MERL tables are isotropic; give one {phi_i} (got " +
+                         std::to_string(phis.size()) + " azimuths)");
+  if (ext == "bsdf" && phis.size() > 1 && (std::abs(phis.front() + 180) > 1e-9 || std::abs(phis.back() - 180) > 1e-9))
+    throw ParameterError("{phi_i}: an anisotropic .bsdf needs azimuths over the full circle from -180 to 180 "
+                         "(e.g. {phi_i} -180:180:30), or one azimuth for an isotropic table");
+  // -o .bsdf: the RGL tables hold vndf, luminance and two spectra values (floats) per vertex of
+  // the table_resolution^2 grid of every incidence.
+  // A spectral run: a spectra value per wavelength and three rgb values.
+  const double wavelengths = static_cast<double>(bsdf_wavelengths(o).size());
+  const double vertex_bytes = wavelengths > 0 ? 4.0 * (2 + wavelengths + 3) : 16.0;
+  if (ext == "bsdf")
+    require_memory(vertex_bytes * static_cast<double>(n_inc) * o.table_resolution * o.table_resolution,
+                   "{table_resolution} " + std::to_string(o.table_resolution) + " with " + std::to_string(n_inc) +
+                       " incidences");
+  if (ext == "pbsdf") {
+    const PbsdfGrid g = pbsdf_grid(o.table_resolution);
+    require_memory(4.0 * 16 * kPbsdfWavelengths * g.theta_h * g.theta_d * g.phi_d,
+                   "{table_resolution} " + std::to_string(o.table_resolution) + " for a .pbsdf");
+  }
+  // Tallies: f and f^2 per side, slot and pixel, one per worker plus the merge tree, and the
+  // finished results of every incidence.
+  const double tally = 2.0 * (o.orders + 1) * (static_cast<double>(o.resolution) * o.resolution + o.resolution) * 2 * 8;
+  const int threads = o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency();
+  // (a spectral run's results: a tally per wavelength beside the first wavelength's)
+  const double need = tally * (3.0 * threads + 4.0 + 2.0 * n_inc * runs * (1.0 + wavelengths));
+  const double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
+  if (need > 0.5 * have)
+    throw ParameterError("{resolution} " + std::to_string(o.resolution) + " with {orders} " +
+                         std::to_string(o.orders) + " and " + std::to_string(n_inc) + " incidences needs about " +
+                         fixed_text(need / (1 << 30), 1) + " GiB of tallies, more than half of this machine's memory");
+  if (averaged && o.rays < o.table_azimuths)
+    throw ParameterError("{table_azimuths} " + std::to_string(o.table_azimuths) + " splits {rays} over as many "
+                         "azimuths: give at least that many rays (got " + std::to_string(o.rays) + ")");
+}
+
+// check() on a normalized request.
+void check_normalized(const BsdfRequest& o) {
+  require_given(o.material, "material");
+  if (o.theta_i_deg.empty()) throw ParameterError("{theta_i} is required");
+  const std::string& ext = o.format;
+  if (ext != "exr" && ext != "json" && ext != "bsdf" && ext != "binary" && ext != "pbsdf")
+    throw UsageError("the output must be .exr, .json, .bsdf, .binary or .pbsdf (got ." + ext + ")");
+  bsdf_material(o);
+  if (ext == "pbsdf") check_pbsdf_request(o);
+  check_incidences(o);
+  check_counts(o);
+  check_tables(o);
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+void BsdfRequest::check() const { check_normalized(normalized(*this)); }
+
+std::string bsdf_record_path(const std::string& path) {
+  if (extension_of(path) == "json") return path;
+  const auto slash = path.find_last_of('/');
+  const auto dot = path.find_last_of('.');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return path + ".json";
+  return path.substr(0, dot + 1) + "json";
+}
+
+BsdfRun run_bsdf_request(const BsdfRequest& request, const RunContext& ctx, const std::string& table_path) {
+  BsdfRequest r = normalized(request);
+  r.threads = ctx.threads;
+  check_normalized(r);
+  if (!r.surface.get) throw UsageError("no surface given");
+  const std::shared_ptr<const Microsurface> surface = r.surface.get();
+  const Microsurface& s = *surface;
+  check_bsdf_surface(r, s, r.surface.name);
+  const auto t0 = std::chrono::steady_clock::now();
+  BsdfTableOptions to = bsdf_table_options(r, s, ctx.split);  // shards and MPI ranks (scaleout)
+  if (ctx.progress) to.progress = ctx.progress;
+  const Tracer tracer(s);
+  const BsdfTable table = measure_bsdf_table(tracer, to);
+
+  BsdfRun run;
+  run.nominal_ndf = s.nominal.has_value();
+  run.seconds = table.seconds;
+  run.record = record_header("measure bsdf", ctx);
+  put_bsdf_record(run.record, r, table, s, r.surface.name);
+  if (r.format != "json") write_bsdf_tables(table_path, r, table, s, run.record, bsdf_record_path(table_path));
+  run.record["wall_seconds"] = seconds_since(t0);
+  return run;
+}
+
+Json measure_bsdf_record(const BsdfRequest& r, const RunContext& ctx, const std::string& table_path) {
+  return run_bsdf_request(r, ctx, table_path).record;
+}
+
+}  // namespace microsim
