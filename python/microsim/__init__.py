@@ -7,18 +7,17 @@ compared with the analytic models of :mod:`microsim.models`.
 Keyword arguments are the command line's long options with ``_`` for ``-``
 (``correlation_length=0.02`` is ``--correlation-length 0.02``); lists of angles are given as
 lists, numbers or the command line's text (``theta=[30, 80]`` is ``--theta 30,80``), ``True`` a
-flag. ``help("measure g1")`` lists them. generate, measure_ndf, measure_g1, measure_g2,
-measure_vndf and validate set the fields of the library's requests (``_core.G1Request`` ...)
-directly; measure_bsdf runs the command line's code in memory. Records are the command's JSON as
-dicts and lists, numeric arrays as numpy arrays, bit for bit what ``-o record.json`` writes at
-the same seed. Errors raise the library's message, its parameters named as the keywords
+flag. ``help("measure g1")`` lists them. Every function sets the fields of the library's request
+(``_core.G1Request``, ``_core.BsdfRequest`` ...) directly and runs it; no command line is parsed.
+Records are the command's JSON as dicts and lists, numeric arrays as numpy arrays, bit for bit
+what ``-o record.json`` writes at the same seed. Errors raise the library's message, its parameters named as the keywords
 (``rays: must be ...``), as :class:`UsageError` (a ``ValueError``) where the command line exits 2
 (an option, a file or a model argument refused) and as :class:`RuntimeFailure` (a
 ``RuntimeError``) where it exits 1 (the run failed); both are defined once, in the compiled core, and raised by
 :mod:`microsim.models` too. Measurements release the GIL.
 """
 from . import _core
-from ._core import RuntimeFailure, Surface, UsageError, _help, _run, load, models, surface_kinds
+from ._core import RuntimeFailure, Surface, UsageError, load, models, surface_kinds
 
 __all__ = ["Surface", "UsageError", "RuntimeFailure", "ValidationFailed", "generate", "load",
            "measure_ndf", "measure_g1", "measure_g2", "measure_vndf", "measure_bsdf", "measure_albedo",
@@ -34,36 +33,8 @@ class ValidationFailed(RuntimeFailure):
         self.record = record
 
 
-def _value(name, v):
-    if isinstance(v, bool):
-        raise UsageError(f"--{name}: a flag takes True or False only")
-    if isinstance(v, float):
-        return repr(v)  # shortest text that reads back as the same double
-    if isinstance(v, (int, str)):
-        return str(v)
-    if hasattr(v, "item") and getattr(v, "ndim", 1) == 0:  # numpy scalar
-        return _value(name, v.item())
-    raise UsageError(f"--{name}: unsupported value {v!r}")
-
-
-def _options(options):
-    args = []
-    for key, v in options.items():
-        name = key.replace("_", "-")
-        if v is None or v is False:
-            continue
-        if v is True:
-            args.append("--" + name)
-        elif isinstance(v, (list, tuple)) or (hasattr(v, "tolist") and getattr(v, "ndim", 0) > 0):
-            items = v.tolist() if hasattr(v, "tolist") else v
-            args += ["--" + name, ",".join(_value(name, x) for x in items)]
-        else:
-            args += ["--" + name, _value(name, v)]
-    return args
-
-
 def _surfaces(surfaces):
-    """Names on the command line for the surfaces (their files when loaded) and the name map."""
+    """The records' names of the surfaces (their files when loaded) and the name map."""
     if isinstance(surfaces, Surface):
         surfaces = [surfaces]
     surfaces = list(surfaces)
@@ -89,16 +60,6 @@ def _refuse_shard(options):
                          "read back by its merge; Python measures whole runs")
 
 
-def _command(words, positional, by_name, options, default_output):
-    _refuse_shard(options)
-    output = options.pop("output", None)
-    args = list(words) + list(positional) + ["-o", output or default_output] + _options(options)
-    record, generated, failure = _run(args, by_name, output is not None)
-    if failure is not None:
-        raise ValidationFailed(failure, record)
-    return record, generated
-
-
 def generate(kind, **options):
     """A new surface: ``generate("gaussian", alpha=0.5, resolution=128, seed=9)``.
 
@@ -121,15 +82,11 @@ def generate(kind, **options):
     return _core._generate(kind, given, config, output or default, output is not None, threads)
 
 
-def _measure(quantity, surfaces, options):
-    names, by_name = _surfaces(surfaces)
-    record, _ = _command(["measure", quantity], names, by_name, options, "record.json")
-    return record
-
-
 # The requests' fields that are lists of angles: given as a list, a number or the command line's
 # text; the record's parameters echo the text.
-_ANGLE_LISTS = {"theta", "phi", "theta_o", "phi_o", "theta_i", "phi_i"}
+_ANGLE_LISTS = {"theta", "phi", "theta_o", "phi_o", "theta_i", "phi_i", "wavelengths"}
+# The fields that are the command line's flags: True or False.
+_FLAGS = {"polarized", "no_models"}
 
 
 def _item_text(name, v):
@@ -155,6 +112,11 @@ def _set_field(request, command, key, v):
     if key not in _fields(request):
         raise UsageError(f"unknown keyword '{key}' for {command} (known: {', '.join(_fields(request))}, "
                          "output, threads)")
+    if key in _FLAGS:
+        if not isinstance(v, bool):
+            raise UsageError(f"{key}: a flag takes True or False only")
+        setattr(request, key, v)
+        return
     if key in _ANGLE_LISTS:
         v = _angle_text(key, v)
     elif key == "checks" and isinstance(v, (list, tuple)):
@@ -212,9 +174,9 @@ def measure_vndf(surfaces, **options):
 
 
 def measure_bsdf(surface, **options):
-    """BSDF per scattering order (``microsim measure bsdf``); ``output="t.exr"`` (or .bsdf, .binary)
-    also writes the table."""
-    return _measure("bsdf", surface, options)
+    """BSDF per scattering order (``microsim measure bsdf``); one surface. ``output="t.exr"`` (or
+    .bsdf, .binary, .pbsdf) also writes the table, and the record beside it (``t.json``)."""
+    return _run_request("bsdf", _core.BsdfRequest(), _core._measure_bsdf, surface, options, one_surface=True)
 
 
 def measure_albedo(surfaces, **options):
@@ -222,7 +184,7 @@ def measure_albedo(surfaces, **options):
     E_avg with statistical and quadrature errors (``microsim measure albedo``):
     ``measure_albedo([s1, s2], material="mirror", mu_nodes=8, rays=100000)``. Each surface is
     measured on its own; ``output="lut.exr"`` also writes the lookup table E(mu, alpha)."""
-    return _measure("albedo", surfaces, options)
+    return _run_request("albedo", _core.AlbedoRequest(), _core._measure_albedo, surfaces, options)
 
 
 def validate(surfaces=None, **options):
@@ -245,6 +207,54 @@ def validate(surfaces=None, **options):
     return record
 
 
+# The functions of the commands and the library requests whose fields are their keywords.
+_REQUESTS = {
+    "measure ndf": ("NdfRequest", "measure_ndf"),
+    "measure g1": ("G1Request", "measure_g1"),
+    "measure g2": ("G2Request", "measure_g2"),
+    "measure vndf": ("VndfRequest", "measure_vndf"),
+    "measure bsdf": ("BsdfRequest", "measure_bsdf"),
+    "measure albedo": ("AlbedoRequest", "measure_albedo"),
+    "validate": ("ValidateRequest", "validate"),
+}
+
+
+def _kind_help(name, kind):
+    lines = [f"generate({name!r}, ...): {kind['help']}", "keywords:"]
+    for o in kind["options"]:
+        facts = [o["type"]]
+        if o["default"] is not None:
+            facts.append(f"default {o['default']}")
+        if o["range"] is not None:
+            facts.append(f"in {o['range']}")
+        if o["required"]:
+            facts.append("required")
+        lines.append(f"  {o['keyword']} ({', '.join(facts)}): {o['help']}")
+    return "\n".join(lines)
+
+
 def help(command=""):
-    """The command line's help of a command, e.g. ``help("measure g1")``: its options."""
-    return _help(command.split())
+    """The keywords of a function, built from the library's tables: ``help("measure g1")`` lists the
+    fields of its request with their defaults, ``help("generate gaussian")`` the surface kind's
+    options with their types, ranges and descriptions; ``help()`` lists the commands. (The
+    command line's ``microsim COMMAND --help`` describes every option in words.)"""
+    words = command.split()
+    kinds = surface_kinds()
+    if not words:
+        return ("commands: " + ", ".join(["generate KIND"] + list(_REQUESTS)) + "\nsurface kinds: " +
+                ", ".join(kinds))
+    if words[0] == "generate":
+        if len(words) == 1:
+            return "generate(kind, **options), kind one of: " + ", ".join(kinds)
+        if words[1] not in kinds:
+            raise UsageError(f"unknown surface kind '{words[1]}' (known: {', '.join(kinds)})")
+        return _kind_help(words[1], kinds[words[1]])
+    key = " ".join(words)
+    if key not in _REQUESTS:
+        raise UsageError(f"unknown command '{key}' (known: generate, {', '.join(_REQUESTS)})")
+    request_class, function = _REQUESTS[key]
+    request = getattr(_core, request_class)()
+    lines = [f"{function}: {' '.join(globals()[function].__doc__.split())}", "keywords (default):"]
+    lines += [f"  {k} ({getattr(request, k)!r})" for k in _fields(request)]
+    lines += ["  output (None: the record only)", "  threads (0: all cores)"]
+    return "\n".join(lines)

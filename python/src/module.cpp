@@ -1,17 +1,14 @@
 // The compiled part of the Python module `microsim` (microsim._core): surfaces as numpy views,
-// the library's requests (requests.cpp, generate.cpp, validate.cpp), the command tree of the
-// command line run in memory for the commands without a request yet (measure bsdf, help), and
-// the analytic models (models.cpp). python/microsim/__init__.py turns keyword arguments into request
-// fields or, for those commands, into the command's options.
+// the library's requests (requests.cpp, bsdf_albedo.cpp, generate.cpp, validate.cpp) and the
+// analytic models (models.cpp). python/microsim/__init__.py turns keyword arguments into request
+// fields. The command line is no part of it: the requests hold every check and record.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <map>
 #include <memory>
 #include <optional>
 
-#include "../../src/cli/app.hpp"
 #include "held_surface.hpp"
 #include "json_to_python.hpp"
 #include "microsim/surface/surface_io.hpp"
@@ -25,6 +22,7 @@ void bind_models(py::module_& m);
 void bind_requests(py::module_& m);
 void bind_generate(py::module_& m);
 void bind_validate(py::module_& m);
+void bind_bsdf_albedo(py::module_& m);
 }
 
 namespace {
@@ -50,48 +48,6 @@ py::object nominal(const Microsurface& s) {
 
 // A library parameter as Python names it: the keyword argument of the same name.
 std::string keyword_spelling(std::string_view parameter) { return std::string(parameter); }
-
-struct RunResult {
-  std::optional<Json> record;
-  std::vector<Surface> surfaces;
-  std::string failure;  // a runtime failure after the record was kept (validate: FAILED identities)
-};
-
-// Runs `args` (a command line without the program name) with surface arguments resolved in
-// `inputs` and outputs handed back; files are written too when `write_files` (an -o the caller
-// chose). Called without the GIL.
-RunResult run(const std::vector<std::string>& args,
-              const std::map<std::string, std::shared_ptr<const Microsurface>>& inputs,
-              bool write_files) {
-  RunResult out;
-  cli::GlobalOptions g;
-  g.quiet = true;
-  g.surface_by_name = [&](const std::string& name) {
-    auto it = inputs.find(name);
-    if (it == inputs.end()) throw UsageError(name + ": no such surface");
-    return *it->second;
-  };
-  g.keep_record = [&](const std::string& path, const Json& j) {
-    out.record = j;
-    if (write_files) cli::write_record(path, j);
-  };
-  g.keep_surface = [&](const std::string& path, const Microsurface& s) {
-    out.surfaces.push_back({std::make_shared<const Microsurface>(s), std::nullopt});
-    if (write_files) save_surface(s, path);
-  };
-  std::unique_ptr<CLI::App> app = cli::build_app(g);
-  const std::string unknown = cli::unknown_command(*app, args);
-  if (!unknown.empty()) throw UsageError(unknown);
-  try {
-    cli::run_app(*app, args);
-  } catch (const CLI::ParseError& e) {
-    throw UsageError(e.what());  // the command line's message, e.g. "--rays: ..."
-  } catch (const RuntimeFailure& e) {
-    if (!out.record) throw;
-    out.failure = e.what();
-  }
-  return out;
-}
 
 // The surface spec's table: kind -> its options (keyword = the option name with '_' for '-').
 py::dict surface_kinds_table() {
@@ -123,16 +79,6 @@ py::dict surface_kinds_table() {
     kinds[py::str(k.name)] = kind;
   }
   return kinds;
-}
-
-std::string help(const std::vector<std::string>& command) {
-  cli::GlobalOptions g;
-  std::unique_ptr<CLI::App> app = cli::build_app(g);
-  const std::string unknown = cli::unknown_command(*app, command);
-  if (!unknown.empty()) throw UsageError(unknown);
-  const CLI::App* level = app.get();
-  for (const auto& word : command) level = level->get_subcommand(word);
-  return level->help();
 }
 
 // microsim.Surface: the geometry as read-only numpy views, the description and the macrosurface.
@@ -196,8 +142,6 @@ PYBIND11_MODULE(_core, m) {
       if (p) std::rethrow_exception(p);
     } catch (const UsageError& e) {
       usage_error(spelled_message(e, keyword_spelling).c_str());
-    } catch (const CLI::ParseError& e) {
-      usage_error(e.what());
     } catch (const RuntimeFailure& e) {
       runtime_failure(e.what());
     } catch (const py::builtin_exception&) {
@@ -221,27 +165,10 @@ PYBIND11_MODULE(_core, m) {
     return s;
   }, py::arg("path"), "Load a surface file (.exr, .ply, .obj, .off)");
 
-  m.def("_run", [](const std::vector<std::string>& args, const std::map<std::string, Surface>& inputs,
-                   bool write_files) {
-    std::map<std::string, std::shared_ptr<const Microsurface>> surfaces;
-    for (const auto& [name, s] : inputs) surfaces[name] = s.s;
-    RunResult r;
-    {
-      py::gil_scoped_release nogil;  // measurements run on TBB threads without the GIL
-      r = run(args, surfaces, write_files);
-    }
-    py::object record = r.record ? python::to_python(*r.record) : py::none();
-    py::object failure = py::none();
-    if (!r.failure.empty()) failure = py::str(r.failure);
-    return py::make_tuple(record, r.surfaces, failure);
-  }, py::arg("args"), py::arg("surfaces"), py::arg("write_files"),
-     "Run a command (arguments without the program name) on surfaces in memory; returns "
-     "(record or None, generated surfaces, failure message or None)");
-
   python::bind_requests(m);
   python::bind_generate(m);
   python::bind_validate(m);
-  m.def("_help", &help, py::arg("command"), "The command line's help of a command");
+  python::bind_bsdf_albedo(m);
   m.def("surface_kinds", &surface_kinds_table,
         "Every surface kind of generate(kind, **options) with its options: name, keyword, type, default, "
         "range, required, help and the generator parameter it sets (the library's surface spec)");

@@ -173,7 +173,7 @@ def test_output_option_writes_the_file(tile, tmp_path):
     saved = tmp_path / "s.exr"
     microsim.generate("gaussian", resolution=16, seed=1, output=str(saved))
     assert microsim.load(str(saved)).heights.shape == (16, 16)
-    assert "--rays" in microsim.help("measure g1")
+    assert "  rays (1000000)" in microsim.help("measure g1")
 
 
 def test_surface_kinds_table_matches_generate(tmp_path):
