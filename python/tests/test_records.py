@@ -1,4 +1,4 @@
-"""The module runs the command line's code: the same surfaces, records and error messages."""
+"""The module runs the library's code: the same surfaces, records and error messages as the program."""
 import json
 import threading
 import time
