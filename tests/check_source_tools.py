@@ -64,6 +64,11 @@ def main():
         failing = subprocess.run([sys.executable, str(ROOT / "tools" / "include_cycles.py"), "--root", d, "--fail"],
                                  capture_output=True, text=True)
         check(failing.returncode == 1, "--fail exits 1 on a cycle")
+        guarded = [sys.executable, str(ROOT / "tools" / "include_cycles.py"), "--root", d, "--fail-touching"]
+        check(subprocess.run(guarded + ["x"], capture_output=True).returncode == 1,
+              "--fail-touching x exits 1 on a cycle in x")
+        check(subprocess.run(guarded + ["y"], capture_output=True).returncode == 0,
+              "--fail-touching y ignores a cycle in x")
         long_file = root / "src" / "x" / "long.cpp"
         long_file.write_text("int f() {\n" + "  ;\n" * 90 + "}\n")
         over = subprocess.run([sys.executable, str(ROOT / "tools" / "function_lengths.py"), "3", "--root", d,

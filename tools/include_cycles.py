@@ -10,9 +10,11 @@ so the script lists every strongly connected group of two or more components
 (io -> measure -> io), which is how layering rules ("io may depend on result
 types, not the reverse") are stated.
 
-Usage: include_cycles.py [--root DIR] [--dirs] [--fail]
-  --dirs  also report cycles between top-level directories (io, measure, ...)
-  --fail  exit 1 when a component cycle exists (the default only reports)
+Usage: include_cycles.py [--root DIR] [--dirs] [--fail] [--fail-touching DIR ...]
+  --dirs           also report cycles between top-level directories (io, measure, ...)
+  --fail           exit 1 when a component cycle exists (the default only reports)
+  --fail-touching  exit 1 when a component cycle has a member in one of these top-level
+                   directories (a guard for the directories already free of cycles)
 """
 import argparse
 import pathlib
@@ -121,6 +123,7 @@ def main():
     parser.add_argument("--root", default=".")
     parser.add_argument("--dirs", action="store_true")
     parser.add_argument("--fail", action="store_true")
+    parser.add_argument("--fail-touching", nargs="+", default=[], metavar="DIR")
     args = parser.parse_args()
     root = pathlib.Path(args.root).resolve()
     graph = component_graph(root)
@@ -141,7 +144,10 @@ def main():
                     for src, dst in sorted(dirs[a][b]):
                         print(f"    {src} includes {dst}")
         print(f"directory cycles: {len(dir_cycles)}")
-    return 1 if args.fail and cycles else 0
+    touching = [g for g in cycles if any(c.split("/")[0] in args.fail_touching for c in g)]
+    for group in touching:
+        print("cycle in a guarded directory:", " <-> ".join(group))
+    return 1 if (args.fail and cycles) or touching else 0
 
 
 if __name__ == "__main__":
