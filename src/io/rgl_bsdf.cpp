@@ -434,9 +434,8 @@ struct IncidenceLight {
   int p, q, L;
   const std::optional<models::SpectrumToRgb>& colour;
   std::vector<double> f_l;
-  // The table's incidence azimuth is u_phi = 1/2 of an isotropic table's half vectors.
   Vec3 wi;
-  double phi_ref;
+  double phi_ref;  // azimuth of u_phi = 1/2: the incidence's when isotropic (phi_m - phi_i stored)
 
   IncidenceLight(const BsdfTable& table, int p_, int q_, int L_, bool isotropic,
                  const std::optional<models::SpectrumToRgb>& c)
