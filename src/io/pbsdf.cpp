@@ -150,8 +150,6 @@ std::vector<float> evenly_spaced(double lo, double hi, int n) {
 // ---------------------------------------------------------------------------------------------
 // A table from a polarized measurement
 
-PbsdfGrid pbsdf_grid(int n) { return {n / 2 + 1, n / 2 + 1, n + 1}; }
-
 namespace {
 // The run's Mueller BSDF (all orders) at the direction wo: bilinear between the pixel centres of
 // its bin map, in the map's square coordinates (edge pixels held to the border), as interpolate_f.

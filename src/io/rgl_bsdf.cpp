@@ -20,33 +20,31 @@ namespace microsim {
 // Tensor file
 // ---------------------------------------------------------------------------------------------
 
-TensorField TensorField::f32(const std::string& name, std::vector<std::uint64_t> shape, const std::vector<float>& v) {
+namespace {
+// A field of dtype holding v's values as raw little-endian bytes (the host's order: x86-64, aarch64).
+template <class T>
+TensorField raw_field(const std::string& name, std::uint8_t dtype, std::vector<std::uint64_t> shape,
+                      const std::vector<T>& v) {
   TensorField f;
   f.name = name;
-  f.dtype = 10;
+  f.dtype = dtype;
   f.shape = std::move(shape);
-  f.data.resize(v.size() * sizeof(float));
-  std::memcpy(f.data.data(), v.data(), f.data.size());
+  f.data.resize(v.size() * sizeof(T));
+  if (!v.empty()) std::memcpy(f.data.data(), v.data(), f.data.size());
   return f;
+}
+}  // namespace
+
+TensorField TensorField::f32(const std::string& name, std::vector<std::uint64_t> shape, const std::vector<float>& v) {
+  return raw_field(name, 10, std::move(shape), v);
 }
 
 TensorField TensorField::u8(const std::string& name, std::vector<std::uint64_t> shape, const std::vector<std::uint8_t>& v) {
-  TensorField f;
-  f.name = name;
-  f.dtype = 1;
-  f.shape = std::move(shape);
-  f.data = v;
-  return f;
+  return raw_field(name, 1, std::move(shape), v);
 }
 
 TensorField TensorField::u16(const std::string& name, std::vector<std::uint64_t> shape, const std::vector<std::uint16_t>& v) {
-  TensorField f;
-  f.name = name;
-  f.dtype = 3;
-  f.shape = std::move(shape);
-  f.data.resize(v.size() * sizeof(std::uint16_t));
-  std::memcpy(f.data.data(), v.data(), f.data.size());
-  return f;
+  return raw_field(name, 3, std::move(shape), v);
 }
 
 namespace {
@@ -286,14 +284,10 @@ double projected_area(const FacetNormals& f, const Vec3& w) {
       std::plus<double>());
 }
 
-}  // namespace
-
-RglTable build_rgl_table(const BsdfTable& t, const Microsurface& s, const RglOptions& o) {
-  if (o.resolution < 2 || o.ndf_resolution < 2 || o.sigma_resolution < 2)
-    throw ParameterError("{table_resolution} must be at least 2");
-  RglTable out;
-  out.isotropic = t.phi_i.size() == 1;
-  if (!out.isotropic) {
+// The incidences a reader interpolates between: one azimuth (isotropic) or azimuths over the
+// full circle, both angle lists increasing.
+void check_rgl_incidences(const BsdfTable& t) {
+  if (t.phi_i.size() != 1) {
     const double lo = *std::min_element(t.phi_i.begin(), t.phi_i.end());
     const double hi = *std::max_element(t.phi_i.begin(), t.phi_i.end());
     if (std::abs(lo + kPi) > 1e-6 || std::abs(hi - kPi) > 1e-6)
@@ -304,102 +298,116 @@ RglTable build_rgl_table(const BsdfTable& t, const Microsurface& s, const RglOpt
     if (!(t.theta_i[k] > t.theta_i[k - 1])) throw ParameterError("{theta_i} must be increasing for a .bsdf");
   for (std::size_t k = 1; k < t.phi_i.size(); ++k)
     if (!(t.phi_i[k] > t.phi_i[k - 1])) throw ParameterError("{phi_i} must be increasing for a .bsdf");
-  const int R = o.resolution, nt = static_cast<int>(t.theta_i.size()), np = static_cast<int>(t.phi_i.size());
-  out.resolution = R;
-  out.description = o.description;
-  for (double x : t.theta_i) out.theta_i.push_back(static_cast<float>(x));
-  for (double x : t.phi_i) out.phi_i.push_back(static_cast<float>(x));
-  // A spectral conductor's wavelengths (the same for every incidence), else two equal ones.
-  const int L = t.results.front().wavelengths();
-  if (L > 0)
-    for (double nm : t.results.front().options.wavelengths_nm) out.wavelengths.push_back(static_cast<float>(nm));
-  else
-    out.wavelengths = {360.0f, 830.0f};
-  const std::size_t nl = out.wavelengths.size();
-  std::optional<models::SpectrumToRgb> colour;
-  if (L > 0) colour.emplace(t.results.front().options.wavelengths_nm);
+}
 
-  // --- ndf: kernel estimate from the facet normals (tent in theta, see kernel_width; tent of one
-  // vertex spacing in phi when anisotropic): D(v) = sum_f (A_f / A) K_v(m_f) / int K_v d omega.
-  const FacetNormals fn = facet_normals(s);
+// A spectral conductor's wavelengths (the same for every incidence), else two equal ones.
+std::vector<float> rgl_wavelengths(const BsdfTable& t) {
+  if (t.results.front().wavelengths() == 0) return {360.0f, 830.0f};
+  std::vector<float> nm;
+  for (double x : t.results.front().options.wavelengths_nm) nm.push_back(static_cast<float>(x));
+  return nm;
+}
+
+// sum_f (A_f / A) K_v(m_f) at every ndf vertex v (theta vertices at `center`, tents of `width`):
+// one row when isotropic, else Np azimuth rows, each facet shared linearly between its two
+// neighbouring rows. Empty when no facet faces up.
+std::vector<double> ndf_kernel_sums(const FacetNormals& fn, const std::vector<double>& center,
+                                    const std::vector<double>& width, bool isotropic, int Np) {
+  const int Nt = static_cast<int>(center.size());
+  const int rows = isotropic ? 1 : Np;
+  using Acc = std::vector<double>;
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, fn.ax.size(), 1 << 12), Acc(),
+      [&](const tbb::blocked_range<std::size_t>& r, Acc a) {
+        if (a.empty()) a.assign(static_cast<std::size_t>(rows) * Nt, 0.0);
+        for (std::size_t k = r.begin(); k != r.end(); ++k) {
+          const Vec3 v(fn.ax[k], fn.ay[k], fn.az[k]);
+          const double w = v.norm();  // A_f / A
+          if (!(w > 0) || v.z() <= 0) continue;  // the format holds the upper hemisphere only
+          const Vec3 m = v / w;
+          const double th = elevation(m);
+          int j = 0;
+          double fy = 0.0;
+          if (!isotropic) {
+            const double y = phi_to_u(std::atan2(m.y(), m.x())) * (Np - 1);
+            j = std::clamp(static_cast<int>(y), 0, Np - 2);
+            fy = std::clamp(y - j, 0.0, 1.0);
+          }
+          for (int i = 0; i < Nt; ++i) {
+            const double kw = w * kernel(th, center[i], width[i]);
+            if (kw == 0.0) continue;
+            if (isotropic) {
+              a[i] += kw;
+            } else {
+              a[static_cast<std::size_t>(j) * Nt + i] += kw * (1 - fy);
+              a[static_cast<std::size_t>(j + 1) * Nt + i] += kw * fy;
+            }
+          }
+        }
+        return a;
+      },
+      [](Acc a, const Acc& b) {
+        if (a.empty()) return b;
+        for (std::size_t k = 0; k < b.size(); ++k) a[k] += b[k];
+        return a;
+      });
+}
+
+// D at the Np x Nt vertices from the kernel sums: each divided by its kernel's integral over the
+// azimuths it stands for (2 pi isotropic, one phi cell otherwise), then floored at ndf_floor
+// times the maximum so that every half vector has a finite spectra value.
+std::vector<float> ndf_from_kernel_sums(std::vector<double> a, const std::vector<double>& center,
+                                        const std::vector<double>& width, bool isotropic, int Np,
+                                        double ndf_floor) {
+  const int Nt = static_cast<int>(center.size());
+  std::vector<float> ndf(static_cast<std::size_t>(Np) * Nt, 0.0f);
+  if (isotropic) {
+    for (int i = 0; i < Nt; ++i) {
+      const float d = static_cast<float>(a[i] / (2.0 * kPi * kernel_weight(center[i], width[i])));
+      ndf[i] = ndf[Nt + i] = d;
+    }
+  } else {
+    // phi = -pi and +pi are one azimuth: merge the two edge rows; the tent in phi then spans
+    // a full cell, 2 pi / (Np - 1).
+    for (int i = 0; i < Nt; ++i) {
+      const double e = a[i] + a[static_cast<std::size_t>(Np - 1) * Nt + i];
+      a[i] = a[static_cast<std::size_t>(Np - 1) * Nt + i] = e;
+    }
+    for (int j = 0; j < Np; ++j)
+      for (int i = 0; i < Nt; ++i)
+        ndf[static_cast<std::size_t>(j) * Nt + i] = static_cast<float>(
+            a[static_cast<std::size_t>(j) * Nt + i] / (2.0 * kPi / (Np - 1) * kernel_weight(center[i], width[i])));
+    // theta = 0 is one direction for every phi: its azimuthal mean.
+    double pole = 0.0;
+    for (int j = 0; j < Np - 1; ++j) pole += ndf[static_cast<std::size_t>(j) * Nt];
+    for (int j = 0; j < Np; ++j) ndf[static_cast<std::size_t>(j) * Nt] = static_cast<float>(pole / (Np - 1));
+  }
+  const float floor = static_cast<float>(ndf_floor * *std::max_element(ndf.begin(), ndf.end()));
+  for (float& d : ndf) d = std::max(d, floor);
+  return ndf;
+}
+
+// ndf: kernel estimate from the facet normals (tent in theta, see kernel_width; tent of one
+// vertex spacing in phi when anisotropic): D(v) = sum_f (A_f / A) K_v(m_f) / int K_v d omega.
+void fill_rgl_ndf(RglTable& out, const FacetNormals& fn, const RglOptions& o) {
   // Anisotropic: at most 17 azimuth vertices (22.5 degrees apart): finer phi tents hold too few
   // facets of one tile, and the reader's f cos / D interpolation turns the noise of D into
   // bias (the mean of 1/D over noisy neighbours exceeds 1/D).
   const int Nt = o.ndf_resolution, Np = out.isotropic ? 2 : std::min(o.ndf_resolution, 17);
   out.ndf_theta = Nt;
   out.ndf_phi = Np;
-  {
-    std::vector<double> width(Nt), center(Nt);
-    for (int i = 0; i < Nt; ++i) {
-      center[i] = u_to_theta(static_cast<double>(i) / (Nt - 1));
-      width[i] = kernel_width(i, Nt);
-    }
-    const int rows = out.isotropic ? 1 : Np;
-    using Acc = std::vector<double>;
-    const Acc acc = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, fn.ax.size(), 1 << 12), Acc(),
-        [&](const tbb::blocked_range<std::size_t>& r, Acc a) {
-          if (a.empty()) a.assign(static_cast<std::size_t>(rows) * Nt, 0.0);
-          for (std::size_t k = r.begin(); k != r.end(); ++k) {
-            const Vec3 v(fn.ax[k], fn.ay[k], fn.az[k]);
-            const double w = v.norm();  // A_f / A
-            if (!(w > 0) || v.z() <= 0) continue;  // the format holds the upper hemisphere only
-            const Vec3 m = v / w;
-            const double th = elevation(m);
-            int j = 0;
-            double fy = 0.0;
-            if (!out.isotropic) {
-              const double y = phi_to_u(std::atan2(m.y(), m.x())) * (Np - 1);
-              j = std::clamp(static_cast<int>(y), 0, Np - 2);
-              fy = std::clamp(y - j, 0.0, 1.0);
-            }
-            for (int i = 0; i < Nt; ++i) {
-              const double kw = w * kernel(th, center[i], width[i]);
-              if (kw == 0.0) continue;
-              if (out.isotropic) {
-                a[i] += kw;
-              } else {
-                a[static_cast<std::size_t>(j) * Nt + i] += kw * (1 - fy);
-                a[static_cast<std::size_t>(j + 1) * Nt + i] += kw * fy;
-              }
-            }
-          }
-          return a;
-        },
-        [](Acc a, const Acc& b) {
-          if (a.empty()) return b;
-          for (std::size_t k = 0; k < b.size(); ++k) a[k] += b[k];
-          return a;
-        });
-    out.ndf.assign(static_cast<std::size_t>(Np) * Nt, 0.0f);
-    if (acc.empty()) throw UsageError("the surface has no upward-facing facets");
-    if (out.isotropic) {
-      for (int i = 0; i < Nt; ++i) {
-        const float d = static_cast<float>(acc[i] / (2.0 * kPi * kernel_weight(center[i], width[i])));
-        out.ndf[i] = out.ndf[Nt + i] = d;
-      }
-    } else {
-      // phi = -pi and +pi are one azimuth: merge the two edge rows; the tent in phi then spans
-      // a full cell, 2 pi / (Np - 1).
-      std::vector<double> a = acc;
-      for (int i = 0; i < Nt; ++i) {
-        const double e = a[i] + a[static_cast<std::size_t>(Np - 1) * Nt + i];
-        a[i] = a[static_cast<std::size_t>(Np - 1) * Nt + i] = e;
-      }
-      for (int j = 0; j < Np; ++j)
-        for (int i = 0; i < Nt; ++i)
-          out.ndf[static_cast<std::size_t>(j) * Nt + i] = static_cast<float>(
-              a[static_cast<std::size_t>(j) * Nt + i] / (2.0 * kPi / (Np - 1) * kernel_weight(center[i], width[i])));
-      // theta = 0 is one direction for every phi: its azimuthal mean.
-      double pole = 0.0;
-      for (int j = 0; j < Np - 1; ++j) pole += out.ndf[static_cast<std::size_t>(j) * Nt];
-      for (int j = 0; j < Np; ++j) out.ndf[static_cast<std::size_t>(j) * Nt] = static_cast<float>(pole / (Np - 1));
-    }
-    const float floor = static_cast<float>(o.ndf_floor * *std::max_element(out.ndf.begin(), out.ndf.end()));
-    for (float& d : out.ndf) d = std::max(d, floor);
+  std::vector<double> width(Nt), center(Nt);
+  for (int i = 0; i < Nt; ++i) {
+    center[i] = u_to_theta(static_cast<double>(i) / (Nt - 1));
+    width[i] = kernel_width(i, Nt);
   }
+  std::vector<double> sums = ndf_kernel_sums(fn, center, width, out.isotropic, Np);
+  if (sums.empty()) throw UsageError("the surface has no upward-facing facets");
+  out.ndf = ndf_from_kernel_sums(std::move(sums), center, width, out.isotropic, Np, o.ndf_floor);
+}
 
-  // --- sigma: exact projected area at each vertex direction.
+// sigma: exact projected area at each vertex direction (isotropic: averaged over 16 azimuths).
+void fill_rgl_sigma(RglTable& out, const FacetNormals& fn, const RglOptions& o) {
   const int St = o.sigma_resolution, Sp = out.isotropic ? 2 : o.sigma_resolution;
   out.sigma_theta = St;
   out.sigma_phi = Sp;
@@ -417,86 +425,149 @@ RglTable build_rgl_table(const BsdfTable& t, const Microsurface& s, const RglOpt
             projected_area(fn, direction_from_angles(theta, u_to_phi(static_cast<double>(j) / (Sp - 1)))));
     }
   }
+}
 
-  // --- per incidence: vndf, spectra, luminance.
+// The measured light of one incidence (p, q) as the table stores it: f at wo, all orders, of
+// every wavelength into f_l and the luminance returned (wavelength independent: f itself).
+struct IncidenceLight {
+  const BsdfTable& t;
+  int p, q, L;
+  const std::optional<models::SpectrumToRgb>& colour;
+  std::vector<double> f_l;
+  Vec3 wi;
+  double phi_ref;  // azimuth of u_phi = 1/2: the incidence's when isotropic (phi_m - phi_i stored)
+
+  IncidenceLight(const BsdfTable& table, int p_, int q_, int L_, bool isotropic,
+                 const std::optional<models::SpectrumToRgb>& c)
+      : t(table), p(p_), q(q_), L(L_), colour(c), f_l(std::max(L_, 1)),
+        wi(direction_from_angles(table.theta_i[q_], table.phi_i[p_])),
+        phi_ref(isotropic ? table.phi_i[p_] : 0.0) {}
+  double f(const Vec3& wo) {
+    const int K = t.at(p, q).options.orders;
+    if (L == 0) return table_f(t, p, q, 0, K, wo);
+    for (int l = 0; l < L; ++l) f_l[l] = table_f(t, p, q, 0, K, wo, l);
+    return colour->luminance(f_l.data());
+  }
+  Vec3 half_vector(double ut, double up) const {
+    return direction_from_angles(u_to_theta(ut), u_to_phi(up) + phi_ref);
+  }
+};
+
+// The vndf warp's density over the R x R u-grid: the facets' visible normals, D <wi.m> d omega /
+// du, the half vectors of the measured reflected light, f cos(theta_o) d omega_o / du, and of
+// outgoing directions uniform over the hemisphere, d omega_o / du; mixed by RglOptions' shares.
+std::vector<double> vndf_mixture(const RglTable& out, IncidenceLight& light, const RglOptions& o) {
+  const int R = out.resolution;
+  const std::size_t slice = static_cast<std::size_t>(R) * R;
+  const Vec3& wi = light.wi;
+  std::vector<double> vis(slice, 0.0), lit(slice, 0.0), all(slice, 0.0);
+  double sum_vis = 0.0, sum_lit = 0.0, sum_all = 0.0;
+  for (int j = 0; j < R; ++j)
+    for (int i = 0; i < R; ++i) {
+      const double ut = static_cast<double>(i) / (R - 1), up = static_cast<double>(j) / (R - 1);
+      const Vec3 m = light.half_vector(ut, up);
+      const double jac = 2.0 * kPi * kPi * ut * std::sin(u_to_theta(ut));  // d omega_m / du
+      const double wm = std::max(0.0, wi.dot(m));
+      const std::size_t k = static_cast<std::size_t>(j) * R + i;
+      vis[k] = bilinear(out.ndf, out.ndf_phi, out.ndf_theta, ut, up) * wm * jac;
+      const Vec3 wo = 2.0 * wi.dot(m) * m - wi;
+      if (wo.z() > 0) {
+        lit[k] = light.f(wo) * wo.z() * 4.0 * wm * jac;
+        all[k] = 4.0 * wm * jac;
+      }
+      sum_vis += vis[k];
+      sum_lit += lit[k];
+      sum_all += all[k];
+    }
+  std::vector<double> vn(slice);
+  for (std::size_t k = 0; k < slice; ++k)
+    vn[k] = (1.0 - o.measured_share - o.uniform_share) * vis[k] / sum_vis +
+            (sum_lit > 0 ? o.measured_share * lit[k] / sum_lit : 0.0) + o.uniform_share * all[k] / sum_all;
+  return vn;
+}
+
+// spectra, luminance (and rgb of a spectral conductor) of one incidence at every sample-square
+// vertex s: wm = warp(s), wo = reflect(wi, wm), the measured f cos(theta_o) times
+// 4 sigma(u_wi) / ndf(u_m) as the reader interpolates them; 0 below the horizon.
+void fill_rgl_spectra(RglTable& out, IncidenceLight& light, const BilinearWarp& warp, double sig) {
+  const int R = out.resolution, nt = static_cast<int>(out.theta_i.size()), L = light.L;
+  const std::size_t slice = static_cast<std::size_t>(R) * R, nl = out.wavelengths.size();
+  const std::size_t incidence = static_cast<std::size_t>(light.p) * nt + light.q;
+  std::vector<double>& f_l = light.f_l;
+  for (int j = 0; j < R; ++j)
+    for (int i = 0; i < R; ++i) {
+      const Vec2 um = warp.sample(Vec2(static_cast<double>(i) / (R - 1), static_cast<double>(j) / (R - 1)));
+      const Vec3 m = light.half_vector(um.x(), um.y());
+      const Vec3 wo = 2.0 * light.wi.dot(m) * m - light.wi;
+      double value = 0.0;
+      std::fill(f_l.begin(), f_l.end(), 0.0);
+      if (wo.z() > 0) {
+        const double D = bilinear(out.ndf, out.ndf_phi, out.ndf_theta, um.x(), um.y());
+        value = light.f(wo) * wo.z() * 4.0 * sig / D;
+        for (int l = 0; l < L; ++l) f_l[l] = f_l[l] * wo.z() * 4.0 * sig / D;
+      }
+      const std::size_t k = static_cast<std::size_t>(j) * R + i;
+      out.luminance[incidence * slice + k] = static_cast<float>(value);
+      const std::size_t sb = incidence * nl * slice;
+      if (L == 0) {
+        out.spectra[sb + k] = out.spectra[sb + slice + k] = static_cast<float>(value);
+        continue;
+      }
+      for (int l = 0; l < L; ++l) out.spectra[sb + l * slice + k] = static_cast<float>(f_l[l]);
+      const auto c = light.colour->rgb(f_l.data());
+      const std::size_t cb = incidence * 3 * slice;
+      for (int ch = 0; ch < 3; ++ch) out.rgb[cb + ch * slice + k] = static_cast<float>(c[ch]);
+    }
+}
+
+// vndf, spectra and luminance of incidence (p, q); out's ndf and sigma are filled.
+void fill_rgl_incidence(RglTable& out, IncidenceLight& light, const RglOptions& o) {
+  const int R = out.resolution, nt = static_cast<int>(out.theta_i.size());
+  const std::size_t slice = static_cast<std::size_t>(R) * R;
+  const std::vector<double> vn = vndf_mixture(out, light, o);
+  const std::size_t base = (static_cast<std::size_t>(light.p) * nt + light.q) * slice;
+  for (std::size_t k = 0; k < slice; ++k) out.vndf[base + k] = static_cast<float>(vn[k]);
+  // The warp as the reader builds it: from the float values in the file.
+  std::vector<double> vf(slice);
+  for (std::size_t k = 0; k < slice; ++k) vf[k] = out.vndf[base + k];
+  const BilinearWarp warp(std::move(vf), R, R);
+  const BsdfTable& t = light.t;
+  const double sig = bilinear(out.sigma, out.sigma_phi, out.sigma_theta, theta_to_u(t.theta_i[light.q]),
+                              phi_to_u(t.phi_i[light.p]));
+  fill_rgl_spectra(out, light, warp, sig);
+}
+
+}  // namespace
+
+RglTable build_rgl_table(const BsdfTable& t, const Microsurface& s, const RglOptions& o) {
+  if (o.resolution < 2 || o.ndf_resolution < 2 || o.sigma_resolution < 2)
+    throw ParameterError("{table_resolution} must be at least 2");
+  check_rgl_incidences(t);
+  RglTable out;
+  out.isotropic = t.phi_i.size() == 1;
+  const int R = o.resolution, nt = static_cast<int>(t.theta_i.size()), np = static_cast<int>(t.phi_i.size());
+  out.resolution = R;
+  out.description = o.description;
+  for (double x : t.theta_i) out.theta_i.push_back(static_cast<float>(x));
+  for (double x : t.phi_i) out.phi_i.push_back(static_cast<float>(x));
+  out.wavelengths = rgl_wavelengths(t);
+  const int L = t.results.front().wavelengths();
+  std::optional<models::SpectrumToRgb> colour;
+  if (L > 0) colour.emplace(t.results.front().options.wavelengths_nm);
+
+  const FacetNormals fn = facet_normals(s);
+  fill_rgl_ndf(out, fn, o);
+  fill_rgl_sigma(out, fn, o);
+
   const std::size_t slice = static_cast<std::size_t>(R) * R;
   out.vndf.assign(static_cast<std::size_t>(np) * nt * slice, 0.0f);
   out.luminance.assign(out.vndf.size(), 0.0f);
-  out.spectra.assign(static_cast<std::size_t>(np) * nt * nl * slice, 0.0f);
+  out.spectra.assign(static_cast<std::size_t>(np) * nt * out.wavelengths.size() * slice, 0.0f);
   if (L > 0) out.rgb.assign(static_cast<std::size_t>(np) * nt * 3 * slice, 0.0f);
   for (int p = 0; p < np; ++p)
     for (int q = 0; q < nt; ++q) {
-      const BsdfResult& r = t.at(p, q);
-      const Vec3 wi = direction_from_angles(t.theta_i[q], t.phi_i[p]);
-      const double phi_ref = out.isotropic ? t.phi_i[p] : 0.0;  // azimuth of u_phi = 1/2
-      auto half_vector = [&](double ut, double up) {
-        return direction_from_angles(u_to_theta(ut), u_to_phi(up) + phi_ref);
-      };
-      // The facets' visible normals in u-space, D <wi.m> d omega / du, and the half vectors of
-      // the measured reflected light, f cos(theta_o) d omega_o / du, and of outgoing directions
-      // uniform over the hemisphere, d omega_o / du; mixed by RglOptions' shares.
-      const int K = r.options.orders;
-      // f of every wavelength at wo into f_l, and the luminance (wavelength independent: f).
-      std::vector<double> f_l(std::max(L, 1));
-      auto measured_f = [&](const Vec3& wo) {
-        if (L == 0) return table_f(t, p, q, 0, K, wo);
-        for (int l = 0; l < L; ++l) f_l[l] = table_f(t, p, q, 0, K, wo, l);
-        return colour->luminance(f_l.data());
-      };
-      std::vector<double> vis(slice, 0.0), lit(slice, 0.0), all(slice, 0.0);
-      double sum_vis = 0.0, sum_lit = 0.0, sum_all = 0.0;
-      for (int j = 0; j < R; ++j)
-        for (int i = 0; i < R; ++i) {
-          const double ut = static_cast<double>(i) / (R - 1), up = static_cast<double>(j) / (R - 1);
-          const Vec3 m = half_vector(ut, up);
-          const double jac = 2.0 * kPi * kPi * ut * std::sin(u_to_theta(ut));  // d omega_m / du
-          const double wm = std::max(0.0, wi.dot(m));
-          const std::size_t k = static_cast<std::size_t>(j) * R + i;
-          vis[k] = bilinear(out.ndf, Np, Nt, ut, up) * wm * jac;
-          const Vec3 wo = 2.0 * wi.dot(m) * m - wi;
-          if (wo.z() > 0) {
-            lit[k] = measured_f(wo) * wo.z() * 4.0 * wm * jac;
-            all[k] = 4.0 * wm * jac;
-          }
-          sum_vis += vis[k];
-          sum_lit += lit[k];
-          sum_all += all[k];
-        }
-      std::vector<double> vn(slice);
-      for (std::size_t k = 0; k < slice; ++k)
-        vn[k] = (1.0 - o.measured_share - o.uniform_share) * vis[k] / sum_vis +
-                (sum_lit > 0 ? o.measured_share * lit[k] / sum_lit : 0.0) + o.uniform_share * all[k] / sum_all;
-      const std::size_t base = (static_cast<std::size_t>(p) * nt + q) * slice;
-      for (std::size_t k = 0; k < slice; ++k) out.vndf[base + k] = static_cast<float>(vn[k]);
-      // The warp as the reader builds it: from the float values in the file.
-      std::vector<double> vf(slice);
-      for (std::size_t k = 0; k < slice; ++k) vf[k] = out.vndf[base + k];
-      const BilinearWarp warp(std::move(vf), R, R);
-      const double sig = bilinear(out.sigma, Sp, St, theta_to_u(t.theta_i[q]), phi_to_u(t.phi_i[p]));
-      for (int j = 0; j < R; ++j)
-        for (int i = 0; i < R; ++i) {
-          const Vec2 um = warp.sample(Vec2(static_cast<double>(i) / (R - 1), static_cast<double>(j) / (R - 1)));
-          const Vec3 m = half_vector(um.x(), um.y());
-          const Vec3 wo = 2.0 * wi.dot(m) * m - wi;
-          double value = 0.0;
-          std::fill(f_l.begin(), f_l.end(), 0.0);
-          if (wo.z() > 0) {
-            const double D = bilinear(out.ndf, Np, Nt, um.x(), um.y());
-            value = measured_f(wo) * wo.z() * 4.0 * sig / D;
-            for (int l = 0; l < L; ++l) f_l[l] = f_l[l] * wo.z() * 4.0 * sig / D;
-          }
-          const std::size_t k = static_cast<std::size_t>(j) * R + i;
-          out.luminance[base + k] = static_cast<float>(value);
-          const std::size_t sb = (static_cast<std::size_t>(p) * nt + q) * nl * slice;
-          if (L == 0) {
-            out.spectra[sb + k] = out.spectra[sb + slice + k] = static_cast<float>(value);
-            continue;
-          }
-          for (int l = 0; l < L; ++l) out.spectra[sb + l * slice + k] = static_cast<float>(f_l[l]);
-          const auto c = colour->rgb(f_l.data());
-          const std::size_t cb = (static_cast<std::size_t>(p) * nt + q) * 3 * slice;
-          for (int ch = 0; ch < 3; ++ch) out.rgb[cb + ch * slice + k] = static_cast<float>(c[ch]);
-        }
+      IncidenceLight light(t, p, q, L, out.isotropic, colour);
+      fill_rgl_incidence(out, light, o);
     }
   return out;
 }

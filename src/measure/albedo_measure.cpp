@@ -406,30 +406,21 @@ Table albedo_average_table(const std::vector<AlbedoSurface>& surfaces, const MuQ
   return t;
 }
 
-void put_albedo_record(Json& j, const AlbedoRequest& o, const std::vector<AlbedoSurface>& surfaces) {
-  const MuQuadrature q = albedo_quadrature(o);
-  const models::Material m = albedo_material(o);
-  j["file"] = Json::array();
-  for (const AlbedoSurface& s : surfaces) j["file"].push_back(s.file);
-  j["parameters"] = {{"material", o.material},
-                     {"eta", o.metal.empty() ? (o.eta ? Json(*o.eta) : Json(nullptr)) : Json(m.eta)},
-                     {"k", o.metal.empty() ? (o.k ? Json(*o.k) : Json(nullptr)) : Json(m.k)},
-                     {"metal", o.metal.empty() ? Json(nullptr) : Json(o.metal)},
-                     {"wavelength_nm", o.metal.empty() ? Json(nullptr) : Json(o.wavelength_nm)},
-                     {"phi_i_deg", o.phi_i_deg},
-                     {"orders", o.orders},
-                     {"rays_per_node", o.rays},
-                     {"seed", o.seed},
-                     {"replicates", o.replicates},
-                     {"max_events", o.max_events}};
+namespace {
+// The quadrature in mu: its nodes (also as theta_i), weights and the lower-order rule.
+Json albedo_quadrature_json(const MuQuadrature& q) {
   Json quad = {{"rule", q.rule}, {"nodes", q.mu.size()}, {"mu", q.mu}, {"weight", q.weight},
                {"low_rule_weight", q.low_weight}, {"has_low_rule", q.has_low_rule},
                {"description", q.description()}};
   std::vector<double> theta;
   for (double mu : q.mu) theta.push_back(deg(std::acos(std::min(1.0, mu))));
   quad["theta_i_deg"] = theta;
-  j["quadrature"] = quad;
-  j["definitions"] = {
+  return quad;
+}
+
+// What the record's fields mean.
+Json albedo_definitions_json() {
+  return {
       {"albedo", "E(mu), the directional albedo at mu = cos theta_i: the fraction of the incident power that "
                  "leaves the surface, reflected plus (a dielectric) transmitted, all scattering orders; a "
                  "conductor's paths carry the product of their Fresnel factors, a dielectric chooses "
@@ -448,25 +439,49 @@ void put_albedo_record(Json& j, const AlbedoRequest& o, const std::vector<Albedo
                    "isotropic surface unless given; rays split evenly, errors combined in quadrature)"},
       {"alpha", "the row's nominal roughness from the surface's metadata: alpha, or sqrt(alpha_x alpha_y) for "
                 "an anisotropic NDF"}};
+}
+
+// One surface's summary: file, description, nominal NDF and roughness, path counts, time.
+Json albedo_surface_json(const AlbedoSurface& s) {
+  std::uint64_t paths = 0, lost = 0, unterminated = 0;
+  for (const AlbedoNode& n : s.nodes) paths += n.paths, lost += n.lost, unterminated += n.unterminated;
+  Json ndf = nullptr;
+  if (s.nominal)
+    ndf = {{"distribution", s.nominal->kind == models::Distribution::GGX ? "ggx" : "beckmann"},
+           {"alpha_x", s.nominal->alpha_x},
+           {"alpha_y", s.nominal->alpha_y}};
+  return {{"file", s.file},
+          {"surface", s.description},
+          {"nominal_ndf", ndf},
+          {"alpha", number_or_null(s.alpha)},
+          {"azimuths", s.azimuths},
+          {"paths", paths},
+          {"lost_paths", lost},
+          {"unterminated_paths", unterminated},
+          {"seconds", s.seconds}};
+}
+}  // namespace
+
+void put_albedo_record(Json& j, const AlbedoRequest& o, const std::vector<AlbedoSurface>& surfaces) {
+  const MuQuadrature q = albedo_quadrature(o);
+  const models::Material m = albedo_material(o);
+  j["file"] = Json::array();
+  for (const AlbedoSurface& s : surfaces) j["file"].push_back(s.file);
+  j["parameters"] = {{"material", o.material},
+                     {"eta", o.metal.empty() ? (o.eta ? Json(*o.eta) : Json(nullptr)) : Json(m.eta)},
+                     {"k", o.metal.empty() ? (o.k ? Json(*o.k) : Json(nullptr)) : Json(m.k)},
+                     {"metal", o.metal.empty() ? Json(nullptr) : Json(o.metal)},
+                     {"wavelength_nm", o.metal.empty() ? Json(nullptr) : Json(o.wavelength_nm)},
+                     {"phi_i_deg", o.phi_i_deg},
+                     {"orders", o.orders},
+                     {"rays_per_node", o.rays},
+                     {"seed", o.seed},
+                     {"replicates", o.replicates},
+                     {"max_events", o.max_events}};
+  j["quadrature"] = albedo_quadrature_json(q);
+  j["definitions"] = albedo_definitions_json();
   Json per_surface = Json::array();
-  for (const AlbedoSurface& s : surfaces) {
-    std::uint64_t paths = 0, lost = 0, unterminated = 0;
-    for (const AlbedoNode& n : s.nodes) paths += n.paths, lost += n.lost, unterminated += n.unterminated;
-    Json ndf = nullptr;
-    if (s.nominal)
-      ndf = {{"distribution", s.nominal->kind == models::Distribution::GGX ? "ggx" : "beckmann"},
-             {"alpha_x", s.nominal->alpha_x},
-             {"alpha_y", s.nominal->alpha_y}};
-    per_surface.push_back({{"file", s.file},
-                           {"surface", s.description},
-                           {"nominal_ndf", ndf},
-                           {"alpha", number_or_null(s.alpha)},
-                           {"azimuths", s.azimuths},
-                           {"paths", paths},
-                           {"lost_paths", lost},
-                           {"unterminated_paths", unterminated},
-                           {"seconds", s.seconds}});
-  }
+  for (const AlbedoSurface& s : surfaces) per_surface.push_back(albedo_surface_json(s));
   j["surfaces"] = per_surface;
   j["rows"] = albedo_nodes_table(surfaces, q).rows;
   j["averages"] = albedo_average_table(surfaces, q).rows;

@@ -397,41 +397,28 @@ Json spectral_albedo_json(const BsdfResult& r) {
 }
 }  // namespace
 
-Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
-  const int K = r.options.orders;
-  Json j;
-  // --- albedos: {reflected: {order: value}, transmitted: ...}, then the errors per side
-  const auto albedos = [K](Json& out, const std::function<Estimate(int, int)>& estimate) {
-    Json se[2] = {Json::object(), Json::object()};
-    for (int sd = 0; sd < 2; ++sd) {
-      Json a = Json::object();
-      for (int k = 0; k <= K; ++k) {
-        const Estimate e = estimate(sd, k);
-        a[order_key(k, K)] = e.mean;
-        se[sd][order_key(k, K)] = e.stderr_;
-      }
-      out[kSideName[sd]] = a;
+namespace {
+// Albedos per side and order ({reflected: {order: value}, transmitted: ...}) into out, then the
+// errors per side (reflected_stderr, transmitted_stderr).
+void put_albedos(Json& out, int K, const std::function<Estimate(int, int)>& estimate) {
+  Json se[2] = {Json::object(), Json::object()};
+  for (int sd = 0; sd < 2; ++sd) {
+    Json a = Json::object();
+    for (int k = 0; k <= K; ++k) {
+      const Estimate e = estimate(sd, k);
+      a[order_key(k, K)] = e.mean;
+      se[sd][order_key(k, K)] = e.stderr_;
     }
-    out["reflected_stderr"] = se[0];
-    out["transmitted_stderr"] = se[1];
-  };
-  Json measured = Json::object();
-  albedos(measured, [&](int sd, int k) { return r.albedo(sd, k); });
-  j["albedo"] = {{"reflected", measured["reflected"]}, {"transmitted", measured["transmitted"]}};
-  j["reflected_stderr"] = measured["reflected_stderr"];
-  j["transmitted_stderr"] = measured["transmitted_stderr"];
-  {
-    // R + T per path is the path's weight when it leaves: its own standard error.
-    const auto& m = r.measured;
-    const double sum = m.albedo[m.a_index(0, K)] + m.albedo[m.a_index(1, K)];
-    const Estimate RT = m.estimate(sum, m.both2);
-    j["reflected_plus_transmitted"] = RT.mean;
-    j["reflected_plus_transmitted_stderr"] = RT.stderr_;
+    out[kSideName[sd]] = a;
   }
+  out["reflected_stderr"] = se[0];
+  out["transmitted_stderr"] = se[1];
+}
 
-  // --- models of the albedo
+// The models of the albedo: smooth interface, the single-scattering models of the nominal NDF
+// and the Smith random walk (null where the run has none).
+Json albedo_models_json(const BsdfResult& r, const AlbedoModels& am) {
   Json models = Json::object();
-  const AlbedoModels am = albedo_models(r);
   models["smooth_interface"] = am.smooth;
   if (am.smith) {
     models["smith_single"] = {{"reflected", am.smith->reflected}, {"transmitted", am.smith->transmitted}};
@@ -446,7 +433,7 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
   }
   if (r.smith_walk) {
     Json mw = Json::object();
-    albedos(mw, [&](int sd, int k) { return r.model_albedo(sd, k); });
+    put_albedos(mw, r.options.orders, [&](int sd, int k) { return r.model_albedo(sd, k); });
     mw["walks"] = r.smith_walk->paths;
     mw["unterminated"] = r.smith_walk->unterminated;
     mw["error_target"] = smith_walk_error_json(r);
@@ -454,20 +441,11 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
   } else {
     models["smith_multiple"] = nullptr;
   }
-  j["albedo_models"] = models;
-  if (!r.spectral.empty()) j["spectral"] = spectral_albedo_json(r);
-  if (r.polarization) j["polarization"] = polarization_json(*r.polarization, r.options.wavelengths_nm);
+  return models;
+}
 
-  // --- the tables: measured beside the models per side and order, and the in-plane lobe
-  j["rows"] = albedo_table(r, am).rows;
-  j["in_plane"] = bsdf_in_plane_table(r).rows;
-  if (r.options.models) add_groove_models(j, r, s);  // closed-form V-groove / V-cavity models beside rows and lobes
-  add_macro_normalization(j, r, s);
-  for (const char* table : {"rows", "in_plane"})
-    for (Json& row : j[table])
-      for (const char* z : kNominalZ) one_surface_nominal_z(row, z);
-
-  // --- bookkeeping
+// The run's bookkeeping: paths, losses, events, the tracer's counters and the times.
+void put_bsdf_bookkeeping(Json& j, const BsdfResult& r) {
   const auto& m = r.measured;
   j["paths"] = m.paths;
   j["replicates"] = m.replicates;
@@ -484,6 +462,40 @@ Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
   j["seconds"] = r.seconds;
   j["model_seconds"] = r.model_seconds;
   j["rays_per_second"] = (r.seconds - r.model_seconds) > 0 ? m.counters.rays / (r.seconds - r.model_seconds) : 0.0;
+}
+}  // namespace
+
+Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s) {
+  const int K = r.options.orders;
+  Json j;
+  // --- albedos: {reflected: {order: value}, transmitted: ...}, then the errors per side
+  Json measured = Json::object();
+  put_albedos(measured, K, [&](int sd, int k) { return r.albedo(sd, k); });
+  j["albedo"] = {{"reflected", measured["reflected"]}, {"transmitted", measured["transmitted"]}};
+  j["reflected_stderr"] = measured["reflected_stderr"];
+  j["transmitted_stderr"] = measured["transmitted_stderr"];
+  {
+    // R + T per path is the path's weight when it leaves: its own standard error.
+    const auto& m = r.measured;
+    const double sum = m.albedo[m.a_index(0, K)] + m.albedo[m.a_index(1, K)];
+    const Estimate RT = m.estimate(sum, m.both2);
+    j["reflected_plus_transmitted"] = RT.mean;
+    j["reflected_plus_transmitted_stderr"] = RT.stderr_;
+  }
+  const AlbedoModels am = albedo_models(r);
+  j["albedo_models"] = albedo_models_json(r, am);
+  if (!r.spectral.empty()) j["spectral"] = spectral_albedo_json(r);
+  if (r.polarization) j["polarization"] = polarization_json(*r.polarization, r.options.wavelengths_nm);
+
+  // --- the tables: measured beside the models per side and order, and the in-plane lobe
+  j["rows"] = albedo_table(r, am).rows;
+  j["in_plane"] = bsdf_in_plane_table(r).rows;
+  if (r.options.models) add_groove_models(j, r, s);  // closed-form V-groove / V-cavity models beside rows and lobes
+  add_macro_normalization(j, r, s);
+  for (const char* table : {"rows", "in_plane"})
+    for (Json& row : j[table])
+      for (const char* z : kNominalZ) one_surface_nominal_z(row, z);
+  put_bsdf_bookkeeping(j, r);
   return j;
 }
 
@@ -499,8 +511,9 @@ Json bsdf_incidences_json(const BsdfTable& t, const Microsurface& s) {
   return out;
 }
 
-void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Microsurface& s,
-                     const std::string& file) {
+namespace {
+// The record's parameters: the request as run (one incidence: its angles as numbers).
+Json bsdf_parameters_json(const BsdfRequest& o, const BsdfTable& t) {
   const BsdfResult& r = t.results.at(0);
   const bool single = t.results.size() == 1;
   Json parameters = {{"material", o.material},
@@ -528,10 +541,12 @@ void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Mi
     parameters["index_source"] = table->source;
     parameters["wavelengths_nm"] = r.options.wavelengths_nm;
   }
-  j["file"] = file;
-  j["surface"] = s.description;
-  j["parameters"] = parameters;
-  j["definitions"] = {
+  return parameters;
+}
+
+// What the record's fields mean (spectral and polarized runs: their fields too).
+Json bsdf_definitions_json(const BsdfRequest& o, const BsdfResult& r) {
+  Json definitions = {
       {"albedo", "fraction of the incident power leaving on each side after exactly n scattering "
                  "events (order_Kplus: K or more; total: all); a conductor's paths carry the "
                  "product of their Fresnel factors, a dielectric chooses reflection with "
@@ -562,7 +577,7 @@ void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Mi
                      "fields), phi_i outer, theta_i inner; with one incidence the same fields "
                      "also stand at the top level"}};
   if (!r.spectral.empty())
-    j["definitions"]["spectral"] =
+    definitions["spectral"] =
         "a spectral conductor (metal or ior_file): every path traced once with one weight per "
         "wavelength (the product of that wavelength's unpolarized Fresnel reflectances), each "
         "wavelength's tallies those of a run with its index alone; the scalar fields (albedo, rows, "
@@ -573,7 +588,7 @@ void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Mi
         "by the fit of [Wyman13], equal-energy illuminant, each channel divided by a constant "
         "spectrum's: a mirror is (1, 1, 1)); n and k linear in the wavelength between table rows";
   if (o.polarized)
-    j["definitions"]["polarization"] =
+    definitions["polarization"] =
         "Mueller matrices of the reflected paths (row-major 4 x 4, Stokes vectors with s3 = -2 Im(Ex Ey*) "
         "for exp(-i omega t)); input frame: the light travelling along -l with reference axis "
         "normalize(z x l); output frame: each path's exit direction o with axis normalize(z x o) "
@@ -583,6 +598,18 @@ void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Mi
         "pixel j * R + i, the map of the EXR tables), f[wavelength][pixel]; in_plane.<order>: the same "
         "per in-plane bin (the bins of in_plane), f[wavelength][bin]; *_stderr: the spread of the "
         "replicate means. M00 is the BSDF of unpolarized light";
+  return definitions;
+}
+}  // namespace
+
+void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Microsurface& s,
+                     const std::string& file) {
+  const BsdfResult& r = t.results.at(0);
+  const bool single = t.results.size() == 1;
+  j["file"] = file;
+  j["surface"] = s.description;
+  j["parameters"] = bsdf_parameters_json(o, t);
+  j["definitions"] = bsdf_definitions_json(o, r);
   const Json incidences = bsdf_incidences_json(t, s);
   if (single)
     for (auto it = incidences[0].begin(); it != incidences[0].end(); ++it)

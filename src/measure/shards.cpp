@@ -271,6 +271,134 @@ Tallies tallies_of(const Json& j, const std::string& part, std::size_t index) {
   return t;
 }
 
+// The run and the shard a part names, its fingerprint checked against the run it states.
+struct PartHeader {
+  RunIdentity run;
+  int index = 0, count = 0;
+  std::string fingerprint;
+};
+
+PartHeader part_header(const std::string& name, const Json& j) {
+  if (!j.is_object() || j.value("format", std::string()) != kPartialFormat)
+    throw ParameterError("part " + literal_text(name) + " is not a partial record (no \"format\": \"" +
+                         std::string(kPartialFormat) + "\"; written by measure ... {shard} K/N)");
+  PartHeader h;
+  try {
+    h.run = identity_of(j.at("run"));
+    h.index = j.at("shard").at("index").get<int>();
+    h.count = j.at("shard").at("count").get<int>();
+  } catch (const Json::exception& e) {
+    throw UsageError("part " + name + " is not a valid partial record: " + e.what());
+  }
+  h.fingerprint = h.run.fingerprint();
+  if (h.fingerprint != j.at("run").value("fingerprint", std::string()))
+    throw UsageError("part " + name + " is damaged: its fingerprint does not match its run");
+  return h;
+}
+
+// Every estimator call's tallies of a part, in the order the run made them.
+std::vector<Tallies> part_tallies(const std::string& name, const Json& j) {
+  std::vector<Tallies> entries;
+  try {
+    for (const auto& e : j.at("tallies")) entries.push_back(tallies_of(e, name, entries.size()));
+  } catch (const Json::exception& e) {
+    throw UsageError("part " + name + " is not a valid partial record: " + e.what());
+  }
+  return entries;
+}
+
+// The parts of one run: the first part fixes the run and the shard count; each later part must
+// have the same fingerprint and count, and every shard index must come once.
+class ShardSet {
+ public:
+  void add(const std::string& name, const PartHeader& h) {
+    if (seen_.empty()) {
+      first_ = h;
+      first_name_ = name;
+    } else if (h.fingerprint != first_.fingerprint) {
+      throw UsageError("part " + name + " belongs to another run than " + first_name_ +
+                       " (different command, inputs or version: fingerprint " + h.fingerprint + " vs " +
+                       first_.fingerprint + ")");
+    } else if (h.count != first_.count) {
+      throw UsageError("part " + name + " is shard " + std::to_string(h.index) + "/" + std::to_string(h.count) +
+                       ", " + first_name_ + " one of " + std::to_string(first_.count) + " shards");
+    }
+    const int k = h.index, n = h.count;
+    if (!(k >= 1 && k <= n)) throw UsageError("part " + name + " has an invalid shard index");
+    if (seen_.count(k))
+      throw UsageError("shard " + std::to_string(k) + "/" + std::to_string(n) + " is given twice (" +
+                       seen_[k] + " and " + name + ")");
+    seen_[k] = name;
+  }
+  // ParameterError listing the shards no part holds.
+  void check_complete() const {
+    const int shards = first_.count;
+    std::string missing;
+    for (int k = 1; k <= shards; ++k)
+      if (!seen_.count(k)) missing += (missing.empty() ? "" : ", ") + std::to_string(k) + "/" + std::to_string(shards);
+    if (!missing.empty())
+      throw ParameterError("shard" + std::string(missing.find(',') != std::string::npos ? "s " : " ") + missing +
+                           " missing (run them with {shard} K/N, then merge all " + std::to_string(shards) +
+                           " parts)");
+  }
+  const PartHeader& first() const { return first_; }
+  const std::string& first_name() const { return first_name_; }
+
+ private:
+  std::map<int, std::string> seen_;  // shard index -> part name
+  PartHeader first_;
+  std::string first_name_;
+};
+
+// The covered ranges of one estimator call's parts tile its units [0, units): no gap, no overlap.
+void check_units_tiled(std::vector<UnitRange> ranges, std::size_t e, const Tallies& merged) {
+  std::sort(ranges.begin(), ranges.end(),
+            [](const UnitRange& a, const UnitRange& b) { return a.first < b.first; });
+  std::uint64_t at = 0;
+  for (const UnitRange& r : ranges) {
+    if (r.size() == 0) continue;
+    if (r.first != at)
+      throw UsageError("estimator call " + std::to_string(e + 1) + " (" + merged.kind + "): units " +
+                       (r.first > at ? "[" + std::to_string(at) + ", " + std::to_string(r.first) + ") missing"
+                                     : "from " + std::to_string(r.first) + " covered twice"));
+    at = r.end;
+  }
+  if (at != merged.units)
+    throw UsageError("estimator call " + std::to_string(e + 1) + " (" + merged.kind + "): units [" +
+                     std::to_string(at) + ", " + std::to_string(merged.units) + ") missing");
+}
+
+// Estimator call e merged over the parts (taken in `order`, shard order, so that real totals
+// are summed in a fixed order): each part's covered unit rows copied in, the tails summed.
+Tallies merge_entry(const std::vector<std::vector<Tallies>>& all, const std::vector<std::size_t>& order,
+                    std::size_t e, const std::vector<std::pair<std::string, Json>>& parts,
+                    const std::string& first_name) {
+  Tallies merged = all[order[0]][e];
+  merged.covered = {0, merged.units};
+  std::fill(merged.counts.begin(), merged.counts.end(), 0);
+  std::fill(merged.reals.begin(), merged.reals.end(), 0.0);
+  std::fill(merged.tail_counts.begin(), merged.tail_counts.end(), 0);
+  std::fill(merged.tail_reals.begin(), merged.tail_reals.end(), 0.0);
+  std::vector<UnitRange> ranges;
+  for (std::size_t p : order) {
+    const Tallies& t = all[p][e];
+    if (!same_layout(t, merged))
+      throw UsageError("part " + parts[p].first + ": estimator call " + std::to_string(e + 1) +
+                       " is " + describe(t) + ", " + first_name + " has " + describe(merged));
+    for (std::uint64_t u = t.covered.first; u < t.covered.end; ++u) {
+      std::copy_n(t.counts.begin() + static_cast<std::ptrdiff_t>(u * t.row_counts), t.row_counts,
+                  merged.counts.begin() + static_cast<std::ptrdiff_t>(u * t.row_counts));
+      std::copy_n(t.reals.begin() + static_cast<std::ptrdiff_t>(u * t.row_reals), t.row_reals,
+                  merged.reals.begin() + static_cast<std::ptrdiff_t>(u * t.row_reals));
+    }
+    for (std::size_t i = 0; i < t.tail_counts.size(); ++i) merged.tail_counts[i] += t.tail_counts[i];
+    for (std::size_t i = 0; i < t.tail_reals.size(); ++i) merged.tail_reals[i] += t.tail_reals[i];
+    ranges.push_back(t.covered);
+  }
+  check_units_tiled(std::move(ranges), e, merged);
+  return merged;
+}
+
 }  // namespace
 
 Json partial_json(const RunIdentity& run, const ShardRecorder& shard, double seconds) {
@@ -288,109 +416,28 @@ Json partial_json(const RunIdentity& run, const ShardRecorder& shard, double sec
 
 MergedRun merge_partials(const std::vector<std::pair<std::string, Json>>& parts) {
   if (parts.empty()) throw UsageError("merge needs at least one partial record");
-  MergedRun m;
-  std::map<int, std::string> seen;  // shard index -> part name
-  std::string fingerprint, first_name;
+  ShardSet shards;
   std::vector<std::vector<Tallies>> all;
   for (const auto& [name, j] : parts) {
-    if (!j.is_object() || j.value("format", std::string()) != kPartialFormat)
-      throw ParameterError("part " + literal_text(name) + " is not a partial record (no \"format\": \"" +
-                           std::string(kPartialFormat) + "\"; written by measure ... {shard} K/N)");
-    RunIdentity run;
-    int k = 0, n = 0;
-    try {
-      run = identity_of(j.at("run"));
-      k = j.at("shard").at("index").get<int>();
-      n = j.at("shard").at("count").get<int>();
-    } catch (const Json::exception& e) {
-      throw UsageError("part " + name + " is not a valid partial record: " + e.what());
-    }
-    const std::string fp = run.fingerprint();
-    if (fp != j.at("run").value("fingerprint", std::string()))
-      throw UsageError("part " + name + " is damaged: its fingerprint does not match its run");
-    if (all.empty()) {
-      m.run = run;
-      m.shards = n;
-      fingerprint = fp;
-      first_name = name;
-    } else if (fp != fingerprint) {
-      throw UsageError("part " + name + " belongs to another run than " + first_name +
-                       " (different command, inputs or version: fingerprint " + fp + " vs " +
-                       fingerprint + ")");
-    } else if (n != m.shards) {
-      throw UsageError("part " + name + " is shard " + std::to_string(k) + "/" + std::to_string(n) +
-                       ", " + first_name + " one of " + std::to_string(m.shards) + " shards");
-    }
-    if (!(k >= 1 && k <= n)) throw UsageError("part " + name + " has an invalid shard index");
-    if (seen.count(k))
-      throw UsageError("shard " + std::to_string(k) + "/" + std::to_string(n) + " is given twice (" +
-                       seen[k] + " and " + name + ")");
-    seen[k] = name;
-    std::vector<Tallies> entries;
-    try {
-      for (const auto& e : j.at("tallies")) entries.push_back(tallies_of(e, name, entries.size()));
-    } catch (const Json::exception& e) {
-      throw UsageError("part " + name + " is not a valid partial record: " + e.what());
-    }
-    all.push_back(std::move(entries));
+    shards.add(name, part_header(name, j));
+    all.push_back(part_tallies(name, j));
   }
-  std::string missing;
-  for (int k = 1; k <= m.shards; ++k)
-    if (!seen.count(k)) missing += (missing.empty() ? "" : ", ") + std::to_string(k) + "/" + std::to_string(m.shards);
-  if (!missing.empty())
-    throw ParameterError("shard" + std::string(missing.find(',') != std::string::npos ? "s " : " ") + missing +
-                         " missing (run them with {shard} K/N, then merge all " +
-                         std::to_string(m.shards) + " parts)");
+  shards.check_complete();
+  MergedRun m;
+  m.run = shards.first().run;
+  m.shards = shards.first().count;
 
   // Entry by entry: the same layout in every part, covered ranges tiling the units.
   const std::size_t ne = all[0].size();
   for (std::size_t p = 1; p < all.size(); ++p)
     if (all[p].size() != ne)
       throw UsageError("part " + parts[p].first + " holds " + std::to_string(all[p].size()) +
-                       " estimator calls, " + first_name + " " + std::to_string(ne));
+                       " estimator calls, " + shards.first_name() + " " + std::to_string(ne));
   // Parts in shard order, so that real totals are summed in a fixed order.
   std::vector<std::size_t> order(all.size());
   for (std::size_t p = 0; p < all.size(); ++p)
     order[static_cast<std::size_t>(parts[p].second.at("shard").at("index").get<int>() - 1)] = p;
-  for (std::size_t e = 0; e < ne; ++e) {
-    Tallies merged = all[order[0]][e];
-    merged.covered = {0, merged.units};
-    std::fill(merged.counts.begin(), merged.counts.end(), 0);
-    std::fill(merged.reals.begin(), merged.reals.end(), 0.0);
-    std::fill(merged.tail_counts.begin(), merged.tail_counts.end(), 0);
-    std::fill(merged.tail_reals.begin(), merged.tail_reals.end(), 0.0);
-    std::vector<UnitRange> ranges;
-    for (std::size_t p : order) {
-      const Tallies& t = all[p][e];
-      if (!same_layout(t, merged))
-        throw UsageError("part " + parts[p].first + ": estimator call " + std::to_string(e + 1) +
-                         " is " + describe(t) + ", " + first_name + " has " + describe(merged));
-      for (std::uint64_t u = t.covered.first; u < t.covered.end; ++u) {
-        std::copy_n(t.counts.begin() + static_cast<std::ptrdiff_t>(u * t.row_counts), t.row_counts,
-                    merged.counts.begin() + static_cast<std::ptrdiff_t>(u * t.row_counts));
-        std::copy_n(t.reals.begin() + static_cast<std::ptrdiff_t>(u * t.row_reals), t.row_reals,
-                    merged.reals.begin() + static_cast<std::ptrdiff_t>(u * t.row_reals));
-      }
-      for (std::size_t i = 0; i < t.tail_counts.size(); ++i) merged.tail_counts[i] += t.tail_counts[i];
-      for (std::size_t i = 0; i < t.tail_reals.size(); ++i) merged.tail_reals[i] += t.tail_reals[i];
-      ranges.push_back(t.covered);
-    }
-    std::sort(ranges.begin(), ranges.end(),
-              [](const UnitRange& a, const UnitRange& b) { return a.first < b.first; });
-    std::uint64_t at = 0;
-    for (const UnitRange& r : ranges) {
-      if (r.size() == 0) continue;
-      if (r.first != at)
-        throw UsageError("estimator call " + std::to_string(e + 1) + " (" + merged.kind + "): units " +
-                         (r.first > at ? "[" + std::to_string(at) + ", " + std::to_string(r.first) + ") missing"
-                                       : "from " + std::to_string(r.first) + " covered twice"));
-      at = r.end;
-    }
-    if (at != merged.units)
-      throw UsageError("estimator call " + std::to_string(e + 1) + " (" + merged.kind + "): units [" +
-                       std::to_string(at) + ", " + std::to_string(merged.units) + ") missing");
-    m.entries.push_back(std::move(merged));
-  }
+  for (std::size_t e = 0; e < ne; ++e) m.entries.push_back(merge_entry(all, order, e, parts, shards.first_name()));
   return m;
 }
 

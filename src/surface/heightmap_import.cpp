@@ -304,11 +304,6 @@ std::size_t fill_missing(std::vector<double>& z, int nx, int ny, bool periodic) 
   return holes.size();
 }
 
-bool is_window(const Microsurface& s) {
-  return s.kind() == Microsurface::Kind::Heightfield && s.description.is_object() &&
-         s.description.value("boundary", std::string()) == "window";
-}
-
 double length_unit_in_metres(const std::string& u) {
   if (u.empty()) return 0;
   if (u == "m") return 1;

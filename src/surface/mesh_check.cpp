@@ -121,24 +121,10 @@ int corner_of(const std::array<std::uint32_t, 3>& t, std::uint32_t v) {
   return t[0] == v ? 0 : t[1] == v ? 1 : 2;
 }
 
-}  // namespace
-
-MeshCheckReport check_mesh(const Microsurface& s, const std::string& name, bool check_eq_1b) {
-  MeshCheckReport rep;
-  if (s.kind() != Microsurface::Kind::Mesh) return rep;
+// Every triangle has three distinct vertices and an area above rounding (relative to `scale`).
+void check_triangles_not_degenerate(const Microsurface& s, const std::string& name, double scale) {
   const auto& V = s.vertices();
   const auto& T = s.triangles();
-  const Macrosurface& macro = s.macro();
-  rep.triangles = T.size();
-  rep.vertices = V.size();
-  if (T.empty()) throw UsageError(name + ": the mesh has no triangles");
-  for (const auto& v : V)
-    if (!v.allFinite()) throw UsageError(name + ": non-finite vertex coordinate");
-  const Eigen::AlignedBox3d box = s.bounds();
-  const double scale = std::max({box.sizes().norm(), macro.size_x, macro.size_y, 1e-30});
-  const double tol = 1e-6 * scale;
-
-  // Degenerate triangles.
   for (std::size_t k = 0; k < T.size(); ++k) {
     const auto& t = T[k];
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
@@ -147,19 +133,28 @@ MeshCheckReport check_mesh(const Microsurface& s, const std::string& name, bool 
       throw UsageError(name + ": degenerate triangle " + std::to_string(k) + " (zero area) at " +
                        point_str(V[t[0]]));
   }
+}
 
-  // Edges: at most two triangles, in opposite directions; boundary edges on the rim.
+// An edge where an open mesh may end: on a periodic tile's border (continued by the next
+// tile), else on the base plane z = 0.
+bool edge_on_rim(const Macrosurface& macro, const Eigen::Vector3f& p, const Eigen::Vector3f& q, double tol) {
+  const double hx = 0.5 * macro.size_x, hy = 0.5 * macro.size_y;
+  if (!macro.periodic) return std::abs(p.z()) <= tol && std::abs(q.z()) <= tol;
+  for (double side : {hx, -hx})
+    if (std::abs(p.x() - side) <= tol && std::abs(q.x() - side) <= tol) return true;
+  for (double side : {hy, -hy})
+    if (std::abs(p.y() - side) <= tol && std::abs(q.y() - side) <= tol) return true;
+  return false;
+}
+
+// Edges: at most two triangles, in opposite directions; boundary edges (counted in rep) on the
+// rim. Returns the triangle corners joined across shared edges: the fans around each vertex.
+UnionFind check_edges(const Microsurface& s, const std::string& name, double tol, MeshCheckReport& rep) {
+  const auto& V = s.vertices();
+  const auto& T = s.triangles();
+  const Macrosurface& macro = s.macro();
   const bool rim_rule = !is_vcavity(s);
   const double hx = 0.5 * macro.size_x, hy = 0.5 * macro.size_y;
-  auto on_rim = [&](std::uint32_t a, std::uint32_t b) {
-    const Eigen::Vector3f &p = V[a], &q = V[b];
-    if (!macro.periodic) return std::abs(p.z()) <= tol && std::abs(q.z()) <= tol;
-    for (double side : {hx, -hx})
-      if (std::abs(p.x() - side) <= tol && std::abs(q.x() - side) <= tol) return true;
-    for (double side : {hy, -hy})
-      if (std::abs(p.y() - side) <= tol && std::abs(q.y() - side) <= tol) return true;
-    return false;
-  };
   std::vector<DirectedEdge> E = sorted_edges(T);
   UnionFind fans(3 * T.size());
   for (std::size_t i = 0; i < E.size();) {
@@ -179,7 +174,7 @@ MeshCheckReport check_mesh(const Microsurface& s, const std::string& name, bool 
         fans.unite(3 * E[i].tri + corner_of(t1, v), 3 * E[i + 1].tri + corner_of(t2, v));
     } else {
       ++rep.boundary_edges;
-      if (rim_rule && !on_rim(E[i].lo, E[i].hi))
+      if (rim_rule && !edge_on_rim(macro, V[E[i].lo], V[E[i].hi], tol))
         throw UsageError(
             name + ": open mesh: the boundary edge " + point_str(V[E[i].lo]) + "-" +
             point_str(V[E[i].hi]) + " is not on the macrosurface's rim (" +
@@ -190,7 +185,13 @@ MeshCheckReport check_mesh(const Microsurface& s, const std::string& name, bool 
     }
     i = j;
   }
-  // One fan per vertex (no two cones or sheets meeting at a single vertex).
+  return fans;
+}
+
+// One fan per vertex (no two cones or sheets meeting at a single vertex).
+void check_one_fan_per_vertex(const Microsurface& s, const std::string& name, UnionFind& fans) {
+  const auto& V = s.vertices();
+  const auto& T = s.triangles();
   std::vector<std::uint32_t> root_of(V.size(), UINT32_MAX);
   for (std::uint32_t k = 0; k < T.size(); ++k)
     for (int c = 0; c < 3; ++c) {
@@ -200,16 +201,22 @@ MeshCheckReport check_mesh(const Microsurface& s, const std::string& name, bool 
         throw UsageError(name + ": non-manifold mesh: separate sheets meet at the single vertex " +
                          point_str(V[v]));
     }
+}
 
-  if (macro.periodic) {
-    for (const auto& v : V)
-      if (std::abs(v.x()) > hx + tol || std::abs(v.y()) > hy + tol)
-        throw UsageError(name + ": vertex " + point_str(v) + " lies outside the periodic tile " +
-                         std::to_string(macro.size_x) + " x " + std::to_string(macro.size_y));
-  }
+// A periodic tile's vertices lie inside the tile (within tol).
+void check_inside_tile(const Microsurface& s, const std::string& name, double tol) {
+  const Macrosurface& macro = s.macro();
+  if (!macro.periodic) return;
+  const double hx = 0.5 * macro.size_x, hy = 0.5 * macro.size_y;
+  for (const auto& v : s.vertices())
+    if (std::abs(v.x()) > hx + tol || std::abs(v.y()) > hy + tol)
+      throw UsageError(name + ": vertex " + point_str(v) + " lies outside the periodic tile " +
+                       std::to_string(macro.size_x) + " x " + std::to_string(macro.size_y));
+}
 
-  // [GeomBSDF24, eq. 1b]: sum_f A_f m_f = A n.
-  if (!check_eq_1b) return rep;
+// [GeomBSDF24, eq. 1b]: sum_f A_f m_f = A n; the relative error goes into rep.
+void check_area_normal_sum(const Microsurface& s, const std::string& name, MeshCheckReport& rep) {
+  const Macrosurface& macro = s.macro();
   if (!(macro.area > 0)) throw UsageError(name + ": the macrosurface area must be > 0");
   FacetSums f = facet_sums(s);
   const Vec3 ratio = f.sum_area_normal / macro.area;
@@ -221,6 +228,29 @@ MeshCheckReport check_mesh(const Microsurface& s, const std::string& name, bool 
        << "or the mesh is inside-out";
     throw UsageError(os.str());
   }
+}
+
+}  // namespace
+
+MeshCheckReport check_mesh(const Microsurface& s, const std::string& name, bool check_eq_1b) {
+  MeshCheckReport rep;
+  if (s.kind() != Microsurface::Kind::Mesh) return rep;
+  const auto& V = s.vertices();
+  const auto& T = s.triangles();
+  const Macrosurface& macro = s.macro();
+  rep.triangles = T.size();
+  rep.vertices = V.size();
+  if (T.empty()) throw UsageError(name + ": the mesh has no triangles");
+  for (const auto& v : V)
+    if (!v.allFinite()) throw UsageError(name + ": non-finite vertex coordinate");
+  const Eigen::AlignedBox3d box = s.bounds();
+  const double scale = std::max({box.sizes().norm(), macro.size_x, macro.size_y, 1e-30});
+  const double tol = 1e-6 * scale;
+  check_triangles_not_degenerate(s, name, scale);
+  UnionFind fans = check_edges(s, name, tol, rep);
+  check_one_fan_per_vertex(s, name, fans);
+  check_inside_tile(s, name, tol);
+  if (check_eq_1b) check_area_normal_sum(s, name, rep);
   return rep;
 }
 

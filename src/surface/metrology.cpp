@@ -2,8 +2,6 @@
 
 #include <unsupported/Eigen/FFT>
 
-#include "microsim/surface/heightmap_import.hpp"
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -11,6 +9,7 @@
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <utility>
 
 namespace microsim {
 
@@ -210,13 +209,10 @@ double ggx_score(const Src& src, double mean_x, double mean_y, double a2) {
   });
 }
 
+// Mean slope, rms slopes per axis, Sdq and the Beckmann alphas of the moments; returns the slope
+// variances (vx, vy).
 template <class Src>
-SlopeStats slope_stats_of(const Src& src, int bins) {
-  SlopeStats st;
-  st.n = src.size();
-  if (st.n == 0) return st;
-  const double n = static_cast<double>(st.n);
-  const Divide by_n(n);  // 2 nx ny facets: a power of two on most tiles
+std::pair<double, double> fill_slope_moments(const Src& src, SlopeStats& st, const Divide& by_n) {
   const Sum3 m = block_sum(st.n, Sum3{}, [&](std::size_t k0, std::size_t k1, Sum3& a) {
     src.each(k0, k1, [&](double sx, double sy) {
       a.a += by_n(sx);
@@ -233,18 +229,22 @@ SlopeStats slope_stats_of(const Src& src, int bins) {
       a.b += by_n((sy - st.mean_y) * (sy - st.mean_y));
     });
   });
-  const double vx = var.a, vy = var.b;
-  st.rms_x = std::sqrt(vx);
-  st.rms_y = std::sqrt(vy);
+  st.rms_x = std::sqrt(var.a);
+  st.rms_y = std::sqrt(var.b);
   st.sdq = std::sqrt(sg2);
   // Beckmann's slope variance per axis is alpha^2 / 2 ([GeomBSDF24, eq. 1b/1c] fitted alpha).
   st.beckmann_alpha_x = std::sqrt(2.0) * st.rms_x;
   st.beckmann_alpha_y = std::sqrt(2.0) * st.rms_y;
-  if (!(vx > 0) || !(vy > 0)) return st;  // a profile along one axis: no 2D slope model fits
+  return {var.a, var.b};
+}
 
-  // Isotropic GGX by maximum likelihood: d/d alpha log L = 0 <=> sum r^2 / (alpha^2 + r^2) = n/2,
-  // whose left side decreases with alpha (bisection on log alpha). r^2 is recomputed in every
-  // pass rather than stored: 8 bytes per facet less at the peak.
+// Isotropic GGX by maximum likelihood: d/d alpha log L = 0 <=> sum r^2 / (alpha^2 + r^2) = n/2,
+// whose left side decreases with alpha (bisection on log alpha). r^2 is recomputed in every
+// pass rather than stored: 8 bytes per facet less at the peak. Unset (0) when half the slopes
+// or more sit at the mean: the likelihood has no maximum then.
+template <class Src>
+void fit_isotropic_ggx(const Src& src, SlopeStats& st) {
+  const double n = static_cast<double>(st.n);
   const std::size_t nonzero = static_cast<std::size_t>(
       block_sum(st.n, 0.0, [&](std::size_t k0, std::size_t k1, double& c) {
         src.each(k0, k1, [&](double sx, double sy) {
@@ -252,26 +252,30 @@ SlopeStats slope_stats_of(const Src& src, int bins) {
           c += x * x + y * y > 0;
         });
       }));
-  if (2 * nonzero > st.n) {
-    double lo = std::log(1e-12 + 1e-6 * st.sdq), hi = std::log(1e6 * (st.sdq + 1e-300));
-    // Once a midpoint repeats an end that an earlier pass set, that pass's answer repeats too
-    // and (lo, hi) stays as it is: the remaining passes of the 200 are skipped.
-    bool lo_set = false, hi_set = false;
-    for (int it = 0; it < 200; ++it) {
-      const double mid = 0.5 * (lo + hi), a2 = std::exp(2 * mid);
-      if ((mid == lo && lo_set) || (mid == hi && hi_set)) break;
-      if (ggx_score(src, st.mean_x, st.mean_y, a2) > 0.5 * n) {
-        lo = mid;
-        lo_set = true;
-      } else {
-        hi = mid;
-        hi_set = true;
-      }
+  if (!(2 * nonzero > st.n)) return;
+  double lo = std::log(1e-12 + 1e-6 * st.sdq), hi = std::log(1e6 * (st.sdq + 1e-300));
+  // Once a midpoint repeats an end that an earlier pass set, that pass's answer repeats too
+  // and (lo, hi) stays as it is: the remaining passes of the 200 are skipped.
+  bool lo_set = false, hi_set = false;
+  for (int it = 0; it < 200; ++it) {
+    const double mid = 0.5 * (lo + hi), a2 = std::exp(2 * mid);
+    if ((mid == lo && lo_set) || (mid == hi && hi_set)) break;
+    if (ggx_score(src, st.mean_x, st.mean_y, a2) > 0.5 * n) {
+      lo = mid;
+      lo_set = true;
+    } else {
+      hi = mid;
+      hi_set = true;
     }
-    st.ggx_alpha = std::exp(0.5 * (lo + hi));
   }
-  // Anisotropic GGX: EM fixed point of the bivariate t with 2 degrees of freedom, started from
-  // the Beckmann moments; each step raises the likelihood.
+  st.ggx_alpha = std::exp(0.5 * (lo + hi));
+}
+
+// Anisotropic GGX: EM fixed point of the bivariate t with 2 degrees of freedom, started from
+// the Beckmann moments (variances vx, vy); each step raises the likelihood. Returns (ax^2, ay^2).
+template <class Src>
+std::pair<double, double> fit_anisotropic_ggx(const Src& src, SlopeStats& st, double vx, double vy,
+                                              const Divide& by_n) {
   double ax2 = vx * 2, ay2 = vy * 2;
   for (st.ggx_iterations = 1; st.ggx_iterations <= 2000; ++st.ggx_iterations) {
     const Sum2 e = block_sum(st.n, Sum2{}, [&](std::size_t k0, std::size_t k1, Sum2& a) {
@@ -290,8 +294,14 @@ SlopeStats slope_stats_of(const Src& src, int bins) {
   }
   st.ggx_alpha_x = std::sqrt(ax2);
   st.ggx_alpha_y = std::sqrt(ay2);
+  return {ax2, ay2};
+}
 
-  // Normalized slope radius q: Beckmann q^2 ~ Exp(1), CDF 1 - exp(-q^2); GGX CDF q^2 / (1 + q^2).
+// Goodness of fit of the Beckmann moments (variances vx, vy) and of the anisotropic GGX (ax2,
+// ay2) on the normalized slope radius q, in `bins` classes of equal model probability:
+// Beckmann q^2 ~ Exp(1), CDF 1 - exp(-q^2); GGX CDF q^2 / (1 + q^2).
+template <class Src>
+void fit_slope_radius(const Src& src, SlopeStats& st, double vx, double vy, double ax2, double ay2, int bins) {
   const auto qb = [&](std::size_t k0, std::size_t k1, const auto& f) {
     src.each(k0, k1, [&](double sx, double sy) {
       const double x = sx - st.mean_x, y = sy - st.mean_y;
@@ -312,6 +322,19 @@ SlopeStats slope_stats_of(const Src& src, int bins) {
   }
   st.beckmann_fit = equal_probability_fit("beckmann", eb, st.n, qb, 2);
   st.ggx_fit = equal_probability_fit("ggx", eg, st.n, qg, 2);
+}
+
+template <class Src>
+SlopeStats slope_stats_of(const Src& src, int bins) {
+  SlopeStats st;
+  st.n = src.size();
+  if (st.n == 0) return st;
+  const Divide by_n(static_cast<double>(st.n));  // 2 nx ny facets: a power of two on most tiles
+  const auto [vx, vy] = fill_slope_moments(src, st, by_n);
+  if (!(vx > 0) || !(vy > 0)) return st;  // a profile along one axis: no 2D slope model fits
+  fit_isotropic_ggx(src, st);
+  const auto [ax2, ay2] = fit_anisotropic_ggx(src, st, vx, vy, by_n);
+  fit_slope_radius(src, st, vx, vy, ax2, ay2, bins);
   return st;
 }
 }  // namespace

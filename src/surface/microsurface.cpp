@@ -204,4 +204,9 @@ double lambda_from_facets(const Microsurface& s, const Vec3& v) {
   return back / (v.dot(s.macro().normal) * s.macro().area);
 }
 
+bool is_window(const Microsurface& s) {
+  return s.kind() == Microsurface::Kind::Heightfield && s.description.is_object() &&
+         s.description.value("boundary", std::string()) == "window";
+}
+
 }  // namespace microsim

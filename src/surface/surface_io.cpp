@@ -7,7 +7,7 @@
 #include <sys/stat.h>
 
 #include "microsim/io/checks.hpp"
-#include "microsim/io/exr_pixels.hpp"
+#include "microsim/io/exr_table.hpp"
 #include "microsim/io/json_input.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/surface/heightmap_import.hpp"

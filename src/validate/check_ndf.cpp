@@ -63,6 +63,75 @@ void check_d_identities(const SurfaceSet& set, Progress& progress, CheckOutput& 
   out.measurements = per_surface;
 }
 
+namespace {
+// The nominal D averaged over theta ring it (phi-averaged bin averages).
+double nominal_ring_d(const DirectionBinning& bins, const models::Ndf& nominal, int it) {
+  double model = 0;
+  for (int ip = 0; ip < bins.n_phi(); ++ip)
+    model += bins.bin_average(bins.index(it, ip), [&](const Vec3& m) { return nominal.D(m); });
+  return model / bins.n_phi();
+}
+
+// D of ring it and its error: one surface's with its block error, or the ensemble mean with the
+// between-surface error.
+std::pair<double, double> measured_ring_d(const std::vector<NdfResult>& res, int it) {
+  const std::size_t K = res.size();
+  if (K == 1) return {res[0].ring_d[it], res[0].ring_d_stderr[it]};
+  std::vector<double> x;
+  double blocks2 = 0;
+  for (const auto& r : res) {
+    x.push_back(r.ring_d[it]);
+    blocks2 += r.ring_d_stderr[it] * r.ring_d_stderr[it];
+  }
+  double d, se;
+  std::tie(d, se) = mean_and_se(x);
+  // Floor: the within-surface (block) error of the mean, in case K values agree by chance.
+  se = std::max(se, std::sqrt(blocks2) / static_cast<double>(K));
+  return {d, se};
+}
+
+std::string d_label(const SurfaceSet& set, std::size_t K) {
+  return K > 1 ? std::to_string(K) + " surfaces" : surface_label(set, 0);
+}
+
+Row ring_row(const SurfaceSet& set, std::size_t K, double lo, double hi, double d, double se, double model) {
+  Row r = make_row(set, d_label(set, K), "d_ring", "nominal", Kind::Model, "[Heitz14, Sec. 3.2] Beckmann D, bin-averaged");
+  r.condition += (K > 1 || !surface_label(set, 0).empty() ? ", " : " ") + std::string("theta_m ") +
+                 angle(lo) + "-" + angle(hi);
+  r.measured = d;
+  r.stderr_ = se;
+  r.model = model;
+  r.error = K > 1 ? "surfaces" : "blocks";
+  if (K > 1) r.dof = static_cast<int>(K) - 1;
+  r.group = set.name + "/d_ring";
+  r.extra = {{"theta_m_range_deg", {lo, hi}}};
+  return r;
+}
+
+// Moment fit of alpha (slope variance alpha^2/2 per axis, [Heitz14, Sec. 3.2, App. A]) vs the
+// nominal alpha: rows, and each surface's fitted alphas into the record.
+void push_fitted_alpha_rows(const SurfaceSet& set, const std::vector<FacetSums>& sums, const models::Ndf& nominal,
+                            Json& ndf, CheckOutput& out) {
+  const std::size_t K = sums.size();
+  for (int a = 0; a < 2; ++a) {
+    std::vector<double> x;
+    for (const auto& f : sums) x.push_back(std::sqrt(2 * (a == 0 ? f.slope_var_x : f.slope_var_y)));
+    auto [mean, se] = mean_and_se(x);
+    Row r = make_row(set, d_label(set, K), a == 0 ? "fitted_alpha_x" : "fitted_alpha_y", "nominal",
+                     K > 1 ? Kind::Model : Kind::Info, "[Heitz14, Sec. 3.2 and App. A]: P22 dslope = (n.m) D dm, Beckmann slope variance alpha^2/2 per axis");
+    r.measured = mean;
+    if (K > 1) {
+      r.stderr_ = se;
+      r.dof = static_cast<int>(K) - 1;
+    }
+    r.model = a == 0 ? nominal.alpha_x : nominal.alpha_y;
+    r.error = K > 1 ? "surfaces" : "none (one surface)";
+    out.rows.push_back(r);
+    ndf[a == 0 ? "fitted_alpha_x" : "fitted_alpha_y"] = x;
+  }
+}
+}  // namespace
+
 // ---------------------------------------------------------------------------------------------
 // D against the generator's nominal NDF, per theta ring (phi-averaged). One surface: the
 // spatial-block standard error of measure_ndf; an ensemble: the between-surface one.
@@ -88,25 +157,8 @@ void check_d_nominal(const SurfaceSet& set, Progress& progress, CheckOutput& out
               {"nominal", std::string(models::to_string(nominal.kind))},
               {"alpha_x", nominal.alpha_x}, {"alpha_y", nominal.alpha_y}};
   for (int it = 0; it < bins.n_theta(); ++it) {
-    double model = 0;
-    for (int ip = 0; ip < bins.n_phi(); ++ip)
-      model += bins.bin_average(bins.index(it, ip), [&](const Vec3& m) { return nominal.D(m); });
-    model /= bins.n_phi();
-    double d, se;
-    if (K == 1) {
-      d = res[0].ring_d[it];
-      se = res[0].ring_d_stderr[it];
-    } else {
-      std::vector<double> x;
-      double blocks2 = 0;
-      for (const auto& r : res) {
-        x.push_back(r.ring_d[it]);
-        blocks2 += r.ring_d_stderr[it] * r.ring_d_stderr[it];
-      }
-      std::tie(d, se) = mean_and_se(x);
-      // Floor: the within-surface (block) error of the mean, in case K values agree by chance.
-      se = std::max(se, std::sqrt(blocks2) / static_cast<double>(K));
-    }
+    const double model = nominal_ring_d(bins, nominal, it);
+    const auto [d, se] = measured_ring_d(res, it);
     const double lo = deg(bins.theta_lo(it)), hi = deg(bins.theta_hi(it));
     ndf["theta_lo_deg"].push_back(lo);
     ndf["theta_hi_deg"].push_back(hi);
@@ -116,37 +168,9 @@ void check_d_nominal(const SurfaceSet& set, Progress& progress, CheckOutput& out
     // Rings where the model puts at least min_ring_mass of the microsurface area (per unit
     // macro area) are tested; the far tails hold too few facets for a normal z.
     if (model * bins.solid_angle_of_ring(it) < o.min_ring_mass) continue;
-    Row r = make_row(set, K > 1 ? std::to_string(K) + " surfaces" : surface_label(set, 0), "d_ring",
-                     "nominal", Kind::Model, "[Heitz14, Sec. 3.2] Beckmann D, bin-averaged");
-    r.condition += (K > 1 || !surface_label(set, 0).empty() ? ", " : " ") + std::string("theta_m ") +
-                   angle(lo) + "-" + angle(hi);
-    r.measured = d;
-    r.stderr_ = se;
-    r.model = model;
-    r.error = K > 1 ? "surfaces" : "blocks";
-    if (K > 1) r.dof = static_cast<int>(K) - 1;
-    r.group = set.name + "/d_ring";
-    r.extra = {{"theta_m_range_deg", {lo, hi}}};
-    out.rows.push_back(r);
+    out.rows.push_back(ring_row(set, K, lo, hi, d, se, model));
   }
-  // Moment fit of alpha (slope variance alpha^2/2 per axis, [Heitz14, Sec. 3.2, App. A]) vs the nominal alpha.
-  for (int a = 0; a < 2; ++a) {
-    std::vector<double> x;
-    for (const auto& f : sums) x.push_back(std::sqrt(2 * (a == 0 ? f.slope_var_x : f.slope_var_y)));
-    auto [mean, se] = mean_and_se(x);
-    Row r = make_row(set, K > 1 ? std::to_string(K) + " surfaces" : surface_label(set, 0),
-                     a == 0 ? "fitted_alpha_x" : "fitted_alpha_y", "nominal",
-                     K > 1 ? Kind::Model : Kind::Info, "[Heitz14, Sec. 3.2 and App. A]: P22 dslope = (n.m) D dm, Beckmann slope variance alpha^2/2 per axis");
-    r.measured = mean;
-    if (K > 1) {
-      r.stderr_ = se;
-      r.dof = static_cast<int>(K) - 1;
-    }
-    r.model = a == 0 ? nominal.alpha_x : nominal.alpha_y;
-    r.error = K > 1 ? "surfaces" : "none (one surface)";
-    out.rows.push_back(r);
-    ndf[a == 0 ? "fitted_alpha_x" : "fitted_alpha_y"] = x;
-  }
+  push_fitted_alpha_rows(set, sums, nominal, ndf, out);
   out.measurements = ndf;
 }
 

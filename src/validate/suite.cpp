@@ -77,10 +77,8 @@ bool is_option_key(const std::string& k) {
                                "ndf_phi_bins", "min_ring_mass", "min_bin_count"};
   return std::find(std::begin(keys), std::end(keys), k) != std::end(keys);
 }
-}  // namespace
 
-Suite load_suite(const std::string& path) {
-  namespace fs = std::filesystem;
+Json read_suite_json(const std::string& path) {
   require_regular_input(path, "{suite}");
   std::ifstream in(path);
   if (!in) throw ParameterError("{suite} " + literal_text(path) + ": cannot read the file");
@@ -91,6 +89,95 @@ Suite load_suite(const std::string& path) {
     suite_error(path, std::string("not valid JSON (") + e.what() + ")");
   }
   if (!j.is_object()) suite_error(path, "expected a JSON object");
+  return j;
+}
+
+// The options every entry starts from (`defaults`, else the built-in ones).
+Options read_suite_defaults(const Json& j, const std::string& path) {
+  Options defaults;
+  if (j.contains("defaults")) {
+    if (!j["defaults"].is_object()) suite_error(path, "defaults must be an object");
+    for (auto it = j["defaults"].begin(); it != j["defaults"].end(); ++it)
+      if (!is_option_key(it.key())) suite_error(path, "defaults: unknown field '" + it.key() + "'");
+    read_options(j["defaults"], defaults, path, "defaults");
+  }
+  return defaults;
+}
+
+// A preset named relative to the suite is looked up beside the suite file, then in its parent
+// folder (surfaces/); the absolute path.
+std::string entry_preset(const Json& e, const std::string& path, const std::string& where,
+                         const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  if (!e["preset"].is_string()) suite_error(path, where + ": preset must be a string");
+  fs::path p = e["preset"].get<std::string>();
+  if (p.is_relative()) {
+    fs::path a = dir / p, b = dir.parent_path() / p;
+    p = fs::exists(a) ? a : b;
+  }
+  if (!fs::exists(p)) suite_error(path, where + ": preset " + e["preset"].get<std::string>() + " not found");
+  return fs::absolute(p).lexically_normal().string();
+}
+
+// The generator's options as the command line would give them (booleans as true/false).
+std::vector<std::pair<std::string, std::string>> entry_args(const Json& e, const std::string& path,
+                                                            const std::string& where) {
+  if (!e["args"].is_object()) suite_error(path, where + ": args must be an object");
+  std::vector<std::pair<std::string, std::string>> args;
+  for (auto it = e["args"].begin(); it != e["args"].end(); ++it) {
+    std::string value = it.value().is_string() ? it.value().get<std::string>() : it.value().dump();
+    if (it.value().is_boolean()) value = it.value().get<bool>() ? "true" : "false";
+    args.emplace_back(it.key(), value);
+  }
+  return args;
+}
+
+// Distinct seeds: the surfaces of an ensemble count as independent samples.
+std::vector<std::uint64_t> entry_seeds(const Json& e, const std::string& path, const std::string& where) {
+  if (!e["seeds"].is_array()) suite_error(path, where + ": seeds must be an array of integers in [0, 2^64-1]");
+  std::vector<std::uint64_t> seeds;
+  std::set<std::uint64_t> seen;
+  for (const Json& x : e["seeds"]) {
+    seeds.push_back(get_seed(x, path, where, "seeds"));
+    if (!seen.insert(seeds.back()).second)
+      suite_error(path, where + ": seeds: " + std::to_string(seeds.back()) +
+                            " is given twice (the surfaces of an ensemble must be independent)");
+  }
+  return seeds;
+}
+
+SuiteEntry read_suite_entry(const Json& e, const std::string& path, const std::filesystem::path& dir,
+                            const Options& defaults) {
+  SuiteEntry entry;
+  if (!e.is_object() || !e.contains("name") || !e["name"].is_string())
+    suite_error(path, "every entry needs a string 'name'");
+  entry.name = e["name"].get<std::string>();
+  const std::string where = "entry " + entry.name;
+  for (auto it = e.begin(); it != e.end(); ++it)
+    if (it.key() != "name" && it.key() != "generate" && it.key() != "preset" &&
+        it.key() != "args" && it.key() != "seeds" && it.key() != "format" &&
+        !is_option_key(it.key()))
+      suite_error(path, where + ": unknown field '" + it.key() + "'");
+  if (!e.contains("generate") || !e["generate"].is_string())
+    suite_error(path, where + ": needs 'generate' (a generator kind, as in microsim generate KIND)");
+  entry.generate = e["generate"].get<std::string>();
+  if (e.contains("preset")) entry.preset = entry_preset(e, path, where, dir);
+  if (e.contains("args")) entry.args = entry_args(e, path, where);
+  if (e.contains("seeds")) entry.seeds = entry_seeds(e, path, where);
+  if (e.contains("format")) {
+    entry.format = e["format"].is_string() ? e["format"].get<std::string>() : "";
+    if (entry.format != "exr" && entry.format != "ply" && entry.format != "obj" && entry.format != "off")
+      suite_error(path, where + ": format must be exr, ply, obj or off");
+  }
+  entry.options = defaults;
+  read_options(e, entry.options, path, where);
+  return entry;
+}
+}  // namespace
+
+Suite load_suite(const std::string& path) {
+  namespace fs = std::filesystem;
+  const Json j = read_suite_json(path);
   Suite s;
   s.file = path;
   s.name = j.value("name", fs::path(path).stem().string());
@@ -104,69 +191,11 @@ Suite load_suite(const std::string& path) {
     s.significance = j["significance"].get<double>();
     if (!(s.significance > 0 && s.significance < 1)) suite_error(path, "significance must be in (0, 1)");
   }
-  Options defaults;
-  if (j.contains("defaults")) {
-    if (!j["defaults"].is_object()) suite_error(path, "defaults must be an object");
-    for (auto it = j["defaults"].begin(); it != j["defaults"].end(); ++it)
-      if (!is_option_key(it.key())) suite_error(path, "defaults: unknown field '" + it.key() + "'");
-    read_options(j["defaults"], defaults, path, "defaults");
-  }
+  const Options defaults = read_suite_defaults(j, path);
   if (!j.contains("entries") || !j["entries"].is_array() || j["entries"].empty())
     suite_error(path, "needs a non-empty 'entries' array");
-  // Presets are looked up beside the suite file, then in its parent folder (surfaces/).
   const fs::path dir = fs::path(path).parent_path();
-  for (const Json& e : j["entries"]) {
-    SuiteEntry entry;
-    if (!e.is_object() || !e.contains("name") || !e["name"].is_string())
-      suite_error(path, "every entry needs a string 'name'");
-    entry.name = e["name"].get<std::string>();
-    const std::string where = "entry " + entry.name;
-    for (auto it = e.begin(); it != e.end(); ++it)
-      if (it.key() != "name" && it.key() != "generate" && it.key() != "preset" &&
-          it.key() != "args" && it.key() != "seeds" && it.key() != "format" &&
-          !is_option_key(it.key()))
-        suite_error(path, where + ": unknown field '" + it.key() + "'");
-    if (!e.contains("generate") || !e["generate"].is_string())
-      suite_error(path, where + ": needs 'generate' (a generator kind, as in microsim generate KIND)");
-    entry.generate = e["generate"].get<std::string>();
-    if (e.contains("preset")) {
-      if (!e["preset"].is_string()) suite_error(path, where + ": preset must be a string");
-      fs::path p = e["preset"].get<std::string>();
-      if (p.is_relative()) {
-        fs::path a = dir / p, b = dir.parent_path() / p;
-        p = fs::exists(a) ? a : b;
-      }
-      if (!fs::exists(p)) suite_error(path, where + ": preset " + e["preset"].get<std::string>() + " not found");
-      entry.preset = fs::absolute(p).lexically_normal().string();
-    }
-    if (e.contains("args")) {
-      if (!e["args"].is_object()) suite_error(path, where + ": args must be an object");
-      for (auto it = e["args"].begin(); it != e["args"].end(); ++it) {
-        std::string value = it.value().is_string() ? it.value().get<std::string>() : it.value().dump();
-        if (it.value().is_boolean()) value = it.value().get<bool>() ? "true" : "false";
-        entry.args.emplace_back(it.key(), value);
-      }
-    }
-    if (e.contains("seeds")) {
-      // Distinct seeds: the surfaces of an ensemble count as independent samples.
-      if (!e["seeds"].is_array()) suite_error(path, where + ": seeds must be an array of integers in [0, 2^64-1]");
-      std::set<std::uint64_t> seen;
-      for (const Json& x : e["seeds"]) {
-        entry.seeds.push_back(get_seed(x, path, where, "seeds"));
-        if (!seen.insert(entry.seeds.back()).second)
-          suite_error(path, where + ": seeds: " + std::to_string(entry.seeds.back()) +
-                                " is given twice (the surfaces of an ensemble must be independent)");
-      }
-    }
-    if (e.contains("format")) {
-      entry.format = e["format"].is_string() ? e["format"].get<std::string>() : "";
-      if (entry.format != "exr" && entry.format != "ply" && entry.format != "obj" && entry.format != "off")
-        suite_error(path, where + ": format must be exr, ply, obj or off");
-    }
-    entry.options = defaults;
-    read_options(e, entry.options, path, where);
-    s.entries.push_back(entry);
-  }
+  for (const Json& e : j["entries"]) s.entries.push_back(read_suite_entry(e, path, dir, defaults));
   return s;
 }
 

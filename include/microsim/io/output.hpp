@@ -1,108 +1,21 @@
 // Writing results: JSON records, CSV mirrors of JSON rows, EXR tables with self-describing
-// headers. Every write is atomic (temporary file in the same folder, checked, synced, then
-// renamed): a failed write (a full disk) leaves neither the file nor a temporary.
+// headers (io/exr_table.hpp). Every write is atomic (io/atomic_write.hpp: temporary file in the
+// same folder, checked, synced, then renamed): a failed write (a full disk) leaves neither the
+// file nor a temporary.
 #pragma once
-#include <fstream>
-#include <functional>
 #include <string>
-#include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "microsim/common.hpp"
+#include "microsim/io/atomic_write.hpp"
+#include "microsim/io/exr_table.hpp"
 
 namespace microsim {
 
 // Extension of a path, lower case, without the dot ("json", "csv", "exr"...).
 std::string extension_of(const std::string& path);
 
-// Calls write(tmp_path), tmp_path in the folder of path, syncs tmp_path to the disk and renames it
-// to path; removes tmp_path and throws RuntimeFailure naming path ("cannot write PATH: why") if
-// write throws or left no file. write must itself check what it wrote (write_stream_atomically
-// does). Inside an OutputTransaction the rename waits for its commit(). A path naming a device or
-// a pipe (/dev/null, /dev/stdout) is written in place: a rename would replace the device itself.
-void write_atomically(const std::string& path, const std::function<void(const std::string&)>& write);
-// write_atomically through a stream: write(out) fills a binary std::ofstream on the temporary; the
-// stream is flushed and closed, and a failure of any write, of the flush or of the close fails
-// the output. Every output file of microsim is written by this or write_atomically.
-void write_stream_atomically(const std::string& path, const std::function<void(std::ofstream&)>& write);
-
-// All outputs of one command committed together: while a transaction is alive, every
-// write_atomically goes to its temporary and is renamed into place only by commit(), after every
-// output is written; destroying an uncommitted transaction removes its temporaries. Transactions
-// nest (the innermost receives the writes). Single-threaded use (the command's main thread).
-class OutputTransaction {
- public:
-  OutputTransaction();
-  ~OutputTransaction();
-  OutputTransaction(const OutputTransaction&) = delete;
-  OutputTransaction& operator=(const OutputTransaction&) = delete;
-  // Renames every temporary to its final path, in the order written.
-  void commit();
-  // Temporary holding `path` if a live transaction wrote it and has not committed yet.
-  static std::string pending(const std::string& path);
-  // Renames this transaction's files into place now (they are read back by the command), but
-  // ties them to the enclosing transaction: it removes them if it ends uncommitted or the
-  // process is interrupted, and keeps them once it commits.
-  void place_provisionally();
-  // A folder the command created for its outputs (mkdir succeeded): removed if the transaction
-  // ends uncommitted (when empty: only the command's own files were in it) or the process is
-  // interrupted; kept once it commits. Folders are removed deepest first.
-  void created_folder(const std::string& path);
-
- private:
-  friend void write_atomically(const std::string&, const std::function<void(const std::string&)>&);
-  std::vector<std::pair<std::string, std::string>> files_;  // (temporary, final)
-  std::vector<std::string> placed_;   // renamed into place by a nested place_provisionally()
-  std::vector<std::string> folders_;  // created_folder(), in the order created
-};
-
-// Creates the folder `path` (and its missing parents) for a command's outputs; each folder it
-// creates is tied to the innermost live transaction (created_folder), so that a failed or
-// interrupted command leaves no empty folder behind. False when it cannot create it.
-bool create_output_folder(const std::string& path);
-
-// Temporary files and folders removed if the process is interrupted: install_interrupt_cleanup()
-// (called first in main, before any other thread starts) blocks SIGINT, SIGTERM and SIGHUP and
-// starts a thread that, on one of them, removes every registered path (a folder with its
-// contents), then ends the process by the same signal.
-void register_temporary(const std::string& path);
-void unregister_temporary(const std::string& path);
-void install_interrupt_cleanup();
-// The cleanup runs while the other threads go on: one of them can meet the files being removed,
-// fail and reach exit before the signal is re-raised. Exit paths call this first: during an
-// interrupt it waits for the signal thread to end the process.
-void wait_if_interrupted();
-// A temporary folder (mkdtemp under TMPDIR, registered), removed with its contents when destroyed.
-class TemporaryFolder {
- public:
-  explicit TemporaryFolder(const std::string& prefix);
-  ~TemporaryFolder();
-  TemporaryFolder(const TemporaryFolder&) = delete;
-  TemporaryFolder& operator=(const TemporaryFolder&) = delete;
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-};
-
 void write_json(const std::string& path, const Json& j);
 // One CSV line per element of j["rows"]; nested objects and arrays are skipped (CSV is flat).
 void write_csv_rows(const std::string& path, const Json& j);
-
-// A float image table: named channels of width x height, plus header attributes (numbers become
-// double attributes, strings string attributes, anything else its JSON text).
-struct ExrTable {
-  int width = 0, height = 0;
-  std::vector<std::string> channel_names;
-  std::vector<std::vector<float>> channels;  // each width*height, row-major
-  Json attributes = Json::object();
-};
-void write_exr(const std::string& path, const ExrTable& t);
-// Reads a table; `check_header` (if given) sees the size, channel names and attributes (no pixels
-// yet) and may refuse the file before its pixels are allocated. Width and height must be >= 1
-// and the pixels must fit in memory (io/checks.hpp).
-ExrTable read_exr(const std::string& path,
-                  const std::function<void(const ExrTable&)>& check_header = {});
 
 }  // namespace microsim

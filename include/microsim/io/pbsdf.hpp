@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "microsim/io/pbsdf_grid.hpp"
 #include "microsim/io/rgl_bsdf.hpp"
 #include "microsim/measure/bsdf_table.hpp"
 #include "microsim/models/mueller.hpp"
@@ -77,18 +78,7 @@ std::vector<float> evenly_spaced(double lo, double hi, int n);
 // ---------------------------------------------------------------------------------------------
 // A table from a polarized measurement (measure bsdf --polarized -o X.pbsdf)
 
-// The plugin copies exactly this many wavelengths from the file.
-constexpr std::size_t kPbsdfWavelengths = 5;
-// The wavelengths written for a single index (mirror, one conductor index): the same matrix at each.
-inline std::vector<std::uint16_t> pbsdf_single_index_wavelengths() { return {450, 500, 550, 600, 650}; }
-
-// The node counts of a measured table of resolution n (the request's table resolution):
-// theta_h and theta_d n / 2 + 1 nodes over [0, pi/2], phi_d n + 1 nodes over [-pi, pi], so that
-// the spacing is 90 / (n / 2) degrees along each angle.
-struct PbsdfGrid {
-  int theta_h = 0, theta_d = 0, phi_d = 0;
-};
-PbsdfGrid pbsdf_grid(int table_resolution);
+// The wavelength count, the single-index wavelengths and the node counts of pbsdf_grid(n): io/pbsdf_grid.hpp.
 
 // The measured Mueller BRDF of an isotropic polarized table (one phi_i, every run with per-bin
 // tallies) for light from `light` seen from `view` at wavelength index l, in microsim's frames

@@ -69,8 +69,7 @@ struct HeightmapImportParams {
 // returned (as a grid whose description has "boundary": "window") instead of refused. Only
 // metrology may read such a surface: no estimator traces a window (defined in surface_io.cpp).
 Microsurface load_surface_or_window(const std::string& path, bool allow_window = false);
-// True for a heightfield imported as a non-periodic window.
-bool is_window(const Microsurface& s);
+// is_window (surface/microsurface.hpp) tells such a surface.
 
 // Factor of a length unit in metres (m, mm, um, nm, pm; "" = 0: no unit).
 double length_unit_in_metres(const std::string& unit);

@@ -106,6 +106,11 @@ class Microsurface {
   std::vector<std::array<std::uint32_t, 3>> triangles_;
 };
 
+// True for a heightfield imported as a non-periodic window (surface/heightmap_import.hpp): its
+// description has "boundary": "window". Here, with the surface, so that metrology can tell a
+// window without depending on the importer.
+bool is_window(const Microsurface& s);
+
 // Area-weighted facet statistics that every check and model needs ([GeomBSDF24, eq. 1b/1c], docs/theory/ndf.md).
 struct FacetSums {
   Vec3 sum_area_normal = Vec3::Zero();  // sum_f A_f m_f        ([GeomBSDF24, eq. 1b]: equals n A)

@@ -1,0 +1,82 @@
+#!/usr/bin/env python3
+"""The source tools measure what they claim: tools/function_lengths.py finds a function's first
+and last line (a multi-line signature, a constructor with brace initializers, braces in strings
+and comments) and tools/include_cycles.py finds a two-header cycle and nothing in a chain."""
+import pathlib
+import subprocess
+import sys
+import tempfile
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "tools"))
+import function_lengths  # noqa: E402
+import include_cycles  # noqa: E402
+
+SAMPLE = '''namespace a {
+struct S {
+  int x{1};
+  int get() const {
+    return x;
+  }
+};
+S::S(int v)
+    : x{v}, y(2) {
+  const char* s = "}{";  // }
+}
+int long_one(int a,
+             int b) {
+  auto f = [&](int c) {
+    return c;
+  };
+  /* { */
+  return f(a) + b;
+}
+}  // namespace a
+'''
+
+
+def check(condition, what):
+    if not condition:
+        print("FAIL:", what)
+        sys.exit(1)
+
+
+def main():
+    found = {name: (first, last) for first, last, name in function_lengths.functions_of(SAMPLE)}
+    check(found.get("get") == (4, 6), f"inline member function lines: {found}")
+    check(found.get("S::S") == (8, 11), f"constructor with brace initializer: {found}")
+    check(found.get("long_one") == (12, 19), f"multi-line signature with a lambda: {found}")
+    check(len(found) == 3, f"exactly three functions: {found}")
+
+    with tempfile.TemporaryDirectory() as d:
+        root = pathlib.Path(d)
+        inc = root / "include" / "microsim" / "x"
+        inc.mkdir(parents=True)
+        (root / "src" / "x").mkdir(parents=True)
+        (inc / "a.hpp").write_text('#include "microsim/x/b.hpp"\n')
+        (inc / "b.hpp").write_text("\n")
+        (inc / "c.hpp").write_text('#include "microsim/x/a.hpp"\n')
+        check(include_cycles.strongly_connected(include_cycles.component_graph(root)) == [],
+              "a chain c -> a -> b is no cycle")
+        (root / "src" / "x" / "b.cpp").write_text('#include "microsim/x/b.hpp"\n#include "microsim/x/a.hpp"\n')
+        cycles = include_cycles.strongly_connected(include_cycles.component_graph(root))
+        check(cycles == [["x/a", "x/b"]], f"b's source including a closes a cycle: {cycles}")
+        failing = subprocess.run([sys.executable, str(ROOT / "tools" / "include_cycles.py"), "--root", d, "--fail"],
+                                 capture_output=True, text=True)
+        check(failing.returncode == 1, "--fail exits 1 on a cycle")
+        guarded = [sys.executable, str(ROOT / "tools" / "include_cycles.py"), "--root", d, "--fail-touching"]
+        check(subprocess.run(guarded + ["x"], capture_output=True).returncode == 1,
+              "--fail-touching x exits 1 on a cycle in x")
+        check(subprocess.run(guarded + ["y"], capture_output=True).returncode == 0,
+              "--fail-touching y ignores a cycle in x")
+        long_file = root / "src" / "x" / "long.cpp"
+        long_file.write_text("int f() {\n" + "  ;\n" * 90 + "}\n")
+        over = subprocess.run([sys.executable, str(ROOT / "tools" / "function_lengths.py"), "3", "--root", d,
+                               "--limit", "80", "--fail"], capture_output=True, text=True)
+        check(over.returncode == 1 and "92 src/x/long.cpp:1 f" in over.stdout,
+              f"--fail exits 1 on a 92-line function: {over.stdout}")
+    print("source tools: ok")
+
+
+if __name__ == "__main__":
+    main()
