@@ -8,8 +8,8 @@
 #include <memory>
 #include <string>
 
-#include "microsim/api/albedo_request.hpp"
-#include "microsim/api/bsdf_request.hpp"
+#include "microsim/api/albedo_run.hpp"
+#include "microsim/api/bsdf_run.hpp"
 #include "microsim/common.hpp"
 #include "test_helpers.hpp"
 

@@ -4,17 +4,13 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 #include "microsim/api/request_checks.hpp"
-#include "microsim/io/bsdf_files.hpp"
 #include "microsim/io/checks.hpp"
-#include "microsim/io/output.hpp"
-#include "microsim/io/pbsdf.hpp"
-#include "microsim/measure/bsdf_record.hpp"
-#include "microsim/surface/microsurface.hpp"
-#include "microsim/trace/tracer.hpp"
+#include "microsim/io/pbsdf_grid.hpp"
+#include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/models/metals.hpp"
 
 namespace microsim {
 
@@ -136,48 +132,68 @@ void check_normalized(const BsdfRequest& o) {
   check_tables(o);
 }
 
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 }  // namespace
 
 void BsdfRequest::check() const { check_normalized(normalized(*this)); }
 
-std::string bsdf_record_path(const std::string& path) {
-  if (extension_of(path) == "json") return path;
-  const auto slash = path.find_last_of('/');
-  const auto dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return path + ".json";
-  return path.substr(0, dot + 1) + "json";
+BsdfRequest normalized_bsdf_request(const BsdfRequest& r) { return normalized(r); }
+
+std::optional<models::IndexTable> bsdf_index_table(const BsdfRequest& o) {
+  const bool spectral = !o.metal.empty() || !o.ior_file.empty();
+  if (!spectral) {
+    if (!o.wavelengths_nm.empty()) throw ParameterError("{wavelengths} needs {metal} or {ior_file}");
+    return std::nullopt;
+  }
+  if (o.material != "conductor") throw ParameterError("{metal} and {ior_file} apply to {material} conductor only");
+  if (!o.metal.empty() && !o.ior_file.empty()) throw ParameterError("give {metal} or {ior_file}, not both");
+  if (o.eta || o.k) throw ParameterError("{eta} and {k} do not go with {metal} or {ior_file} (the table gives the index)");
+  if (!o.metal.empty()) return models::metal_table(o.metal);
+  return models::read_index_file(o.ior_file);
 }
 
-BsdfRun run_bsdf_request(const BsdfRequest& request, const RunContext& ctx, const std::string& table_path) {
-  BsdfRequest r = normalized(request);
-  r.threads = ctx.threads;
-  check_normalized(r);
-  if (!r.surface.get) throw UsageError("no surface given");
-  const std::shared_ptr<const Microsurface> surface = r.surface.get();
-  const Microsurface& s = *surface;
-  check_bsdf_surface(r, s, r.surface.name);
-  const auto t0 = std::chrono::steady_clock::now();
-  BsdfTableOptions to = bsdf_table_options(r, s, ctx.split);  // shards and MPI ranks (scaleout)
-  if (ctx.progress) to.progress = ctx.progress;
-  const Tracer tracer(s);
-  const BsdfTable table = measure_bsdf_table(tracer, to);
-
-  BsdfRun run;
-  run.nominal_ndf = s.nominal.has_value();
-  run.seconds = table.seconds;
-  run.record = record_header("measure bsdf", ctx);
-  put_bsdf_record(run.record, r, table, s, r.surface.name);
-  if (r.format != "json") write_bsdf_tables(table_path, r, table, s, run.record, bsdf_record_path(table_path));
-  run.record["wall_seconds"] = seconds_since(t0);
-  return run;
+std::vector<double> bsdf_wavelengths(const BsdfRequest& o) {
+  const auto table = bsdf_index_table(o);
+  if (!table) return {};
+  std::vector<double> nm = o.wavelengths_nm.empty() ? models::default_wavelengths_nm() : o.wavelengths_nm;
+  if (static_cast<int>(nm.size()) > kMaxWavelengths)
+    throw ParameterError("{wavelengths}: at most " + std::to_string(kMaxWavelengths) + " wavelengths");
+  models::check_wavelengths(nm, *table, "{wavelengths}");
+  return nm;
 }
 
-Json measure_bsdf_record(const BsdfRequest& r, const RunContext& ctx, const std::string& table_path) {
-  return run_bsdf_request(r, ctx, table_path).record;
+std::vector<models::Material> spectral_conductors(const models::IndexTable& table, const std::vector<double>& nm) {
+  std::vector<models::Material> out;
+  for (double x : nm) {
+    const models::OpticalConstant c = table.at(x);
+    out.push_back(models::Material::conductor(c.n, c.k));
+  }
+  return out;
+}
+
+models::Material bsdf_material(const BsdfRequest& o) {
+  const auto f4 = [](double x) { return fixed_text(x, 4); };
+  if (const auto table = bsdf_index_table(o)) return spectral_conductors(*table, bsdf_wavelengths(o)).front();
+  if (o.material == "mirror") {
+    if (o.eta || o.k) throw ParameterError("{eta} and {k} apply to {material} conductor or dielectric, not mirror");
+    return models::Material::mirror();
+  }
+  if (o.material == "conductor") {
+    if (!o.eta || !o.k) throw ParameterError("{material} conductor needs {eta} E and {k} K (complex index eta + ik)");
+    if (!(std::isfinite(*o.eta) && *o.eta > 0 && *o.eta <= 100))
+      throw ParameterError("{eta} must be in (0, 100] (got " + f4(*o.eta) + ")");
+    if (!(std::isfinite(*o.k) && *o.k >= 0 && *o.k <= 100))
+      throw ParameterError("{k} must be in [0, 100] (got " + f4(*o.k) + ")");
+    return models::Material::conductor(*o.eta, *o.k);
+  }
+  if (o.material == "dielectric") {
+    if (!o.eta) throw ParameterError("{material} dielectric needs {eta} E (index below / index above)");
+    if (o.k) throw ParameterError("{k} applies to {material} conductor only");
+    if (!(std::isfinite(*o.eta) && *o.eta >= 0.01 && *o.eta <= 100))
+      throw ParameterError("{eta} must be in [0.01, 100] (got " + f4(*o.eta) + ")");
+    return models::Material::dielectric(*o.eta);
+  }
+  throw ParameterError("{material} must be mirror, conductor or dielectric (got '" + literal_text(o.material) + "')");
 }
 
 }  // namespace microsim

@@ -8,8 +8,8 @@
 
 #include "cli_common.hpp"
 #include "option_checks.hpp"
-#include "microsim/api/albedo_request.hpp"
-#include "microsim/api/bsdf_request.hpp"
+#include "microsim/api/albedo_run.hpp"
+#include "microsim/api/bsdf_run.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/measure/albedo_measure.hpp"
 

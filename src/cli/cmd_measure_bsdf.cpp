@@ -8,7 +8,7 @@
 
 #include "cli_common.hpp"
 #include "option_checks.hpp"
-#include "microsim/api/bsdf_request.hpp"
+#include "microsim/api/bsdf_run.hpp"
 #include "microsim/io/output.hpp"
 
 namespace microsim::cli {

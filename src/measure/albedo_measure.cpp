@@ -154,22 +154,6 @@ AlbedoAverage average_albedo(const MuQuadrature& q, const std::vector<Estimate>&
 // ---------------------------------------------------------------------------------------------
 // Request
 
-models::Material albedo_material(const AlbedoRequest& o) {
-  if (!o.metal.empty()) {
-    if (o.material != "conductor") throw ParameterError("{metal} applies to {material} conductor only");
-    if (o.eta || o.k) throw ParameterError("{eta} and {k} do not go with {metal} (the table gives the index)");
-    const models::IndexTable& table = models::metal_table(o.metal);
-    models::check_wavelengths({o.wavelength_nm}, table, "{wavelength_nm}");
-    const models::OpticalConstant c = table.at(o.wavelength_nm);
-    return models::Material::conductor(c.n, c.k);
-  }
-  BsdfRequest b;
-  b.material = o.material;
-  b.eta = o.eta;
-  b.k = o.k;
-  return bsdf_material(b);
-}
-
 MuQuadrature albedo_quadrature(const AlbedoRequest& o) {
   if (o.theta_i_deg.empty()) return gauss_legendre_mu(o.mu_nodes);
   std::vector<double> mu;

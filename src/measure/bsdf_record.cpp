@@ -64,66 +64,6 @@ const char* const kNominalZ[3] = {"z_smith_single", "z_smith_multiple", "z_vcavi
 // ---------------------------------------------------------------------------------------------
 // Request
 
-std::optional<models::IndexTable> bsdf_index_table(const BsdfRequest& o) {
-  const bool spectral = !o.metal.empty() || !o.ior_file.empty();
-  if (!spectral) {
-    if (!o.wavelengths_nm.empty()) throw ParameterError("{wavelengths} needs {metal} or {ior_file}");
-    return std::nullopt;
-  }
-  if (o.material != "conductor") throw ParameterError("{metal} and {ior_file} apply to {material} conductor only");
-  if (!o.metal.empty() && !o.ior_file.empty()) throw ParameterError("give {metal} or {ior_file}, not both");
-  if (o.eta || o.k) throw ParameterError("{eta} and {k} do not go with {metal} or {ior_file} (the table gives the index)");
-  if (!o.metal.empty()) return models::metal_table(o.metal);
-  return models::read_index_file(o.ior_file);
-}
-
-std::vector<double> bsdf_wavelengths(const BsdfRequest& o) {
-  const auto table = bsdf_index_table(o);
-  if (!table) return {};
-  std::vector<double> nm = o.wavelengths_nm.empty() ? models::default_wavelengths_nm() : o.wavelengths_nm;
-  if (static_cast<int>(nm.size()) > kMaxWavelengths)
-    throw ParameterError("{wavelengths}: at most " + std::to_string(kMaxWavelengths) + " wavelengths");
-  models::check_wavelengths(nm, *table, "{wavelengths}");
-  return nm;
-}
-
-namespace {
-// The conductors of a spectral request, one per wavelength.
-std::vector<models::Material> spectral_conductors(const models::IndexTable& table, const std::vector<double>& nm) {
-  std::vector<models::Material> out;
-  for (double x : nm) {
-    const models::OpticalConstant c = table.at(x);
-    out.push_back(models::Material::conductor(c.n, c.k));
-  }
-  return out;
-}
-}  // namespace
-
-models::Material bsdf_material(const BsdfRequest& o) {
-  const auto f4 = [](double x) { return fixed(x, 4); };
-  if (const auto table = bsdf_index_table(o)) return spectral_conductors(*table, bsdf_wavelengths(o)).front();
-  if (o.material == "mirror") {
-    if (o.eta || o.k) throw ParameterError("{eta} and {k} apply to {material} conductor or dielectric, not mirror");
-    return models::Material::mirror();
-  }
-  if (o.material == "conductor") {
-    if (!o.eta || !o.k) throw ParameterError("{material} conductor needs {eta} E and {k} K (complex index eta + ik)");
-    if (!(std::isfinite(*o.eta) && *o.eta > 0 && *o.eta <= 100))
-      throw ParameterError("{eta} must be in (0, 100] (got " + f4(*o.eta) + ")");
-    if (!(std::isfinite(*o.k) && *o.k >= 0 && *o.k <= 100))
-      throw ParameterError("{k} must be in [0, 100] (got " + f4(*o.k) + ")");
-    return models::Material::conductor(*o.eta, *o.k);
-  }
-  if (o.material == "dielectric") {
-    if (!o.eta) throw ParameterError("{material} dielectric needs {eta} E (index below / index above)");
-    if (o.k) throw ParameterError("{k} applies to {material} conductor only");
-    if (!(std::isfinite(*o.eta) && *o.eta >= 0.01 && *o.eta <= 100))
-      throw ParameterError("{eta} must be in [0.01, 100] (got " + f4(*o.eta) + ")");
-    return models::Material::dielectric(*o.eta);
-  }
-  throw ParameterError("{material} must be mirror, conductor or dielectric (got '" + literal_text(o.material) + "')");
-}
-
 void check_bsdf_surface(const BsdfRequest& o, const Microsurface& s, const std::string& name) {
   const std::string& ext = o.format;
   if (s.macro().finite_object() && (ext == "bsdf" || ext == "binary" || ext == "pbsdf"))

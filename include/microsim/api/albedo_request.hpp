@@ -10,6 +10,7 @@
 
 #include "microsim/api/run_context.hpp"
 #include "microsim/api/surface_input.hpp"
+#include "microsim/models/microfacet_bsdf.hpp"
 
 namespace microsim {
 
@@ -45,23 +46,11 @@ struct AlbedoRequest {
 // The output formats of measure albedo.
 constexpr const char* kAlbedoFormats[] = {"json", "csv", "exr"};
 
-struct AlbedoSurface;  // measure/albedo_measure.hpp
+// The material the request names (a conductor from a metal's table: its index at wavelength_nm);
+// ParameterError for a wrong name or missing / misplaced indices.
+models::Material albedo_material(const AlbedoRequest& request);
 
-// A run of the request: the record and each surface's measurement (the lookup table's rows;
-// shared, so that a run is whole without measure/albedo_measure.hpp).
-struct AlbedoRun {
-  Json record;
-  std::shared_ptr<const std::vector<AlbedoSurface>> surfaces;
-};
-
-// Checks the request, measures each surface in turn (each loaded when its turn comes) and
-// returns the record (command "measure albedo") with the measurements.
-AlbedoRun run_albedo_request(const AlbedoRequest& r, const RunContext& ctx);
-// The record of run_albedo_request.
-Json measure_albedo_record(const AlbedoRequest& r, const RunContext& ctx);
-// Writes a run to `output` by its format: .json the record; .csv the rows and the record beside
-// (.json); .exr the lookup table, the rows beside (.csv) and the record (.json). Returns the
-// paths written, in words ("lut.exr, lut.csv and lut.json").
-std::string write_albedo_outputs(const std::string& output, const AlbedoRequest& r, const AlbedoRun& run);
+// The request as it is measured: its incidences sorted, without repeats.
+AlbedoRequest normalized_albedo_request(const AlbedoRequest& r);
 
 }  // namespace microsim

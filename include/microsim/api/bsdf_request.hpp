@@ -12,6 +12,8 @@
 #include <vector>
 
 #include "microsim/api/run_context.hpp"
+#include "microsim/models/metals.hpp"
+#include "microsim/models/microfacet_bsdf.hpp"
 #include "microsim/api/surface_input.hpp"
 
 namespace microsim {
@@ -56,22 +58,18 @@ struct BsdfRequest {
 // The output formats of measure bsdf: the table files and the record alone.
 constexpr const char* kBsdfFormats[] = {"exr", "json", "bsdf", "binary", "pbsdf"};
 
-// The record's path for an output `path`: itself for .json, else the same name with .json (the
-// record goes beside the table).
-std::string bsdf_record_path(const std::string& path);
+// The request as it is measured: its incidence angles sorted, without repeats.
+BsdfRequest normalized_bsdf_request(const BsdfRequest& r);
 
-// A run of the request: the record and what the command line prints beside it.
-struct BsdfRun {
-  Json record;
-  bool nominal_ndf = false;  // the surface has a nominal NDF (the microfacet models are beside)
-  double seconds = 0.0;      // the walks' time over every incidence
-};
-
-// Checks the request, loads and checks the surface, measures every incidence and returns the
-// record (command "measure bsdf"). A table format (exr, bsdf, binary, pbsdf) is written to
-// `table_path` and adds its fields to the record; the EXR header names bsdf_record_path(table_path).
-BsdfRun run_bsdf_request(const BsdfRequest& r, const RunContext& ctx, const std::string& table_path = "");
-// The record of run_bsdf_request.
-Json measure_bsdf_record(const BsdfRequest& r, const RunContext& ctx, const std::string& table_path = "");
+// The index table of a spectral request (metal or ior_file), or nullopt; ParameterError for a
+// misplaced or unknown metal and an unreadable or malformed file.
+std::optional<models::IndexTable> bsdf_index_table(const BsdfRequest& request);
+// The wavelengths of a spectral request, checked against its table (empty when not spectral).
+std::vector<double> bsdf_wavelengths(const BsdfRequest& request);
+// The conductors of a spectral request's table at its wavelengths `nm`, one per wavelength.
+std::vector<models::Material> spectral_conductors(const models::IndexTable& table, const std::vector<double>& nm);
+// The material the request names (a spectral conductor: its index at the first wavelength);
+// ParameterError for a wrong name or missing / misplaced indices.
+models::Material bsdf_material(const BsdfRequest& request);
 
 }  // namespace microsim

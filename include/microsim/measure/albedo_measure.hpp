@@ -67,10 +67,6 @@ struct AlbedoAverage {
   double low_rule_value = 0.0;
 };
 AlbedoAverage average_albedo(const MuQuadrature& q, const std::vector<Estimate>& e);
-
-// The material the request names (a conductor from a metal's table: its index at wavelength_nm);
-// ParameterError for a wrong name or missing / misplaced indices.
-models::Material albedo_material(const AlbedoRequest& request);
 // The quadrature the request asks for.
 MuQuadrature albedo_quadrature(const AlbedoRequest& request);
 
