@@ -143,12 +143,13 @@ void trace_g1_part(EnsembleG1& g, const std::vector<CdfSamples>& samples, std::s
   const SceneEnsemble::Part& p = g.e.part(k);
   const std::unique_ptr<Scene> scene = g.e.build(k);
   const std::size_t nf = p.facets;
+  std::vector<std::uint64_t> hits(nf), drawn(nf), visible(nf);  // per facet of the part
   for (std::size_t iv = 0; iv < g.nv; ++iv) {
     TraceCounters& tc = g.part_counters[k * g.nv + iv];
     const Vec3 vl = p.frame.to_local(g.results[iv].v);
     const RayWindow w = scene->ray_window(vl);
     for (int q = static_cast<int>(g.reps.first); q < static_cast<int>(g.reps.end); ++q) {
-      std::vector<std::uint64_t> hits(nf), drawn(nf), visible(nf);
+      for (auto* x : {&hits, &drawn, &visible}) std::fill(x->begin(), x->end(), 0);
       const std::uint64_t stream =
           ReplicatePlan::stream(view_stream(0xA000, iv) + (static_cast<std::uint64_t>(k) << 24), q);
       for (std::uint64_t i = 0; i < g.per_part; ++i) {
@@ -313,8 +314,9 @@ void trace_g2_part(const SceneEnsemble& e, std::size_t k, const G2Result& r, con
   const Vec3 ol = p.frame.to_local(r.o), il = p.frame.to_local(r.i);
   const std::size_t nf = p.facets, nbins = static_cast<std::size_t>(r.binning.size());
   const auto lo = static_cast<std::uint32_t>(p.first_facet), hi = static_cast<std::uint32_t>(p.first_facet + nf);
+  std::vector<std::uint64_t> n(nf), vo(nf), vi(nf), vb(nf);  // per facet of the part
   for (int q = static_cast<int>(reps.first); q < static_cast<int>(reps.end); ++q) {
-    std::vector<std::uint64_t> n(nf), vo(nf), vi(nf), vb(nf);
+    for (auto* x : {&n, &vo, &vi, &vb}) std::fill(x->begin(), x->end(), 0);
     samples.for_each(q, lo, hi, [&](std::uint64_t j, std::uint32_t f) {
       CounterRng rng = samples.rng(q, j);
       const Vec3 x = draw_point(*scene, p, f, rng);

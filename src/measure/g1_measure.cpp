@@ -407,8 +407,8 @@ std::vector<Tally> raycast_grid_batched(const G1Pass& p, const DownwardRays& dow
 // a facet from behind crossed the surface through a rounding gap. A measured region: hits
 // outside it (facet index >= num_facets()) are misses. A heightfield's bin is the table's (the
 // same normal from the same heights, binned once), its hit decoded by the lean primary-ray path
-// (Tracer::front_facet); a mesh's table holds float normals, so its hits are binned from the
-// exact one.
+// (Tracer::front_facet); a mesh's table holds float normals, so its hits (traced on its Scene)
+// are binned from the exact one.
 std::vector<Tally> raycast_g1(const G1Pass& p, const RayWindow& w) {
   WindowOrigins origin{w, p.plan.strata, std::vector<std::uint64_t>(p.R())};
   for (int q = 0; q < p.R(); ++q)
@@ -417,12 +417,12 @@ std::vector<Tally> raycast_g1(const G1Pass& p, const RayWindow& w) {
   const DownwardRays down(p.tracer, v);
   if (p.heightfield && p.ahead) return raycast_grid_ahead(p, down, origin);
   if (p.heightfield) return raycast_grid_batched(p, down, origin);
-  const std::size_t nf = p.nf();
+  const std::unique_ptr<Scene> scene = make_scene(p.tracer);
   return run_replicates(p.R(), p.n_rep(), p.nbins(), p.counters, p.done, p.reps,
                         [&](int rep, std::uint64_t j, Tally& t) {
-                          const TraceHit h = p.tracer.first_hit(
+                          const TraceHit h = scene->intersect(
                               origin(rep, j, p.plan.strata.cell(j)), -v, nullptr, t.counters);
-                          if (!h.hit || h.backface || h.facet >= nf) return;
+                          if (scene->front_facet(h) == Scene::kNoFacet) return;
                           const int b = p.r.binning.bin_of(h.normal);  // -1: out of range
                           if (b >= 0) ++t.hits[static_cast<std::size_t>(b)];
                         });
