@@ -1,5 +1,5 @@
-// Steps shared by the estimators of a whole surface (g2_measure.cpp, vndf_measure.cpp) and of a
-// V-cavity ensemble traced groove by groove (vcavity_measure.cpp): option checks, random
+// Steps shared by the estimators of a whole surface (g2_measure.cpp, vndf_measure.cpp) and of an
+// ensemble scene traced part by part (ensemble_estimators.cpp): option checks, random
 // streams, the replicate plan, the exchange of tallies with other processes (measure/shards.hpp)
 // and the totals, written once so that both routes stay the same estimator.
 #pragma once

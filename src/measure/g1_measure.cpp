@@ -50,6 +50,10 @@ constexpr std::uint64_t kChunk = 1 << 14;
 // order, chunking and thread count.
 // `chunk(j0, j1, first, active, t)` runs one chunk: rays [j0, j1) of replicates first ..
 // first + active - 1 into the tallies t[0 .. active - 1].
+// Not run_replicate_chunks (measure/replicates.hpp), whose chunks lie inside one replicate and
+// whose body sees one ray: the ray-index-major order across replicates is what keeps a large
+// tile's cells in cache, and the chunk-level body is what lets Tracer::front_facets batch the
+// queries of ray j of every replicate. The tallies are the same integer counts either way.
 template <class Chunk>
 std::vector<Tally> run_chunks(int R, std::uint64_t n, int nbins, TraceCounters& counters,
                               std::atomic<std::uint64_t>& done, UnitRange share, Chunk&& chunk) {
@@ -300,6 +304,192 @@ DirectionBinning g1_normal_binning(const G1Options& o) {
   return DirectionBinning(o.normal_theta_bins, o.normal_phi_bins, kPi);
 }
 
+namespace {
+
+// Estimator (b)'s facet weights, a block at a time: front-facing projected area A_f max(0, v.m_f).
+struct FrontProjectedArea {
+  const FacetTable& ft;
+  Vec3 v;
+  void operator()(std::size_t k0, std::size_t k1, double* w) const {
+    ft.for_each_cross(k0, k1, [&](std::size_t k, const Vec3& c) { w[k - k0] = std::max(0.0, 0.5 * c.dot(v)); });
+  }
+};
+
+// One G1 measurement on a Tracer in progress: what both estimators' passes read.
+struct G1Pass {
+  const Tracer& tracer;
+  const Microsurface& s;
+  const FacetTable& ft;
+  const G1Options& o;
+  const G1Result& r;
+  const ReplicatePlan& plan;
+  UnitRange reps;
+  std::uint64_t key;  // the direction's stream key
+  bool heightfield, ahead;
+  TraceCounters& counters;
+  std::atomic<std::uint64_t>& done;
+  int R() const { return plan.replicates; }
+  std::uint64_t n_rep() const { return plan.per_replicate(); }
+  int nbins() const { return r.binning.size(); }
+  std::size_t nf() const { return s.num_facets(); }
+};
+
+// The origins of the ray-casting rays: ray j of replicate rep, in its stratum `cell` of the
+// window. Per replicate the generator's key (CounterRng::key), per ray index j its stratum
+// (the same in every replicate): computed once, not per ray.
+struct WindowOrigins {
+  const RayWindow& w;
+  const Strata& strata;
+  std::vector<std::uint64_t> keys;
+  Vec3 operator()(int rep, std::uint64_t j, const Strata::Cell& cell) const {
+    CounterRng rng(CounterRng::Keyed{}, keys[rep], j);
+    const Vec2 ab = strata.point(cell, rng);
+    return Vec3(w.origin0 + ab.x() * w.e1 + ab.y() * w.e2);
+  }
+};
+
+// A large heightfield's rays are set up a few rays ahead, their grid vertices and table
+// entry prefetched (Tracer::prefetch_front): on tiles larger than the caches the memory reads
+// of consecutive rays then overlap.
+std::vector<Tally> raycast_grid_ahead(const G1Pass& p, const DownwardRays& down, const WindowOrigins& origin) {
+  const Tracer& tracer = p.tracer;
+  const FacetTable& ft = p.ft;
+  const Strata& strata = p.plan.strata;
+  const std::size_t nf = p.nf();
+  return run_replicates_ahead<Vec3>(
+      p.R(), p.n_rep(), p.nbins(), p.counters, p.done, p.reps,
+      [&](int rep, std::uint64_t j) {
+        const Vec3 org = origin(rep, j, strata.cell(j));
+        ft.prefetch(tracer.prefetch_front(down, org));
+        return org;
+      },
+      [&](const Vec3& org, Tally& t) {
+        const std::size_t k = tracer.front_facet(down, org, t.counters);
+        if (k >= nf) return;
+        const int b = ft.bin(k);  // -1: a facet outside the binning's range (not tallied)
+        if (b >= 0) ++t.hits[static_cast<std::size_t>(b)];
+      });
+}
+
+// The same rays in the same order as run_replicates, ray j of every replicate in turn; the
+// hits of a chunk counted in one flat array (replicate-major), read from the table's stored
+// bins, and added to the tallies at the end of the chunk.
+std::vector<Tally> raycast_grid_batched(const G1Pass& p, const DownwardRays& down, const WindowOrigins& origin) {
+  const Tracer& tracer = p.tracer;
+  const FacetTable& ft = p.ft;
+  const Strata& strata = p.plan.strata;
+  const std::uint16_t* bins16 = ft.bins16();
+  const std::size_t nb = static_cast<std::size_t>(p.nbins()), nf = p.nf();
+  return run_chunks(
+      p.R(), p.n_rep(), p.nbins(), p.counters, p.done, p.reps,
+      [&](std::uint64_t j0, std::uint64_t j1, std::uint64_t first, std::uint64_t active, Tally* t) {
+        std::vector<std::uint64_t> hits(active * nb + 1);  // + 1: the facets without a bin
+        const std::size_t nobin = active * nb;
+        // Ray j of the replicates in blocks (Tracer::front_facets): origins, queries, hits.
+        for (std::uint64_t j = j0; j < j1; ++j) {
+          const Strata::Cell cell = strata.cell(j);
+          tracer.front_facets(
+              down, active, [&](std::size_t q) { return origin(static_cast<int>(first + q), j, cell); },
+              [&](std::size_t q) -> TraceCounters& { return t[q].counters; },
+              [&](std::size_t q, std::size_t k) {
+                if (k >= nf) return;
+                const int b = bins16 ? (bins16[k] == FacetTable::kNoBin16 ? -1 : bins16[k]) : ft.bin(k);
+                ++hits[b < 0 ? nobin : q * nb + static_cast<std::size_t>(b)];
+              });
+        }
+        for (std::uint64_t q = 0; q < active; ++q)
+          for (std::size_t b = 0; b < nb; ++b) t[q].hits[b] += hits[q * nb + b];
+      });
+}
+
+// (a) ray casting along -v: per replicate a stratified, Morton-ordered pass over the window.
+// Hits on back faces (counted in counters) are left out of the visible area: a ray that meets
+// a facet from behind crossed the surface through a rounding gap. A measured region: hits
+// outside it (facet index >= num_facets()) are misses. A heightfield's bin is the table's (the
+// same normal from the same heights, binned once), its hit decoded by the lean primary-ray path
+// (Tracer::front_facet); a mesh's table holds float normals, so its hits (traced on its Scene)
+// are binned from the exact one.
+std::vector<Tally> raycast_g1(const G1Pass& p, const RayWindow& w) {
+  WindowOrigins origin{w, p.plan.strata, std::vector<std::uint64_t>(p.R())};
+  for (int q = 0; q < p.R(); ++q)
+    origin.keys[q] = CounterRng::key(p.o.seed, ReplicatePlan::stream(0xA000 + p.key, q));
+  const Vec3 v = p.r.v;
+  const DownwardRays down(p.tracer, v);
+  if (p.heightfield && p.ahead) return raycast_grid_ahead(p, down, origin);
+  if (p.heightfield) return raycast_grid_batched(p, down, origin);
+  const std::unique_ptr<Scene> scene = make_scene(p.tracer);
+  return run_replicates(p.R(), p.n_rep(), p.nbins(), p.counters, p.done, p.reps,
+                        [&](int rep, std::uint64_t j, Tally& t) {
+                          const TraceHit h = scene->intersect(
+                              origin(rep, j, p.plan.strata.cell(j)), -v, nullptr, t.counters);
+                          if (scene->front_facet(h) == Scene::kNoFacet) return;
+                          const int b = p.r.binning.bin_of(h.normal);  // -1: out of range
+                          if (b >= 0) ++t.hits[static_cast<std::size_t>(b)];
+                        });
+}
+
+// (b) area sampling, per replicate strata along the CDF (facet order is spatially coherent).
+std::vector<Tally> sample_g1(const G1Pass& p, const BlockFacetSampler& sampler, const FrontProjectedArea& weights) {
+  const Microsurface& s = p.s;
+  const Tracer& tracer = p.tracer;
+  const FacetTable& ft = p.ft;
+  const Vec3 v = p.r.v;
+  const std::size_t nf = p.nf();
+  const std::uint64_t n_rep = p.n_rep();
+  const double total = p.r.front_projected;
+  // After the draw of facet k (rng has drawn u): the sample point on k and its occlusion ray.
+  auto sample_facet = [&](CounterRng& rng, std::size_t k, Tally& t) {
+    const int b = ft.bin(k);
+    if (ft.buried(k)) {  // pressed against a twin: never visible
+      ++t.samples[b];
+      return;
+    }
+    const Triangle f = facet_triangle(s, k);  // s.facet(k), without its modulos
+    double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
+    Vec3 x = f.point(r1 * (1 - r2), r1 * r2);
+    SourcePlane plane = SourcePlane::of(f);
+    ++t.samples[b];
+    if (!tracer.occluded(x, v, &plane, t.counters)) ++t.visible[b];
+  };
+  // A large periodic heightfield's draws are set up a few rays ahead (as (a)'s rays): the block
+  // of facets found, its heights, bins and the grid leaves of its cells prefetched
+  // (FacetTable::prefetch_range, Tracer::prefetch_cells); the same draws in the same order.
+  struct Draw {
+    CounterRng rng{0, 0, 0};
+    double u = 0;
+    std::size_t block = 0;
+  };
+  const std::uint64_t stream = 0xB000 + p.key;
+  if (!(p.heightfield && p.ahead && s.macro().periodic && !s.macro().region))
+    return run_replicates(p.R(), n_rep, p.nbins(), p.counters, p.done, p.reps, [&](int rep, std::uint64_t j, Tally& t) {
+      CounterRng rng(p.o.seed, ReplicatePlan::stream(stream, rep), j);
+      double u = (static_cast<double>(j) + rng.uniform()) / n_rep * total;
+      sample_facet(rng, sampler.draw(u, BlockFacetSampler::Blocks{}, weights, &t.draw_hint), t);
+    });
+  constexpr std::size_t kB = BlockFacetSampler::kBlock;
+  return run_replicates_ahead<Draw>(
+      p.R(), n_rep, p.nbins(), p.counters, p.done, p.reps,
+      [&](int rep, std::uint64_t j, Tally& t) {
+        CounterRng rng(p.o.seed, ReplicatePlan::stream(stream, rep), j);
+        const double u = (static_cast<double>(j) + rng.uniform()) / n_rep * total;
+        const std::size_t b = sampler.block(u, &t.draw_hint);
+        const std::size_t k0 = b * kB, k1 = std::min(nf, k0 + kB);
+        ft.prefetch_range(k0, k1);
+        const long c0 = static_cast<long>(k0 / 2), c1 = static_cast<long>((k1 - 1) / 2);
+        const long j0 = c0 / s.nx();
+        // a block's cells in one row (else the row the block starts in)
+        tracer.prefetch_cells(c0 - j0 * s.nx(), c1 / s.nx() == j0 ? c1 - j0 * s.nx() : s.nx() - 1, j0);
+        return Draw{rng, u, b};
+      },
+      [&](Draw& d, Tally& t) { sample_facet(d.rng, sampler.draw_in(d.block, d.u, weights), t); });
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
 G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
                     const FacetTable* table, const Tracer* under) {
   const Microsurface& s = tracer.surface();
@@ -321,180 +511,53 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
   r.binning = g1_normal_binning(o);
   const int nbins = r.binning.size();
   r.bins.assign(nbins, G1NormalBin{});
-  const Vec3 v = r.v;
 
   // Exact facet sums per normal bin, and the CDF of projected area for estimator (b).
   auto t_facets = std::chrono::steady_clock::now();
   FacetTable own;
   const FacetTable& ft = facet_table_for(s, r.binning, table, own);
-  const std::size_t nf = s.num_facets();
   sum_facets_per_bin(r, ft, s);
-  // Estimator (b) draws facets by front-facing projected area A_f max(0, v.m_f).
-  const auto weights = [&](std::size_t k0, std::size_t k1, double* w) {
-    ft.for_each_cross(k0, k1, [&](std::size_t k, const Vec3& c) { w[k - k0] = std::max(0.0, 0.5 * c.dot(v)); });
-  };
-  const BlockFacetSampler sampler(nf, BlockFacetSampler::Blocks{}, weights);
+  const FrontProjectedArea weights{ft, r.v};
+  const BlockFacetSampler sampler(s.num_facets(), BlockFacetSampler::Blocks{}, weights);
   r.front_projected = sampler.total();
   if (!(r.front_projected > 0)) throw RuntimeFailure("no facet faces the direction");
-  r.facet_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_facets).count();
+  r.facet_seconds = seconds_since(t_facets);
 
-  const RayWindow w = make_ray_window(tracer, v);
+  const RayWindow w = make_ray_window(tracer, r.v);
   r.window_area_perp = w.area_perp;
   const ReplicatePlan plan(o.rays, o.replicates);
-  const int R = plan.replicates;
-  const std::uint64_t n_rep = plan.per_replicate();
-  r.replicates = R;
+  r.replicates = plan.replicates;
   r.raycast_rays = plan.total();
   r.sample_rays = plan.total();
-  const UnitRange reps = share_of(o.split, static_cast<std::uint64_t>(R));
-  const std::uint64_t total_work = 2 * n_rep * std::max<std::uint64_t>(1, reps.size());
+  const UnitRange reps = share_of(o.split, static_cast<std::uint64_t>(plan.replicates));
+  const std::uint64_t total_work = 2 * plan.per_replicate() * std::max<std::uint64_t>(1, reps.size());
   std::atomic<std::uint64_t> done{0};
   TraceCounters counters;
-
   auto report = [&] {
     if (o.progress) o.progress(static_cast<double>(done.load()) / total_work);
   };
-
-  const bool heightfield = s.kind() == Microsurface::Kind::Heightfield;
-  // (a) ray casting along -v: per replicate a stratified, Morton-ordered pass over the window.
-  auto t_raycast = std::chrono::steady_clock::now();
-  const double cpu_raycast = process_cpu_seconds();
   const std::uint64_t key = static_cast<std::uint64_t>(r.theta * 1e6) * 7919 +
                             static_cast<std::uint64_t>(r.phi * 1e6);
-  // Hits on back faces (counted in counters) are left out of the visible area: a ray that
-  // meets a facet from behind crossed the surface through a rounding gap. A measured region:
-  // hits outside it (facet index >= num_facets()) are misses. A heightfield's bin is the
-  // table's (the same normal from the same heights, binned once), its hit decoded by the lean
-  // primary-ray path (Tracer::front_facet); a mesh's table holds float normals, so its hits
-  // are binned from the exact one.
-  // Per replicate the generator's key (CounterRng::key), per ray index j its stratum (the same
-  // in every replicate): computed once, not per ray.
-  std::vector<std::uint64_t> keys(R);
-  for (int q = 0; q < R; ++q) keys[q] = CounterRng::key(o.seed, ReplicatePlan::stream(0xA000 + key, q));
-  const DownwardRays down(tracer, v);
-  auto origin = [&](int rep, std::uint64_t j, const Strata::Cell& cell) {
-    CounterRng rng(CounterRng::Keyed{}, keys[rep], j);
-    const Vec2 ab = plan.strata.point(cell, rng);
-    return Vec3(w.origin0 + ab.x() * w.e1 + ab.y() * w.e2);
-  };
-  // A large heightfield's rays are set up a few rays ahead, their grid vertices and table
-  // entry prefetched (Tracer::prefetch_front): on tiles larger than the caches the memory reads
-  // of consecutive rays then overlap.
-  const bool ahead = static_cast<double>(s.nx()) * s.ny() >= kAheadMinCells;
-  std::vector<Tally> ray_reps;
-  if (heightfield && ahead) {
-    ray_reps = run_replicates_ahead<Vec3>(
-        R, n_rep, nbins, counters, done, reps,
-        [&](int rep, std::uint64_t j) {
-          const Vec3 org = origin(rep, j, plan.strata.cell(j));
-          ft.prefetch(tracer.prefetch_front(down, org));
-          return org;
-        },
-        [&](const Vec3& org, Tally& t) {
-          const std::size_t k = tracer.front_facet(down, org, t.counters);
-          if (k >= nf) return;
-          const int b = ft.bin(k);  // -1: a facet outside the binning's range (not tallied)
-          if (b >= 0) ++t.hits[static_cast<std::size_t>(b)];
-        });
-  } else if (heightfield) {
-    // The same rays in the same order as run_replicates, ray j of every replicate in turn; the
-    // hits of a chunk counted in one flat array (replicate-major), read from the table's
-    // stored bins, and added to the tallies at the end of the chunk.
-    const std::uint16_t* bins16 = ft.bins16();
-    const std::size_t nb = static_cast<std::size_t>(nbins);
-    ray_reps = run_chunks(
-        R, n_rep, nbins, counters, done, reps,
-        [&](std::uint64_t j0, std::uint64_t j1, std::uint64_t first, std::uint64_t active, Tally* t) {
-          std::vector<std::uint64_t> hits(active * nb + 1);  // + 1: the facets without a bin
-          const std::size_t nobin = active * nb;
-          // Ray j of the replicates in blocks (Tracer::front_facets): origins, queries, hits.
-          for (std::uint64_t j = j0; j < j1; ++j) {
-            const Strata::Cell cell = plan.strata.cell(j);
-            tracer.front_facets(
-                down, active, [&](std::size_t q) { return origin(static_cast<int>(first + q), j, cell); },
-                [&](std::size_t q) -> TraceCounters& { return t[q].counters; },
-                [&](std::size_t q, std::size_t k) {
-                  if (k >= nf) return;
-                  const int b = bins16 ? (bins16[k] == FacetTable::kNoBin16 ? -1 : bins16[k]) : ft.bin(k);
-                  ++hits[b < 0 ? nobin : q * nb + static_cast<std::size_t>(b)];
-                });
-          }
-          for (std::uint64_t q = 0; q < active; ++q)
-            for (std::size_t b = 0; b < nb; ++b) t[q].hits[b] += hits[q * nb + b];
-        });
-  } else {
-    ray_reps = run_replicates(R, n_rep, nbins, counters, done, reps,
-                              [&](int rep, std::uint64_t j, Tally& t) {
-                                const TraceHit h = tracer.first_hit(
-                                    origin(rep, j, plan.strata.cell(j)), -v, nullptr, t.counters);
-                                if (!h.hit || h.backface || h.facet >= nf) return;
-                                const int b = r.binning.bin_of(h.normal);  // -1: out of range
-                                if (b >= 0) ++t.hits[static_cast<std::size_t>(b)];
-                              });
-  }
+  const G1Pass pass{tracer, s, ft, o, r, plan, reps, key, s.kind() == Microsurface::Kind::Heightfield,
+                    static_cast<double>(s.nx()) * s.ny() >= kAheadMinCells, counters, done};
+
+  auto t_raycast = std::chrono::steady_clock::now();
+  const double cpu_raycast = process_cpu_seconds();
+  std::vector<Tally> ray_reps = raycast_g1(pass, w);
   report();
-  r.raycast_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_raycast).count();
+  r.raycast_seconds = seconds_since(t_raycast);
   r.raycast_cpu_seconds = process_cpu_seconds() - cpu_raycast;
-  // (b) area sampling, per replicate strata along the CDF (facet order is spatially coherent).
+
   auto t_sample = std::chrono::steady_clock::now();
   const double cpu_sample = process_cpu_seconds();
-  const double total = r.front_projected;
-  // After the draw of facet k (rng has drawn u): the sample point on k and its occlusion ray.
-  auto sample_facet = [&](CounterRng& rng, std::size_t k, Tally& t) {
-    const int b = ft.bin(k);
-    if (ft.buried(k)) {  // pressed against a twin: never visible
-      ++t.samples[b];
-      return;
-    }
-    const Triangle f = facet_triangle(s, k);  // s.facet(k), without its modulos
-    double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
-    Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
-    SourcePlane plane = SourcePlane::of(f);
-    ++t.samples[b];
-    if (!tracer.occluded(p, v, &plane, t.counters)) ++t.visible[b];
-  };
-  // A large periodic heightfield's draws are set up a few rays ahead (as (a)'s rays): the block
-  // of facets found, its heights, bins and the grid leaves of its cells prefetched
-  // (FacetTable::prefetch_range, Tracer::prefetch_cells); the same draws in the same order.
-  struct Draw {
-    CounterRng rng{0, 0, 0};
-    double u = 0;
-    std::size_t block = 0;
-  };
-  const bool sample_ahead = heightfield && ahead && s.macro().periodic && !s.macro().region;
-  constexpr std::size_t kB = BlockFacetSampler::kBlock;
-  std::vector<Tally> sample_reps =
-      sample_ahead
-          ? run_replicates_ahead<Draw>(
-                R, n_rep, nbins, counters, done, reps,
-                [&](int rep, std::uint64_t j, Tally& t) {
-                  CounterRng rng(o.seed, ReplicatePlan::stream(0xB000 + key, rep), j);
-                  const double u = (static_cast<double>(j) + rng.uniform()) / n_rep * total;
-                  const std::size_t b = sampler.block(u, &t.draw_hint);
-                  const std::size_t k0 = b * kB, k1 = std::min(nf, k0 + kB);
-                  ft.prefetch_range(k0, k1);
-                  const long c0 = static_cast<long>(k0 / 2), c1 = static_cast<long>((k1 - 1) / 2);
-                  const long j0 = c0 / s.nx();
-                  // a block's cells in one row (else the row the block starts in)
-                  tracer.prefetch_cells(c0 - j0 * s.nx(), c1 / s.nx() == j0 ? c1 - j0 * s.nx() : s.nx() - 1, j0);
-                  return Draw{rng, u, b};
-                },
-                [&](Draw& d, Tally& t) { sample_facet(d.rng, sampler.draw_in(d.block, d.u, weights), t); })
-          : run_replicates(R, n_rep, nbins, counters, done, reps, [&](int rep, std::uint64_t j, Tally& t) {
-              CounterRng rng(o.seed, ReplicatePlan::stream(0xB000 + key, rep), j);
-              double u = (static_cast<double>(j) + rng.uniform()) / n_rep * total;
-              sample_facet(rng, sampler.draw(u, BlockFacetSampler::Blocks{}, weights, &t.draw_hint), t);
-            });
+  std::vector<Tally> sample_reps = sample_g1(pass, sampler, weights);
   report();
   r.sample_cpu_seconds = process_cpu_seconds() - cpu_sample;
-  if (o.split) exchange_g1(*o.split, reps, ray_reps, sample_reps, counters, nbins, n_rep);
+  if (o.split) exchange_g1(*o.split, reps, ray_reps, sample_reps, counters, nbins, plan.per_replicate());
   set_g1_counts(r, ray_reps, sample_reps);
   r.counters = counters;
-  r.sample_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_sample).count();
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.sample_seconds = seconds_since(t_sample);
+  r.seconds = seconds_since(t0);
   return r;
 }
 
@@ -559,11 +622,10 @@ Table g1_table() {
   return t;
 }
 
-Json& add_row(Table& t, const G1Result& r, const Microsurface& s) {
-  t.rows.push_back(Json::object());
-  Json& row = t.rows.back();
-  row["theta_deg"] = deg(r.theta);
-  row["phi_deg"] = deg(r.phi);
+namespace {
+
+// The row's estimates: G1 by both estimators, the visible area and the models beside them.
+void put_g1_estimates(Json& row, const G1Result& r, const Microsurface& s) {
   Estimate g = r.g1_area_sampling(), gr = r.g1_raycast(), var = r.visible_area_ratio();
   row["g1"] = g.mean;
   row["g1_stderr"] = g.stderr_;
@@ -595,6 +657,10 @@ Json& add_row(Table& t, const G1Result& r, const Microsurface& s) {
     row["smith_nominal"] = nullptr;
     row["rel_dev_nominal"] = nullptr;
   }
+}
+
+// The rays and what the tracer counted of them.
+void put_g1_ray_counts(Json& row, const G1Result& r, const Microsurface& s) {
   row["rays"] = r.raycast_rays;
   row["area_samples"] = r.sample_rays;
   row["replicates"] = r.replicates;
@@ -613,62 +679,86 @@ Json& add_row(Table& t, const G1Result& r, const Microsurface& s) {
   row["border_crossings"] = r.counters.border_crossings;
   row["trace_counters"] = fields_json(r.counters);  // every counter, as TraceCounters declares them
   row["seconds"] = r.seconds;
-  Json bins = Json::array();
-  double max_abs_z = 0;
-  // Per-bin models on the bin's own facets, and the deviation of the measurement from each.
-  double chi2_smith = 0, chi2_vcav = 0, mad_smith = 0, mad_vcav = 0, mad_noise = 0, wsum = 0;
+}
+
+// The deviations of the bins' G1 from the models on their own facets (bins_* fields).
+struct BinDeviations {
+  double chi2_smith = 0, chi2_vcav = 0, mad_smith = 0, mad_vcav = 0, mad_noise = 0, max_abs_z = 0;
   int dof = 0;
+};
+
+// Bin b (holding facets) with its estimates and models, added to the deviations `d` (weights
+// w of projected area facing v over `wsum`).
+Json g1_bin_json(const G1Result& r, int b, double wsum, BinDeviations& d) {
+  const G1NormalBin& nb = r.bins[b];
+  Json jb;
+  jb["m"] = {nb.mean_normal.x(), nb.mean_normal.y(), nb.mean_normal.z()};
+  int it = b / r.binning.n_phi(), ip = b % r.binning.n_phi();
+  if (r.undersurface)  // labelled by the undersurface normal -m (theta measured from +z)
+    jb["theta_m_range_deg"] = {180 - deg(r.binning.theta_hi(it)), 180 - deg(r.binning.theta_lo(it))};
+  else
+    jb["theta_m_range_deg"] = {deg(r.binning.theta_lo(it)), deg(r.binning.theta_hi(it))};
+  jb["phi_m_range_deg"] = {deg(r.binning.phi_lo(ip)), deg(r.binning.phi_hi(ip))};
+  jb["area_fraction"] = nb.area / r.total_area;
+  if (!(nb.front_projected > 0 && nb.samples > 0)) {
+    jb["g1"] = 0.0;  // back-facing to v: G1(v, m) = 0 by definition
+    jb["g1_stderr"] = 0.0;
+    return jb;
+  }
+  Estimate eb = r.bin_g1_area_sampling(b), ea = r.bin_g1_raycast(b);
+  jb["g1"] = eb.mean;
+  jb["g1_stderr"] = eb.stderr_;
+  jb["g1_raycast"] = ea.mean;
+  jb["g1_raycast_stderr"] = ea.stderr_;
+  const double z = z_score(eb.mean, ea.mean, std::hypot(eb.stderr_, ea.stderr_));
+  jb["z_estimators"] = z_json(eb.mean, ea.mean, std::hypot(eb.stderr_, ea.stderr_));
+  if (std::isfinite(z)) d.max_abs_z = std::max(d.max_abs_z, std::abs(z));
+  const double smith = 1.0 / (1.0 + r.lambda_numeric);     // [GeomBSDF24, eq. 3Xc]: W1, no m dependence
+  const double vcav = nb.vcavity_weighted / nb.front_projected;  // [Heitz14, eq. 24], bin average
+  jb["smith_numeric"] = smith;
+  jb["vcavity_numeric"] = vcav;
+  const double w = nb.front_projected / wsum;
+  d.mad_smith += w * std::abs(eb.mean - smith);
+  d.mad_vcav += w * std::abs(eb.mean - vcav);
+  d.mad_noise += w * eb.stderr_ * std::sqrt(2 / kPi);
+  // A bin whose samples are all visible (or none) has a zero error: use the resolution of
+  // its n samples instead (stats.hpp proportion_floor), so that chi^2 stays finite and honest.
+  const double sb = std::max(eb.stderr_, proportion_floor(nb.samples));
+  d.chi2_smith += std::pow((eb.mean - smith) / sb, 2);
+  d.chi2_vcav += std::pow((eb.mean - vcav) / sb, 2);
+  ++d.dof;
+  return jb;
+}
+
+// Per-bin models on the bin's own facets, and the deviation of the measurement from each.
+void put_g1_bins(Json& row, const G1Result& r) {
+  Json bins = Json::array();
+  BinDeviations d;
+  double wsum = 0;
   for (int b = 0; b < r.binning.size(); ++b)
     if (r.bins[b].samples > 0) wsum += r.bins[b].front_projected;
-  for (int b = 0; b < r.binning.size(); ++b) {
-    const G1NormalBin& nb = r.bins[b];
-    if (nb.area <= 0) continue;
-    Json jb;
-    jb["m"] = {nb.mean_normal.x(), nb.mean_normal.y(), nb.mean_normal.z()};
-    int it = b / r.binning.n_phi(), ip = b % r.binning.n_phi();
-    if (r.undersurface)  // labelled by the undersurface normal -m (theta measured from +z)
-      jb["theta_m_range_deg"] = {180 - deg(r.binning.theta_hi(it)), 180 - deg(r.binning.theta_lo(it))};
-    else
-      jb["theta_m_range_deg"] = {deg(r.binning.theta_lo(it)), deg(r.binning.theta_hi(it))};
-    jb["phi_m_range_deg"] = {deg(r.binning.phi_lo(ip)), deg(r.binning.phi_hi(ip))};
-    jb["area_fraction"] = nb.area / r.total_area;
-    if (nb.front_projected > 0 && nb.samples > 0) {
-      Estimate eb = r.bin_g1_area_sampling(b), ea = r.bin_g1_raycast(b);
-      jb["g1"] = eb.mean;
-      jb["g1_stderr"] = eb.stderr_;
-      jb["g1_raycast"] = ea.mean;
-      jb["g1_raycast_stderr"] = ea.stderr_;
-      const double z = z_score(eb.mean, ea.mean, std::hypot(eb.stderr_, ea.stderr_));
-      jb["z_estimators"] = z_json(eb.mean, ea.mean, std::hypot(eb.stderr_, ea.stderr_));
-      if (std::isfinite(z)) max_abs_z = std::max(max_abs_z, std::abs(z));
-      const double smith = 1.0 / (1.0 + r.lambda_numeric);     // [GeomBSDF24, eq. 3Xc]: W1, no m dependence
-      const double vcav = nb.vcavity_weighted / nb.front_projected;  // [Heitz14, eq. 24], bin average
-      jb["smith_numeric"] = smith;
-      jb["vcavity_numeric"] = vcav;
-      const double w = nb.front_projected / wsum;
-      mad_smith += w * std::abs(eb.mean - smith);
-      mad_vcav += w * std::abs(eb.mean - vcav);
-      mad_noise += w * eb.stderr_ * std::sqrt(2 / kPi);
-      // A bin whose samples are all visible (or none) has a zero error: use the resolution of
-      // its n samples instead (stats.hpp proportion_floor), so that chi^2 stays finite and honest.
-      const double sb = std::max(eb.stderr_, proportion_floor(nb.samples));
-      chi2_smith += std::pow((eb.mean - smith) / sb, 2);
-      chi2_vcav += std::pow((eb.mean - vcav) / sb, 2);
-      ++dof;
-    } else {
-      jb["g1"] = 0.0;  // back-facing to v: G1(v, m) = 0 by definition
-      jb["g1_stderr"] = 0.0;
-    }
-    bins.push_back(jb);
-  }
-  row["bins_dof"] = dof;
-  row["bins_chi2_smith"] = chi2_smith;
-  row["bins_chi2_vcavity"] = chi2_vcav;
-  row["bins_mad_smith"] = mad_smith;
-  row["bins_mad_vcavity"] = mad_vcav;
-  row["bins_mad_noise"] = mad_noise;
-  row["max_abs_z_estimators"] = max_abs_z;
+  for (int b = 0; b < r.binning.size(); ++b)
+    if (r.bins[b].area > 0) bins.push_back(g1_bin_json(r, b, wsum, d));
+  row["bins_dof"] = d.dof;
+  row["bins_chi2_smith"] = d.chi2_smith;
+  row["bins_chi2_vcavity"] = d.chi2_vcav;
+  row["bins_mad_smith"] = d.mad_smith;
+  row["bins_mad_vcavity"] = d.mad_vcav;
+  row["bins_mad_noise"] = d.mad_noise;
+  row["max_abs_z_estimators"] = d.max_abs_z;
   row["bins"] = bins;
+}
+
+}  // namespace
+
+Json& add_row(Table& t, const G1Result& r, const Microsurface& s) {
+  t.rows.push_back(Json::object());
+  Json& row = t.rows.back();
+  row["theta_deg"] = deg(r.theta);
+  row["phi_deg"] = deg(r.phi);
+  put_g1_estimates(row, r, s);
+  put_g1_ray_counts(row, r, s);
+  put_g1_bins(row, r);
   return row;
 }
 

@@ -150,18 +150,13 @@ DirectionBinning g2_normal_binning(const G2Options& o) {
   return DirectionBinning(o.normal_theta_bins, o.normal_phi_bins, kPi);
 }
 
-G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, const G2Options& opt,
-                    const FacetTable* table) {
-  const Microsurface& s = tracer.surface();
-  G2Result r = start_g2(o_in, i_in, opt, s.macro().area);
-  auto t0 = std::chrono::steady_clock::now();
+namespace {
+
+// The exact facet sums of r.bins at (r.o, r.i), r.total_area, r.front_area, r.lambda_o and
+// r.lambda_i; returns the V-cavity sum over every bin.
+double sum_g2_facets_per_bin(G2Result& r, const FacetTable& ft, const Microsurface& s) {
   const int nbins = r.binning.size();
   const Vec3 o = r.o, i = r.i;
-
-  FacetTable own;
-  const FacetTable& ft = facet_table_for(s, r.binning, table, own);
-  const std::size_t nf = s.num_facets();
-
   // Exact facet sums. Per bin: area, area facing both, weight w_f, w-weighted normal (3),
   // V-cavity sum; then the back-facing projected areas toward o and toward i (Smith Lambda
   // from facets). The CDF of w_f places the samples.
@@ -173,7 +168,7 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
     const double om = o.dot(m), im = i.dot(m);
     return om > 0 && im > 0 ? 0.5 * a * (om + im) : 0.0;
   };
-  Sums sums = sum_over_facets(nf, width, [&](std::size_t k, double* acc) {
+  Sums sums = sum_over_facets(s.num_facets(), width, [&](std::size_t k, double* acc) {
     Vec3 m;
     double a;
     ft.normal_area(k, m, a);
@@ -211,6 +206,39 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
   const Vec3 n = s.macro().normal;
   r.lambda_o = sums[width - 2] / (o.dot(n) * s.macro().area);
   r.lambda_i = sums[width - 1] / (i.dot(n) * s.macro().area);
+  return vcav_total;
+}
+
+// Chunk tallies of replicates r0, r0 + 1, ... (chunks_per_replicate nc each) into the
+// per-replicate counts of r.bins and r.counters.
+void add_g2_parts(G2Result& r, const std::vector<Tally>& parts, int r0, std::uint64_t nc) {
+  for (std::size_t c = 0; c < parts.size(); ++c) {
+    const int rep = r0 + static_cast<int>(c / nc);
+    for (int b = 0; b < r.binning.size(); ++b) {
+      G2NormalBin& nb = r.bins[b];
+      nb.samples_r[rep] += parts[c].samples[b];
+      nb.visible_o_r[rep] += parts[c].vis_o[b];
+      nb.visible_i_r[rep] += parts[c].vis_i[b];
+      nb.visible_both_r[rep] += parts[c].vis_both[b];
+    }
+    r.counters += parts[c].counters;
+  }
+}
+
+}  // namespace
+
+G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, const G2Options& opt,
+                    const FacetTable* table) {
+  const Microsurface& s = tracer.surface();
+  G2Result r = start_g2(o_in, i_in, opt, s.macro().area);
+  auto t0 = std::chrono::steady_clock::now();
+  const int nbins = r.binning.size();
+  const Vec3 o = r.o, i = r.i;
+
+  FacetTable own;
+  const FacetTable& ft = facet_table_for(s, r.binning, table, own);
+  const std::size_t nf = s.num_facets();
+  const double vcav_total = sum_g2_facets_per_bin(r, ft, s);
   const auto weight = [&](std::size_t k) {  // w_f from 2 A_f m_f, without a square root
     const Vec3 c = ft.cross(k);
     const double oc = o.dot(c), ic = i.dot(c);
@@ -272,17 +300,7 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
     std::vector<Tally> parts = run_replicate_chunks<Tally>(
         r1 - r0, n_rep, kChunk, [&] { return Tally(nbins); },
         [&](int rep, std::uint64_t j, Tally& t) { body(r0 + rep, j, t); });
-    for (std::size_t c = 0; c < parts.size(); ++c) {
-      const int rep = r0 + static_cast<int>(c / nc);
-      for (int b = 0; b < nbins; ++b) {
-        G2NormalBin& nb = r.bins[b];
-        nb.samples_r[rep] += parts[c].samples[b];
-        nb.visible_o_r[rep] += parts[c].vis_o[b];
-        nb.visible_i_r[rep] += parts[c].vis_i[b];
-        nb.visible_both_r[rep] += parts[c].vis_both[b];
-      }
-      r.counters += parts[c].counters;
-    }
+    add_g2_parts(r, parts, r0, nc);
     if (opt.progress) opt.progress(static_cast<double>(done.load()) / (n_rep * (share1 - share0)));
   }
   finish_g2(r, opt, reps);
@@ -367,24 +385,11 @@ Table g2_table() {
   return t;
 }
 
-Json& add_row(Table& t, const G2Result& r, const Microsurface& s) {
-  t.rows.push_back(Json::object());
-  Json& row = t.rows.back();
-  row["theta_o_deg"] = deg(theta_of(r.o));
-  row["phi_o_deg"] = deg(phi_of(r.o));
-  row["theta_i_deg"] = deg(theta_of(r.i));
-  row["phi_i_deg"] = deg(phi_of(r.i));
-  const double dphi = models::azimuth_difference(r.o, r.i);
-  row["delta_phi_deg"] = deg(dphi);
-  const Estimate g2 = r.g2(), go = r.g1_o(), gi = r.g1_i();
-  row["g2"] = g2.mean;
-  row["g2_stderr"] = g2.stderr_;
-  row["g1_o"] = go.mean;
-  row["g1_o_stderr"] = go.stderr_;
-  row["g1_i"] = gi.mean;
-  row["g1_i_stderr"] = gi.stderr_;
-  // The bin holding the half vector h = (o + i)/|o + i|: the G2(o, h, i) that a specular
-  // microfacet BRDF uses ([Heitz14, eq. 17] with G2), where the Smith forms apply as they are.
+namespace {
+
+// The bin holding the half vector h = (o + i)/|o + i|: the G2(o, h, i) that a specular
+// microfacet BRDF uses ([Heitz14, eq. 17] with G2), where the Smith forms apply as they are.
+void put_half_bin(Json& row, const G2Result& r) {
   const int hb = r.binning.bin_of((r.o + r.i).normalized());
   const G2NormalBin& hbin = r.bins[hb];
   const int hit = hb / r.binning.n_phi(), hip = hb % r.binning.n_phi();
@@ -399,6 +404,11 @@ Json& add_row(Table& t, const G2Result& r, const Microsurface& s) {
     row["g2_half"] = nullptr;
     row["g2_half_stderr"] = nullptr;
   }
+}
+
+// The models from the surface's own facets with the z-scores of g2 against them, and the
+// nominal NDF's Smith forms.
+void put_g2_models(Json& row, const G2Result& r, const Microsurface& s, const Estimate& g2, double dphi) {
   row["lambda_o_numeric"] = r.lambda_o;
   row["lambda_i_numeric"] = r.lambda_i;
   const models::G2Forms f = r.smith_numeric();
@@ -427,8 +437,11 @@ Json& add_row(Table& t, const G2Result& r, const Microsurface& s) {
                           "smith_height_direction_correlated_nominal"})
       row[k] = nullptr;
   }
-  // The forms built per bin from the measured G1s (correlation assumption alone), their
-  // difference to g2 with its standard error (delta method) and z-score.
+}
+
+// The forms built per bin from the measured G1s (correlation assumption alone), their
+// difference to g2 with its standard error (delta method) and z-score.
+void put_forms_from_g1(Json& row, const G2Result& r) {
   const G2Result::FormsFromG1 fg = r.forms_from_g1();
   const auto fv = as_array(fg.value), fd = as_array(fg.diff), fs = as_array(fg.diff_stderr);
   const char* const* names = kForms;
@@ -438,13 +451,10 @@ Json& add_row(Table& t, const G2Result& r, const Microsurface& s) {
     row[std::string(names[k]) + "_from_g1_diff_stderr"] = fs[k];
     row[std::string("z_") + names[k] + "_from_g1"] = z_json(fd[k], 0.0, fs[k]);
   }
-  row["area_samples"] = r.samples;
-  row["replicates"] = r.replicates;
-  row["occlusion_rays"] = r.counters.rays;
-  row["lost_rays"] = r.counters.lost_below + r.counters.unresolved;
-  row["backface_hits"] = r.counters.backface_hits;
-  row["trace_counters"] = fields_json(r.counters);  // every counter, as TraceCounters declares them
-  row["seconds"] = r.seconds;
+}
+
+// The normal bins holding facets.
+Json g2_bins_json(const G2Result& r) {
   Json bins = Json::array();
   for (int b = 0; b < r.binning.size(); ++b) {
     const G2NormalBin& nb = r.bins[b];
@@ -478,7 +488,38 @@ Json& add_row(Table& t, const G2Result& r, const Microsurface& s) {
     }
     bins.push_back(jb);
   }
-  row["bins"] = bins;
+  return bins;
+}
+
+}  // namespace
+
+Json& add_row(Table& t, const G2Result& r, const Microsurface& s) {
+  t.rows.push_back(Json::object());
+  Json& row = t.rows.back();
+  row["theta_o_deg"] = deg(theta_of(r.o));
+  row["phi_o_deg"] = deg(phi_of(r.o));
+  row["theta_i_deg"] = deg(theta_of(r.i));
+  row["phi_i_deg"] = deg(phi_of(r.i));
+  const double dphi = models::azimuth_difference(r.o, r.i);
+  row["delta_phi_deg"] = deg(dphi);
+  const Estimate g2 = r.g2(), go = r.g1_o(), gi = r.g1_i();
+  row["g2"] = g2.mean;
+  row["g2_stderr"] = g2.stderr_;
+  row["g1_o"] = go.mean;
+  row["g1_o_stderr"] = go.stderr_;
+  row["g1_i"] = gi.mean;
+  row["g1_i_stderr"] = gi.stderr_;
+  put_half_bin(row, r);
+  put_g2_models(row, r, s, g2, dphi);
+  put_forms_from_g1(row, r);
+  row["area_samples"] = r.samples;
+  row["replicates"] = r.replicates;
+  row["occlusion_rays"] = r.counters.rays;
+  row["lost_rays"] = r.counters.lost_below + r.counters.unresolved;
+  row["backface_hits"] = r.counters.backface_hits;
+  row["trace_counters"] = fields_json(r.counters);  // every counter, as TraceCounters declares them
+  row["seconds"] = r.seconds;
+  row["bins"] = g2_bins_json(r);
   return row;
 }
 

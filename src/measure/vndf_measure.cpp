@@ -36,6 +36,33 @@ void histogram_chunks(std::uint64_t n, int nbins, std::vector<std::uint64_t>& co
     counters += cparts[c];
   }
 }
+// Origins first .. first + origins.size() - 1 of the stream, i.i.d. uniform in the unit square,
+// sorted in Morton order (with their coordinates as tie-breaks: a total order, so the same for
+// any thread count).
+void draw_sorted_origins(std::uint64_t seed, std::uint64_t stream, std::uint64_t first,
+                         std::vector<std::pair<std::uint64_t, Vec2>>& origins) {
+  tbb::parallel_for(std::uint64_t(0), static_cast<std::uint64_t>(origins.size()), [&](std::uint64_t j) {
+    CounterRng rng(seed, stream, first + j);
+    const double a = rng.uniform(), b = rng.uniform();
+    const auto spread = [](std::uint64_t x) {  // interleave the 21 bits of x with zeros
+      x &= 0x1FFFFF;
+      x = (x | (x << 32)) & 0x1F00000000FFFFull;
+      x = (x | (x << 16)) & 0x1F0000FF0000FFull;
+      x = (x | (x << 8)) & 0x100F00F00F00F00Full;
+      x = (x | (x << 4)) & 0x10C30C30C30C30C3ull;
+      x = (x | (x << 2)) & 0x1249249249249249ull;
+      return x;
+    };
+    const std::uint64_t key = spread(static_cast<std::uint64_t>(a * (1 << 21))) |
+                              (spread(static_cast<std::uint64_t>(b * (1 << 21))) << 1);
+    origins[j] = {key, Vec2(a, b)};
+  });
+  tbb::parallel_sort(origins.begin(), origins.end(), [](const auto& x, const auto& y) {
+    return x.first < y.first ||
+           (x.first == y.first && (x.second.x() < y.second.x() ||
+                                   (x.second.x() == y.second.x() && x.second.y() < y.second.y())));
+  });
+}
 }  // namespace
 
 DirectionBinning vndf_binning(const VndfOptions& o) {
@@ -125,7 +152,8 @@ VndfResult measure_vndf(const Tracer& tracer, const Vec3& v_in, const VndfOption
   for (double x : sums) r.front_projected_total += x;
   if (!(r.front_projected_total > 0)) throw RuntimeFailure("no facet faces the direction");
 
-  const RayWindow w = make_ray_window(tracer, v);
+  const std::unique_ptr<Scene> scene = make_scene(tracer);
+  const RayWindow w = scene->ray_window(v);
   r.window_area_perp = w.area_perp;
   // Origins i.i.d. uniform over the window (not stratified): the bin counts are then exactly
   // multinomial, so the binomial standard errors and the chi-square p-values are calibrated
@@ -145,36 +173,17 @@ VndfResult measure_vndf(const Tracer& tracer, const Vec3& v_in, const VndfOption
   for (std::uint64_t first = 0; first < r.rays; first += batch) {
     const std::uint64_t n = std::min(batch, r.rays - first);
     origins.resize(n);
-    tbb::parallel_for(std::uint64_t(0), n, [&](std::uint64_t j) {
-      CounterRng rng(o.seed, stream, first + j);
-      const double a = rng.uniform(), b = rng.uniform();
-      const auto spread = [](std::uint64_t x) {  // interleave the 21 bits of x with zeros
-        x &= 0x1FFFFF;
-        x = (x | (x << 32)) & 0x1F00000000FFFFull;
-        x = (x | (x << 16)) & 0x1F0000FF0000FFull;
-        x = (x | (x << 8)) & 0x100F00F00F00F00Full;
-        x = (x | (x << 4)) & 0x10C30C30C30C30C3ull;
-        x = (x | (x << 2)) & 0x1249249249249249ull;
-        return x;
-      };
-      const std::uint64_t key = spread(static_cast<std::uint64_t>(a * (1 << 21))) |
-                                (spread(static_cast<std::uint64_t>(b * (1 << 21))) << 1);
-      origins[j] = {key, Vec2(a, b)};
-    });
-    tbb::parallel_sort(origins.begin(), origins.end(), [](const auto& x, const auto& y) {
-      return x.first < y.first ||
-             (x.first == y.first && (x.second.x() < y.second.x() ||
-                                     (x.second.x() == y.second.x() && x.second.y() < y.second.y())));
-    });
+    draw_sorted_origins(o.seed, stream, first, origins);
     std::vector<std::uint64_t> part;
     histogram_chunks(n, nbins, part, r.counters,
                      [&](std::uint64_t j, std::vector<std::uint64_t>& c, TraceCounters& tc) {
                        if (!share.contains(first + j)) return;
                        const Vec2& ab = origins[j].second;
                        const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
-                       const TraceHit h = tracer.first_hit(org, -v, nullptr, tc);
-                       if (!h.hit || h.backface) return;  // back faces: rounding gaps (counted)
-                       if (h.facet >= nf) return;  // a measured region: a hit outside it, a miss
+                       const TraceHit h = scene->intersect(org, -v, nullptr, tc);
+                       // Back faces (rounding gaps, counted) and, in a measured region, hits
+                       // outside it are misses.
+                       if (scene->front_facet(h) == Scene::kNoFacet) return;
                        const int b = r.binning.bin_of(h.normal);
                        ++c[b >= 0 ? b : nbins];
                      });
@@ -287,6 +296,42 @@ Table vndf_table(double family_alpha) {
   return t;
 }
 
+namespace {
+
+// The bins: measured D_v, Smith's from the facets and the nominal model's (`model`: its bin
+// probabilities, empty without one) with the z-score under the model's binomial variance.
+Json vndf_bins_json(const VndfResult& r, const Microsurface& s, const std::vector<double>& model) {
+  Json bins = Json::array();
+  for (int b = 0; b < r.binning.size(); ++b) {
+    const int it = b / r.binning.n_phi(), ip = b % r.binning.n_phi();
+    Json jb;
+    jb["theta_m_range_deg"] = {deg(r.binning.theta_lo(it)), deg(r.binning.theta_hi(it))};
+    jb["phi_m_range_deg"] = {deg(r.binning.phi_lo(ip)), deg(r.binning.phi_hi(ip))};
+    const Estimate d = r.dv(b);
+    jb["dv"] = d.mean;
+    jb["dv_stderr"] = d.stderr_;
+    jb["hits"] = r.bin_hits[b];
+    jb["dv_smith_numeric"] = r.dv_smith_numeric(b);
+    if (s.nominal) {
+      const double w = r.binning.solid_angle(b);
+      const double dm = model[b] / w;
+      jb["dv_model"] = dm;
+      // z under the model's own binomial variance (defined also where no ray landed).
+      const double se = std::sqrt(model[b] * (1 - model[b]) / r.hits) / w;
+      jb["z"] = z_json(d.mean, dm, se);
+      jb["rel_dev"] = rel_dev_json(d.mean, dm);
+    } else {
+      jb["dv_model"] = nullptr;
+      jb["z"] = nullptr;
+      jb["rel_dev"] = nullptr;
+    }
+    bins.push_back(jb);
+  }
+  return bins;
+}
+
+}  // namespace
+
 Json& add_row(Table& t, const VndfResult& r, const Microsurface& s, const VndfOptions& o,
               const std::optional<SamplerTest>& sampler) {
   t.rows.push_back(Json::object());
@@ -347,33 +392,7 @@ Json& add_row(Table& t, const VndfResult& r, const Microsurface& s, const VndfOp
   row["backface_hits"] = r.counters.backface_hits;
   row["trace_counters"] = fields_json(r.counters);  // every counter, as TraceCounters declares them
   row["seconds"] = r.seconds;
-  Json bins = Json::array();
-  for (int b = 0; b < r.binning.size(); ++b) {
-    const int it = b / r.binning.n_phi(), ip = b % r.binning.n_phi();
-    Json jb;
-    jb["theta_m_range_deg"] = {deg(r.binning.theta_lo(it)), deg(r.binning.theta_hi(it))};
-    jb["phi_m_range_deg"] = {deg(r.binning.phi_lo(ip)), deg(r.binning.phi_hi(ip))};
-    const Estimate d = r.dv(b);
-    jb["dv"] = d.mean;
-    jb["dv_stderr"] = d.stderr_;
-    jb["hits"] = r.bin_hits[b];
-    jb["dv_smith_numeric"] = r.dv_smith_numeric(b);
-    if (s.nominal) {
-      const double w = r.binning.solid_angle(b);
-      const double dm = model[b] / w;
-      jb["dv_model"] = dm;
-      // z under the model's own binomial variance (defined also where no ray landed).
-      const double se = std::sqrt(model[b] * (1 - model[b]) / r.hits) / w;
-      jb["z"] = z_json(d.mean, dm, se);
-      jb["rel_dev"] = rel_dev_json(d.mean, dm);
-    } else {
-      jb["dv_model"] = nullptr;
-      jb["z"] = nullptr;
-      jb["rel_dev"] = nullptr;
-    }
-    bins.push_back(jb);
-  }
-  row["bins"] = bins;
+  row["bins"] = vndf_bins_json(r, s, model);
   return row;
 }
 

@@ -77,6 +77,109 @@ void throw_on_embree_error(RTCDevice device, const char* what) {
 
 }  // namespace
 
+// The heightfield as an Embree grid, its vertices in a mapping of their own (with the periodic
+// copy of one cell around the tile, none for a measured window).
+RTCGeometry Tracer::new_grid_geometry() {
+  const Microsurface& surface = surface_;
+  const Macrosurface& macro = surface.macro();
+  RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_GRID);
+  if (!macro.periodic) {  // a measured window: its own vertices only, no periodic copy
+    window_ = true;
+    pad_ = 0;
+    foot_x0_ = surface.grid_point(0, 0).x();
+    foot_y0_ = surface.grid_point(0, 0).y();
+    foot_x1_ = surface.grid_point(surface.traced_cells_x(), 0).x();
+    foot_y1_ = surface.grid_point(0, surface.traced_cells_y()).y();
+  }
+  grid_width_ = surface.traced_cells_x() + 1 + 2 * pad_;
+  grid_height_ = surface.traced_cells_y() + 1 + 2 * pad_;
+  // The vertex buffer in a mapping of its own, advised to use transparent huge pages: a ray
+  // reads the three vertex rows of its grid leaf, a row apart (12 bytes per vertex), so on a
+  // large tile each ray otherwise costs three TLB misses besides its cache misses (Embree's
+  // `hugepages` option covers its own allocations, not a geometry's buffers). 16 bytes of
+  // padding: Embree may read the last vertex with a 16-byte load.
+  const std::size_t nverts = static_cast<std::size_t>(grid_width_) * grid_height_;
+  vertex_bytes_ = 3 * sizeof(float) * nverts + 16;
+  vertex_pages_ = mmap(nullptr, vertex_bytes_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS,
+                       -1, 0);
+  if (vertex_pages_ == MAP_FAILED) {
+    vertex_pages_ = nullptr;
+    rtcReleaseGeometry(geom);
+    rtcReleaseScene(scene_);
+    rtcReleaseDevice(device_);
+    throw std::bad_alloc();
+  }
+#ifdef MADV_HUGEPAGE
+  madvise(vertex_pages_, vertex_bytes_, MADV_HUGEPAGE);  // a hint: no huge pages is no error
+#endif
+  auto* v = static_cast<float*>(vertex_pages_);
+  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, v, 0,
+                             3 * sizeof(float), nverts);
+  grid_vertices_ = v;
+  double height_sum = 0;
+  for (int j = 0; j < grid_height_; ++j)
+    for (int i = 0; i < grid_width_; ++i) {
+      Vec3 p = surface.grid_point(i - pad_, j - pad_);
+      float* q = v + 3 * (static_cast<std::size_t>(j) * grid_width_ + i);
+      q[0] = static_cast<float>(p.x());
+      q[1] = static_cast<float>(p.y());
+      q[2] = static_cast<float>(p.z());
+      height_sum += q[2];
+    }
+  mean_height_ = height_sum / (static_cast<double>(grid_width_) * grid_height_);
+  auto* g = static_cast<RTCGrid*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_GRID, 0,
+                                                          RTC_FORMAT_GRID, sizeof(RTCGrid), 1));
+  g->startVertexID = 0;
+  g->stride = grid_width_;
+  g->width = static_cast<unsigned short>(grid_width_);
+  g->height = static_cast<unsigned short>(grid_height_);
+  return geom;
+}
+
+// The mesh as Embree triangles (with the copies of a periodic mesh's border triangles).
+RTCGeometry Tracer::new_mesh_geometry() {
+  const Macrosurface& macro = surface_.macro();
+  RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+  const auto& verts = surface_.vertices();
+  const auto& tris = surface_.triangles();
+  // Periodic meshes: add copies, shifted by one tile, of the triangles near the borders so
+  // that a ray crossing a border meets interior geometry (no hit lost to rounding there).
+  std::vector<Eigen::Vector3f> vout(verts);
+  std::vector<std::array<std::uint32_t, 3>> tout(tris);
+  for (std::uint32_t k = 0; k < tris.size(); ++k) mesh_prim_to_facet_.push_back(k);
+  if (macro.periodic) {
+    const double mx = 0.05 * macro.size_x, my = 0.05 * macro.size_y;
+    for (int sx = -1; sx <= 1; ++sx)
+      for (int sy = -1; sy <= 1; ++sy) {
+        if (sx == 0 && sy == 0) continue;
+        Eigen::Vector3f shift(sx * macro.size_x, sy * macro.size_y, 0);
+        for (std::uint32_t k = 0; k < tris.size(); ++k) {
+          Eigen::AlignedBox3f tb;
+          for (auto id : tris[k]) tb.extend(verts[id] + shift);
+          if (tb.max().x() < -0.5 * macro.size_x - mx || tb.min().x() > 0.5 * macro.size_x + mx ||
+              tb.max().y() < -0.5 * macro.size_y - my || tb.min().y() > 0.5 * macro.size_y + my)
+            continue;
+          std::array<std::uint32_t, 3> t{};
+          for (int c = 0; c < 3; ++c) {
+            t[c] = static_cast<std::uint32_t>(vout.size());
+            vout.push_back(verts[tris[k][c]] + shift);
+          }
+          tout.push_back(t);
+          mesh_prim_to_facet_.push_back(k);
+        }
+      }
+  }
+  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+      geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vout.size() + 1));
+  for (std::size_t k = 0; k < vout.size(); ++k)
+    for (int c = 0; c < 3; ++c) v[3 * k + c] = vout[k][c];
+  auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+      geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), tout.size()));
+  for (std::size_t k = 0; k < tout.size(); ++k)
+    for (int c = 0; c < 3; ++c) idx[3 * k + c] = tout[k][c];
+  return geom;
+}
+
 Tracer::Tracer(const Microsurface& surface) : surface_(surface) {
   auto t0 = std::chrono::steady_clock::now();
   // Huge pages (transparent, by madvise) for the BVH and vertices: on large tiles every ray
@@ -96,99 +199,7 @@ Tracer::Tracer(const Microsurface& surface) : surface_(surface) {
 
   const Macrosurface& macro = surface.macro();
   Eigen::AlignedBox3d box = surface.bounds();
-  RTCGeometry geom;
-  if (grid) {
-    geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_GRID);
-    if (!macro.periodic) {  // a measured window: its own vertices only, no periodic copy
-      window_ = true;
-      pad_ = 0;
-      foot_x0_ = surface.grid_point(0, 0).x();
-      foot_y0_ = surface.grid_point(0, 0).y();
-      foot_x1_ = surface.grid_point(surface.traced_cells_x(), 0).x();
-      foot_y1_ = surface.grid_point(0, surface.traced_cells_y()).y();
-    }
-    grid_width_ = surface.traced_cells_x() + 1 + 2 * pad_;
-    grid_height_ = surface.traced_cells_y() + 1 + 2 * pad_;
-    // The vertex buffer in a mapping of its own, advised to use transparent huge pages: a ray
-    // reads the three vertex rows of its grid leaf, a row apart (12 bytes per vertex), so on a
-    // large tile each ray otherwise costs three TLB misses besides its cache misses (Embree's
-    // `hugepages` option covers its own allocations, not a geometry's buffers). 16 bytes of
-    // padding: Embree may read the last vertex with a 16-byte load.
-    const std::size_t nverts = static_cast<std::size_t>(grid_width_) * grid_height_;
-    vertex_bytes_ = 3 * sizeof(float) * nverts + 16;
-    vertex_pages_ = mmap(nullptr, vertex_bytes_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS,
-                         -1, 0);
-    if (vertex_pages_ == MAP_FAILED) {
-      vertex_pages_ = nullptr;
-      rtcReleaseGeometry(geom);
-      rtcReleaseScene(scene_);
-      rtcReleaseDevice(device_);
-      throw std::bad_alloc();
-    }
-#ifdef MADV_HUGEPAGE
-    madvise(vertex_pages_, vertex_bytes_, MADV_HUGEPAGE);  // a hint: no huge pages is no error
-#endif
-    auto* v = static_cast<float*>(vertex_pages_);
-    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, v, 0,
-                               3 * sizeof(float), nverts);
-    grid_vertices_ = v;
-    double height_sum = 0;
-    for (int j = 0; j < grid_height_; ++j)
-      for (int i = 0; i < grid_width_; ++i) {
-        Vec3 p = surface.grid_point(i - pad_, j - pad_);
-        float* q = v + 3 * (static_cast<std::size_t>(j) * grid_width_ + i);
-        q[0] = static_cast<float>(p.x());
-        q[1] = static_cast<float>(p.y());
-        q[2] = static_cast<float>(p.z());
-        height_sum += q[2];
-      }
-    mean_height_ = height_sum / (static_cast<double>(grid_width_) * grid_height_);
-    auto* g = static_cast<RTCGrid*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_GRID, 0,
-                                                            RTC_FORMAT_GRID, sizeof(RTCGrid), 1));
-    g->startVertexID = 0;
-    g->stride = grid_width_;
-    g->width = static_cast<unsigned short>(grid_width_);
-    g->height = static_cast<unsigned short>(grid_height_);
-  } else {
-    geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-    const auto& verts = surface.vertices();
-    const auto& tris = surface.triangles();
-    // Periodic meshes: add copies, shifted by one tile, of the triangles near the borders so
-    // that a ray crossing a border meets interior geometry (no hit lost to rounding there).
-    std::vector<Eigen::Vector3f> vout(verts);
-    std::vector<std::array<std::uint32_t, 3>> tout(tris);
-    for (std::uint32_t k = 0; k < tris.size(); ++k) mesh_prim_to_facet_.push_back(k);
-    if (macro.periodic) {
-      const double mx = 0.05 * macro.size_x, my = 0.05 * macro.size_y;
-      for (int sx = -1; sx <= 1; ++sx)
-        for (int sy = -1; sy <= 1; ++sy) {
-          if (sx == 0 && sy == 0) continue;
-          Eigen::Vector3f shift(sx * macro.size_x, sy * macro.size_y, 0);
-          for (std::uint32_t k = 0; k < tris.size(); ++k) {
-            Eigen::AlignedBox3f tb;
-            for (auto id : tris[k]) tb.extend(verts[id] + shift);
-            if (tb.max().x() < -0.5 * macro.size_x - mx || tb.min().x() > 0.5 * macro.size_x + mx ||
-                tb.max().y() < -0.5 * macro.size_y - my || tb.min().y() > 0.5 * macro.size_y + my)
-              continue;
-            std::array<std::uint32_t, 3> t{};
-            for (int c = 0; c < 3; ++c) {
-              t[c] = static_cast<std::uint32_t>(vout.size());
-              vout.push_back(verts[tris[k][c]] + shift);
-            }
-            tout.push_back(t);
-            mesh_prim_to_facet_.push_back(k);
-          }
-        }
-    }
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vout.size() + 1));
-    for (std::size_t k = 0; k < vout.size(); ++k)
-      for (int c = 0; c < 3; ++c) v[3 * k + c] = vout[k][c];
-    auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), tout.size()));
-    for (std::size_t k = 0; k < tout.size(); ++k)
-      for (int c = 0; c < 3; ++c) idx[3 * k + c] = tout[k][c];
-  }
+  RTCGeometry geom = grid ? new_grid_geometry() : new_mesh_geometry();
   static_assert(sizeof(double) == 8, "");
   scale_ = std::max({box.sizes().maxCoeff(), macro.size_x, macro.size_y});
   rtcCommitGeometry(geom);

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdint>
 
+#include "microsim/trace/scene.hpp"
 #include "microsim/trace/tracer.hpp"
 
 namespace microsim {
@@ -55,10 +56,7 @@ struct Strata {
 // non-periodic heightfield measured in a region (Macrosurface::region, a window): a rectangle
 // at the top of the slab covering every ray that can meet the region's facets. With a region,
 // hits outside it are misses (periodic or not).
-struct RayWindow {
-  Vec3 origin0, e1, e2;
-  double area_perp = 0;  // |(e1 x e2) . v|
-};
+// (RayWindow: trace/scene.hpp.)
 RayWindow make_ray_window(const Tracer& tracer, const Vec3& v);
 
 // A random stream id for a direction (same construction as the G1 estimator's).

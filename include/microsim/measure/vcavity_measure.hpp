@@ -1,6 +1,8 @@
 // The V-cavity model made explicit [Heitz14, Sec. 6.1]: masking measured on an ensemble of separate
 // V-grooves, each traced on its own as an infinite periodic groove, averaged with the model's
 // weights (every groove covers the same macro area; its normals were drawn from (n.m) D(m)).
+// The grooves are an ensemble scene (vcavity_grooves, trace/scene_ensemble.hpp) and these are
+// the ensemble estimators of measure/ensemble_estimators.hpp run on it (vcavity_model.cpp).
 // G1, G2 and the VNDF take their share of the work from options.split as the whole-surface
 // estimators do (replicates for G1 and G2, rays for the VNDF; measure/shards.hpp), with the
 // same tally layouts, so shards merged give the single run's result.

@@ -225,6 +225,9 @@ class Tracer {
 
  private:
   friend struct DownwardRays;
+  // The constructor's geometry of a heightfield (an Embree grid) or of a mesh (triangles).
+  RTCGeometry new_grid_geometry();
+  RTCGeometry new_mesh_geometry();
   // Heightfields: cell (i, j) (tile indices, unwrapped), half and unnormalised normal c of the
   // facet that grid coordinates (u, v) name; true when c is aligned with Embree's Ng (else a
   // rounding at a cell border named a neighbour: facet_of_hit searches around).
