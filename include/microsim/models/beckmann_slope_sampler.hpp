@@ -4,7 +4,7 @@
 //     Phi^-1 from Wichura's algorithm AS 241 (PPND16, relative error ~1e-16; no iteration, no erfc).
 //   * finite mu: a start from a table of x over (theta' = acot(mu), z = Phi^-1(u)), bilinear
 //     (error ~1e-3), then Halley's iteration on the closed-form CDF (cubic convergence: the error is at
-//     rounding after two steps, the third confirms) inside the bracket [lo, hi] the iteration keeps;
+//     rounding after two steps) inside the bracket [lo, hi] the iteration keeps;
 //     outside the table, or when the iteration does not settle in a few steps, the exact function.
 // The tests compare both with the exact function over mu and u (tests/test_beckmann_slope_sampler.cpp).
 #pragma once
@@ -124,15 +124,18 @@ inline double fast_beckmann_visible_slope_quantile(double mu, double u,
     const double d2 = (-1.0 - 2.0 * x * (mu - x)) * e / (kSqrtPi * norm);
     const double den = 2.0 * d1 * d1 - f * d2;
     double xn = den != 0.0 ? x - 2.0 * f * d1 / den : x - f / d1;
-    if (!(xn > lo && xn < hi)) {  // Halley left the bracket: bisect (and do not stop on that step)
+    // Halley left the bracket: bisect (and do not stop on that step). The bracket is closed: at rounding the
+    // step is 0 and x itself is an end of the bracket.
+    if (!(xn >= lo && xn <= hi)) {
       if (!(std::isfinite(lo))) return beckmann_visible_slope_quantile(mu, u);
       x = 0.5 * (lo + hi);
       continue;
     }
     const double step = std::abs(xn - x);
     x = xn;
-    // cubic convergence: from a start ~1e-3 off, the third step is at rounding
-    if (step <= 1e-13 * (1.0 + std::abs(x))) return x;
+    // cubic convergence: a step s from x lands within ~K s^3 of the root, K ~ (f''/f')^2 = (2 x + 1 / (mu - x))^2:
+    // at rounding for s <= 1e-6 min(1, mu - x); from a start ~1e-3 off that is the second step
+    if (step <= 1e-6 * std::min(1.0, mu - x)) return x;
   }
   return beckmann_visible_slope_quantile(mu, u);
 }
