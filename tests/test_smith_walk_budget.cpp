@@ -335,10 +335,16 @@ TEST(SmithWalkBudget, WalksFromThePilotRule) {
   replicate(pilot, 100, {0.40, 0.20, 0.60, 0, 0, 0});
   replicate(pilot, 100, {0.48, 0.21, 0.69, 0, 0, 0});  // se 0.04, 0.005, 0.045
   const WalkBudget b = smith_walk_budget(pilot, r, 1.0, 1000000);
-  // order_1: (1.25 * 0.04 / 0.01)^2 = 25 -> 2500 walks per replicate; total: (1.25 * 3)^2 = 14.06 -> 1407.
+  // order_1: (1.0 * 0.04 / 0.01)^2 = 16 -> 1600 walks per replicate; total: (1.0 * 3)^2 = 9 -> 900.
   EXPECT_EQ(b.limiting_side, 0);
   EXPECT_EQ(b.limiting_slot, 0);
-  EXPECT_NEAR(static_cast<double>(b.walks), 2.0 * 2500, 2.0);
+  EXPECT_NEAR(static_cast<double>(b.walks), 2.0 * 1600, 2.0);
+  // a margin divides the target: (1.25 * 4)^2 = 25 -> 2500
+  EXPECT_NEAR(static_cast<double>(smith_walk_budget(pilot, r, 1.0, 1000000, 1.25).walks), 2.0 * 2500, 2.0);
   EXPECT_EQ(smith_walk_budget(pilot, r, 1.0, 700).walks, 1400u);  // the cap
   EXPECT_EQ(smith_walk_budget(pilot, r, 100.0, 1000000).walks, 200u);  // at least the pilot
+  // A run is kept when every slot's error is at most fraction x the measured: order_1's 0.04 against 0.01.
+  EXPECT_FALSE(smith_walk_target_met(pilot, r, 1.0));
+  EXPECT_FALSE(smith_walk_target_met(pilot, r, 3.99));
+  EXPECT_TRUE(smith_walk_target_met(pilot, r, 4.01));
 }

@@ -581,9 +581,9 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
   std::uint64_t m = std::min(kWalkPilotPerReplicate, cap);
   BsdfTally t = run(m, 0, share, 0.1 * (1.0 - share));
   for (int pass = 1; pass <= kWalkPasses; ++pass) {
-    r.model_budget = smith_walk_budget(t, r, o.model_error_fraction, cap);
+    r.model_budget = smith_walk_budget(t, r, o.model_error_fraction, cap, pass == 1 ? kWalkPilotMargin : kWalkRerunMargin);
     std::uint64_t next = r.model_budget.walks / static_cast<std::uint64_t>(R);
-    if (next <= m) break;
+    if (next <= m || smith_walk_target_met(t, r, o.model_error_fraction)) break;
     next = std::min(next, cap);
     m = next;
     t = run(m, mix64(0x9E3779B97F4A7C15ull * static_cast<std::uint64_t>(pass)), share + 0.1 * (1.0 - share),

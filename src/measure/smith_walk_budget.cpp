@@ -152,7 +152,7 @@ void smith_walk_expected_path(const models::SmithRandomWalk& walk, const Vec3& w
 }
 
 WalkBudget smith_walk_budget(const BsdfTally& pilot, const BsdfResult& r, double fraction,
-                             std::uint64_t max_per_replicate) {
+                             std::uint64_t max_per_replicate, double margin) {
   WalkBudget out;
   out.target_ratio = fraction;
   const double m0 = static_cast<double>(pilot.paths) / std::max(1, pilot.replicates);
@@ -160,7 +160,7 @@ WalkBudget smith_walk_budget(const BsdfTally& pilot, const BsdfResult& r, double
   for_target_slots(r, [&](int sd, int k, double se) {
     const auto i = pilot.a_index(sd, k);
     const double sp = pilot.estimate(pilot.albedo[i], pilot.albedo2[i]).stderr_;
-    const double ratio = kWalkPilotMargin * sp / (fraction * se);
+    const double ratio = margin * sp / (fraction * se);
     const double m = m0 * ratio * ratio;
     if (m > need) {
       need = m;
@@ -171,6 +171,15 @@ WalkBudget smith_walk_budget(const BsdfTally& pilot, const BsdfResult& r, double
   const std::uint64_t m = std::min<std::uint64_t>(max_per_replicate, static_cast<std::uint64_t>(std::ceil(need)));
   out.walks = std::max<std::uint64_t>(m, static_cast<std::uint64_t>(m0)) * std::max(1, pilot.replicates);
   return out;
+}
+
+bool smith_walk_target_met(const BsdfTally& run, const BsdfResult& r, double fraction) {
+  bool met = true;
+  for_target_slots(r, [&](int sd, int k, double se) {
+    const auto i = run.a_index(sd, k);
+    if (!(run.estimate(run.albedo[i], run.albedo2[i]).stderr_ <= fraction * se)) met = false;
+  });
+  return met;
 }
 
 double smith_walk_error_ratio(const BsdfResult& r, int* side, int* slot) {

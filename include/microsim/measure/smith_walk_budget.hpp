@@ -33,13 +33,16 @@ constexpr double kWalkErrorFraction = 1.0;
 constexpr double kWalkErrorFloor = 1e-9;
 
 // The pilot: kWalkPilotPerReplicate walks in each replicate; at most kWalkCapFactor model_walks walks (the
-// model never costs more walks than requested; the record states the error reached). The pilot's error
-// estimate from 32 replicates is itself uncertain by ~13%: the walks are chosen for the target error
-// divided by kWalkPilotMargin.
+// model never costs more walks than requested; the record states the error reached). The walks after the
+// pilot are chosen for the target error itself (kWalkPilotMargin 1: the pilot's error of a rare order, from
+// 32 replicates of few walks, errs both ways, and a run that misses is followed by another); after a run
+// that missed, for the target divided by kWalkRerunMargin, so that the next run rarely misses again.
 constexpr std::uint64_t kWalkPilotPerReplicate = 64;
 constexpr std::uint64_t kWalkCapFactor = 1;
-constexpr double kWalkPilotMargin = 1.25;
-// Runs after the pilot, each with the walks its predecessor's errors ask for.
+constexpr double kWalkPilotMargin = 1.0;
+constexpr double kWalkRerunMargin = 1.1;
+// Runs after the pilot, each with the walks its predecessor's errors ask for; the first run whose own errors
+// meet the target (smith_walk_target_met) is kept.
 constexpr int kWalkPasses = 3;
 
 // The first kLatinDims uniforms of the walks of one replicate form a Latin hypercube over its n walks
@@ -76,11 +79,15 @@ void smith_walk_expected_path(const models::SmithRandomWalk& walk, const Vec3& w
                               std::uint64_t stream, std::uint64_t j, const WalkStrata& strata,
                               const BsdfResult& r, BsdfTally& t, const WalkWindow& window = {});
 
-// The walks per replicate m = m_pilot (kWalkPilotMargin stderr_pilot / (fraction * stderr_measured))^2, the largest over the
+// The walks per replicate m = m_pilot (margin stderr_pilot / (fraction * stderr_measured))^2, the largest over the
 // albedo slots whose measured error is above kWalkErrorFloor (the error of the replicate means falls at least
 // like 1 / sqrt(m)), at least the pilot's and at most max_per_replicate. `pilot`: replicates of m_pilot walks.
 WalkBudget smith_walk_budget(const BsdfTally& pilot, const BsdfResult& measured, double fraction,
-                             std::uint64_t max_per_replicate);
+                             std::uint64_t max_per_replicate, double margin = kWalkPilotMargin);
+
+// True when the run's standard error of every albedo slot with a target is at most fraction times the
+// measurement's (the run is kept).
+bool smith_walk_target_met(const BsdfTally& run, const BsdfResult& measured, double fraction);
 
 // The achieved ratio max over the same slots of walk stderr / measured stderr (0 when no slot sets a target);
 // *side, *slot: where it is reached.

@@ -4,7 +4,7 @@
 //     Phi^-1 from Wichura's algorithm AS 241 (PPND16, relative error ~1e-16; no iteration, no erfc).
 //   * finite mu: a start from a table of x over (theta' = acot(mu), z = Phi^-1(u)), bilinear
 //     (error ~1e-3), then Halley's iteration on the closed-form CDF (cubic convergence: the error is at
-//     rounding after two steps, the third confirms) inside the bracket [lo, hi] the iteration keeps;
+//     rounding after two steps) inside the bracket [lo, hi] the iteration keeps;
 //     outside the table, or when the iteration does not settle in a few steps, the exact function.
 // The tests compare both with the exact function over mu and u (tests/test_beckmann_slope_sampler.cpp).
 #pragma once
@@ -99,42 +99,57 @@ class BeckmannSlopeStarts {
 
 // detail::beckmann_visible_slope_quantile(mu, u) to ~1e-14, faster (see the top of this file). `norm`: the
 // CDF's normalization mu erfc(-mu)/2 + exp(-mu^2)/(2 sqrt(pi)) where the caller knows it (= mu (1 + Lambda)
-// of the view; NaN: computed here).
+// of the view; NaN: computed here). *cdf_evaluations (optional): the CDF evaluations of Halley's iteration,
+// -1 where the exact function gave the result.
 inline double fast_beckmann_visible_slope_quantile(double mu, double u,
-                                                   double norm = std::numeric_limits<double>::quiet_NaN()) {
-  if (std::isinf(mu) && mu > 0.0) return normal_quantile_as241(u) / std::sqrt(2.0);
+                                                   double norm = std::numeric_limits<double>::quiet_NaN(),
+                                                   int* cdf_evaluations = nullptr) {
+  int evaluations = 0;
+  auto exact = [&]() {
+    if (cdf_evaluations) *cdf_evaluations = -1;
+    return beckmann_visible_slope_quantile(mu, u);
+  };
+  auto converged = [&](double x) {
+    if (cdf_evaluations) *cdf_evaluations = evaluations;
+    return x;
+  };
+  if (std::isinf(mu) && mu > 0.0) return converged(normal_quantile_as241(u) / std::sqrt(2.0));
   const double z = normal_quantile_as241(u);
   double x;
   const double theta = std::atan2(1.0, mu);  // acot(mu) in (0, pi)
-  if (!BeckmannSlopeStarts::instance().start(theta, z, &x)) return beckmann_visible_slope_quantile(mu, u);
+  if (!BeckmannSlopeStarts::instance().start(theta, z, &x)) return exact();
   // C(x) = [mu erfc(-x)/2 + exp(-x^2)/(2 sqrt(pi))] / N, C' = (mu - x) exp(-x^2) / (sqrt(pi) N),
   // C'' = (-1 - 2 x (mu - x)) exp(-x^2) / (sqrt(pi) N); N = C's numerator at x = mu.
   if (!(norm > 0.0 && std::isfinite(norm))) norm = mu * 0.5 * std::erfc(-mu) + std::exp(-mu * mu) / (2.0 * kSqrtPi);
-  if (!(norm > 0.0)) return beckmann_visible_slope_quantile(mu, u);
+  if (!(norm > 0.0)) return exact();
   // A start at or beyond mu (the density's end, where it vanishes) gives Halley no slope: the exact function.
-  if (!(x < mu)) return beckmann_visible_slope_quantile(mu, u);
+  if (!(x < mu)) return exact();
   double lo = -kInf, hi = mu;
   for (int it = 0; it < 10; ++it) {
+    ++evaluations;
     const double e = std::exp(-x * x);
     const double f = (mu * 0.5 * std::erfc(-x) + e / (2.0 * kSqrtPi)) / norm - u;
-    if (f == 0.0) return x;
+    if (f == 0.0) return converged(x);
     if (f < 0.0) lo = x; else hi = x;
     const double d1 = (mu - x) * e / (kSqrtPi * norm);
-    if (!(d1 > 0.0)) return beckmann_visible_slope_quantile(mu, u);
+    if (!(d1 > 0.0)) return exact();
     const double d2 = (-1.0 - 2.0 * x * (mu - x)) * e / (kSqrtPi * norm);
     const double den = 2.0 * d1 * d1 - f * d2;
     double xn = den != 0.0 ? x - 2.0 * f * d1 / den : x - f / d1;
-    if (!(xn > lo && xn < hi)) {  // Halley left the bracket: bisect (and do not stop on that step)
-      if (!(std::isfinite(lo))) return beckmann_visible_slope_quantile(mu, u);
+    // Halley left the bracket: bisect (and do not stop on that step). The bracket is closed: at rounding the
+    // step is 0 and x itself is an end of the bracket.
+    if (!(xn >= lo && xn <= hi)) {
+      if (!(std::isfinite(lo))) return exact();
       x = 0.5 * (lo + hi);
       continue;
     }
     const double step = std::abs(xn - x);
     x = xn;
-    // cubic convergence: from a start ~1e-3 off, the third step is at rounding
-    if (step <= 1e-13 * (1.0 + std::abs(x))) return x;
+    // cubic convergence: a step s from x lands within ~K s^3 of the root, K ~ (f''/f')^2 = (2 x + 1 / (mu - x))^2:
+    // at rounding for s <= 1e-6 min(1, mu - x); from a start ~1e-3 off that is the second step
+    if (step <= 1e-6 * std::min(1.0, mu - x)) return converged(x);
   }
-  return beckmann_visible_slope_quantile(mu, u);
+  return exact();
 }
 
 }  // namespace microsim::models::detail
