@@ -265,25 +265,60 @@ BsdfTally& BsdfTally::operator+=(const BsdfTally& o) {
   return *this;
 }
 
-void BsdfTally::add_replicate(const BsdfTally& rep) {
-  if (albedo.empty()) *this = BsdfTally(rep.orders, rep.pixels, rep.plane_bins);
-  // Welford's update of the sum of squared deviations of the replicate means x = S / n (every
-  // replicate has the same n paths): stable where the spread is far below the mean.
-  const double n = static_cast<double>(rep.paths), k = replicates;
+namespace {
+// Adds one replicate's first-moment sums, read at `at(i)` for element i of albedo (0), pix (1)
+// and plane (2) of `rep_shape`, to t's sums and their replicate spread: Welford's update of
+// the sum of squared deviations of the replicate means x = S / n (every replicate has the same
+// n paths), stable where the spread is far below the mean. An element that is 0 in the
+// replicate and in the sum so far is left as it is: the update would add 0 * 0 to its
+// spread (most pixels of a replicate of a few hundred paths are empty).
+template <class At>
+void add_replicate_sums(BsdfTally& t, std::uint64_t paths, At&& at) {
+  const double n = static_cast<double>(paths), k = t.replicates;
   auto welford = [&](double& sum, double& m2, double S) {
     const double x = S / n;
     const double old_mean = k > 0 ? sum / (k * n) : x;
     sum += S;
     m2 += (x - old_mean) * (x - sum / ((k + 1) * n));
   };
-  auto add = [&](std::vector<double>& a, std::vector<double>& a2, const std::vector<double>& b) {
-    for (std::size_t i = 0; i < a.size(); ++i) welford(a[i], a2[i], b[i]);
-  };
-  const double rt = rep.albedo[rep.a_index(0, orders)] + rep.albedo[rep.a_index(1, orders)];
-  double rt_sum = albedo[a_index(0, orders)] + albedo[a_index(1, orders)];
-  welford(rt_sum, both2, rt);
-  for_each_moment([&](const char*, auto sum, auto second) { add(this->*sum, this->*second, rep.*sum); });
+  const int K = t.orders;
+  const double rt = at(0, t.a_index(0, K)) + at(0, t.a_index(1, K));
+  double rt_sum = t.albedo[t.a_index(0, K)] + t.albedo[t.a_index(1, K)];
+  welford(rt_sum, t.both2, rt);
+  int which = 0;
+  BsdfTally::for_each_moment([&](const char*, auto sum, auto second) {
+    std::vector<double>& a = t.*sum;
+    std::vector<double>& a2 = t.*second;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      const double S = at(which, i);
+      if (S == 0.0 && a[i] == 0.0) continue;
+      welford(a[i], a2[i], S);
+    }
+    ++which;
+  });
+}
+}  // namespace
+
+void BsdfTally::add_replicate(const BsdfTally& rep) {
+  if (albedo.empty()) *this = BsdfTally(rep.orders, rep.pixels, rep.plane_bins);
+  const std::vector<double>* sums[3] = {&rep.albedo, &rep.pix, &rep.plane};
+  add_replicate_sums(*this, rep.paths, [&](int which, std::size_t i) { return (*sums[which])[i]; });
   add_fields(*this, rep);
+  ++replicates;
+}
+
+void BsdfTally::add_replicate(const SpectralTally& rep, int l) {
+  if (albedo.empty()) *this = BsdfTally(rep.orders, rep.pixels, rep.plane_bins);
+  const std::vector<double>* sums[3] = {&rep.albedo, &rep.pix, &rep.plane};
+  const std::size_t L = static_cast<std::size_t>(rep.wavelengths);
+  add_replicate_sums(*this, rep.paths, [&](int which, std::size_t i) { return (*sums[which])[i * L + l]; });
+  BsdfTally counts;  // the path counts, shared by every wavelength
+  counts.paths = rep.paths;
+  counts.lost = rep.lost;
+  counts.unterminated = rep.unterminated;
+  counts.events = rep.events;
+  counts.counters = rep.counters;
+  add_fields(*this, counts);
   ++replicates;
 }
 
@@ -356,8 +391,6 @@ std::string order_key(int k, int orders) {
 
 namespace {
 
-constexpr std::uint64_t kChunk = 1 << 13;
-
 std::uint64_t direction_stream(std::uint64_t base, double theta, double phi) {
   // phi may be negative (tables over -180..180 deg): through a signed integer, which wraps
   // modulo 2^64 as a stream key should (a negative double cast to unsigned is undefined).
@@ -365,57 +398,6 @@ std::uint64_t direction_stream(std::uint64_t base, double theta, double phi) {
          static_cast<std::uint64_t>(static_cast<std::int64_t>(phi * 1e6));
 }
 
-// Runs body(i, tally) for i in [0, n) in chunks, `batches` sequential parallel passes (progress
-// between them), each reduced deterministically; the merge order is fixed, so the sums are
-// identical for any thread count.
-std::uint64_t path_batches(std::uint64_t n) {
-  return std::min<std::uint64_t>((n + kChunk - 1) / kChunk, 64);
-}
-// With `parts` (measure/shards.hpp), only the batches in `share` are run and each batch's sum is
-// stored in (*parts)[batch] for the caller to add in batch order (the same sums, same order).
-template <class Body>
-BsdfTally run_paths(std::uint64_t n, int K, int npix, int nplane,
-                    const std::function<void(double)>& progress, double progress0, double progress_span,
-                    Body&& body, std::vector<BsdfTally>* parts = nullptr, UnitRange share = {}) {
-  const std::uint64_t nchunks = (n + kChunk - 1) / kChunk;
-  const std::uint64_t batches = path_batches(n);
-  BsdfTally total(K, npix, nplane);
-  for (std::uint64_t bt = 0; bt < batches; ++bt) {
-    if (parts && !share.contains(bt)) continue;
-    const std::uint64_t c0 = nchunks * bt / batches, c1 = nchunks * (bt + 1) / batches;
-    BsdfTally part = tbb::parallel_deterministic_reduce(
-        tbb::blocked_range<std::uint64_t>(c0, c1, 1), BsdfTally(),
-        [&](const tbb::blocked_range<std::uint64_t>& range, BsdfTally acc) {
-          if (acc.albedo.empty()) acc = BsdfTally(K, npix, nplane);
-          for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
-            const std::uint64_t end = std::min(n, (c + 1) * kChunk);
-            for (std::uint64_t i = c * kChunk; i < end; ++i) body(i, acc);
-          }
-          return acc;
-        },
-        [](BsdfTally a, const BsdfTally& b) {
-          a += b;
-          return a;
-        });
-    if (parts) (*parts)[bt] = std::move(part);
-    else total += part;
-    if (progress) progress(progress0 + progress_span * static_cast<double>(bt + 1) / batches);
-  }
-  return total;
-}
-
-// The walks of replicates [q0, q1), each replicate's tally exactly as run_paths(n, ...) sums it
-// (each batch a deterministic reduce over its chunks, the batches added in order to a zero
-// tally), so the sums are those of one replicate after the other for any thread count. But
-// run_paths keeps the threads busy only when a batch has several chunks, i.e. above 64 chunks
-// per replicate (half a million paths): below, each pass is one chunk on one thread. Here the
-// (replicate, batch) units run several at a time, a pass holding at least kPassChunks chunks,
-// and done(q, tally) receives the replicates in order, on the calling thread. Progress after
-// each pass. Results do not depend on how units are grouped into passes.
-constexpr std::uint64_t kPassChunks = 16;
-constexpr double kPassBytes = 64.0 * 1024 * 1024;
-// Unit: the tally a unit's chunks are summed in (BsdfTally, or ExitCounts for paths of weight 1);
-// Rep: the replicate's (added from its units in order).
 // The sizes of a unit's tallies: orders, pixels, in-plane bins, wavelengths (1: one tally).
 struct TallyShape {
   int K, npix, nplane, wavelengths = 1;
@@ -428,70 +410,67 @@ template <>
 SpectralTally make_tally<SpectralTally>(const TallyShape& s) {
   return SpectralTally(s.wavelengths, s.K, s.npix, s.nplane);
 }
-template <class T>
-bool tally_unset(const T& t) {
-  return t.albedo.empty();
+// A pass of units holds at least kPassChunks chunks (work for the threads) and at most
+// kPassBytes of unit tallies (large hemisphere maps: one unit at a time).
+constexpr std::uint64_t kPassChunks = 16;
+constexpr double kPassBytes = 64.0 * 1024 * 1024;
+UnitPasses path_passes(const TallyShape& shape) {
+  const double K = shape.K, npix = shape.npix, nplane = shape.nplane;
+  // A spectral unit holds first moments only, of every wavelength.
+  const double bytes = shape.wavelengths > 1 ? 8.0 * 2 * (K + 1) * (1.0 + npix + nplane) * shape.wavelengths
+                                             : 16.0 * 2 * (K + 1) * (1.0 + npix + nplane);
+  return {kPassChunks, std::max<std::uint64_t>(1, static_cast<std::uint64_t>(kPassBytes / bytes))};
 }
-bool tally_unset(const SpectralTally& t) { return t.albedo.empty(); }
 
+// The units of a run of n i.i.d. paths (the Smith walk model): one replicate of n paths.
+std::uint64_t path_batches(std::uint64_t n) { return path_plan(1, n).groups(); }
+
+// body(i, tally) for i in [0, n): the units' tallies added in order to a zero tally (progress
+// after each pass, from progress0 over progress_span). With `parts` (measure/shards.hpp), only
+// the units in `share` are run and each unit's tally is stored in (*parts)[unit] for the caller
+// to add in unit order (the same sums, same order).
+template <class Body>
+BsdfTally run_paths(std::uint64_t n, int K, int npix, int nplane,
+                    const std::function<void(double)>& progress, double progress0, double progress_span,
+                    Body&& body, std::vector<BsdfTally>* parts = nullptr, UnitRange share = {0, ~std::uint64_t(0)}) {
+  const TallyShape shape{K, npix, nplane};
+  BsdfTally total(K, npix, nplane);
+  run_units<BsdfTally>(
+      path_plan(1, n), [&] { return BsdfTally(K, npix, nplane); },
+      [&](int, std::uint64_t i, BsdfTally& t) { body(i, t); },
+      [&](int, std::uint64_t u, BsdfTally&& part) {
+        if (parts) (*parts)[u] = std::move(part);
+        else total += part;
+      },
+      share, path_passes(shape),
+      progress ? std::function<void(double)>([&](double f) { progress(progress0 + progress_span * f); }) : nullptr);
+  return total;
+}
+
+// The walks of the replicates in `reps`: each replicate's tally (Rep) is its units' tallies
+// (Unit: BsdfTally, SpectralTally, or ExitCounts for paths of weight 1) added in order, and
+// done(q, tally) receives the replicates in order, on the calling thread. Progress after each
+// pass, over progress_span.
 template <class Unit, class Rep, class Body, class Done>
-void run_replicate_paths(int q0, int q1, std::uint64_t n, const TallyShape& shape,
+void run_replicate_paths(UnitRange reps, int replicates, std::uint64_t n, const TallyShape& shape,
                          const std::function<void(double)>& progress, double progress_span, Body&& body,
                          Done&& done) {
-  const int K = shape.K, npix = shape.npix, nplane = shape.nplane;
-  const std::uint64_t nchunks = (n + kChunk - 1) / kChunk;
-  const std::uint64_t batches = path_batches(n);
-  const std::uint64_t units = static_cast<std::uint64_t>(q1 - q0) * batches;
-  std::vector<Rep> reps;  // replicates q0 + k, summed so far
-  // A pass keeps one tally per unit: at most kPassBytes of them (large hemisphere maps: one
-  // unit per pass, as run_paths).
-  // (a spectral unit: first moments only, of every wavelength).
-  const double tally_bytes = shape.wavelengths > 1 ? 8.0 * 2 * (K + 1) * (1.0 + npix + nplane) * shape.wavelengths
-                                                   : 16.0 * 2 * (K + 1) * (1.0 + npix + nplane);
-  const std::uint64_t max_units = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(kPassBytes / tally_bytes));
-  std::uint64_t u = 0;
-  while (u < units) {
-    std::uint64_t u1 = u, chunks = 0;
-    while (u1 < units && chunks < kPassChunks && u1 - u < max_units) {
-      const std::uint64_t bt = u1 % batches;
-      chunks += nchunks * (bt + 1) / batches - nchunks * bt / batches;
-      ++u1;
-    }
-    std::vector<Unit> parts(u1 - u);
-    tbb::parallel_for(u, u1, [&](std::uint64_t w) {
-      const int q = q0 + static_cast<int>(w / batches);
-      const std::uint64_t bt = w % batches;
-      const std::uint64_t c0 = nchunks * bt / batches, c1 = nchunks * (bt + 1) / batches;
-      parts[w - u] = tbb::parallel_deterministic_reduce(
-          tbb::blocked_range<std::uint64_t>(c0, c1, 1), Unit(),
-          [&](const tbb::blocked_range<std::uint64_t>& range, Unit acc) {
-            if (tally_unset(acc)) acc = make_tally<Unit>(shape);
-            for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
-              const std::uint64_t end = std::min(n, (c + 1) * kChunk);
-              for (std::uint64_t i = c * kChunk; i < end; ++i) body(q, i, acc);
-            }
-            return acc;
-          },
-          [](Unit a, const Unit& b) {
-            a += b;
-            return a;
-          });
-    });
-    for (std::uint64_t w = u; w < u1; ++w) {
-      const std::uint64_t r = w / batches;
-      if (r < reps.size()) {
-        reps[r] += parts[w - u];
-      } else if constexpr (std::is_same<Rep, SpectralTally>::value && std::is_same<Unit, Rep>::value) {
-        reps.push_back(std::move(parts[w - u]));  // x, as 0 + x (the weights are >= 0), uncopied
-      } else {
-        reps.push_back(make_tally<Rep>(shape));
-        reps[r] += parts[w - u];
-      }
-      if (w % batches == batches - 1) done(q0 + static_cast<int>(r), std::move(reps[r]));
-    }
-    u = u1;
-    if (progress) progress(progress_span * static_cast<double>(u) / static_cast<double>(units));
-  }
+  const UnitPlan plan = path_plan(replicates, n);
+  std::optional<Rep> rep;  // the replicate being summed
+  run_units<Unit>(
+      plan, [&] { return make_tally<Unit>(shape); }, body,
+      [&](int q, std::uint64_t g, Unit&& part) {
+        if constexpr (std::is_same<Rep, SpectralTally>::value && std::is_same<Unit, Rep>::value) {
+          if (g == 0) rep.emplace(std::move(part));  // x, as 0 + x (the weights are >= 0), uncopied
+          else *rep += part;
+        } else {
+          if (g == 0) rep.emplace(make_tally<Rep>(shape));
+          *rep += part;
+        }
+        if (g + 1 == plan.groups()) done(q, std::move(*rep));
+      },
+      plan.units_of(reps), path_passes(shape),
+      progress ? std::function<void(double)>([&](double f) { progress(progress_span * f); }) : nullptr);
 }
 
 // Tallies of path sums (replicates == 0) as rows (measure/shards.hpp): the counts, the first
@@ -569,7 +548,7 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
     });
     BsdfTally t(K, npix, nplane);
     run_replicate_paths<BsdfTally, BsdfTally>(
-        0, R, m, TallyShape{K, npix, nplane}, progress ? std::function<void(double)>([&](double f) { progress(p0 + span * f); }) : nullptr, 1.0,
+        UnitRange{0, static_cast<std::uint64_t>(R)}, R, m, TallyShape{K, npix, nplane}, progress ? std::function<void(double)>([&](double f) { progress(p0 + span * f); }) : nullptr, 1.0,
         [&](int q, std::uint64_t j, BsdfTally& acc) {
           smith_walk_expected_path(walk, r.wi, o.seed, ReplicatePlan::stream(mstream ^ salt, q), j, strata[q], r, acc, window);
         },
@@ -680,7 +659,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
       // receive exactly what a run with that wavelength's index alone would.
       r.spectral.assign(L, BsdfTally(K, npix, nplane));
       run_replicate_paths<SpectralTally, SpectralTally>(
-          static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), shape,
+          reps, plan.replicates, plan.per_replicate(), shape,
           o.progress, share,
           [&](int q, std::uint64_t i, SpectralTally& t) {
             double weights[kMaxWavelengths];
@@ -694,13 +673,13 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
             record_walk_end(t, e, weights, ray_weight, r.map, r.plane);
           },
           [&](int, SpectralTally&& rep) {
-            for (int l = 0; l < L; ++l) r.spectral[l].add_replicate(rep.wavelength(l));
+            for (int l = 0; l < L; ++l) r.spectral[l].add_replicate(rep, l);
             rep = SpectralTally();  // the finished replicate's memory back (L tallies wide)
           });
       r.measured = r.spectral[0];
     } else if (unit_weight)
       run_replicate_paths<ExitCounts<std::uint32_t>, ExitCounts<std::uint64_t>>(
-          static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), shape,
+          reps, plan.replicates, plan.per_replicate(), shape,
           o.progress, share,
           [&](int q, std::uint64_t i, ExitCounts<std::uint32_t>& t) {
             record_walk_end(t, walk(q, i, t), r.map, r.plane);
@@ -708,7 +687,7 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
           [&](int q, ExitCounts<std::uint64_t>&& rep) { keep(q, rep.tally()); });
     else
       run_replicate_paths<BsdfTally, BsdfTally>(
-          static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), shape,
+          reps, plan.replicates, plan.per_replicate(), shape,
           o.progress, share,
           [&](int q, std::uint64_t i, BsdfTally& t) {
             record_walk_end(t, walk(q, i, t), ray_weight, r.map, r.plane);

@@ -195,12 +195,8 @@ std::vector<NamedStokes> polarization_inputs() {
 // The walk
 
 namespace {
-// Chunks and batches as the unpolarized tallies sum them (measure/bsdf_measure.cpp), so the sums
-// are added in the same order: 2^13 paths a chunk, at most 64 batches a replicate, each batch a
-// deterministic reduce over its chunks.
-constexpr std::uint64_t kChunk = 1 << 13;
-std::uint64_t path_batches(std::uint64_t n) { return std::min<std::uint64_t>((n + kChunk - 1) / kChunk, 64); }
-
+// The units of the unpolarized tallies (path_plan, measure/replicates.hpp), so the sums are
+// added in the same order.
 struct UnitSums {
   std::vector<double> sums;   // [k][l][16]
   std::vector<double> map;    // [k][l][pixel][16]
@@ -248,10 +244,6 @@ PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalk
   }
   const std::size_t bins_width = static_cast<std::size_t>(L) * t.bin_pixels * 16;
   const std::size_t plane_width = width * t.plane_bins;
-  const std::uint64_t n = plan.per_replicate();
-  const std::uint64_t nchunks = (n + kChunk - 1) / kChunk, batches = path_batches(n);
-  const std::uint64_t units = static_cast<std::uint64_t>(plan.replicates) * batches;
-
   auto path = [&](int q, std::uint64_t i, UnitSums& acc) {
     thread_local std::vector<WalkFacet> facets;
     CounterRng rng(su.seed, ReplicatePlan::stream(su.stream, q), i);
@@ -298,8 +290,8 @@ PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalk
       }
   };
 
-  // Units (replicate, batch) run a pass at a time; each replicate's sum starts at zero and adds
-  // its batches in order, then the replicates are added in order.
+  // Each replicate's sum starts at zero and adds its units in order, then the replicates are
+  // added in order.
   t.total.assign(width, 0.0);
   t.replicate.assign(width * plan.replicates, 0.0);
   t.map_total.assign(map_width, 0.0);
@@ -310,47 +302,27 @@ PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalk
   std::vector<double> plane_replicate(plane_width * plan.replicates, 0.0);
   const std::uint64_t per_pass = std::max<std::uint64_t>(
       16, static_cast<std::uint64_t>(kPassBytes / (8.0 * (width + map_width + bins_width + plane_width))));
-  for (std::uint64_t u = 0; u < units; u += per_pass) {
-    const std::uint64_t u1 = std::min(units, u + per_pass);
-    std::vector<UnitSums> parts(u1 - u);
-    tbb::parallel_for(u, u1, [&](std::uint64_t w) {
-      const int q = static_cast<int>(w / batches);
-      const std::uint64_t bt = w % batches;
-      const std::uint64_t c0 = nchunks * bt / batches, c1 = nchunks * (bt + 1) / batches;
-      parts[w - u] = tbb::parallel_deterministic_reduce(
-          tbb::blocked_range<std::uint64_t>(c0, c1, 1), UnitSums(),
-          [&](const tbb::blocked_range<std::uint64_t>& range, UnitSums acc) {
-            if (acc.sums.empty()) {
-              acc.sums.assign(width, 0.0);
-              acc.map.assign(map_width, 0.0);
-              acc.bins.assign(bins_width, 0.0);
-              acc.plane.assign(plane_width, 0.0);
-            }
-            for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
-              const std::uint64_t end = std::min(n, (c + 1) * kChunk);
-              for (std::uint64_t i = c * kChunk; i < end; ++i) path(q, i, acc);
-            }
-            return acc;
-          },
-          [](UnitSums a, const UnitSums& b) {
-            a += b;
-            return a;
-          });
-    });
-    for (std::uint64_t w = u; w < u1; ++w) {
-      const std::size_t q = w / batches;
-      const UnitSums& part = parts[w - u];
-      double* rep = t.replicate.data() + width * q;
-      for (std::size_t i = 0; i < width; ++i) rep[i] += part.sums[i];
-      double* rep_map = t.map_replicate.data() + map_width * q;
-      for (std::size_t i = 0; i < map_width; ++i) rep_map[i] += part.map[i];
-      double* rep_bins = bins_replicate.data() + bins_width * q;
-      for (std::size_t i = 0; i < bins_width; ++i) rep_bins[i] += part.bins[i];
-      double* rep_plane = plane_replicate.data() + plane_width * q;
-      for (std::size_t i = 0; i < plane_width; ++i) rep_plane[i] += part.plane[i];
-      t.paths += part.paths;
-    }
-  }
+  auto make = [&] {
+    UnitSums u;
+    u.sums.assign(width, 0.0);
+    u.map.assign(map_width, 0.0);
+    u.bins.assign(bins_width, 0.0);
+    u.plane.assign(plane_width, 0.0);
+    return u;
+  };
+  auto add_to_replicate = [&](int q, std::uint64_t, UnitSums&& part) {
+    double* rep = t.replicate.data() + width * q;
+    for (std::size_t i = 0; i < width; ++i) rep[i] += part.sums[i];
+    double* rep_map = t.map_replicate.data() + map_width * q;
+    for (std::size_t i = 0; i < map_width; ++i) rep_map[i] += part.map[i];
+    double* rep_bins = bins_replicate.data() + bins_width * q;
+    for (std::size_t i = 0; i < bins_width; ++i) rep_bins[i] += part.bins[i];
+    double* rep_plane = plane_replicate.data() + plane_width * q;
+    for (std::size_t i = 0; i < plane_width; ++i) rep_plane[i] += part.plane[i];
+    t.paths += part.paths;
+  };
+  run_units<UnitSums>(path_plan(plan.replicates, plan.per_replicate()), make, path, add_to_replicate,
+                      {0, ~std::uint64_t(0)}, UnitPasses{~std::uint64_t(0), per_pass});
   for (int q = 0; q < plan.replicates; ++q) {
     for (std::size_t i = 0; i < width; ++i) t.total[i] += t.replicate[width * q + i];
     for (std::size_t i = 0; i < map_width; ++i) t.map_total[i] += t.map_replicate[map_width * q + i];

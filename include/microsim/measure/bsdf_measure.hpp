@@ -150,6 +150,8 @@ struct BsdfOptions {
   TallySplit* split = nullptr;
 };
 
+struct SpectralTally;
+
 // Mergeable sums. Index conventions: side s (0 reflected, 1 transmitted), slot k (0 .. K-1 for
 // orders 1 .. K+, K for the total). The first moments are sums over paths of the weight that
 // left in the cell. The second moments depend on how the paths were drawn:
@@ -203,6 +205,8 @@ struct BsdfTally {
   BsdfTally& operator+=(const BsdfTally& o);
   // Adds one replicate's per-path tally (replicates == 0) as replicate number `replicates`.
   void add_replicate(const BsdfTally& rep);
+  // The same for wavelength l of a spectral replicate (the counts are the path's, shared).
+  void add_replicate(const SpectralTally& rep, int l);
   // Mean per path of the first moment `sum` (times `scale`) with its standard error.
   Estimate estimate(double sum, double sum2, double scale = 1.0) const;
 };
