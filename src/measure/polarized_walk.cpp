@@ -111,12 +111,20 @@ std::vector<double> bin_stderrs(const std::vector<double>& reps, std::size_t blo
   if (paths == 0 || replicates < 2) return out;
   const double n = static_cast<double>(paths) / replicates;
   const std::size_t per_rep = blocks * 16;
-  std::vector<double> x(replicates);
-  for (std::size_t at = 0; at < per_rep; ++at) {
+  auto x = [&](int q, std::size_t at) {
     const double c = cos_integral[(at / 16) % cos_integral.size()];
-    for (int q = 0; q < replicates; ++q) x[q] = reps[q * per_rep + at] / n * (1.0 / c);
-    out[at] = microsim::replicate_mean(x).stderr_;
-  }
+    return reps[q * per_rep + at] / n * (1.0 / c);
+  };
+  // replicate_mean's arithmetic element by element (the replicates in order), one replicate's
+  // row at a time.
+  const double R = static_cast<double>(replicates);
+  std::vector<double> mean(per_rep, 0.0), ss(per_rep, 0.0);
+  for (int q = 0; q < replicates; ++q)
+    for (std::size_t at = 0; at < per_rep; ++at) mean[at] += x(q, at);
+  for (double& m : mean) m /= R;
+  for (int q = 0; q < replicates; ++q)
+    for (std::size_t at = 0; at < per_rep; ++at) ss[at] += (x(q, at) - mean[at]) * (x(q, at) - mean[at]);
+  for (std::size_t at = 0; at < per_rep; ++at) out[at] = std::sqrt(ss[at] / (R - 1) / R);
   return out;
 }
 Mueller block_at(const std::vector<double>& v, std::size_t at) {
