@@ -111,9 +111,12 @@ std::vector<double> bin_stderrs(const std::vector<double>& reps, std::size_t blo
   if (paths == 0 || replicates < 2) return out;
   const double n = static_cast<double>(paths) / replicates;
   const std::size_t per_rep = blocks * 16;
+  std::vector<double> inv_cos(blocks);  // 1 / c per block, as replicate_mean's callers divide
+  for (std::size_t b = 0; b < blocks; ++b) inv_cos[b] = 1.0 / cos_integral[b % cos_integral.size()];
+  // Replicate q's per-path mean f of element `at` (a zero sum is a zero mean: no division).
   auto x = [&](int q, std::size_t at) {
-    const double c = cos_integral[(at / 16) % cos_integral.size()];
-    return reps[q * per_rep + at] / n * (1.0 / c);
+    const double v = reps[q * per_rep + at];
+    return v == 0.0 ? 0.0 : v / n * inv_cos[at / 16];
   };
   // replicate_mean's arithmetic element by element (the replicates in order), one replicate's
   // row at a time.
@@ -123,7 +126,10 @@ std::vector<double> bin_stderrs(const std::vector<double>& reps, std::size_t blo
     for (std::size_t at = 0; at < per_rep; ++at) mean[at] += x(q, at);
   for (double& m : mean) m /= R;
   for (int q = 0; q < replicates; ++q)
-    for (std::size_t at = 0; at < per_rep; ++at) ss[at] += (x(q, at) - mean[at]) * (x(q, at) - mean[at]);
+    for (std::size_t at = 0; at < per_rep; ++at) {
+      const double d = x(q, at) - mean[at];
+      ss[at] += d * d;
+    }
   for (std::size_t at = 0; at < per_rep; ++at) out[at] = std::sqrt(ss[at] / (R - 1) / R);
   return out;
 }
