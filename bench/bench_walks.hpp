@@ -103,7 +103,7 @@ inline void print_walk_rows(const Tracer& tracer, std::uint64_t paths, int repea
         const double c0 = cpu_seconds();
         const BsdfResult r = measure_bsdf(tracer, o);
         best = std::max(best, r.measured.paths / (cpu_seconds() - c0));
-        wall_best = std::max(wall_best, r.measured.paths / r.seconds);
+        wall_best = std::max(wall_best, r.measured.paths / r.timing.wall_seconds);
         segs_per_path = double(r.measured.counters.rays) / r.measured.paths;
         bare.best_of(replay_rays_per_second(tracer, log));
         const Vec3 wi = direction_from_angles(o.theta_i, o.phi_i);
@@ -138,7 +138,7 @@ inline void print_walk_rows(const Tracer& tracer, std::uint64_t paths, int repea
       // Processor time of the model part: the whole call less the (token) walks' share.
       const double c0 = cpu_seconds();
       const BsdfResult r = measure_bsdf(tracer, o);
-      const double cpu = (cpu_seconds() - c0) * r.model_seconds / r.seconds;
+      const double cpu = (cpu_seconds() - c0) * r.model_timing.wall_seconds / r.timing.wall_seconds;
       if (r.smith_walk) best = std::max(best, r.smith_walk->paths / cpu);
     }
     std::printf("smith-walk  %6.0f %10.3g walks/s (mirror)\n", theta, best);

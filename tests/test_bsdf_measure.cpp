@@ -690,3 +690,65 @@ TEST(BsdfRecord, AlbedoTablesMergeOverSurfacesByTheTableRule) {
               (r1["albedo"].get<double>() - r1["smith_single"].get<double>()) / r1["albedo_stderr"].get<double>(), 1e-12);
   EXPECT_TRUE(j["rows"][4]["z_smooth_interface"].is_number());  // exact model: a verdict
 }
+
+// The estimators' driver (measure/replicates.hpp: run_units): units handed over in unit order,
+// only the share's, and a unit's chunks summed by halving (c0 + (c1 + c2) for three chunks),
+// whatever the passes and the threads.
+namespace {
+struct OrderProbe {
+  double sum = 0.0;
+  std::uint64_t paths = 0;
+  OrderProbe& operator+=(const OrderProbe& o) {
+    sum += o.sum;
+    paths += o.paths;
+    return *this;
+  }
+};
+}  // namespace
+
+TEST(UnitDriver, UnitsInOrderChunksSummedByHalvingShareOnly) {
+  // 3 replicates of 21 paths, chunks of 4 (6 chunks: the last holds one path), 2 units a
+  // replicate (chunks 0-2 and 3-5). A chunk's first path carries 1e16 in chunks 0 and 3, 1 in
+  // the others: halving gives 1e16 + (1 + 1) = 1e16 + 2, a left-to-right sum 1e16.
+  const microsim::UnitPlan plan{3, 21, 4, 2};
+  ASSERT_EQ(plan.chunks(), 6u);
+  ASSERT_EQ(plan.groups(), 2u);
+  auto body = [](int, std::uint64_t j, OrderProbe& p) {
+    ++p.paths;
+    if (j % 4 == 0) p.sum += (j / 4) % 3 == 0 ? 1e16 : 1.0;
+  };
+  for (int threads : {1, 2})
+    for (std::uint64_t max_units : {std::uint64_t(1), ~std::uint64_t(0)}) {
+      tbb::global_control gc(tbb::global_control::max_allowed_parallelism, threads);
+      std::vector<std::pair<int, std::uint64_t>> order;
+      std::vector<OrderProbe> units;
+      microsim::run_units<OrderProbe>(
+          plan, [] { return OrderProbe(); }, body,
+          [&](int q, std::uint64_t g, OrderProbe&& p) {
+            order.emplace_back(q, g);
+            units.push_back(p);
+          },
+          {0, ~std::uint64_t(0)}, microsim::UnitPasses{~std::uint64_t(0), max_units});
+      const std::vector<std::pair<int, std::uint64_t>> expected{{0, 0}, {0, 1}, {1, 0}, {1, 1}, {2, 0}, {2, 1}};
+      EXPECT_EQ(order, expected);
+      ASSERT_EQ(units.size(), 6u);
+      for (std::size_t u = 0; u < units.size(); ++u) {
+        EXPECT_EQ(units[u].sum, 1e16 + 2.0) << u;  // halving; left to right would give 1e16
+        EXPECT_EQ(units[u].paths, u % 2 == 0 ? 12u : 9u) << u;
+      }
+    }
+  // The share of a process that holds replicate 1 only: its two units, nothing else.
+  std::vector<std::pair<int, std::uint64_t>> order;
+  microsim::run_units<OrderProbe>(
+      plan, [] { return OrderProbe(); }, body,
+      [&](int q, std::uint64_t g, OrderProbe&&) { order.emplace_back(q, g); }, plan.units_of({1, 2}));
+  EXPECT_EQ(order, (std::vector<std::pair<int, std::uint64_t>>{{1, 0}, {1, 1}}));
+}
+
+TEST(UnitDriver, ReplicateChunksOutsideTheShareAreLeftAsMade) {
+  auto parts = microsim::run_replicate_chunks<OrderProbe>(
+      3, 10, 4, [] { return OrderProbe(); }, [](int, std::uint64_t, OrderProbe& p) { ++p.paths; }, {1, 2});
+  ASSERT_EQ(parts.size(), 9u);  // 3 chunks a replicate, every chunk its own part
+  for (std::size_t c = 0; c < parts.size(); ++c)
+    EXPECT_EQ(parts[c].paths, c / 3 == 1 ? (c % 3 == 2 ? 2u : 4u) : 0u) << c;
+}

@@ -265,25 +265,60 @@ BsdfTally& BsdfTally::operator+=(const BsdfTally& o) {
   return *this;
 }
 
-void BsdfTally::add_replicate(const BsdfTally& rep) {
-  if (albedo.empty()) *this = BsdfTally(rep.orders, rep.pixels, rep.plane_bins);
-  // Welford's update of the sum of squared deviations of the replicate means x = S / n (every
-  // replicate has the same n paths): stable where the spread is far below the mean.
-  const double n = static_cast<double>(rep.paths), k = replicates;
+namespace {
+// Adds one replicate's first-moment sums, read at `at(i)` for element i of albedo (0), pix (1)
+// and plane (2) of `rep_shape`, to t's sums and their replicate spread: Welford's update of
+// the sum of squared deviations of the replicate means x = S / n (every replicate has the same
+// n paths), stable where the spread is far below the mean. An element that is 0 in the
+// replicate and in the sum so far is left as it is: the update would add 0 * 0 to its
+// spread (most pixels of a replicate of a few hundred paths are empty).
+template <class At>
+void add_replicate_sums(BsdfTally& t, std::uint64_t paths, At&& at) {
+  const double n = static_cast<double>(paths), k = t.replicates;
   auto welford = [&](double& sum, double& m2, double S) {
     const double x = S / n;
     const double old_mean = k > 0 ? sum / (k * n) : x;
     sum += S;
     m2 += (x - old_mean) * (x - sum / ((k + 1) * n));
   };
-  auto add = [&](std::vector<double>& a, std::vector<double>& a2, const std::vector<double>& b) {
-    for (std::size_t i = 0; i < a.size(); ++i) welford(a[i], a2[i], b[i]);
-  };
-  const double rt = rep.albedo[rep.a_index(0, orders)] + rep.albedo[rep.a_index(1, orders)];
-  double rt_sum = albedo[a_index(0, orders)] + albedo[a_index(1, orders)];
-  welford(rt_sum, both2, rt);
-  for_each_moment([&](const char*, auto sum, auto second) { add(this->*sum, this->*second, rep.*sum); });
+  const int K = t.orders;
+  const double rt = at(0, t.a_index(0, K)) + at(0, t.a_index(1, K));
+  double rt_sum = t.albedo[t.a_index(0, K)] + t.albedo[t.a_index(1, K)];
+  welford(rt_sum, t.both2, rt);
+  int which = 0;
+  BsdfTally::for_each_moment([&](const char*, auto sum, auto second) {
+    std::vector<double>& a = t.*sum;
+    std::vector<double>& a2 = t.*second;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      const double S = at(which, i);
+      if (S == 0.0 && a[i] == 0.0) continue;
+      welford(a[i], a2[i], S);
+    }
+    ++which;
+  });
+}
+}  // namespace
+
+void BsdfTally::add_replicate(const BsdfTally& rep) {
+  if (albedo.empty()) *this = BsdfTally(rep.orders, rep.pixels, rep.plane_bins);
+  const std::vector<double>* sums[3] = {&rep.albedo, &rep.pix, &rep.plane};
+  add_replicate_sums(*this, rep.paths, [&](int which, std::size_t i) { return (*sums[which])[i]; });
   add_fields(*this, rep);
+  ++replicates;
+}
+
+void BsdfTally::add_replicate(const SpectralTally& rep, int l) {
+  if (albedo.empty()) *this = BsdfTally(rep.orders, rep.pixels, rep.plane_bins);
+  const std::vector<double>* sums[3] = {&rep.albedo, &rep.pix, &rep.plane};
+  const std::size_t L = static_cast<std::size_t>(rep.wavelengths);
+  add_replicate_sums(*this, rep.paths, [&](int which, std::size_t i) { return (*sums[which])[i * L + l]; });
+  BsdfTally counts;  // the path counts, shared by every wavelength
+  counts.paths = rep.paths;
+  counts.lost = rep.lost;
+  counts.unterminated = rep.unterminated;
+  counts.events = rep.events;
+  counts.counters = rep.counters;
+  add_fields(*this, counts);
   ++replicates;
 }
 
@@ -356,8 +391,6 @@ std::string order_key(int k, int orders) {
 
 namespace {
 
-constexpr std::uint64_t kChunk = 1 << 13;
-
 std::uint64_t direction_stream(std::uint64_t base, double theta, double phi) {
   // phi may be negative (tables over -180..180 deg): through a signed integer, which wraps
   // modulo 2^64 as a stream key should (a negative double cast to unsigned is undefined).
@@ -365,57 +398,6 @@ std::uint64_t direction_stream(std::uint64_t base, double theta, double phi) {
          static_cast<std::uint64_t>(static_cast<std::int64_t>(phi * 1e6));
 }
 
-// Runs body(i, tally) for i in [0, n) in chunks, `batches` sequential parallel passes (progress
-// between them), each reduced deterministically; the merge order is fixed, so the sums are
-// identical for any thread count.
-std::uint64_t path_batches(std::uint64_t n) {
-  return std::min<std::uint64_t>((n + kChunk - 1) / kChunk, 64);
-}
-// With `parts` (measure/shards.hpp), only the batches in `share` are run and each batch's sum is
-// stored in (*parts)[batch] for the caller to add in batch order (the same sums, same order).
-template <class Body>
-BsdfTally run_paths(std::uint64_t n, int K, int npix, int nplane,
-                    const std::function<void(double)>& progress, double progress0, double progress_span,
-                    Body&& body, std::vector<BsdfTally>* parts = nullptr, UnitRange share = {}) {
-  const std::uint64_t nchunks = (n + kChunk - 1) / kChunk;
-  const std::uint64_t batches = path_batches(n);
-  BsdfTally total(K, npix, nplane);
-  for (std::uint64_t bt = 0; bt < batches; ++bt) {
-    if (parts && !share.contains(bt)) continue;
-    const std::uint64_t c0 = nchunks * bt / batches, c1 = nchunks * (bt + 1) / batches;
-    BsdfTally part = tbb::parallel_deterministic_reduce(
-        tbb::blocked_range<std::uint64_t>(c0, c1, 1), BsdfTally(),
-        [&](const tbb::blocked_range<std::uint64_t>& range, BsdfTally acc) {
-          if (acc.albedo.empty()) acc = BsdfTally(K, npix, nplane);
-          for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
-            const std::uint64_t end = std::min(n, (c + 1) * kChunk);
-            for (std::uint64_t i = c * kChunk; i < end; ++i) body(i, acc);
-          }
-          return acc;
-        },
-        [](BsdfTally a, const BsdfTally& b) {
-          a += b;
-          return a;
-        });
-    if (parts) (*parts)[bt] = std::move(part);
-    else total += part;
-    if (progress) progress(progress0 + progress_span * static_cast<double>(bt + 1) / batches);
-  }
-  return total;
-}
-
-// The walks of replicates [q0, q1), each replicate's tally exactly as run_paths(n, ...) sums it
-// (each batch a deterministic reduce over its chunks, the batches added in order to a zero
-// tally), so the sums are those of one replicate after the other for any thread count. But
-// run_paths keeps the threads busy only when a batch has several chunks, i.e. above 64 chunks
-// per replicate (half a million paths): below, each pass is one chunk on one thread. Here the
-// (replicate, batch) units run several at a time, a pass holding at least kPassChunks chunks,
-// and done(q, tally) receives the replicates in order, on the calling thread. Progress after
-// each pass. Results do not depend on how units are grouped into passes.
-constexpr std::uint64_t kPassChunks = 16;
-constexpr double kPassBytes = 64.0 * 1024 * 1024;
-// Unit: the tally a unit's chunks are summed in (BsdfTally, or ExitCounts for paths of weight 1);
-// Rep: the replicate's (added from its units in order).
 // The sizes of a unit's tallies: orders, pixels, in-plane bins, wavelengths (1: one tally).
 struct TallyShape {
   int K, npix, nplane, wavelengths = 1;
@@ -428,70 +410,84 @@ template <>
 SpectralTally make_tally<SpectralTally>(const TallyShape& s) {
   return SpectralTally(s.wavelengths, s.K, s.npix, s.nplane);
 }
-template <class T>
-bool tally_unset(const T& t) {
-  return t.albedo.empty();
+// A pass of units holds at least kPassChunks chunks (work for the threads) and at most
+// kPassBytes of unit tallies (large hemisphere maps: one unit at a time).
+constexpr std::uint64_t kPassChunks = 16;
+constexpr double kPassBytes = 64.0 * 1024 * 1024;
+UnitPasses path_passes(const TallyShape& shape) {
+  const double K = shape.K, npix = shape.npix, nplane = shape.nplane;
+  // A spectral unit holds first moments only, of every wavelength.
+  const double bytes = shape.wavelengths > 1 ? 8.0 * 2 * (K + 1) * (1.0 + npix + nplane) * shape.wavelengths
+                                             : 16.0 * 2 * (K + 1) * (1.0 + npix + nplane);
+  return {kPassChunks, std::max<std::uint64_t>(1, static_cast<std::uint64_t>(kPassBytes / bytes))};
 }
-bool tally_unset(const SpectralTally& t) { return t.albedo.empty(); }
 
-template <class Unit, class Rep, class Body, class Done>
-void run_replicate_paths(int q0, int q1, std::uint64_t n, const TallyShape& shape,
-                         const std::function<void(double)>& progress, double progress_span, Body&& body,
-                         Done&& done) {
-  const int K = shape.K, npix = shape.npix, nplane = shape.nplane;
-  const std::uint64_t nchunks = (n + kChunk - 1) / kChunk;
-  const std::uint64_t batches = path_batches(n);
-  const std::uint64_t units = static_cast<std::uint64_t>(q1 - q0) * batches;
-  std::vector<Rep> reps;  // replicates q0 + k, summed so far
-  // A pass keeps one tally per unit: at most kPassBytes of them (large hemisphere maps: one
-  // unit per pass, as run_paths).
-  // (a spectral unit: first moments only, of every wavelength).
-  const double tally_bytes = shape.wavelengths > 1 ? 8.0 * 2 * (K + 1) * (1.0 + npix + nplane) * shape.wavelengths
-                                                   : 16.0 * 2 * (K + 1) * (1.0 + npix + nplane);
-  const std::uint64_t max_units = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(kPassBytes / tally_bytes));
-  std::uint64_t u = 0;
-  while (u < units) {
-    std::uint64_t u1 = u, chunks = 0;
-    while (u1 < units && chunks < kPassChunks && u1 - u < max_units) {
-      const std::uint64_t bt = u1 % batches;
-      chunks += nchunks * (bt + 1) / batches - nchunks * bt / batches;
-      ++u1;
-    }
-    std::vector<Unit> parts(u1 - u);
-    tbb::parallel_for(u, u1, [&](std::uint64_t w) {
-      const int q = q0 + static_cast<int>(w / batches);
-      const std::uint64_t bt = w % batches;
-      const std::uint64_t c0 = nchunks * bt / batches, c1 = nchunks * (bt + 1) / batches;
-      parts[w - u] = tbb::parallel_deterministic_reduce(
-          tbb::blocked_range<std::uint64_t>(c0, c1, 1), Unit(),
-          [&](const tbb::blocked_range<std::uint64_t>& range, Unit acc) {
-            if (tally_unset(acc)) acc = make_tally<Unit>(shape);
-            for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
-              const std::uint64_t end = std::min(n, (c + 1) * kChunk);
-              for (std::uint64_t i = c * kChunk; i < end; ++i) body(q, i, acc);
-            }
-            return acc;
-          },
-          [](Unit a, const Unit& b) {
-            a += b;
-            return a;
-          });
-    });
-    for (std::uint64_t w = u; w < u1; ++w) {
-      const std::uint64_t r = w / batches;
-      if (r < reps.size()) {
-        reps[r] += parts[w - u];
-      } else if constexpr (std::is_same<Rep, SpectralTally>::value && std::is_same<Unit, Rep>::value) {
-        reps.push_back(std::move(parts[w - u]));  // x, as 0 + x (the weights are >= 0), uncopied
-      } else {
-        reps.push_back(make_tally<Rep>(shape));
-        reps[r] += parts[w - u];
-      }
-      if (w % batches == batches - 1) done(q0 + static_cast<int>(r), std::move(reps[r]));
-    }
-    u = u1;
-    if (progress) progress(progress_span * static_cast<double>(u) / static_cast<double>(units));
+// The units of a run of n i.i.d. paths (the Smith walk model): one replicate of n paths.
+std::uint64_t path_batches(std::uint64_t n) { return path_plan(1, n).groups(); }
+
+// body(i, tally) for i in [0, n): the units' tallies added in order to a zero tally (progress
+// after each pass, from progress0 over progress_span). With `parts` (measure/shards.hpp), only
+// the units in `share` are run and each unit's tally is stored in (*parts)[unit] for the caller
+// to add in unit order (the same sums, same order).
+template <class Body>
+BsdfTally run_paths(std::uint64_t n, int K, int npix, int nplane,
+                    const std::function<void(double)>& progress, double progress0, double progress_span,
+                    Body&& body, std::vector<BsdfTally>* parts = nullptr, UnitRange share = {0, ~std::uint64_t(0)}) {
+  const TallyShape shape{K, npix, nplane};
+  BsdfTally total(K, npix, nplane);
+  run_units<BsdfTally>(
+      path_plan(1, n), [&] { return BsdfTally(K, npix, nplane); },
+      [&](int, std::uint64_t i, BsdfTally& t) { body(i, t); },
+      [&](int, std::uint64_t u, BsdfTally&& part) {
+        if (parts) (*parts)[u] = std::move(part);
+        else total += part;
+      },
+      share, path_passes(shape),
+      progress ? std::function<void(double)>([&](double f) { progress(progress0 + progress_span * f); }) : nullptr);
+  return total;
+}
+
+// A unit's tallies: the path sums (Unit) and, in a polarized run, the Mueller sums of the same
+// paths (empty otherwise).
+template <class Unit>
+struct WalkUnit {
+  Unit sums;
+  MuellerUnit mueller;
+  WalkUnit& operator+=(const WalkUnit& o) {
+    sums += o.sums;
+    mueller += o.mueller;
+    return *this;
   }
+};
+
+// The walks of the replicates in `reps`, body(q, i, sums, mueller) for path i of replicate q:
+// each replicate's tally (Rep) is its units' tallies (Unit: BsdfTally, SpectralTally, or
+// ExitCounts for paths of weight 1) added in order, and done(q, tally) receives the replicates
+// in order, on the calling thread; with `polarized`, the units' Mueller sums go there in the
+// same order. Progress after each pass, over progress_span.
+template <class Unit, class Rep, class Body, class Done>
+void run_replicate_paths(UnitRange reps, int replicates, std::uint64_t n, const TallyShape& shape,
+                         const std::function<void(double)>& progress, double progress_span, Body&& body,
+                         Done&& done, PolarizedSums* polarized = nullptr) {
+  const UnitPlan plan = path_plan(replicates, n);
+  std::optional<Rep> rep;  // the replicate being summed
+  run_units<WalkUnit<Unit>>(
+      plan,
+      [&] { return WalkUnit<Unit>{make_tally<Unit>(shape), polarized ? polarized->make_unit() : MuellerUnit()}; },
+      [&](int q, std::uint64_t i, WalkUnit<Unit>& u) { body(q, i, u.sums, u.mueller); },
+      [&](int q, std::uint64_t g, WalkUnit<Unit>&& part) {
+        if constexpr (std::is_same<Rep, SpectralTally>::value && std::is_same<Unit, Rep>::value) {
+          if (g == 0) rep.emplace(std::move(part.sums));  // x, as 0 + x (the weights are >= 0), uncopied
+          else *rep += part.sums;
+        } else {
+          if (g == 0) rep.emplace(make_tally<Rep>(shape));
+          *rep += part.sums;
+        }
+        if (polarized) polarized->add_unit(q, part.mueller);
+        if (g + 1 == plan.groups()) done(q, std::move(*rep));
+      },
+      plan.units_of(reps), path_passes(shape),
+      progress ? std::function<void(double)>([&](double f) { progress(progress_span * f); }) : nullptr);
 }
 
 // Tallies of path sums (replicates == 0) as rows (measure/shards.hpp): the counts, the first
@@ -569,8 +565,8 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
     });
     BsdfTally t(K, npix, nplane);
     run_replicate_paths<BsdfTally, BsdfTally>(
-        0, R, m, TallyShape{K, npix, nplane}, progress ? std::function<void(double)>([&](double f) { progress(p0 + span * f); }) : nullptr, 1.0,
-        [&](int q, std::uint64_t j, BsdfTally& acc) {
+        UnitRange{0, static_cast<std::uint64_t>(R)}, R, m, TallyShape{K, npix, nplane}, progress ? std::function<void(double)>([&](double f) { progress(p0 + span * f); }) : nullptr, 1.0,
+        [&](int q, std::uint64_t j, BsdfTally& acc, MuellerUnit&) {
           smith_walk_expected_path(walk, r.wi, o.seed, ReplicatePlan::stream(mstream ^ salt, q), j, strata[q], r, acc, window);
         },
         [&](int, BsdfTally&& rep) { t.add_replicate(rep); });
@@ -599,11 +595,7 @@ void check_polarized_options(const BsdfOptions& o, const Microsurface& s) {
   if (is_vcavity(s)) throw ParameterError("{polarized}: V-cavity ensembles are not walked with Mueller matrices");
 }
 
-}  // namespace
-
-BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
-  using namespace microsim::models;
-  const Microsurface& s = tracer.surface();
+void check_bsdf_options(const BsdfOptions& o, const Microsurface& s) {
   if (!(o.theta_i >= 0.0 && o.theta_i < 0.5 * kPi))
     throw ParameterError("{theta_i} must be in [0, 90) degrees");
   if (!std::isfinite(o.phi_i)) throw ParameterError("{phi_i} must be finite");
@@ -612,8 +604,10 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
   if (o.resolution < 1 || o.resolution > 4096) throw ParameterError("{resolution} must be in [1, 4096]");
   check_spectral_options(o, s);
   check_polarized_options(o, s);
-  const auto t0 = std::chrono::steady_clock::now();
+}
 
+// The result's options, incidence and bins, before any walk.
+BsdfResult start_result(const BsdfOptions& o, const Microsurface& s) {
   BsdfResult r;
   r.options = o;
   r.options.progress = nullptr;
@@ -621,147 +615,203 @@ BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
   r.map = HemisphereMap(o.resolution);
   r.plane = InPlaneBins(o.phi_i, o.resolution);
   if (o.models) r.nominal = s.nominal;  // no nominal NDF: no microfacet model beside
-  const int K = o.orders, npix = r.map.size(), nplane = r.plane.size();
-  const Material mat = o.material;
-  const Vec3 wi = r.wi;
-  const ReplicatePlan plan(o.rays, o.replicates);
-  const Macrosurface& macro = s.macro();
+  return r;
+}
+
+// What every path of the explicit surface shares, and one path's walk.
+struct SurfaceWalk {
+  const Tracer& tracer;
+  const BsdfOptions& o;
+  Vec3 wi;
+  ReplicatePlan plan;
   // Periodic tile: the tile at the top of the slab. Finite object: a window perpendicular to l
   // covering its projection; each ray carries W_perp / (A cos theta_i), so that the tallies are
-  // per unit of the flux falling on the macrosurface ([GeomBSDF24, eq. 4a] with the declared area A) and
-  // rays that miss the object add nothing.
-  const bool finite = macro.finite_object();
-  const RayWindow window = make_ray_window(tracer, wi);
-  // A measured region (a window inside its guard band): rays cover the region's reach and those
-  // whose first hit is outside it are misses (measure/bsdf_walk.cpp), weighted like a finite
-  // object's.
-  const double ray_weight = finite || macro.region ? window.area_perp / (macro.area * wi.z()) : 1.0;
-  const std::uint64_t stream = direction_stream(0xB5DF0000ull, o.theta_i, o.phi_i);
-  const bool with_model = o.models && s.nominal && o.model_walks > 0;
-  const double share = with_model ? 0.8 : 1.0;
+  // per unit of the flux falling on the macrosurface ([GeomBSDF24, eq. 4a] with the declared area
+  // A) and rays that miss the object add nothing. A measured region (a window inside its guard
+  // band): rays cover the region's reach and those whose first hit is outside it are misses
+  // (measure/bsdf_walk.cpp), weighted like a finite object's.
+  bool finite;
+  RayWindow window;
+  double ray_weight;
+  std::uint64_t stream;
 
-  auto leave = [&](BsdfTally& t, bool reflected, int order, double w, const Vec3& d) {
-    t.add_exit(reflected ? 0 : 1, order, w, r.map.pixel_of(d), r.plane.bin_of(d));
+  SurfaceWalk(const Tracer& t, const BsdfOptions& opt, const Vec3& l, std::uint64_t s)
+      : tracer(t), o(opt), wi(l), plan(opt.rays, opt.replicates), finite(t.surface().macro().finite_object()),
+        window(make_ray_window(t, l)),
+        ray_weight(finite || t.surface().macro().region
+                       ? window.area_perp / (t.surface().macro().area * l.z())
+                       : 1.0),
+        stream(s) {}
+
+  // Path i of replicate q into a unit's tally t (its counts); the facets kept when `facets`.
+  template <class T>
+  WalkEnd walk(int q, std::uint64_t i, T& t, const SpectralWeights* sw, std::vector<WalkFacet>* facets) const {
+    CounterRng rng(o.seed, ReplicatePlan::stream(stream, q), i);
+    ++t.paths;
+    const Vec2 ab = plan.strata.point(i, rng);
+    return walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2, -wi, o.material, rng,
+                          o.max_events, finite, t.counters, t.events, sw, facets);
+  }
+};
+
+// The facets of the path being walked on this thread (polarized runs).
+std::vector<WalkFacet>& walk_facets() {
+  thread_local std::vector<WalkFacet> facets;
+  return facets;
+}
+
+// The explicit surface's paths, replicates one after the other, each a stratified pass of its
+// own stream; their sums and spread give the calibrated errors (measure/replicates.hpp). A
+// polarized run keeps every path's facets and adds its Mueller matrices to `polarized`.
+void walk_surface(const SurfaceWalk& w, BsdfResult& r, PolarizedSums* polarized,
+                  const std::function<void(double)>& progress, double share) {
+  using models::MaterialKind;
+  const BsdfOptions& o = w.o;
+  const int K = o.orders, npix = r.map.size(), nplane = r.plane.size();
+  const int L = static_cast<int>(o.spectral.size());
+  const TallyShape shape{K, npix, nplane, L > 0 ? L : 1};
+  r.measured = BsdfTally(K, npix, nplane);
+  const UnitRange reps = share_of(o.split, static_cast<std::uint64_t>(w.plan.replicates));
+  // With a split, the replicates of this process are kept until the others' arrive; the
+  // replicates then enter add_replicate in order, as in one process.
+  std::vector<BsdfTally> kept(o.split ? w.plan.replicates : 0, BsdfTally(K, npix, nplane));
+  auto keep = [&](int q, BsdfTally&& rep) {
+    if (o.split) kept[q] = std::move(rep);
+    else r.measured.add_replicate(rep);
   };
-
-  if (is_vcavity(s)) {
-    // The V-cavity ensemble: every groove traced on its own as an infinite periodic groove.
-    r.measured = trace_vcavity_bsdf(s, o, wi, r.map, r.plane, stream);
-    if (o.progress) o.progress(share);
+  // The facets of a polarized path, then its Mueller matrices.
+  auto mueller = [polarized](const WalkEnd& e, MuellerUnit& m) {
+    if (polarized) polarized->add_path(e, walk_facets(), m);
+  };
+  auto facets = [polarized]() { return polarized ? &walk_facets() : nullptr; };
+  // Every exit of weight exactly 1 (mirror, dielectric; rays of weight 1): integer counts
+  // (measure/exit_counts.hpp), the same tallies bit for bit. A unit counts in 32 bits.
+  const bool unit_weight = w.ray_weight == 1.0 &&
+                           (o.material.kind == MaterialKind::Mirror || o.material.kind == MaterialKind::Dielectric) &&
+                           w.plan.per_replicate() < (std::uint64_t(1) << 32);
+  if (L > 0) {
+    // One walk per path, a weight per wavelength (bsdf_walk.hpp); each wavelength's tallies
+    // receive exactly what a run with that wavelength's index alone would.
+    r.spectral.assign(L, BsdfTally(K, npix, nplane));
+    run_replicate_paths<SpectralTally, SpectralTally>(
+        reps, w.plan.replicates, w.plan.per_replicate(), shape, progress, share,
+        [&](int q, std::uint64_t i, SpectralTally& t, MuellerUnit& m) {
+          double weights[kMaxWavelengths];
+          std::fill(weights, weights + L, 1.0);
+          const SpectralWeights sw{o.spectral.data(), L, weights};
+          const WalkEnd e = w.walk(q, i, t, &sw, facets());
+          record_walk_end(t, e, weights, w.ray_weight, r.map, r.plane);
+          mueller(e, m);
+        },
+        [&](int, SpectralTally&& rep) {
+          for (int l = 0; l < L; ++l) r.spectral[l].add_replicate(rep, l);
+          rep = SpectralTally();  // the finished replicate's memory back (L tallies wide)
+        },
+        polarized);
+    r.measured = r.spectral[0];
+  } else if (unit_weight) {
+    run_replicate_paths<ExitCounts<std::uint32_t>, ExitCounts<std::uint64_t>>(
+        reps, w.plan.replicates, w.plan.per_replicate(), shape, progress, share,
+        [&](int q, std::uint64_t i, ExitCounts<std::uint32_t>& t, MuellerUnit& m) {
+          const WalkEnd e = w.walk(q, i, t, nullptr, facets());
+          record_walk_end(t, e, r.map, r.plane);
+          mueller(e, m);
+        },
+        [&](int q, ExitCounts<std::uint64_t>&& rep) { keep(q, rep.tally()); }, polarized);
   } else {
-    // Replicates one after the other, each a stratified pass of its own stream; their sums
-    // and spread give the calibrated errors (measure/replicates.hpp).
-    r.measured = BsdfTally(K, npix, nplane);
-    const UnitRange reps = share_of(o.split, static_cast<std::uint64_t>(plan.replicates));
-    // With a split, the replicates of this process are kept until the others' arrive; the
-    // replicates then enter add_replicate in order, as in one process.
-    std::vector<BsdfTally> kept(o.split ? plan.replicates : 0, BsdfTally(K, npix, nplane));
-    auto keep = [&](int q, BsdfTally&& rep) {
-      if (o.split) kept[q] = std::move(rep);
-      else r.measured.add_replicate(rep);
-    };
-    // Every exit of weight exactly 1 (mirror, dielectric; rays of weight 1): integer counts
-    // (measure/exit_counts.hpp), the same tallies bit for bit. A unit counts in 32 bits.
-    const bool unit_weight = ray_weight == 1.0 &&
-                             (mat.kind == MaterialKind::Mirror || mat.kind == MaterialKind::Dielectric) &&
-                             plan.per_replicate() < (std::uint64_t(1) << 32);
-    // Path i of replicate q, walked into a unit's tally t (either kind).
-    auto walk = [&](int q, std::uint64_t i, auto& t) {
-      CounterRng rng(o.seed, ReplicatePlan::stream(stream, q), i);
-      ++t.paths;
-      const Vec2 ab = plan.strata.point(i, rng);
-      return walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2, -wi, mat,
-                            rng, o.max_events, finite, t.counters, t.events);
-    };
-    const int L = static_cast<int>(o.spectral.size());
-    const TallyShape shape{K, npix, nplane, L > 0 ? L : 1};
-    if (L > 0) {
-      // One walk per path, a weight per wavelength (bsdf_walk.hpp); each wavelength's tallies
-      // receive exactly what a run with that wavelength's index alone would.
-      r.spectral.assign(L, BsdfTally(K, npix, nplane));
-      run_replicate_paths<SpectralTally, SpectralTally>(
-          static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), shape,
-          o.progress, share,
-          [&](int q, std::uint64_t i, SpectralTally& t) {
-            double weights[kMaxWavelengths];
-            std::fill(weights, weights + L, 1.0);
-            const SpectralWeights sw{o.spectral.data(), L, weights};
-            CounterRng rng(o.seed, ReplicatePlan::stream(stream, q), i);
-            ++t.paths;
-            const Vec2 ab = plan.strata.point(i, rng);
-            const WalkEnd e = walk_bsdf_path(tracer, window.origin0 + ab.x() * window.e1 + ab.y() * window.e2,
-                                             -wi, mat, rng, o.max_events, finite, t.counters, t.events, &sw);
-            record_walk_end(t, e, weights, ray_weight, r.map, r.plane);
-          },
-          [&](int, SpectralTally&& rep) {
-            for (int l = 0; l < L; ++l) r.spectral[l].add_replicate(rep.wavelength(l));
-            rep = SpectralTally();  // the finished replicate's memory back (L tallies wide)
-          });
-      r.measured = r.spectral[0];
-    } else if (unit_weight)
-      run_replicate_paths<ExitCounts<std::uint32_t>, ExitCounts<std::uint64_t>>(
-          static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), shape,
-          o.progress, share,
-          [&](int q, std::uint64_t i, ExitCounts<std::uint32_t>& t) {
-            record_walk_end(t, walk(q, i, t), r.map, r.plane);
-          },
-          [&](int q, ExitCounts<std::uint64_t>&& rep) { keep(q, rep.tally()); });
-    else
-      run_replicate_paths<BsdfTally, BsdfTally>(
-          static_cast<int>(reps.first), static_cast<int>(reps.end), plan.per_replicate(), shape,
-          o.progress, share,
-          [&](int q, std::uint64_t i, BsdfTally& t) {
-            record_walk_end(t, walk(q, i, t), ray_weight, r.map, r.plane);
-          },
-          keep);
-    if (o.split) {
-      exchange_paths(*o.split, "bsdf", reps, false, kept);
-      for (const BsdfTally& rep : kept) r.measured.add_replicate(rep);
-    }
-    if (o.polarized)
-      r.polarization = measure_polarization(
-          tracer, {wi, window.origin0, window.e1, window.e2, ray_weight, finite, o.seed, stream, o.rays,
-                   o.replicates, K, o.max_events, mat, o.spectral, o.phi_i, o.resolution});
+    run_replicate_paths<BsdfTally, BsdfTally>(
+        reps, w.plan.replicates, w.plan.per_replicate(), shape, progress, share,
+        [&](int q, std::uint64_t i, BsdfTally& t, MuellerUnit& m) {
+          const WalkEnd e = w.walk(q, i, t, nullptr, facets());
+          record_walk_end(t, e, w.ray_weight, r.map, r.plane);
+          mueller(e, m);
+        },
+        keep, polarized);
   }
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (o.split) {
+    exchange_paths(*o.split, "bsdf", reps, false, kept);
+    for (const BsdfTally& rep : kept) r.measured.add_replicate(rep);
+  }
+}
 
-  if (with_model) {
-    const auto tm = std::chrono::steady_clock::now();
-    const SmithRandomWalk walk(*s.nominal, mat, HeightDistribution::Uniform, o.max_events);
-    const std::uint64_t mstream = direction_stream(0x5A17000000ull, o.theta_i, o.phi_i);
-    struct Rng {
-      CounterRng c;
-      double uniform() { return c.uniform(); }
-    };
-    auto model_path = [&](std::uint64_t i, BsdfTally& t) {
-      Rng rng{CounterRng(o.seed, mstream, i)};
-      ++t.paths;
-      const WalkExit e = walk.walk(wi, rng);
-      t.events += static_cast<std::uint64_t>(e.order);
-      if (e.lost) {
-        ++t.unterminated;
-        return;
-      }
-      leave(t, e.reflected, e.order, e.weight, e.direction);
-    };
-    if (o.model_error_fraction > 0.0) {
-      r.smith_walk = smith_walks_to_error(walk.with_fast_slope_sampler(), r, mstream, o.progress, share);
-    } else if (!o.split) {
-      r.smith_walk = run_paths(o.model_walks, K, npix, nplane, o.progress, share, 1.0 - share, model_path);
-    } else {
-      // The model's sequential batches shared like replicates, then summed in batch order.
-      const std::uint64_t nb = path_batches(o.model_walks);
-      const UnitRange mine = o.split->share(nb);
-      std::vector<BsdfTally> parts(nb, BsdfTally(K, npix, nplane));
-      run_paths(o.model_walks, K, npix, nplane, o.progress, share, 1.0 - share, model_path, &parts, mine);
-      exchange_paths(*o.split, "bsdf_model", mine, true, parts);
-      BsdfTally total(K, npix, nplane);
-      for (const BsdfTally& p : parts) total += p;
-      r.smith_walk = std::move(total);
-    }
-    r.model_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - tm).count();
+// The explicit surface's tallies (V-cavity ensembles: every groove traced on its own as an
+// infinite periodic groove), and the polarized sums of the same paths.
+void measure_surface(const Tracer& tracer, BsdfResult& r, std::uint64_t stream,
+                     const std::function<void(double)>& progress, double share) {
+  const BsdfOptions& o = r.options;
+  const Microsurface& s = tracer.surface();
+  if (is_vcavity(s)) {
+    r.measured = trace_vcavity_bsdf(s, o, r.wi, r.map, r.plane, stream);
+    if (progress) progress(share);
+    return;
   }
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const SurfaceWalk w(tracer, o, r.wi, stream);
+  std::optional<PolarizedSums> polarized;
+  if (o.polarized)
+    polarized.emplace(PolarizedSumsSetup{r.wi, w.ray_weight, w.plan.replicates, o.orders, o.material, o.spectral,
+                                         o.phi_i, o.resolution});
+  walk_surface(w, r, polarized ? &*polarized : nullptr, progress, share);
+  if (polarized) r.polarization = polarized->finish();
+}
+
+// The Smith random-walk model of the nominal NDF beside the measurement (same seed, own stream).
+void measure_smith_model(BsdfResult& r, const std::function<void(double)>& progress, double share) {
+  using namespace microsim::models;
+  const BsdfOptions& o = r.options;
+  const int K = o.orders, npix = r.map.size(), nplane = r.plane.size();
+  const Vec3 wi = r.wi;
+  const SmithRandomWalk walk(*r.nominal, o.material, HeightDistribution::Uniform, o.max_events);
+  const std::uint64_t mstream = direction_stream(0x5A17000000ull, o.theta_i, o.phi_i);
+  if (o.model_error_fraction > 0.0) {
+    r.smith_walk = smith_walks_to_error(walk.with_fast_slope_sampler(), r, mstream, progress, share);
+    return;
+  }
+  struct Rng {
+    CounterRng c;
+    double uniform() { return c.uniform(); }
+  };
+  auto model_path = [&](std::uint64_t i, BsdfTally& t) {
+    Rng rng{CounterRng(o.seed, mstream, i)};
+    ++t.paths;
+    const WalkExit e = walk.walk(wi, rng);
+    t.events += static_cast<std::uint64_t>(e.order);
+    if (e.lost) {
+      ++t.unterminated;
+      return;
+    }
+    t.add_exit(e.reflected ? 0 : 1, e.order, e.weight, r.map.pixel_of(e.direction), r.plane.bin_of(e.direction));
+  };
+  if (!o.split) {
+    r.smith_walk = run_paths(o.model_walks, K, npix, nplane, progress, share, 1.0 - share, model_path);
+    return;
+  }
+  // The model's sequential units shared like replicates, then summed in unit order.
+  const std::uint64_t nb = path_batches(o.model_walks);
+  const UnitRange mine = o.split->share(nb);
+  std::vector<BsdfTally> parts(nb, BsdfTally(K, npix, nplane));
+  run_paths(o.model_walks, K, npix, nplane, progress, share, 1.0 - share, model_path, &parts, mine);
+  exchange_paths(*o.split, "bsdf_model", mine, true, parts);
+  BsdfTally total(K, npix, nplane);
+  for (const BsdfTally& p : parts) total += p;
+  r.smith_walk = std::move(total);
+}
+
+}  // namespace
+
+BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& o) {
+  const Microsurface& s = tracer.surface();
+  check_bsdf_options(o, s);
+  const Stopwatch clock;
+  BsdfResult r = start_result(o, s);
+  const bool with_model = o.models && s.nominal && o.model_walks > 0;
+  const double share = with_model ? 0.8 : 1.0;  // of the progress
+  measure_surface(tracer, r, direction_stream(0xB5DF0000ull, o.theta_i, o.phi_i), o.progress, share);
+  if (with_model) {
+    const Stopwatch model_clock;
+    measure_smith_model(r, o.progress, share);
+    r.model_timing = model_clock.elapsed();
+  }
+  r.timing = clock.elapsed();
   return r;
 }
 

@@ -399,9 +399,10 @@ void put_bsdf_bookkeeping(Json& j, const BsdfResult& r) {
                  {"wrong_side_hits", m.counters.backface_hits},
                  {"border_crossings", m.counters.border_crossings}};
   j["trace_counters"] = fields_json(m.counters);  // every counter, as TraceCounters declares them
-  j["seconds"] = r.seconds;
-  j["model_seconds"] = r.model_seconds;
-  j["rays_per_second"] = (r.seconds - r.model_seconds) > 0 ? m.counters.rays / (r.seconds - r.model_seconds) : 0.0;
+  const double seconds = r.timing.wall_seconds, model_seconds = r.model_timing.wall_seconds;
+  j["seconds"] = seconds;
+  j["model_seconds"] = model_seconds;
+  j["rays_per_second"] = (seconds - model_seconds) > 0 ? m.counters.rays / (seconds - model_seconds) : 0.0;
 }
 }  // namespace
 

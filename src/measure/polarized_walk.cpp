@@ -11,6 +11,7 @@
 
 #include "microsim/measure/bsdf_walk.hpp"
 #include "microsim/measure/replicates.hpp"
+#include "microsim/measure/bsdf_measure.hpp"
 
 namespace microsim {
 
@@ -110,12 +111,26 @@ std::vector<double> bin_stderrs(const std::vector<double>& reps, std::size_t blo
   if (paths == 0 || replicates < 2) return out;
   const double n = static_cast<double>(paths) / replicates;
   const std::size_t per_rep = blocks * 16;
-  std::vector<double> x(replicates);
-  for (std::size_t at = 0; at < per_rep; ++at) {
-    const double c = cos_integral[(at / 16) % cos_integral.size()];
-    for (int q = 0; q < replicates; ++q) x[q] = reps[q * per_rep + at] / n * (1.0 / c);
-    out[at] = microsim::replicate_mean(x).stderr_;
-  }
+  std::vector<double> inv_cos(blocks);  // 1 / c per block, as replicate_mean's callers divide
+  for (std::size_t b = 0; b < blocks; ++b) inv_cos[b] = 1.0 / cos_integral[b % cos_integral.size()];
+  // Replicate q's per-path mean f of element `at` (a zero sum is a zero mean: no division).
+  auto x = [&](int q, std::size_t at) {
+    const double v = reps[q * per_rep + at];
+    return v == 0.0 ? 0.0 : v / n * inv_cos[at / 16];
+  };
+  // replicate_mean's arithmetic element by element (the replicates in order), one replicate's
+  // row at a time.
+  const double R = static_cast<double>(replicates);
+  std::vector<double> mean(per_rep, 0.0), ss(per_rep, 0.0);
+  for (int q = 0; q < replicates; ++q)
+    for (std::size_t at = 0; at < per_rep; ++at) mean[at] += x(q, at);
+  for (double& m : mean) m /= R;
+  for (int q = 0; q < replicates; ++q)
+    for (std::size_t at = 0; at < per_rep; ++at) {
+      const double d = x(q, at) - mean[at];
+      ss[at] += d * d;
+    }
+  for (std::size_t at = 0; at < per_rep; ++at) out[at] = std::sqrt(ss[at] / (R - 1) / R);
   return out;
 }
 Mueller block_at(const std::vector<double>& v, std::size_t at) {
@@ -192,176 +207,136 @@ std::vector<NamedStokes> polarization_inputs() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The walk
+// The sums of the walked paths
 
-namespace {
-// Chunks and batches as the unpolarized tallies sum them (measure/bsdf_measure.cpp), so the sums
-// are added in the same order: 2^13 paths a chunk, at most 64 batches a replicate, each batch a
-// deterministic reduce over its chunks.
-constexpr std::uint64_t kChunk = 1 << 13;
-std::uint64_t path_batches(std::uint64_t n) { return std::min<std::uint64_t>((n + kChunk - 1) / kChunk, 64); }
+MuellerUnit& MuellerUnit::operator+=(const MuellerUnit& o) {
+  if (sums.empty()) return *this = o;
+  for (std::size_t i = 0; i < sums.size(); ++i) sums[i] += o.sums[i];
+  for (std::size_t i = 0; i < map.size(); ++i) map[i] += o.map[i];
+  for (std::size_t i = 0; i < bins.size(); ++i) bins[i] += o.bins[i];
+  for (std::size_t i = 0; i < plane.size(); ++i) plane[i] += o.plane[i];
+  paths += o.paths;
+  return *this;
+}
 
-struct UnitSums {
-  std::vector<double> sums;   // [k][l][16]
-  std::vector<double> map;    // [k][l][pixel][16]
-  std::vector<double> bins;   // [l][bin pixel][16]
-  std::vector<double> plane;  // [k][l][b][16]
-  std::uint64_t paths = 0;
-  UnitSums& operator+=(const UnitSums& o) {
-    if (sums.empty()) return *this = o;
-    for (std::size_t i = 0; i < sums.size(); ++i) sums[i] += o.sums[i];
-    for (std::size_t i = 0; i < map.size(); ++i) map[i] += o.map[i];
-    for (std::size_t i = 0; i < bins.size(); ++i) bins[i] += o.bins[i];
-    for (std::size_t i = 0; i < plane.size(); ++i) plane[i] += o.plane[i];
-    paths += o.paths;
-    return *this;
+// The maps, the widths of the sums and the per-replicate sums of one run.
+struct PolarizedSums::Layout {
+  PolarizedSumsSetup su;
+  int K, L;
+  const Material* materials;
+  HemisphereMap map{kPolarizationMapResolution};
+  bool per_bin;  // su.resolution > 0: a hemisphere map of all orders, the in-plane bins per slot
+  HemisphereMap bin_map;
+  InPlaneBins plane;
+  std::size_t width, map_width, bins_width, plane_width;
+  PolarizationTally t;
+  std::vector<double> bins_replicate, plane_replicate;  // [q][...]: the errors of the bins
+
+  explicit Layout(const PolarizedSumsSetup& s)
+      : su(s), K(s.orders), L(s.spectral.empty() ? 1 : static_cast<int>(s.spectral.size())),
+        materials(s.spectral.empty() ? &su.material : su.spectral.data()), per_bin(s.resolution > 0),
+        bin_map(per_bin ? polarized_bin_resolution(s.resolution) : 1), plane(s.phi_i, per_bin ? s.resolution : 1) {
+    t.orders = K;
+    t.wavelengths = L;
+    t.replicates = s.replicates;
+    t.pixels = map.size();
+    if (per_bin) {
+      t.bin_resolution = bin_map.resolution();
+      t.bin_pixels = bin_map.size();
+      t.plane_bins = plane.size();
+      for (int px = 0; px < t.bin_pixels; ++px) t.bin_cos.push_back(bin_map.pixel_cos_integral(px));
+      for (int b = 0; b < t.plane_bins; ++b) t.plane_cos.push_back(plane.cos_integral(b));
+    }
+    width = static_cast<std::size_t>(K + 1) * L * 16;
+    map_width = width * t.pixels;
+    bins_width = static_cast<std::size_t>(L) * t.bin_pixels * 16;
+    plane_width = width * t.plane_bins;
+    // Each replicate's sum starts at zero and adds its units in order.
+    t.replicate.assign(width * s.replicates, 0.0);
+    t.map_replicate.assign(map_width * s.replicates, 0.0);
+    bins_replicate.assign(bins_width * s.replicates, 0.0);
+    plane_replicate.assign(plane_width * s.replicates, 0.0);
   }
 };
-// Units run at once: at most this many bytes of unit sums.
-constexpr double kPassBytes = 64.0 * 1024 * 1024;
+
+PolarizedSums::PolarizedSums(const PolarizedSumsSetup& setup) : layout_(std::make_unique<Layout>(setup)) {}
+PolarizedSums::~PolarizedSums() = default;
+
+MuellerUnit PolarizedSums::make_unit() const {
+  MuellerUnit u;
+  u.sums.assign(layout_->width, 0.0);
+  u.map.assign(layout_->map_width, 0.0);
+  u.bins.assign(layout_->bins_width, 0.0);
+  u.plane.assign(layout_->plane_width, 0.0);
+  return u;
+}
+
+namespace {
+// p[a] += w0 * M(a / 4, a % 4) for the 16 elements.
+void add_matrix(double* p, double w0, const Mueller& M) {
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 4; ++b) p[4 * a + b] += w0 * M(a, b);
+}
 }  // namespace
 
-PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalkSetup& su) {
-  const ReplicatePlan plan(su.rays, su.replicates);
-  const int K = su.orders;
-  const int L = su.spectral.empty() ? 1 : static_cast<int>(su.spectral.size());
-  const Material* materials = su.spectral.empty() ? &su.material : su.spectral.data();
-  PolarizationTally t;
-  t.orders = K;
-  t.wavelengths = L;
-  t.replicates = plan.replicates;
-  const HemisphereMap map(kPolarizationMapResolution);
-  const int npix = map.size();
-  t.pixels = npix;
-  const std::size_t width = static_cast<std::size_t>(K + 1) * L * 16;
-  const std::size_t map_width = width * npix;
-  // Per-bin tallies (su.resolution > 0): a hemisphere map of all orders, the in-plane bins per slot.
-  const bool per_bin = su.resolution > 0;
-  const HemisphereMap bin_map(per_bin ? polarized_bin_resolution(su.resolution) : 1);
-  const InPlaneBins plane(su.phi_i, per_bin ? su.resolution : 1);
-  if (per_bin) {
-    t.bin_resolution = bin_map.resolution();
-    t.bin_pixels = bin_map.size();
-    t.plane_bins = plane.size();
-    for (int px = 0; px < t.bin_pixels; ++px) t.bin_cos.push_back(bin_map.pixel_cos_integral(px));
-    for (int b = 0; b < t.plane_bins; ++b) t.plane_cos.push_back(plane.cos_integral(b));
+void PolarizedSums::add_path(const WalkEnd& e, const std::vector<WalkFacet>& facets, MuellerUnit& acc) const {
+  const Layout& y = *layout_;
+  ++acc.paths;
+  if (e.kind != WalkEnd::Reflected) return;
+  const int K = y.K, L = y.L;
+  const double w0 = y.su.ray_weight;
+  Mueller M[kMaxWavelengths];
+  walk_path_muellers(y.su.wi, facets, e.direction, y.materials, L, M);
+  const int k = std::min(e.order, K) - 1;
+  // A finite object's ray reflected below the base plane counts in the albedo only.
+  const bool above = e.direction.z() > 0.0;
+  if (y.per_bin && above) {
+    const int bp = y.bin_map.pixel_of(e.direction), b = y.plane.bin_of(e.direction);
+    for (int l = 0; l < L; ++l) add_matrix(acc.bins.data() + (static_cast<std::size_t>(l) * y.t.bin_pixels + bp) * 16, w0, M[l]);
+    if (b >= 0)
+      for (int slot : {k, K})
+        for (int l = 0; l < L; ++l)
+          add_matrix(acc.plane.data() + ((static_cast<std::size_t>(slot) * L + l) * y.t.plane_bins + b) * 16, w0, M[l]);
   }
-  const std::size_t bins_width = static_cast<std::size_t>(L) * t.bin_pixels * 16;
-  const std::size_t plane_width = width * t.plane_bins;
-  const std::uint64_t n = plan.per_replicate();
-  const std::uint64_t nchunks = (n + kChunk - 1) / kChunk, batches = path_batches(n);
-  const std::uint64_t units = static_cast<std::uint64_t>(plan.replicates) * batches;
-
-  auto path = [&](int q, std::uint64_t i, UnitSums& acc) {
-    thread_local std::vector<WalkFacet> facets;
-    CounterRng rng(su.seed, ReplicatePlan::stream(su.stream, q), i);
-    ++acc.paths;
-    const Vec2 ab = plan.strata.point(i, rng);
-    TraceCounters counters;
-    std::uint64_t events = 0;
-    double weights[kMaxWavelengths];
-    std::fill(weights, weights + L, 1.0);
-    const SpectralWeights sw{su.spectral.data(), L, weights};
-    const WalkEnd e = walk_bsdf_path(tracer, su.origin0 + ab.x() * su.e1 + ab.y() * su.e2, -su.wi, su.material, rng,
-                                     su.max_events, su.finite, counters, events,
-                                     su.spectral.empty() ? nullptr : &sw, &facets);
-    if (e.kind != WalkEnd::Reflected) return;
-    Mueller M[kMaxWavelengths];
-    walk_path_muellers(su.wi, facets, e.direction, materials, L, M);
-    const int k = std::min(e.order, K) - 1;
-    // A finite object's ray reflected below the base plane counts in the albedo only.
-    const bool above = e.direction.z() > 0.0;
-    const int px = above ? map.pixel_of(e.direction) : -1;
-    if (per_bin && above) {
-      const int bp = bin_map.pixel_of(e.direction), b = plane.bin_of(e.direction);
-      for (int l = 0; l < L; ++l) {
-        double* p = acc.bins.data() + (static_cast<std::size_t>(l) * t.bin_pixels + bp) * 16;
-        for (int a = 0; a < 16; ++a) p[a] += su.ray_weight * M[l](a / 4, a % 4);
-      }
-      if (b >= 0)
-        for (int slot : {k, K})
-          for (int l = 0; l < L; ++l) {
-            double* p = acc.plane.data() + ((static_cast<std::size_t>(slot) * L + l) * t.plane_bins + b) * 16;
-            for (int a = 0; a < 16; ++a) p[a] += su.ray_weight * M[l](a / 4, a % 4);
-          }
+  const int px = above ? y.map.pixel_of(e.direction) : -1;
+  for (int slot : {k, K})
+    for (int l = 0; l < L; ++l) {
+      const std::size_t at = static_cast<std::size_t>(slot) * L + l;
+      add_matrix(acc.sums.data() + at * 16, w0, M[l]);
+      if (px >= 0) add_matrix(acc.map.data() + (at * y.t.pixels + px) * 16, w0, M[l]);
     }
-    for (int slot : {k, K})
-      for (int l = 0; l < L; ++l) {
-        double* p = acc.sums.data() + (static_cast<std::size_t>(slot) * L + l) * 16;
-        double* q = px < 0 ? nullptr : acc.map.data() + ((static_cast<std::size_t>(slot) * L + l) * npix + px) * 16;
-        for (int a = 0; a < 4; ++a)
-          for (int b = 0; b < 4; ++b) {
-            const double w = su.ray_weight * M[l](a, b);
-            p[4 * a + b] += w;
-            if (q) q[4 * a + b] += w;
-          }
-      }
+}
+
+void PolarizedSums::add_unit(int q, const MuellerUnit& part) {
+  Layout& y = *layout_;
+  auto add = [](double* to, const std::vector<double>& from) {
+    for (std::size_t i = 0; i < from.size(); ++i) to[i] += from[i];
   };
+  add(y.t.replicate.data() + y.width * q, part.sums);
+  add(y.t.map_replicate.data() + y.map_width * q, part.map);
+  add(y.bins_replicate.data() + y.bins_width * q, part.bins);
+  add(y.plane_replicate.data() + y.plane_width * q, part.plane);
+  y.t.paths += part.paths;
+}
 
-  // Units (replicate, batch) run a pass at a time; each replicate's sum starts at zero and adds
-  // its batches in order, then the replicates are added in order.
-  t.total.assign(width, 0.0);
-  t.replicate.assign(width * plan.replicates, 0.0);
-  t.map_total.assign(map_width, 0.0);
-  t.map_replicate.assign(map_width * plan.replicates, 0.0);
-  t.bins_total.assign(bins_width, 0.0);
-  std::vector<double> bins_replicate(bins_width * plan.replicates, 0.0);
-  t.plane_total.assign(plane_width, 0.0);
-  std::vector<double> plane_replicate(plane_width * plan.replicates, 0.0);
-  const std::uint64_t per_pass = std::max<std::uint64_t>(
-      16, static_cast<std::uint64_t>(kPassBytes / (8.0 * (width + map_width + bins_width + plane_width))));
-  for (std::uint64_t u = 0; u < units; u += per_pass) {
-    const std::uint64_t u1 = std::min(units, u + per_pass);
-    std::vector<UnitSums> parts(u1 - u);
-    tbb::parallel_for(u, u1, [&](std::uint64_t w) {
-      const int q = static_cast<int>(w / batches);
-      const std::uint64_t bt = w % batches;
-      const std::uint64_t c0 = nchunks * bt / batches, c1 = nchunks * (bt + 1) / batches;
-      parts[w - u] = tbb::parallel_deterministic_reduce(
-          tbb::blocked_range<std::uint64_t>(c0, c1, 1), UnitSums(),
-          [&](const tbb::blocked_range<std::uint64_t>& range, UnitSums acc) {
-            if (acc.sums.empty()) {
-              acc.sums.assign(width, 0.0);
-              acc.map.assign(map_width, 0.0);
-              acc.bins.assign(bins_width, 0.0);
-              acc.plane.assign(plane_width, 0.0);
-            }
-            for (std::uint64_t c = range.begin(); c != range.end(); ++c) {
-              const std::uint64_t end = std::min(n, (c + 1) * kChunk);
-              for (std::uint64_t i = c * kChunk; i < end; ++i) path(q, i, acc);
-            }
-            return acc;
-          },
-          [](UnitSums a, const UnitSums& b) {
-            a += b;
-            return a;
-          });
-    });
-    for (std::uint64_t w = u; w < u1; ++w) {
-      const std::size_t q = w / batches;
-      const UnitSums& part = parts[w - u];
-      double* rep = t.replicate.data() + width * q;
-      for (std::size_t i = 0; i < width; ++i) rep[i] += part.sums[i];
-      double* rep_map = t.map_replicate.data() + map_width * q;
-      for (std::size_t i = 0; i < map_width; ++i) rep_map[i] += part.map[i];
-      double* rep_bins = bins_replicate.data() + bins_width * q;
-      for (std::size_t i = 0; i < bins_width; ++i) rep_bins[i] += part.bins[i];
-      double* rep_plane = plane_replicate.data() + plane_width * q;
-      for (std::size_t i = 0; i < plane_width; ++i) rep_plane[i] += part.plane[i];
-      t.paths += part.paths;
-    }
+PolarizationTally PolarizedSums::finish() {
+  Layout& y = *layout_;
+  PolarizationTally& t = y.t;
+  // The replicates added in order.
+  auto total = [&](std::vector<double>& out, const std::vector<double>& reps, std::size_t w) {
+    out.assign(w, 0.0);
+    for (int q = 0; q < t.replicates; ++q)
+      for (std::size_t i = 0; i < w; ++i) out[i] += reps[w * q + i];
+  };
+  total(t.total, t.replicate, y.width);
+  total(t.map_total, t.map_replicate, y.map_width);
+  total(t.bins_total, y.bins_replicate, y.bins_width);
+  total(t.plane_total, y.plane_replicate, y.plane_width);
+  if (y.per_bin) {
+    t.bins_stderr = bin_stderrs(y.bins_replicate, y.bins_width / 16, t.replicates, t.paths, t.bin_cos);
+    t.plane_stderr = bin_stderrs(y.plane_replicate, y.plane_width / 16, t.replicates, t.paths, t.plane_cos);
   }
-  for (int q = 0; q < plan.replicates; ++q) {
-    for (std::size_t i = 0; i < width; ++i) t.total[i] += t.replicate[width * q + i];
-    for (std::size_t i = 0; i < map_width; ++i) t.map_total[i] += t.map_replicate[map_width * q + i];
-    for (std::size_t i = 0; i < bins_width; ++i) t.bins_total[i] += bins_replicate[bins_width * q + i];
-    for (std::size_t i = 0; i < plane_width; ++i) t.plane_total[i] += plane_replicate[plane_width * q + i];
-  }
-  if (per_bin) {
-    t.bins_stderr = bin_stderrs(bins_replicate, bins_width / 16, t.replicates, t.paths, t.bin_cos);
-    t.plane_stderr = bin_stderrs(plane_replicate, plane_width / 16, t.replicates, t.paths, t.plane_cos);
-  }
-  return t;
+  return std::move(t);
 }
 
 }  // namespace microsim

@@ -22,6 +22,7 @@
 #include "microsim/io/output.hpp"
 #include "microsim/measure/polarized_walk.hpp"
 #include "microsim/measure/shards.hpp"
+#include "microsim/measure/timing.hpp"
 #include "microsim/models/microfacet_bsdf.hpp"
 #include "microsim/models/smith_random_walk.hpp"
 #include "microsim/trace/tracer.hpp"
@@ -140,8 +141,8 @@ struct BsdfOptions {
   // errors of the replicate means (measure/replicates.hpp).
   int replicates = 32;
   // Mueller matrices along every reflected path, per order and wavelength
-  // (measure/polarized_walk.hpp): the paths are walked a second time with the same random
-  // numbers. Periodic tiles and finite objects in one process.
+  // (measure/polarized_walk.hpp), built from the facets of the walk's own paths. Periodic
+  // tiles and finite objects in one process.
   bool polarized = false;
   // Called from the calling thread with the fraction of work done (progress display).
   std::function<void(double)> progress;
@@ -149,6 +150,8 @@ struct BsdfOptions {
   // nullptr: all computed here.
   TallySplit* split = nullptr;
 };
+
+struct SpectralTally;
 
 // Mergeable sums. Index conventions: side s (0 reflected, 1 transmitted), slot k (0 .. K-1 for
 // orders 1 .. K+, K for the total). The first moments are sums over paths of the weight that
@@ -203,6 +206,8 @@ struct BsdfTally {
   BsdfTally& operator+=(const BsdfTally& o);
   // Adds one replicate's per-path tally (replicates == 0) as replicate number `replicates`.
   void add_replicate(const BsdfTally& rep);
+  // The same for wavelength l of a spectral replicate (the counts are the path's, shared).
+  void add_replicate(const SpectralTally& rep, int l);
   // Mean per path of the first moment `sum` (times `scale`) with its standard error.
   Estimate estimate(double sum, double sum2, double scale = 1.0) const;
 };
@@ -228,7 +233,8 @@ struct BsdfResult {
   WalkBudget model_budget;              // how many walks, for which error
   std::optional<models::Ndf> nominal;
   std::optional<PolarizationTally> polarization;  // options.polarized: the reflected Mueller sums
-  double seconds = 0, model_seconds = 0;
+  Timing timing;        // the whole run (the record's `seconds`)
+  Timing model_timing;  // the Smith walk model's part of it (`model_seconds`)
 
   int wavelengths() const { return static_cast<int>(spectral.size()); }
   // The tallies of wavelength index `lambda` (spectral runs), or `measured` for lambda < 0.

@@ -1,6 +1,6 @@
 // Mueller matrices carried along the BSDF walk (`measure bsdf --polarized`, docs/guide/polarization.md):
-// every path of the explicit surface is walked again with the same random numbers as the
-// unpolarized tallies (same seed, streams, strata), its facets are kept, and the path's Mueller
+// every path of the explicit surface keeps its facets as it is walked for the unpolarized
+// tallies (one trace per path), and the path's Mueller
 // matrix is built from them (models/mueller.hpp: the s/p frame of each facet, the Fresnel
 // matrix, the rotations between frames), from the Stokes frame of the light's direction to the
 // frame of the exit direction, once per wavelength (the geometry is shared, only r_s and r_p
@@ -14,6 +14,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "microsim/io/output.hpp"
@@ -21,8 +22,8 @@
 
 namespace microsim {
 
-class Tracer;
 struct WalkFacet;
+struct WalkEnd;
 
 // The equal-area map (HemisphereMap) of the direction-resolved sums: coarse, so that each pixel
 // gathers paths of every order.
@@ -88,16 +89,12 @@ struct PolarizationTally {
   Estimate resolved_degree_of_polarization(int k, int l, const models::Stokes& s) const;
 };
 
-// The inputs of the polarized walk: what measure_bsdf uses for its own paths.
-struct PolarizedWalkSetup {
+// What the polarized sums of a run take from it (measure_bsdf).
+struct PolarizedSumsSetup {
   Vec3 wi;                       // light direction
-  Vec3 origin0, e1, e2;          // the ray window
   double ray_weight = 1.0;
-  bool finite = false;
-  std::uint64_t seed = 1, stream = 0;
-  std::uint64_t rays = 0;        // as BsdfOptions::rays
-  int replicates = 32;           // requested (ReplicatePlan)
-  int orders = 4, max_events = 10000;
+  int replicates = 32;           // the run's (ReplicatePlan::replicates)
+  int orders = 4;
   models::Material material;     // single index (spectral empty)
   std::vector<models::Material> spectral;
   double phi_i = 0.0;            // the in-plane bins' plane of incidence
@@ -105,7 +102,36 @@ struct PolarizedWalkSetup {
                                  // polarized_bin_resolution(R); 0: no per-bin tallies
 };
 
-PolarizationTally measure_polarization(const Tracer& tracer, const PolarizedWalkSetup& setup);
+// One work unit's Mueller sums (measure/replicates.hpp): its paths, and its reflected paths'
+// matrices as PolarizationTally lays them out.
+struct MuellerUnit {
+  std::vector<double> sums;   // [k][l][16]
+  std::vector<double> map;    // [k][l][pixel][16]
+  std::vector<double> bins;   // [l][bin pixel][16]
+  std::vector<double> plane;  // [k][l][b][16]
+  std::uint64_t paths = 0;
+  MuellerUnit& operator+=(const MuellerUnit& o);
+};
+
+// The polarized sums of a run, filled from the BSDF walk's own paths (measure_bsdf walks each
+// path once and hands it here with its facets): per unit, then per replicate in unit order
+// (the order of the unpolarized tallies), then the run's PolarizationTally.
+class PolarizedSums {
+ public:
+  explicit PolarizedSums(const PolarizedSumsSetup& setup);
+  ~PolarizedSums();
+  MuellerUnit make_unit() const;
+  // A walked path into its unit's sums (every path counts; a reflected one adds its matrices).
+  void add_path(const WalkEnd& end, const std::vector<WalkFacet>& facets, MuellerUnit& unit) const;
+  // Unit sums of replicate q, in unit order.
+  void add_unit(int q, const MuellerUnit& unit);
+  // The totals and the errors of the bins.
+  PolarizationTally finish();
+
+ private:
+  struct Layout;
+  std::unique_ptr<Layout> layout_;
+};
 
 // The Mueller matrix of a walked path for each of `count` materials (the geometry shared): from
 // the Stokes frame of wi to that of `exit` (models::stokes_frame), divided by the product of the
