@@ -171,7 +171,7 @@ void register_measure_bsdf(CLI::App& measure, const GlobalOptions& g) {
   cmd->add_flag("--polarized", o->request.polarized,
                 "Also carry each reflected path's Mueller matrix (Stokes frames of the incident and "
                 "exit directions) and record per incidence, order and wavelength the Mueller albedo, "
-                "its errors and the degree of polarization (the paths are walked twice)");
+                "its errors and the degree of polarization (from the same paths as the unpolarized tally)");
   cmd->add_flag("--no-models", o->no_models,
                 "Measure only: no analytic model beside the measurement (single-scattering "
                 "integrals, Smith random walk, V-groove closed forms), which cost time on tables");
