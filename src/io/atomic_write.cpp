@@ -57,6 +57,23 @@ sigset_t interrupt_signals() {
   return set;
 }
 
+// Removes every registered temporary. The other threads run on meanwhile: one may rename a file
+// into a temporary folder after its contents were listed (its rmdir then fails) or register a
+// folder the sweep has passed, so the sweep repeats until a pass finds nothing registered left on
+// disk (at most about 100 ms).
+void remove_temporaries() {
+  for (int pass = 0; pass < 100; ++pass) {
+    bool left = false;
+    for (int k = 0; k < kSlots; ++k)
+      if (g_used[k].load()) {
+        remove_path_raw(g_paths[k], 0);
+        left = left || access(g_paths[k], F_OK) == 0;
+      }
+    if (!left && pass > 0) return;
+    usleep(1000);
+  }
+}
+
 // The signal thread: the interrupt signals are blocked in every other thread, so they arrive
 // here (sigwait) as ordinary events. A cleanup inside an asynchronous handler could deadlock:
 // opendir allocates, and the interrupted thread may hold the allocator's lock.
@@ -66,8 +83,7 @@ void wait_for_interrupt() {
   while (sigwait(&set, &sig) != 0) {
   }
   g_interrupting.store(true);
-  for (int k = 0; k < kSlots; ++k)
-    if (g_used[k].load()) remove_path_raw(g_paths[k], 0);
+  remove_temporaries();
   // End the process by the same signal, with its default action (the exit status says so).
   signal(sig, SIG_DFL);
   sigset_t one;
@@ -122,6 +138,12 @@ TemporaryFolder::TemporaryFolder(const std::string& prefix) {
   if (!mkdtemp(tmpl.data())) throw RuntimeFailure("cannot create a temporary folder in " + tmpl);
   path_ = tmpl;
   register_temporary(path_);
+  // Made while an interrupt's sweep was running: it may have passed this folder's slot already.
+  if (g_interrupting.load()) {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+    wait_if_interrupted();
+  }
 }
 
 TemporaryFolder::~TemporaryFolder() {
