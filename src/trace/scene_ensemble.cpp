@@ -10,7 +10,8 @@
 namespace microsim {
 
 VGrooveScene::VGrooveScene(float top)
-    : top_(top),
+    : TracedScene(tracer_),  // bound here, used only once tracer_ is built below
+      top_(top),
       surface_(Microsurface::heightfield(2, 2, 1.0, 1.0, {0.0f, top, 0.0f, top})),
       tracer_(surface_),
       plane_{SourcePlane::of(surface_.facet(0)), SourcePlane::of(surface_.facet(2))} {}

@@ -62,19 +62,30 @@ class Scene {
   virtual const Tracer& tracer() const = 0;
 };
 
-// A scene over a Tracer (not owned; it must outlive the scene): one class per kind of
-// surface, each with its own rule at the region's border. Facets are the surface's own.
-class TracerScene : public Scene {
+// A scene whose rays a Tracer traces as they are (the Tracer is not owned: it must outlive the
+// scene, or be a member of the derived scene).
+class TracedScene : public Scene {
  public:
-  explicit TracerScene(const Tracer& tracer) : tracer_(tracer) {}
+  explicit TracedScene(const Tracer& tracer) : traced_(tracer) {}
   TraceHit intersect(const Vec3& org, const Vec3& dir, const SourcePlane* source, TraceCounters& c,
                      RaySide side = RaySide::Front) const override {
-    return tracer_.first_hit(org, dir, source, c, side);
+    return traced_.first_hit(org, dir, source, c, side);
   }
   bool occluded(const Vec3& org, const Vec3& dir, const SourcePlane* source,
                 TraceCounters& c) const override {
-    return tracer_.occluded(org, dir, source, c);
+    return traced_.occluded(org, dir, source, c);
   }
+  const Tracer& tracer() const override { return traced_; }
+
+ private:
+  const Tracer& traced_;
+};
+
+// A scene over a whole surface's Tracer: one class per kind of surface, each with its own rule
+// at the region's border. Facets are the surface's own.
+class TracerScene : public TracedScene {
+ public:
+  explicit TracerScene(const Tracer& tracer) : TracedScene(tracer), tracer_(tracer) {}
   std::size_t front_facet(const TraceHit& h) const override;
   std::size_t num_facets() const override { return tracer_.surface().num_facets(); }
   double facet_area(std::size_t f) const override { return tracer_.surface().facet(f).area(); }
@@ -85,7 +96,6 @@ class TracerScene : public Scene {
   }
   RayWindow ray_window(const Vec3& v) const override;
   double macro_area() const override { return tracer_.surface().macro().area; }
-  const Tracer& tracer() const override { return tracer_; }
 
  private:
   const Tracer& tracer_;

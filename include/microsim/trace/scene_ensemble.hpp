@@ -26,17 +26,9 @@ struct SceneFrame {
 // One infinite periodic V-groove in its own frame: one period x in [-1/2, 1/2] per unit tile,
 // the ridge along y, the surface z = top (1 - 2|x|). Two facets: side 0 (x < 0) and side 1
 // (x > 0). Traced as a periodic 2 x 2 heightfield (Tracer).
-class VGrooveScene : public Scene {
+class VGrooveScene : public TracedScene {
  public:
   explicit VGrooveScene(float top);
-  TraceHit intersect(const Vec3& org, const Vec3& dir, const SourcePlane* source, TraceCounters& c,
-                     RaySide side = RaySide::Front) const override {
-    return tracer_.first_hit(org, dir, source, c, side);
-  }
-  bool occluded(const Vec3& org, const Vec3& dir, const SourcePlane* source,
-                TraceCounters& c) const override {
-    return tracer_.occluded(org, dir, source, c);
-  }
   std::size_t front_facet(const TraceHit& h) const override {
     return h.hit && !h.backface ? (h.facet / 2) % 2 : kNoFacet;  // the cell's column is the side
   }
@@ -53,7 +45,6 @@ class VGrooveScene : public Scene {
   }
   RegionExit region_exit() const override { return RegionExit::Wrap; }
   double macro_area() const override { return 1.0; }
-  const Tracer& tracer() const override { return tracer_; }
 
  private:
   float top_;
