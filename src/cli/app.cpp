@@ -42,9 +42,8 @@ std::unique_ptr<MicrosimApp> build_app(GlobalOptions& g, TallyReplay* replay) {
       level = level->get_subcommands().front();
       words.push_back(level->get_name());
     }
-    // Before any work: an output must not replace an input of the same run (embedded, inputs
-    // are surfaces held in memory).
-    if (!g.surface_by_name) refuse_outputs_naming_inputs(app, app.shard_text);
+    // Before any work: an output must not replace an input of the same run.
+    refuse_outputs_naming_inputs(app, app.shard_text);
     if ((!app.shard_text.empty() || mpi.active) && !command_can_split(words))
       throw UsageError(std::string(mpi.active ? "mpirun" : "--shard") +
                        " applies to measure g1, g2, vndf, bsdf and validate");

@@ -43,20 +43,11 @@ void require_extension(const std::string& path, std::initializer_list<const char
 
 void write_record(const std::string& path, const Json& j) { write_record_file(path, j); }
 
-void write_record(const GlobalOptions& g, const std::string& path, const Json& j) {
-  if (g.keep_record) g.keep_record(path, j);
-  else write_record(path, j);
-}
+void write_record(const GlobalOptions&, const std::string& path, const Json& j) { write_record(path, j); }
 
-Microsurface input_surface(const GlobalOptions& g, const std::string& path) {
-  return g.surface_by_name ? g.surface_by_name(path) : load_surface(path);
-}
+Microsurface input_surface(const GlobalOptions&, const std::string& path) { return load_surface(path); }
 
-SurfaceInput input_surface_source(const GlobalOptions& g, const std::string& path) {
-  if (!g.surface_by_name) return surface_file(path);
-  auto by_name = g.surface_by_name;
-  return {path, [by_name, path] { return std::make_shared<const Microsurface>(by_name(path)); }};
-}
+SurfaceInput input_surface_source(const GlobalOptions&, const std::string& path) { return surface_file(path); }
 
 std::vector<SurfaceInput> input_surface_sources(const GlobalOptions& g, const std::vector<std::string>& paths) {
   std::vector<SurfaceInput> sources;
@@ -72,10 +63,7 @@ RunContext run_context(const GlobalOptions& g) {
   return ctx;
 }
 
-void output_surface(const GlobalOptions& g, const Microsurface& s, const std::string& path) {
-  if (g.keep_surface) g.keep_surface(path, s);
-  else save_surface(s, path);
-}
+void output_surface(const GlobalOptions&, const Microsurface& s, const std::string& path) { save_surface(s, path); }
 
 std::string fmt(double x, int precision) {
   std::ostringstream os;

@@ -24,12 +24,6 @@ namespace microsim::cli {
 struct GlobalOptions {
   int threads = 0;  // 0 = all cores
   bool quiet = false;
-  // Set only when the commands run embedded (the Python module): surface arguments name surfaces
-  // held in memory, records and generated surfaces are handed over (with the -o path) instead of
-  // written to files.
-  std::function<Microsurface(const std::string&)> surface_by_name;
-  std::function<void(const std::string&, const Json&)> keep_record;
-  std::function<void(const std::string&, const Microsurface&)> keep_surface;
   // Work shared with other processes (shards, MPI ranks, a merge's replay; scaleout.hpp):
   // passed to the estimators' options. `ranks` > 0 under MPI (written to the record).
   TallySplit* split = nullptr;
@@ -39,14 +33,14 @@ struct GlobalOptions {
   bool partial = false;
 };
 
-// A command's input surface: the file `path`, or the surface of that name when embedded.
+// A command's input surface: the file `path`.
 Microsurface input_surface(const GlobalOptions& g, const std::string& path);
-// The same as a request's surface: the file, or the surface of that name when embedded.
+// The same as a request's surface: the file, loaded when the request runs.
 SurfaceInput input_surface_source(const GlobalOptions& g, const std::string& path);
 std::vector<SurfaceInput> input_surface_sources(const GlobalOptions& g, const std::vector<std::string>& paths);
 // The run as a request's record knows it: threads, MPI ranks and the shards/MPI split of g.
 RunContext run_context(const GlobalOptions& g);
-// A command's output surface: saved to `path`, or handed over when embedded.
+// A command's output surface: saved to `path`.
 void output_surface(const GlobalOptions& g, const Microsurface& s, const std::string& path);
 
 // A progress bar with ETA on a terminal; silent in pipes, CI and with --quiet.
@@ -68,7 +62,7 @@ class Progress {
 void require_extension(const std::string& path, std::initializer_list<const char*> allowed);
 // JSON or CSV (rows only) by extension, atomically.
 void write_record(const std::string& path, const Json& j);
-// The same, or the record handed over when embedded.
+// The same (the global options kept for the commands' uniform call).
 void write_record(const GlobalOptions& g, const std::string& path, const Json& j);
 std::string fmt(double x, int precision = 4);
 // A record's number, or "-" where it is null (e.g. a z without an error bar).

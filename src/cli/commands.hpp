@@ -22,7 +22,7 @@ struct SurfaceOptionValues {
 void add_surface_options(CLI::App& cmd, const SurfaceKind& kind, SurfaceOptionValues& v);
 // The options given (on the command line or in the preset) as a request.
 SurfaceRequest given_surface_options(const SurfaceKind& kind, const SurfaceOptionValues& v);
-// Generates the surface, saves it at `path` (or hands it over when embedded) and prints.
+// Generates the surface, saves it at `path` and prints.
 void write_generated(const SurfaceRequest& r, const std::string& path, const GlobalOptions& g);
 
 struct MeasureOptions {

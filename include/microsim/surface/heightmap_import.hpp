@@ -65,12 +65,6 @@ struct HeightmapImportParams {
   double guard_correlation_lengths = -1;
 };
 
-// load_surface, except that with allow_window a heightfield saved as a non-periodic window is
-// returned (as a grid whose description has "boundary": "window") instead of refused. Only
-// metrology may read such a surface: no estimator traces a window (defined in surface_io.cpp).
-Microsurface load_surface_or_window(const std::string& path, bool allow_window = false);
-// is_window (surface/microsurface.hpp) tells such a surface.
-
 // Factor of a length unit in metres (m, mm, um, nm, pm; "" = 0: no unit).
 double length_unit_in_metres(const std::string& unit);
 
