@@ -7,7 +7,9 @@
 
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <string>
+#include <thread>
 
 #include "cli_helpers.hpp"
 #include "microsim/common.hpp"
@@ -275,6 +277,36 @@ TEST(NoLeftovers, ProvisionalFilesFollowTheEnclosingTransaction) {
     outer.commit();
   }
   EXPECT_TRUE(exists(p));
+}
+
+// Two commands on two threads (as Python calls without the GIL run them): each thread's writes
+// join the transaction that thread opened, not the one opened last by any thread. Thread A opens
+// its transaction, then B opens one (the most recent of the process), then A writes, commits and
+// B ends uncommitted: A's file must be in place and B's gone.
+TEST(NoLeftovers, EachThreadsWritesJoinTheTransactionItOpened) {
+  const std::string dir = folder("threads");
+  const std::string a_path = dir + "/a.json", b_path = dir + "/b.json";
+  std::promise<void> a_opened, b_opened, a_done;
+  std::thread b([&] {
+    a_opened.get_future().wait();
+    OutputTransaction t;
+    b_opened.set_value();
+    a_done.get_future().wait();
+    write_json(b_path, {{"b", 1}});
+  });  // not committed
+  {
+    OutputTransaction t;
+    a_opened.set_value();
+    b_opened.get_future().wait();
+    write_json(a_path, {{"a", 1}});
+    EXPECT_EQ(OutputTransaction::pending(a_path).empty(), false);  // seen from any thread
+    t.commit();
+  }
+  a_done.set_value();
+  b.join();
+  EXPECT_TRUE(exists(a_path));
+  EXPECT_FALSE(exists(b_path));
+  EXPECT_EQ(temporaries_in(dir), 0);
 }
 
 TEST(NoLeftovers, DemoInterruptedLeavesNoOutputFolder) {

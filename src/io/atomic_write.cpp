@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <mutex>
 #include <thread>
 
 #include "microsim/common.hpp"
@@ -27,6 +28,9 @@ constexpr int kSlots = 256;
 constexpr std::size_t kPathMax = 4096;
 char g_paths[kSlots][kPathMax];
 std::atomic<bool> g_used[kSlots];
+// A slot taken by one registering thread before it fills the path (compare-and-swap), so that
+// two threads never fill the same slot.
+std::atomic<bool> g_claimed[kSlots];
 
 // Removes a file, or a folder with its contents. Runs on the signal thread (below), not in a
 // signal handler, so opendir/readdir may allocate even while another thread holds a malloc lock.
@@ -94,20 +98,46 @@ void wait_for_interrupt() {
   for (;;) pause();
 }
 
-std::vector<OutputTransaction*>& transactions() {
-  static std::vector<OutputTransaction*> stack;
-  return stack;
+// The live transactions of every thread, in the order opened, each with the thread that opened
+// it; this list and every transaction's files_ are read and changed under registry_mutex().
+struct LiveTransaction {
+  OutputTransaction* transaction;
+  std::thread::id owner;
+};
+
+std::mutex& registry_mutex() {
+  static std::mutex m;
+  return m;
+}
+
+std::vector<LiveTransaction>& transactions() {
+  static std::vector<LiveTransaction> live;
+  return live;
+}
+
+// The calling thread's innermost live transaction before `below` (nullptr: from the top), or
+// nullptr. The caller holds registry_mutex().
+OutputTransaction* innermost_of_this_thread(const OutputTransaction* below = nullptr) {
+  const auto& live = transactions();
+  auto it = live.rbegin();
+  if (below)
+    while (it != live.rend() && (it++)->transaction != below) {
+    }
+  for (; it != live.rend(); ++it)
+    if (it->owner == std::this_thread::get_id()) return it->transaction;
+  return nullptr;
 }
 }  // namespace
 
 void register_temporary(const std::string& path) {
   if (path.size() + 1 > kPathMax) throw RuntimeFailure("path too long: " + path);
-  for (int k = 0; k < kSlots; ++k)
-    if (!g_used[k].load() && g_paths[k][0] == 0) {
-      std::memcpy(g_paths[k], path.c_str(), path.size() + 1);
-      g_used[k].store(true);
-      return;
-    }
+  for (int k = 0; k < kSlots; ++k) {
+    bool free = false;
+    if (!g_claimed[k].compare_exchange_strong(free, true)) continue;
+    std::memcpy(g_paths[k], path.c_str(), path.size() + 1);
+    g_used[k].store(true);
+    return;
+  }
   throw RuntimeFailure("too many temporary files at once");
 }
 
@@ -116,6 +146,7 @@ void unregister_temporary(const std::string& path) {
     if (g_used[k].load() && path == g_paths[k]) {
       g_used[k].store(false);
       g_paths[k][0] = 0;
+      g_claimed[k].store(false);
       return;
     }
 }
@@ -215,9 +246,18 @@ void remove_folders_if_empty(const std::vector<std::string>& folders) {
 }
 }  // namespace
 
-OutputTransaction::OutputTransaction() { transactions().push_back(this); }
+OutputTransaction::OutputTransaction() {
+  const std::lock_guard<std::mutex> lock(registry_mutex());
+  transactions().push_back({this, std::this_thread::get_id()});
+}
 
 OutputTransaction::~OutputTransaction() {
+  {
+    const std::lock_guard<std::mutex> lock(registry_mutex());
+    auto& live = transactions();
+    live.erase(std::remove_if(live.begin(), live.end(), [this](const LiveTransaction& l) { return l.transaction == this; }),
+               live.end());
+  }
   for (const auto& [tmp, path] : files_) {
     std::remove(tmp.c_str());
     unregister_temporary(tmp);
@@ -227,13 +267,15 @@ OutputTransaction::~OutputTransaction() {
     unregister_temporary(path);
   }
   remove_folders_if_empty(folders_);
-  auto& st = transactions();
-  st.erase(std::remove(st.begin(), st.end(), this), st.end());
 }
 
 void OutputTransaction::commit() {
-  auto files = std::move(files_);
-  files_.clear();
+  std::vector<std::pair<std::string, std::string>> files;
+  {
+    const std::lock_guard<std::mutex> lock(registry_mutex());
+    files = std::move(files_);
+    files_.clear();
+  }
   std::string failed;
   // A destination that cannot take a file (a folder of that name) fails the whole set before
   // anything is renamed.
@@ -270,11 +312,13 @@ void OutputTransaction::commit() {
 }
 
 void OutputTransaction::place_provisionally() {
-  auto& st = transactions();
-  const auto self = std::find(st.begin(), st.end(), this);
-  OutputTransaction* parent = self != st.begin() && self != st.end() ? *(self - 1) : nullptr;
+  OutputTransaction* parent = nullptr;
   std::vector<std::string> finals;
-  for (const auto& [tmp, path] : files_) finals.push_back(path);
+  {
+    const std::lock_guard<std::mutex> lock(registry_mutex());
+    parent = innermost_of_this_thread(this);
+    for (const auto& [tmp, path] : files_) finals.push_back(path);
+  }
   // Registered before the rename: an interrupt in between removes them as well.
   for (const auto& path : finals) register_temporary(path);
   try {
@@ -309,14 +353,20 @@ bool create_output_folder(const std::string& path) {
       if (errno == EEXIST && fs::is_directory(p, ec)) continue;
       return false;
     }
-    if (!transactions().empty()) transactions().back()->created_folder(p.string());
+    OutputTransaction* innermost = nullptr;
+    {
+      const std::lock_guard<std::mutex> lock(registry_mutex());
+      innermost = innermost_of_this_thread();
+    }
+    if (innermost) innermost->created_folder(p.string());
   }
   return fs::is_directory(path, ec);
 }
 
 std::string OutputTransaction::pending(const std::string& path) {
+  const std::lock_guard<std::mutex> lock(registry_mutex());
   for (auto it = transactions().rbegin(); it != transactions().rend(); ++it)
-    for (const auto& [tmp, final_path] : (*it)->files_)
+    for (const auto& [tmp, final_path] : it->transaction->files_)
       if (final_path == path) return tmp;
   return "";
 }
@@ -338,7 +388,7 @@ void write_atomically(const std::string& path,
   auto slash = path.find_last_of('/');
   std::string dir = slash == std::string::npos ? "" : path.substr(0, slash + 1);
   std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
-  static int counter = 0;
+  static std::atomic<int> counter{0};
   std::string tmp = dir + ".tmp-" + std::to_string(getpid()) + "-" + std::to_string(counter++) + "-" + base;
   register_temporary(tmp);
   auto discard = [&] {
@@ -358,9 +408,12 @@ void write_atomically(const std::string& path,
     discard();
     throw;
   }
-  if (!transactions().empty()) {
-    transactions().back()->files_.emplace_back(tmp, path);
-    return;
+  {
+    const std::lock_guard<std::mutex> lock(registry_mutex());
+    if (OutputTransaction* t = innermost_of_this_thread()) {
+      t->files_.emplace_back(tmp, path);
+      return;
+    }
   }
   const bool ok = std::rename(tmp.c_str(), path.c_str()) == 0;
   const int err = errno;

@@ -25,7 +25,9 @@ void write_stream_atomically(const std::string& path, const std::function<void(s
 // All outputs of one command committed together: while a transaction is alive, every
 // write_atomically goes to its temporary and is renamed into place only by commit(), after every
 // output is written; destroying an uncommitted transaction removes its temporaries. Transactions
-// nest (the innermost receives the writes). Single-threaded use (the command's main thread).
+// nest: the innermost one opened by the writing thread receives its writes, so that commands run
+// at once on several threads (the Python module releases the GIL) keep their outputs apart. A
+// thread with no live transaction of its own writes directly. pending() sees every thread's.
 class OutputTransaction {
  public:
   OutputTransaction();
