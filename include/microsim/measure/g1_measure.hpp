@@ -33,6 +33,10 @@ struct G1Options {
   std::function<void(double)> progress;
   // Other processes sharing the replicates (measure/shards.hpp); nullptr: all computed here.
   TallySplit* split = nullptr;
+  // A heightfield's fast routes (measure_g1 on a Tracer): rays decoded by its grid walk, draws
+  // set up ahead. false: every ray traced on the surface's Scene, the exact route they must
+  // equal ray for ray (the tests compare the two).
+  bool grid_fast_paths = true;
 };
 
 struct G1NormalBin {
