@@ -161,31 +161,7 @@ struct FrontProjectedArea {
   }
 };
 
-// How estimator (a) traces a surface's rays; every route counts the same hits, ray for ray
-// (tests/test_measure.cpp, G1Measure.*Route*):
-//  * SceneFirstHit: every ray traced on the surface's Scene (Tracer::first_hit), the exact
-//    route, and a mesh's only one;
-//  * GridBatched: a heightfield's rays decoded by the lean primary-ray walk of its grid, ray j
-//    of every replicate as one block (Tracer::front_facets);
-//  * GridAhead: the same walk ray by ray, each set up and prefetched a few rays ahead
-//    (Tracer::prefetch_front): on heightfields of kAheadMinCells cells or more, larger than the
-//    caches, the memory reads of consecutive rays then overlap.
-enum class RaycastRoute { SceneFirstHit, GridBatched, GridAhead };
-
 bool beyond_the_caches(const Microsurface& s) { return static_cast<double>(s.nx()) * s.ny() >= kAheadMinCells; }
-
-RaycastRoute raycast_route(const Microsurface& s, const G1Options& o) {
-  if (s.kind() != Microsurface::Kind::Heightfield || !o.grid_fast_paths) return RaycastRoute::SceneFirstHit;
-  return beyond_the_caches(s) ? RaycastRoute::GridAhead : RaycastRoute::GridBatched;
-}
-
-// Whether estimator (b) sets its draws up ahead of tracing them (the same draws in the same
-// order): on a periodic heightfield beyond the caches, its facets' blocks and grid cells
-// prefetched.
-bool draws_ahead(const Microsurface& s, const G1Options& o) {
-  return o.grid_fast_paths && s.kind() == Microsurface::Kind::Heightfield && beyond_the_caches(s) &&
-         s.macro().periodic && !s.macro().region;
-}
 
 // One G1 measurement on a Tracer in progress: what both estimators' passes read.
 struct G1Pass {
@@ -219,7 +195,7 @@ struct WindowOrigins {
   }
 };
 
-// RaycastRoute::GridAhead: the rays set up a few rays ahead, their grid vertices and table
+// G1RaycastRoute::GridAhead: the rays set up a few rays ahead, their grid vertices and table
 // entry prefetched.
 std::vector<G1Tally> raycast_grid_ahead(const G1Pass& p, const DownwardRays& down, const WindowOrigins& origin) {
   const Tracer& tracer = p.tracer;
@@ -241,7 +217,7 @@ std::vector<G1Tally> raycast_grid_ahead(const G1Pass& p, const DownwardRays& dow
       });
 }
 
-// RaycastRoute::GridBatched: the same rays in the same order as run_replicates, ray j of every
+// G1RaycastRoute::GridBatched: the same rays in the same order as run_replicates, ray j of every
 // replicate in turn; the hits of a chunk counted in one flat array (replicate-major), read from the table's stored
 // bins, and added to the tallies at the end of the chunk.
 std::vector<G1Tally> raycast_grid_batched(const G1Pass& p, const DownwardRays& down, const WindowOrigins& origin) {
@@ -281,10 +257,10 @@ std::vector<G1Tally> raycast_g1(const G1Pass& p, const RayWindow& w) {
   for (int q = 0; q < p.R(); ++q)
     origin.keys[q] = CounterRng::key(p.o.seed, ReplicatePlan::stream(0xA000 + p.key, q));
   const Vec3 v = p.r.v;
-  const RaycastRoute route = raycast_route(p.s, p.o);
-  if (route != RaycastRoute::SceneFirstHit) {
+  const G1RaycastRoute route = g1_raycast_route(p.s, p.o);
+  if (route != G1RaycastRoute::SceneFirstHit) {
     const DownwardRays down(p.tracer, v);
-    return route == RaycastRoute::GridAhead ? raycast_grid_ahead(p, down, origin)
+    return route == G1RaycastRoute::GridAhead ? raycast_grid_ahead(p, down, origin)
                                             : raycast_grid_batched(p, down, origin);
   }
   const bool table_bins = p.s.kind() == Microsurface::Kind::Heightfield;
@@ -316,7 +292,7 @@ std::vector<G1Tally> sample_g1(const G1Pass& p, const BlockFacetSampler& sampler
     const double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
     sample_g1_point(p.scene, f.point(r1 * (1 - r2), r1 * r2), v, SourcePlane::of(f), b, t);
   };
-  // draws_ahead: the block of facets found, its heights, bins and the grid leaves of its cells
+  // g1_draws_ahead: the block of facets found, its heights, bins and the grid leaves of its cells
   // prefetched (FacetTable::prefetch_range, Tracer::prefetch_cells).
   struct Draw {
     CounterRng rng{0, 0, 0};
@@ -324,7 +300,7 @@ std::vector<G1Tally> sample_g1(const G1Pass& p, const BlockFacetSampler& sampler
     std::size_t block = 0;
   };
   const std::uint64_t stream = 0xB000 + p.key;
-  if (!draws_ahead(s, p.o))
+  if (!g1_draws_ahead(s, p.o))
     return run_replicates(p.R(), n_rep, p.nbins(), p.counters, p.done, p.reps, [&](int rep, std::uint64_t j, G1Tally& t) {
       CounterRng rng(p.o.seed, ReplicatePlan::stream(stream, rep), j);
       double u = (static_cast<double>(j) + rng.uniform()) / n_rep * total;
@@ -349,6 +325,16 @@ std::vector<G1Tally> sample_g1(const G1Pass& p, const BlockFacetSampler& sampler
 }
 
 }  // namespace
+
+G1RaycastRoute g1_raycast_route(const Microsurface& s, const G1Options& o) {
+  if (s.kind() != Microsurface::Kind::Heightfield || !o.grid_fast_paths) return G1RaycastRoute::SceneFirstHit;
+  return beyond_the_caches(s) ? G1RaycastRoute::GridAhead : G1RaycastRoute::GridBatched;
+}
+
+bool g1_draws_ahead(const Microsurface& s, const G1Options& o) {
+  return o.grid_fast_paths && s.kind() == Microsurface::Kind::Heightfield && beyond_the_caches(s) &&
+         s.macro().periodic && !s.macro().region;
+}
 
 G1Result measure_g1(const Tracer& tracer, const Vec3& v_in, const G1Options& o,
                     const FacetTable* table, const Tracer* under) {
