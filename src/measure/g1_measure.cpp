@@ -37,13 +37,13 @@ constexpr std::uint64_t kChunk = 1 << 14;
 // order, chunking and thread count.
 // `chunk(j0, j1, first, active, t)` runs one chunk: rays [j0, j1) of replicates first ..
 // first + active - 1 into the tallies t[0 .. active - 1].
-// Not run_replicate_chunks (measure/replicates.hpp), whose chunks lie inside one replicate and
-// whose body sees one ray: the ray-index-major order across replicates is what keeps a large
+// Not run_units (measure/replicates.hpp, the walks' and G2's driver), whose units lie inside one
+// replicate and whose body sees one ray: the ray-index-major order across replicates is what keeps a large
 // tile's cells in cache, and the chunk-level body is what lets Tracer::front_facets batch the
 // queries of ray j of every replicate. The tallies are the same integer counts either way.
 template <class Chunk>
 std::vector<G1Tally> run_chunks(int R, std::uint64_t n, int nbins, TraceCounters& counters,
-                              std::atomic<std::uint64_t>& done, UnitRange share, Chunk&& chunk) {
+                                std::atomic<std::uint64_t>& done, UnitRange share, Chunk&& chunk) {
   const std::uint64_t first = std::min<std::uint64_t>(share.first, R);
   const std::uint64_t end = std::min<std::uint64_t>(share.end, R);
   const std::uint64_t active = end > first ? end - first : 0;
@@ -76,7 +76,7 @@ std::vector<G1Tally> run_chunks(int R, std::uint64_t n, int nbins, TraceCounters
 
 template <class Body>
 std::vector<G1Tally> run_replicates(int R, std::uint64_t n, int nbins, TraceCounters& counters,
-                                  std::atomic<std::uint64_t>& done, UnitRange share, Body&& body) {
+                                    std::atomic<std::uint64_t>& done, UnitRange share, Body&& body) {
   return run_chunks(R, n, nbins, counters, done, share,
                     [&](std::uint64_t j0, std::uint64_t j1, std::uint64_t first,
                         std::uint64_t active, G1Tally* t) {
@@ -91,8 +91,8 @@ std::vector<G1Tally> run_replicates(int R, std::uint64_t n, int nbins, TraceCoun
 // the same order as run_replicates, so the tallies are the same.
 template <class State, class Prepare, class Body>
 std::vector<G1Tally> run_replicates_ahead(int R, std::uint64_t n, int nbins, TraceCounters& counters,
-                                        std::atomic<std::uint64_t>& done, UnitRange share,
-                                        Prepare&& prepare, Body&& body) {
+                                          std::atomic<std::uint64_t>& done, UnitRange share,
+                                          Prepare&& prepare, Body&& body) {
   struct Slot {
     State state;
     std::uint64_t q;
@@ -151,7 +151,6 @@ G1Result measure_g1_undersurface(const Microsurface& s, const Vec3& v_in, const 
   return r;
 }
 
-
 // Estimator (b)'s facet weights, a block at a time: front-facing projected area A_f max(0, v.m_f).
 struct FrontProjectedArea {
   const FacetTable& ft;
@@ -161,6 +160,7 @@ struct FrontProjectedArea {
   }
 };
 
+// kAheadMinCells cells or more: a tile whose grid and table no longer fit in the caches.
 bool beyond_the_caches(const Microsurface& s) { return static_cast<double>(s.nx()) * s.ny() >= kAheadMinCells; }
 
 // One G1 measurement on a Tracer in progress: what both estimators' passes read.
