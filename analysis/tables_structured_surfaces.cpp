@@ -9,7 +9,7 @@
 
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/measure/ndf_measure.hpp"
-#include "microsim/measure/vcavity_measure.hpp"
+#include "microsim/measure/ensemble_estimators.hpp"
 #include "microsim/models/ndf.hpp"
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/surface/generators.hpp"
@@ -191,7 +191,7 @@ void vcavity_vs_heightfield() {
   std::vector<double> thetas = {20, 40, 50, 60, 70, 75, 80, 85, 89};
   std::vector<Vec3> views;
   for (double t : thetas) views.push_back(direction_from_angles(rad(t), rad(10)));
-  std::vector<G1Result> ens = measure_vcavity_g1(vc, views, opts(2e6));
+  std::vector<G1Result> ens = measure_g1(vcavity_grooves(vc, "measure_g1", GrooveFrames::StoredNormalOverHypot), views, opts(2e6));
   std::printf("Per normal bin (18 x 8 over the sphere) the measured G1(v, m) (area sampling) is compared "
               "with the V-cavity model [Heitz14, eq. 24] and Smith (chi+(v.m)/(1+Lambda)), both on the "
               "surface's own facets. mad = sum_b w_b |G1_b - model_b|, w_b = front-facing projected "

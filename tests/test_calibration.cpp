@@ -17,7 +17,7 @@
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/measure/g2_measure.hpp"
 #include "microsim/measure/stats.hpp"
-#include "microsim/measure/vcavity_measure.hpp"
+#include "microsim/measure/ensemble_estimators.hpp"
 #include "microsim/measure/vndf_measure.hpp"
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/surface/generators.hpp"
@@ -215,23 +215,24 @@ TEST(Calibration, VcavityEnsemble) {
   p.grooves = 64;
   p.seed = 3;
   const Microsurface s = generate_vcavity(p);
+  const SceneEnsemble grooves = vcavity_grooves(s, "test", GrooveFrames::StoredNormalOverHypot);
   G1Options o;
   o.rays = 4096;
   const std::vector<Vec3> views = {dir(70, 30)};
   int b = -1;
   {
     o.seed = 1;
-    const G1Result ref = measure_vcavity_g1(s, views, o)[0];
+    const G1Result ref = measure_g1(grooves, views, o)[0];
     for (int k = 0; k < ref.binning.size(); ++k)
       if (b < 0 || ref.bins[k].raycast_hits > ref.bins[b].raycast_hits) b = k;
   }
   expect_calibrated(calibrate("vcavity g1 area sampling", [&](std::uint64_t seed) {
     o.seed = seed;
-    return measure_vcavity_g1(s, views, o)[0].g1_area_sampling();
+    return measure_g1(grooves, views, o)[0].g1_area_sampling();
   }));
   expect_calibrated(calibrate("vcavity g1 raycast bin " + std::to_string(b), [&](std::uint64_t seed) {
     o.seed = seed;
-    return measure_vcavity_g1(s, views, o)[0].bin_g1_raycast(b);
+    return measure_g1(grooves, views, o)[0].bin_g1_raycast(b);
   }));
 }
 

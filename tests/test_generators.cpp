@@ -14,7 +14,7 @@
 #include "microsim/statistics.hpp"
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/measure/ndf_measure.hpp"
-#include "microsim/measure/vcavity_measure.hpp"
+#include "microsim/measure/ensemble_estimators.hpp"
 #include "microsim/models/ndf.hpp"
 #include "microsim/surface/gaussian.hpp"
 #include "microsim/surface/generators.hpp"
@@ -436,9 +436,9 @@ TEST(VCavity, EnsembleMatchesTheVCavityModelPerNormalBinNotSmith) {
   p.grooves = 512;
   Microsurface s = generate_vcavity(p);
   // The stored strips carry the ensemble's D: Beckmann(0.6) sampled by projected area.
-  std::vector<G1Result> res = measure_vcavity_g1(s, {direction_from_angles(rad(70), rad(10)),
-                                                     direction_from_angles(rad(80), 0)},
-                                                 opts(1000000));
+  std::vector<G1Result> res = measure_g1(vcavity_grooves(s, "test", GrooveFrames::StoredNormalOverHypot),
+                                         {direction_from_angles(rad(70), rad(10)), direction_from_angles(rad(80), 0)},
+                                         opts(1000000));
   for (const G1Result& r : res) {
     std::vector<double> z_vc, z_smith;
     for (int b = 0; b < r.binning.size(); ++b) {
@@ -499,11 +499,11 @@ TEST(VCavity, IdenticalForAnyThreadCount) {
   p.grooves = 64;
   Microsurface s = generate_vcavity(p);
   const std::vector<Vec3> views = {direction_from_angles(rad(75), rad(30))};
-  std::vector<G1Result> a = measure_vcavity_g1(s, views, opts(50000));
+  std::vector<G1Result> a = measure_g1(vcavity_grooves(s, "test", GrooveFrames::StoredNormalOverHypot), views, opts(50000));
   std::vector<G1Result> b;
   {
     tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-    b = measure_vcavity_g1(s, views, opts(50000));
+    b = measure_g1(vcavity_grooves(s, "test", GrooveFrames::StoredNormalOverHypot), views, opts(50000));
   }
   EXPECT_EQ(a[0].raycast_hits, b[0].raycast_hits);
   EXPECT_EQ(a[0].sample_visible, b[0].sample_visible);

@@ -1,43 +1,27 @@
-// The G1 estimators on an ensemble scene (measure/ensemble_estimators.hpp).
+// The G1 estimator on an ensemble scene (measure/ensemble_estimators.hpp): the estimator of
+// g1_estimator.hpp, its rays planned part by part.
 #include "microsim/measure/ensemble_estimators.hpp"
 
-#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 #include <string>
 
 #include "ensemble_parts.hpp"
 #include "estimator_steps.hpp"
-#include "microsim/measure/bsdf_walk.hpp"
+#include "g1_estimator.hpp"
 #include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
-#include "microsim/models/vgroove_multiple.hpp"
 
 namespace microsim {
 
 namespace {
 
-// Per view, replicate and normal bin: ray-cast hits, area samples and visible samples.
-// Integer sums, added atomically part by part: exact, so identical for any thread count.
-struct G1Counts {
-  std::atomic<std::uint64_t> hits{0}, samples{0}, visible{0};
-  // The counts exchanged per replicate, in measure_g1's order (its tally's for_each_field).
-  template <class F>
-  static constexpr void for_each_field(F&& f) {
-    f("hits", &G1Counts::hits);
-    f("samples", &G1Counts::samples);
-    f("visible", &G1Counts::visible);
-  }
-};
-
 std::uint64_t view_stream(std::uint64_t base, std::size_t view) { return base + 7919 * view; }
 
-// The G1 measurement of an ensemble in progress: its plans, per-view results and CDFs, counts.
 // The ray-casting plan: at least one ray per part and replicate, so that every replicate covers
 // every part.
 ReplicatePlan part_plan_of(const SceneEnsemble& e, const G1Options& o) {
@@ -46,6 +30,7 @@ ReplicatePlan part_plan_of(const SceneEnsemble& e, const G1Options& o) {
                        o.replicates);
 }
 
+// The G1 measurement of an ensemble in progress: its plans, per-view results, CDFs and tallies.
 struct EnsembleG1 {
   EnsembleG1(const SceneEnsemble& ensemble, const G1Options& options, std::size_t views)
       : e(ensemble), o(options), nv(views), part_plan(part_plan_of(ensemble, options)) {}
@@ -59,40 +44,26 @@ struct EnsembleG1 {
   std::uint64_t per_part = 0, n_samples = 0;
   ReplicatePlan part_plan;
   UnitRange reps;
-  std::vector<G1Counts> counts;  // (view, replicate, bin)
-  std::vector<TraceCounters> part_counters;  // (part, view)
-  G1Counts& at(std::size_t iv, int q, int b) { return counts[(iv * R + q) * nbins + b]; }
+  std::vector<std::vector<G1Tally>> tallies;  // [view][replicate]
+  std::vector<TraceCounters> counters;        // per view
+  std::mutex adding;  // the parts add their counts to tallies and counters one at a time
 };
 
-// Result iv's header and exact facet sums per bin, and its CDF of front projected area.
-void sum_g1_facets(EnsembleG1& g, std::size_t iv, const Vec3& view) {
+// Result iv: its header and exact facet sums per bin (sum_g1_facets), and its CDF of front
+// projected area.
+void sum_g1_view(EnsembleG1& g, std::size_t iv, const Vec3& view) {
   const SceneEnsemble& e = g.e;
-  G1Result& r = g.results[iv];
-  r.v = view.normalized();
-  r.theta = theta_of(r.v);
-  r.phi = phi_of(r.v);
-  r.macro_area = e.macro_area();
-  r.bins.assign(g.nbins, G1NormalBin{});
-  double back = 0;
+  G1Result& r = g.results[iv] = start_g1(view, g.o, e.macro_area());
+  sum_g1_facets(r, e.num_facets(), r.v.z() * r.macro_area, [&](std::size_t j, Vec3& m, double& a) {
+    m = e.facet_normal(j);
+    a = e.facet_area(j);
+    return g.bin[j];
+  });
   std::vector<double>& cdf = g.cdfs[iv];
-  for (std::size_t j = 0; j < e.num_facets(); ++j) {
-    const Vec3& m = e.facet_normal(j);
-    const double area = e.facet_area(j), proj = area * r.v.dot(m);
-    G1NormalBin& nb = r.bins[g.bin[j]];
-    const double front = std::max(0.0, proj);
-    nb.area += area;
-    nb.front_projected += front;
-    nb.mean_normal += front * m;
-    if (front > 0) nb.vcavity_weighted += front * models::vcavity_G1(r.v, m);
-    back += std::max(0.0, -proj);
-    r.total_area += area;
-    cdf[j] = (j ? cdf[j - 1] : 0.0) + front;
-  }
-  for (auto& nb : r.bins)
-    if (nb.mean_normal.norm() > 0) nb.mean_normal.normalize();
+  for (std::size_t j = 0; j < e.num_facets(); ++j)
+    cdf[j] = (j ? cdf[j - 1] : 0.0) + std::max(0.0, e.facet_area(j) * r.v.dot(e.facet_normal(j)));
   r.front_projected = cdf.back();
-  r.lambda_numeric = back / (r.v.z() * r.macro_area);  // [Heitz14, App. A]
-  r.window_area_perp = r.v.z() * r.macro_area;          // the parts' windows seen along v
+  r.window_area_perp = r.v.z() * r.macro_area;  // the parts' windows seen along v
 }
 
 // The area-sampling plan and the per-view sums.
@@ -109,103 +80,63 @@ void start_ensemble_g1(EnsembleG1& g, const std::vector<Vec3>& views) {
   g.results.resize(g.nv);
   g.cdfs.assign(g.nv, std::vector<double>(nf));
   for (std::size_t iv = 0; iv < g.nv; ++iv) {
+    sum_g1_view(g, iv, views[iv]);
     G1Result& r = g.results[iv];
-    r.binning = binning;
-    sum_g1_facets(g, iv, views[iv]);
     r.replicates = g.R;
     r.raycast_rays = g.per_part * K * g.R;
     r.sample_rays = g.n_samples * sample_plan.replicates;
   }
   g.reps = share_of(g.o.split, static_cast<std::uint64_t>(g.R));
-  g.counts = std::vector<G1Counts>(g.nv * g.R * g.nbins);
-  g.part_counters.assign(K * g.nv, TraceCounters{});
+  g.tallies.assign(g.nv, std::vector<G1Tally>(g.R, G1Tally(g.nbins)));
+  g.counters.assign(g.nv, TraceCounters{});
 }
 
-// Part k, every view and replicate of this process: (a) stratified rays over its window along
-// -v, (b) its share of each replicate's area samples.
+// Part k's counts of view iv, per replicate of this process and facet of the part (`part`: one
+// G1Tally per replicate whose bins are the part's facets), added to the view's tallies by the
+// facets' normal bins.
+void add_part_counts(EnsembleG1& g, std::size_t iv, const SceneEnsemble::Part& p, const std::vector<G1Tally>& part) {
+  const std::lock_guard<std::mutex> lock(g.adding);
+  for (std::size_t i = 0; i < part.size(); ++i) {
+    G1Tally& t = g.tallies[iv][g.reps.first + i];
+    for (std::size_t f = 0; f < p.facets; ++f) {
+      const int b = g.bin[p.first_facet + f];
+      t.hits[b] += part[i].hits[f];
+      t.samples[b] += part[i].samples[f];
+      t.visible[b] += part[i].visible[f];
+    }
+    g.counters[iv] += part[i].counters;
+  }
+}
+
+// Part k, every view and replicate of this process, with the estimator's kernels on the part's
+// scene in its own frame: (a) stratified rays over its window along -v (cast_g1_ray), (b) its
+// share of each replicate's area samples (sample_g1_point).
 void trace_g1_part(EnsembleG1& g, const std::vector<CdfSamples>& samples, std::size_t k) {
   const SceneEnsemble::Part& p = g.e.part(k);
   const std::unique_ptr<Scene> scene = g.e.build(k);
-  const std::size_t nf = p.facets;
-  std::vector<std::uint64_t> hits(nf), drawn(nf), visible(nf);  // per facet of the part
+  const int nf = static_cast<int>(p.facets);
+  const auto facet_itself = [](const TraceHit&, std::size_t f) { return static_cast<int>(f); };
+  std::vector<G1Tally> part(g.reps.size(), G1Tally(nf));  // per replicate of this process
   for (std::size_t iv = 0; iv < g.nv; ++iv) {
-    TraceCounters& tc = g.part_counters[k * g.nv + iv];
     const Vec3 vl = p.frame.to_local(g.results[iv].v);
     const RayWindow w = scene->ray_window(vl);
+    std::fill(part.begin(), part.end(), G1Tally(nf));
     for (int q = static_cast<int>(g.reps.first); q < static_cast<int>(g.reps.end); ++q) {
-      for (auto* x : {&hits, &drawn, &visible}) std::fill(x->begin(), x->end(), 0);
+      G1Tally& t = part[q - g.reps.first];
       const std::uint64_t stream =
           ReplicatePlan::stream(view_stream(0xA000, iv) + (static_cast<std::uint64_t>(k) << 24), q);
       for (std::uint64_t i = 0; i < g.per_part; ++i) {
         CounterRng rng(g.o.seed, stream, i);
-        const Vec2 ab = g.part_plan.strata.point(i, rng);
-        const TraceHit h = scene->intersect(w.origin0 + ab.x() * w.e1 + ab.y() * w.e2, -vl, nullptr, tc);
-        const std::size_t f = scene->front_facet(h);
-        if (f != Scene::kNoFacet) ++hits[f];
+        cast_g1_ray(*scene, window_point(w, g.part_plan.strata.point(i, rng)), vl, facet_itself, t);
       }
       const auto lo = static_cast<std::uint32_t>(p.first_facet), hi = static_cast<std::uint32_t>(p.first_facet + nf);
       samples[iv].for_each(q, lo, hi, [&](std::uint64_t i, std::uint32_t j) {
         CounterRng rng = samples[iv].rng(q, i);
-        const SourcePlane plane = scene->facet_plane(j - lo);
-        ++drawn[j - lo];
-        if (!scene->occluded(draw_point(*scene, p, j, rng), vl, &plane, tc)) ++visible[j - lo];
+        const Vec3 x = draw_point(*scene, p, j, rng);
+        sample_g1_point(*scene, x, vl, scene->facet_plane(j - lo), static_cast<int>(j - lo), t);
       });
-      for (std::size_t f = 0; f < nf; ++f) {
-        G1Counts& c = g.at(iv, q, g.bin[p.first_facet + f]);
-        c.hits += hits[f];
-        c.samples += drawn[f];
-        c.visible += visible[f];
-      }
     }
-  }
-}
-
-// The other processes' replicates, view by view, in measure_g1's tally layout.
-void exchange_ensemble_g1(EnsembleG1& g, std::size_t iv) {
-  const std::size_t nb = static_cast<std::size_t>(g.nbins);
-  // Field f of bin b at f * nb + b, as measure_g1 packs its per-bin vectors.
-  const auto each_count = [&](auto&& fn) {
-    std::size_t f = 0;
-    G1Counts::for_each_field([&](const char*, auto member) {
-      for (int q = 0; q < g.R; ++q)
-        for (int b = 0; b < g.nbins; ++b) fn(g.at(iv, q, b).*member, q, f * nb + b);
-      ++f;
-    });
-  };
-  std::size_t fields = 0;
-  G1Counts::for_each_field([&](const char*, auto) { ++fields; });
-  Tallies t("g1", g.R, g.reps, fields * nb, 0, kCounterValues, 0);
-  each_count([&](const std::atomic<std::uint64_t>& c, int q, std::size_t pos) { t.count_row(q)[pos] = c; });
-  put_counters(g.results[iv].counters, t.tail_counts.data());
-  g.o.split->exchange(t);
-  each_count([&](std::atomic<std::uint64_t>& c, int q, std::size_t pos) { c = t.count_row(q)[pos]; });
-  g.results[iv].counters = get_counters(t.tail_counts.data());
-}
-
-// Per-replicate counts of view iv into its result.
-void set_ensemble_g1_counts(EnsembleG1& g, std::size_t iv) {
-  G1Result& r = g.results[iv];
-  const int R = g.R;
-  r.raycast_hits_r.assign(R, 0);
-  r.sample_visible_r.assign(R, 0);
-  for (int b = 0; b < g.nbins; ++b) {
-    G1NormalBin& nb = r.bins[b];
-    nb.raycast_hits_r.assign(R, 0);
-    nb.samples_r.assign(R, 0);
-    nb.visible_r.assign(R, 0);
-    for (int q = 0; q < R; ++q) {
-      const G1Counts& c = g.at(iv, q, b);
-      nb.raycast_hits_r[q] = c.hits;
-      nb.samples_r[q] = c.samples;
-      nb.visible_r[q] = c.visible;
-      nb.raycast_hits += c.hits;
-      nb.samples += c.samples;
-      nb.visible += c.visible;
-      r.raycast_hits_r[q] += c.hits;
-      r.sample_visible_r[q] += c.visible;
-    }
-    r.raycast_hits += nb.raycast_hits;
-    r.sample_visible += nb.visible;
+    add_part_counts(g, iv, p, part);
   }
 }
 
@@ -229,12 +160,8 @@ std::vector<G1Result> measure_g1(const SceneEnsemble& e, const std::vector<Vec3>
   for (std::size_t iv = 0; iv < g.nv; ++iv)
     samples.emplace_back(g.cdfs[iv], o.seed, view_stream(0xC000, iv), g.n_samples, g.reps);
   tbb::parallel_for(std::size_t(0), e.parts(), [&](std::size_t k) { trace_g1_part(g, samples, k); });
-  for (std::size_t iv = 0; iv < g.nv; ++iv)  // in part order
-    for (std::size_t k = 0; k < e.parts(); ++k) g.results[iv].counters += g.part_counters[k * g.nv + iv];
-  for (std::size_t iv = 0; iv < g.nv; ++iv) {
-    if (o.split) exchange_ensemble_g1(g, iv);
-    set_ensemble_g1_counts(g, iv);
-  }
+  const G1RaysPerReplicate rays{g.per_part * e.parts(), g.n_samples};
+  for (std::size_t iv = 0; iv < g.nv; ++iv) finish_g1(g.results[iv], g.tallies[iv], g.counters[iv], o.split, g.reps, rays);
   const double seconds = seconds_since(t0);
   for (auto& r : g.results) r.seconds = seconds / g.nv;
   if (o.progress) o.progress(1.0);

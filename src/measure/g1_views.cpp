@@ -2,7 +2,7 @@
 
 #include <memory>
 
-#include "microsim/measure/vcavity_measure.hpp"
+#include "microsim/measure/ensemble_estimators.hpp"
 #include "microsim/models/microfacet_bsdf.hpp"
 #include "microsim/surface/generators.hpp"
 #include "microsim/surface/undersurface.hpp"
@@ -26,7 +26,7 @@ G1Views measure_g1_views(const Microsurface& s, const std::vector<Vec3>& views, 
   };
   if (is_vcavity(s)) {
     out.vcavity = true;
-    for (const G1Result& r : measure_vcavity_g1(s, views, options)) {
+    for (const G1Result& r : measure_g1(vcavity_grooves(s, "measure_g1", GrooveFrames::StoredNormalOverHypot), views, options)) {
       out.counters += r.counters;
       add_row(out.table, r, s);
       ++done;

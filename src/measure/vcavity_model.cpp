@@ -9,11 +9,6 @@
 
 namespace microsim {
 
-std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vector<Vec3>& views,
-                                         const G1Options& o) {
-  return measure_g1(vcavity_grooves(s, "measure_vcavity_g1", GrooveFrames::StoredNormalOverHypot), views, o);
-}
-
 G2Result measure_vcavity_g2(const Microsurface& s, const Vec3& o, const Vec3& i, const G2Options& opt) {
   return measure_g2(vcavity_grooves(s, "measure_vcavity_g2", GrooveFrames::StoredNormalNormalized), o, i, opt);
 }

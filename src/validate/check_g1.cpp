@@ -1,6 +1,6 @@
 // Check of G1 (both estimators, Smith from the facets and nominal, per normal bin).
 #include "checks_common.hpp"
-#include "microsim/measure/vcavity_measure.hpp"
+#include "microsim/measure/ensemble_estimators.hpp"
 #include "microsim/surface/generators.hpp"
 
 namespace microsim::validation {
@@ -163,7 +163,7 @@ void check_g1(const SurfaceSet& set, Progress& progress, CheckOutput& out) {
       // (as measure g1 does), not the stored strips traced together.
       const G1Result r = measure_with_progress(progress, 2.0 * static_cast<double>(o.rays), go,
                                                [&](const G1Options& opt) {
-                                                 return is_vcavity(s) ? measure_vcavity_g1(s, {v}, opt).at(0)
+                                                 return is_vcavity(s) ? measure_g1(vcavity_grooves(s, "measure_g1", GrooveFrames::StoredNormalOverHypot), {v}, opt).at(0)
                                                                       : measure_g1(pass.tracer, v, opt, &pass.table);
                                                });
       const std::vector<double> vcav = vcavity_bin_model(pass.table, r.v, binning.size());

@@ -1,5 +1,6 @@
 // Check of G2 (hotspot identity, Smith forms, V-cavity).
 #include "checks_common.hpp"
+#include "microsim/measure/ensemble_estimators.hpp"
 #include "microsim/measure/vcavity_measure.hpp"
 #include "microsim/surface/generators.hpp"
 
@@ -125,7 +126,7 @@ struct G2Runs {
     g1o.normal_phi_bins = go.normal_phi_bins;
     const G1Result g = measure_with_progress(progress, 2.0 * static_cast<double>(g1o.rays), g1o,
                                              [&](const G1Options& opt) {
-                                               return is_vcavity(s) ? measure_vcavity_g1(s, {v}, opt).at(0)
+                                               return is_vcavity(s) ? measure_g1(vcavity_grooves(s, "measure_g1", GrooveFrames::StoredNormalOverHypot), {v}, opt).at(0)
                                                                     : measure_g1(pass.tracer, v, opt, &pass.table);
                                              });
     progress.update();

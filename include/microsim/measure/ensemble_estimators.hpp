@@ -18,12 +18,14 @@
 
 namespace microsim {
 
-// For each view v (v.n > 0): (a) ray casting, the same number of stratified rays on every
-// part's window along -v; (b) area sampling, points drawn over the whole ensemble by
-// front-facing projected area (a stratified CDF over its facets), one occlusion ray toward v
-// each, traced in the point's part. Per normal bin the pooled counts and the exact facet sums
-// (area, front-facing projected area, V-cavity-weighted area). Each part's scene is built once
-// for all views.
+// For each view v (v.n > 0), the whole surface's G1 estimator (its tallies, exact facet sums,
+// rays and exchange, src/measure/g1_estimator.hpp) with its rays planned part by part: (a) ray
+// casting, the same number of stratified rays on every part's window along -v; (b) area
+// sampling, points drawn over the whole ensemble by front-facing projected area (a stratified
+// CDF over its facets), one occlusion ray toward v each, traced in the point's part. Per normal
+// bin the pooled counts and the exact facet sums (area, front-facing projected area,
+// V-cavity-weighted area). Each part's scene is built once for all views. A vcavity surface's
+// G1: measure_g1(vcavity_grooves(s, what, GrooveFrames::StoredNormalOverHypot), views, options).
 std::vector<G1Result> measure_g1(const SceneEnsemble& e, const std::vector<Vec3>& views,
                                  const G1Options& options);
 

@@ -33,6 +33,10 @@ struct G1Options {
   std::function<void(double)> progress;
   // Other processes sharing the replicates (measure/shards.hpp); nullptr: all computed here.
   TallySplit* split = nullptr;
+  // A heightfield's fast routes (measure_g1 on a Tracer): rays decoded by its grid walk, draws
+  // set up ahead. false: every ray traced on the surface's Scene, the exact route they must
+  // equal ray for ray (the tests compare the two).
+  bool grid_fast_paths = true;
 };
 
 struct G1NormalBin {
@@ -115,6 +119,23 @@ std::vector<double> sum_over_facets(std::size_t num_facets, std::size_t width, B
 // recomputing the facets of the traced surface for every direction.
 G1Result measure_g1(const Tracer& tracer, const Vec3& v, const G1Options& options,
                     const FacetTable* table = nullptr, const Tracer* under = nullptr);
+
+// How measure_g1 traces estimator (a)'s rays on a surface; every route counts the same hits, ray
+// for ray (tests/test_g1_routes.cpp):
+//  * SceneFirstHit: every ray traced on the surface's Scene (Tracer::first_hit), the exact
+//    route, and a mesh's only one;
+//  * GridBatched: a heightfield's rays decoded by the lean primary-ray walk of its grid, ray j
+//    of every replicate as one block (Tracer::front_facets);
+//  * GridAhead: the same walk ray by ray, each set up and prefetched a few rays ahead
+//    (Tracer::prefetch_front): on heightfields of kAheadMinCells cells or more, larger than the
+//    caches, the memory reads of consecutive rays then overlap.
+// options.grid_fast_paths = false takes SceneFirstHit everywhere.
+enum class G1RaycastRoute { SceneFirstHit, GridBatched, GridAhead };
+G1RaycastRoute g1_raycast_route(const Microsurface& s, const G1Options& options);
+// Whether measure_g1 sets estimator (b)'s draws up ahead of tracing them (the same draws in the
+// same order, their facets' blocks and grid cells prefetched): on a periodic heightfield beyond
+// the caches, unless options.grid_fast_paths is false.
+bool g1_draws_ahead(const Microsurface& s, const G1Options& options);
 
 // The table of G1 over view directions (measure/table.hpp): no rows yet, the columns an ensemble
 // keeps and how they merge, and the comparisons with the models.

@@ -1,7 +1,7 @@
 // G1 of one surface over a list of view directions, whatever the surface's kind: the rows of the
 // G1 table (g1_table, add_row) in the order of the views.
-//  * a V-cavity ensemble (is_vcavity) is traced groove by groove (measure_vcavity_g1,
-//    [Heitz14, Sec. 6.1] made explicit);
+//  * a V-cavity ensemble (is_vcavity) is traced groove by groove (measure_g1 on its
+//    vcavity_grooves, [Heitz14, Sec. 6.1] made explicit);
 //  * a view below the horizon (v.n < 0, meshes only) measures the undersurface explicitly, beside
 //    the surface's own G1 at -v and at v reflected across the macrosurface, the two
 //    approximations of [GeomBSDF24, "Inherent Assumptions"] (add_undersurface_approximations);

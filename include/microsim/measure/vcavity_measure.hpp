@@ -2,7 +2,9 @@
 // V-grooves, each traced on its own as an infinite periodic groove, averaged with the model's
 // weights (every groove covers the same macro area; its normals were drawn from (n.m) D(m)).
 // The grooves are an ensemble scene (vcavity_grooves, trace/scene_ensemble.hpp) and these are
-// the ensemble estimators of measure/ensemble_estimators.hpp run on it (vcavity_model.cpp).
+// the ensemble estimators of measure/ensemble_estimators.hpp run on it (vcavity_model.cpp). G1
+// has no wrapper: measure_g1(vcavity_grooves(s, what, GrooveFrames::StoredNormalOverHypot),
+// views, options) is the ensemble's G1 (measure_g1_views, the G1 record, does that).
 // G1, G2 and the VNDF take their share of the work from options.split as the whole-surface
 // estimators do (replicates for G1 and G2, rays for the VNDF; measure/shards.hpp), with the
 // same tally layouts, so shards merged give the single run's result.
@@ -15,17 +17,6 @@
 #include "microsim/measure/vndf_measure.hpp"
 
 namespace microsim {
-
-// `s` is a vcavity surface (generate_vcavity / is_vcavity). For each view v (v.n > 0):
-//  (a) ray casting: the same number of stratified rays on every groove's tile along -v;
-//  (b) area sampling: points drawn over the whole ensemble by front-facing projected area
-//      (stratified CDF over the 2K facets), one occlusion ray toward v each.
-// Per normal bin the G1Result holds the pooled counts and the exact facet sums of the stored
-// strips (area, front-facing projected area, V-cavity-weighted area), so the G1 record (cli/cmd_measure_g1.cpp) reports
-// the ensemble's G1 beside the V-cavity model (vcavity_numeric, [Heitz14, eq. 24]) and Smith.
-// Each groove's Embree scene is built once for all views.
-std::vector<G1Result> measure_vcavity_g1(const Microsurface& s, const std::vector<Vec3>& views,
-                                         const G1Options& options);
 
 // G2(o, m, i) of a vcavity ensemble ([GeomBSDF24, eq. 16], the weights of measure_g2): points drawn over
 // the whole ensemble with density w_f = A_f (max(0, o.m_f) + max(0, i.m_f)) / 2 over the

@@ -94,7 +94,7 @@ Microsurface generate_ellipsoid(const EllipsoidParams& p);
 // strips (one period of each groove, unit period and length, laid out on a grid, description
 // kind "vcavity"): their facets give the ensemble's D exactly (measure ndf, info), and
 // measure g1 traces each groove on its own as an infinite periodic V-groove
-// (measure_vcavity_g1 in measure/vcavity_measure.hpp).
+// (measure_g1 on its vcavity_grooves, measure/ensemble_estimators.hpp).
 struct VCavityParams {
   std::string ndf = "beckmann";  // beckmann | ggx
   double alpha_x = 0.5, alpha_y = 0.5;
