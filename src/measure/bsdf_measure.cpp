@@ -6,6 +6,7 @@
 #include "microsim/measure/sampling.hpp"
 #include "microsim/measure/spectral_tally.hpp"
 #include "microsim/measure/smith_walk_budget.hpp"
+#include "microsim/measure/table_run_sums.hpp"
 #include "microsim/measure/vcavity_measure.hpp"
 #include "microsim/surface/generators.hpp"
 
@@ -675,9 +676,14 @@ void walk_surface(const SurfaceWalk& w, BsdfResult& r, PolarizedSums* polarized,
   // With a split, the replicates of this process are kept until the others' arrive; the
   // replicates then enter add_replicate in order, as in one process.
   std::vector<BsdfTally> kept(o.split ? w.plan.replicates : 0, BsdfTally(K, npix, nplane));
+  // A table-only run sums the replicates' first moments alone (measure/table_run_sums.hpp).
+  auto add_rep = [&](const BsdfTally& rep) {
+    if (o.table_sums_only) add_replicate_first_moments(r.measured, rep);
+    else r.measured.add_replicate(rep);
+  };
   auto keep = [&](int q, BsdfTally&& rep) {
     if (o.split) kept[q] = std::move(rep);
-    else r.measured.add_replicate(rep);
+    else add_rep(rep);
   };
   // The facets of a polarized path, then its Mueller matrices.
   auto mueller = [polarized](const WalkEnd& e, MuellerUnit& m) {
@@ -704,7 +710,9 @@ void walk_surface(const SurfaceWalk& w, BsdfResult& r, PolarizedSums* polarized,
           mueller(e, m);
         },
         [&](int, SpectralTally&& rep) {
-          for (int l = 0; l < L; ++l) r.spectral[l].add_replicate(rep, l);
+          for (int l = 0; l < L; ++l)
+            if (o.table_sums_only) add_replicate_first_moments(r.spectral[l], rep, l);
+            else r.spectral[l].add_replicate(rep, l);
           rep = SpectralTally();  // the finished replicate's memory back (L tallies wide)
         },
         polarized);
@@ -730,7 +738,7 @@ void walk_surface(const SurfaceWalk& w, BsdfResult& r, PolarizedSums* polarized,
   }
   if (o.split) {
     exchange_paths(*o.split, "bsdf", reps, false, kept);
-    for (const BsdfTally& rep : kept) r.measured.add_replicate(rep);
+    for (const BsdfTally& rep : kept) add_rep(rep);
   }
 }
 
@@ -749,7 +757,7 @@ void measure_surface(const Tracer& tracer, BsdfResult& r, std::uint64_t stream,
   std::optional<PolarizedSums> polarized;
   if (o.polarized)
     polarized.emplace(PolarizedSumsSetup{r.wi, w.ray_weight, w.plan.replicates, o.orders, o.material, o.spectral,
-                                         o.phi_i, o.resolution});
+                                         o.phi_i, o.resolution, o.table_sums_only});
   walk_surface(w, r, polarized ? &*polarized : nullptr, progress, share);
   if (polarized) r.polarization = polarized->finish();
 }
