@@ -73,11 +73,14 @@ TEST(TableRunSums, SingleIndexTableFIsTheSameBitForBit) {
   const BsdfTable full = measure(s, table_options(false, false, Turned::Everything));
   const BsdfTable kept = measure(s, table_options(false, false, Turned::TableF));
   expect_same_table_f(full, kept, 0);
-  // The turned runs keep the reflected pixel sums alone: no second moments, no in-plane sums.
+  // The turned runs keep the reflected total's pixel sums alone: no second moments, no other
+  // slot, no in-plane sums; another slot is refused, not read from the wrong sums.
   const BsdfTally& m = kept.turned[0][0].measured;
   EXPECT_TRUE(m.pix2.empty() && m.albedo2.empty() && m.plane.empty());
-  EXPECT_EQ(m.pix.size(), static_cast<std::size_t>(m.slots()) * m.pixels);
+  EXPECT_EQ(m.pix.size(), static_cast<std::size_t>(m.pixels));
   EXPECT_FALSE(full.turned[0][0].measured.pix2.empty());
+  EXPECT_THROW(f_pixel_mean(kept.turned[0][0], 0, 0, 5), std::logic_error);
+  EXPECT_EQ(f_pixel_mean(kept.turned[0][0], 0, m.orders, 5), full.turned[0][0].f_pixel(0, m.orders, 5).mean);
 }
 
 TEST(TableRunSums, SpectralPolarizedTableFIsTheSameBitForBit) {

@@ -12,6 +12,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -411,7 +412,8 @@ template <>
 SpectralTally make_tally<SpectralTally>(const TallyShape& s) {
   return SpectralTally(s.wavelengths, s.K, s.npix, s.nplane);
 }
-// A pass of units holds at least kPassChunks chunks (work for the threads) and at most
+// A pass of units holds at least kPassChunks chunks (work for the threads; 4 per thread on
+// smaller machines: each unit in a pass keeps its tally until the pass ends) and at most
 // kPassBytes of unit tallies (large hemisphere maps: one unit at a time).
 constexpr std::uint64_t kPassChunks = 16;
 constexpr double kPassBytes = 64.0 * 1024 * 1024;
@@ -420,7 +422,8 @@ UnitPasses path_passes(const TallyShape& shape) {
   // A spectral unit holds first moments only, of every wavelength.
   const double bytes = shape.wavelengths > 1 ? 8.0 * 2 * (K + 1) * (1.0 + npix + nplane) * shape.wavelengths
                                              : 16.0 * 2 * (K + 1) * (1.0 + npix + nplane);
-  return {kPassChunks, std::max<std::uint64_t>(1, static_cast<std::uint64_t>(kPassBytes / bytes))};
+  const auto threads = static_cast<std::uint64_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+  return {std::min(kPassChunks, 4 * threads), std::max<std::uint64_t>(1, static_cast<std::uint64_t>(kPassBytes / bytes))};
 }
 
 // The units of a run of n i.i.d. paths (the Smith walk model): one replicate of n paths.

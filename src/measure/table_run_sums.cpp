@@ -1,5 +1,7 @@
 #include "microsim/measure/table_run_sums.hpp"
 
+#include <stdexcept>
+
 #include "microsim/tally_fields.hpp"
 
 namespace microsim {
@@ -39,11 +41,14 @@ void add_replicate_first_moments(BsdfTally& t, const SpectralTally& rep, int l) 
 }
 
 namespace {
-// t's reflected pixel sums (side 0 comes first: p_index(0, k, px) stays valid) and counts.
-void keep_reflected_pixels(BsdfTally& t, bool keep_f) {
-  if (keep_f) t.pix.resize(static_cast<std::size_t>(t.slots()) * t.pixels);
-  else t.pix.clear();
-  t.pix.shrink_to_fit();
+// t's pixel sums of the reflected total (slot K of side 0) alone, at pix[px], and its counts.
+void keep_reflected_total(BsdfTally& t, bool keep_f) {
+  if (keep_f) {
+    const auto total = t.pix.begin() + static_cast<std::ptrdiff_t>(t.p_index(0, t.orders, 0));
+    std::vector<double>(total, total + t.pixels).swap(t.pix);
+  } else {
+    std::vector<double>().swap(t.pix);
+  }
   for (std::vector<double>* v : {&t.albedo2, &t.pix2, &t.plane, &t.plane2}) std::vector<double>().swap(*v);
 }
 }  // namespace
@@ -57,19 +62,25 @@ void keep_table_sums_only(BsdfResult& r, bool keep_f) {
     counts.orders = r.measured.orders;
     counts.replicates = r.measured.replicates;
     r.measured = std::move(counts);
-    for (BsdfTally& t : r.spectral) keep_reflected_pixels(t, keep_f);
+    for (BsdfTally& t : r.spectral) keep_reflected_total(t, keep_f);
   } else {
-    keep_reflected_pixels(r.measured, keep_f);
+    keep_reflected_total(r.measured, keep_f);
   }
   r.smith_walk.reset();
   if (r.polarization) r.polarization->keep_table_sums_only();
 }
 
 double f_pixel_mean(const BsdfResult& r, int side, int k, int px, int lambda) {
-  // BsdfTally::estimate's mean (and tally_estimate's): sum / paths * scale, 0 without paths.
   const BsdfTally& t = r.tally(lambda);
+  // A kept table-only tally holds the reflected total alone (pix.size() == pixels; a full one
+  // holds at least 2 slots).
+  const bool total_only = t.pix.size() == static_cast<std::size_t>(t.pixels);
+  if (total_only && (side != 0 || k != t.orders))
+    throw std::logic_error("f_pixel_mean: a table-only run keeps the reflected total alone");
+  // BsdfTally::estimate's mean (and tally_estimate's): sum / paths * scale, 0 without paths.
   if (t.paths == 0) return 0.0;
-  return t.pix[t.p_index(side, k, px)] / static_cast<double>(t.paths) * (1.0 / r.map.pixel_cos_integral(px));
+  const double sum = t.pix[total_only ? static_cast<std::size_t>(px) : t.p_index(side, k, px)];
+  return sum / static_cast<double>(t.paths) * (1.0 / r.map.pixel_cos_integral(px));
 }
 
 }  // namespace microsim

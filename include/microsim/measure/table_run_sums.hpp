@@ -17,12 +17,14 @@ void add_replicate_first_moments(BsdfTally& t, const BsdfTally& rep);
 void add_replicate_first_moments(BsdfTally& t, const SpectralTally& rep, int l);
 
 // Frees what a table does not read of a finished table-only run: every second moment, the
-// in-plane sums and the transmitted side's pixel sums; the reflected pixel sums too unless
-// `keep_f` (a .pbsdf reads the Mueller bins only). The counts stay (BsdfTable::paths).
+// in-plane sums and the pixel sums of every slot but the reflected total (K of side 0), which
+// stay as pix[px] (pix.size() == pixels), unless `keep_f` is false (a .pbsdf reads the Mueller
+// bins only: no pixel sums). The counts stay (BsdfTable::paths).
 void keep_table_sums_only(BsdfResult& r, bool keep_f);
 
-// f_pixel(side, k, px, lambda).mean without its error, bit for bit, from the first moment alone
-// (also of a result kept by keep_table_sums_only, on side 0).
+// f_pixel(side, k, px, lambda).mean without its error, bit for bit, from the first moment alone;
+// of a result kept by keep_table_sums_only, the reflected total's only (std::logic_error for
+// another slot).
 double f_pixel_mean(const BsdfResult& r, int side, int k, int px, int lambda = -1);
 
 }  // namespace microsim
