@@ -139,3 +139,29 @@ TEST(TableRunSums, FirstMomentsAreAddReplicatesSums) {
   EXPECT_EQ(a.replicates, b.replicates);
   EXPECT_EQ(b.pix2, std::vector<double>(b.pix2.size(), 0.0));
 }
+
+TEST(TableRunSums, BinsOnlyUnitsAddTheirChunks) {
+  // A work unit of several chunks adds its chunks' Mueller sums: a bins_only unit (no albedo,
+  // map or in-plane sums) too, and its paths.
+  PolarizedSumsSetup su;
+  su.wi = direction_from_angles(rad(30.0), 0.0);
+  su.replicates = 2;
+  su.orders = 2;
+  su.material = mm::Material::conductor(0.42, 2.47);
+  su.resolution = 4;
+  su.bins_only = true;
+  const PolarizedSums sums(su);
+  MuellerUnit a = sums.make_unit(), b = sums.make_unit();
+  ASSERT_TRUE(a.sums.empty());
+  ASSERT_EQ(a.bins.size(), 4u * 4 * 16);
+  a.bins[3] = 0.25, a.paths = 7;
+  b.bins[3] = 0.5, b.bins[17] = 1.0, b.paths = 5;
+  a += b;
+  EXPECT_EQ(a.bins[3], 0.75);
+  EXPECT_EQ(a.bins[17], 1.0);
+  EXPECT_EQ(a.paths, 12u);
+  MuellerUnit identity;
+  identity += a;
+  EXPECT_EQ(identity.bins, a.bins);
+  EXPECT_EQ(identity.paths, 12u);
+}

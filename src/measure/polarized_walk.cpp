@@ -210,11 +210,17 @@ std::vector<NamedStokes> polarization_inputs() {
 // The sums of the walked paths
 
 MuellerUnit& MuellerUnit::operator+=(const MuellerUnit& o) {
-  if (sums.empty()) return *this = o;
-  for (std::size_t i = 0; i < sums.size(); ++i) sums[i] += o.sums[i];
-  for (std::size_t i = 0; i < map.size(); ++i) map[i] += o.map[i];
-  for (std::size_t i = 0; i < bins.size(); ++i) bins[i] += o.bins[i];
-  for (std::size_t i = 0; i < plane.size(); ++i) plane[i] += o.plane[i];
+  // Sum by sum: a bins_only unit has its bins alone; an empty sum (the reduction's identity)
+  // takes o's.
+  auto add = [](std::vector<double>& a, const std::vector<double>& b) {
+    if (a.empty()) a = b;
+    else
+      for (std::size_t i = 0; i < a.size(); ++i) a[i] += b[i];
+  };
+  add(sums, o.sums);
+  add(map, o.map);
+  add(bins, o.bins);
+  add(plane, o.plane);
   paths += o.paths;
   return *this;
 }
