@@ -6,11 +6,13 @@
 #include "microsim/measure/sampling.hpp"
 #include "microsim/measure/spectral_tally.hpp"
 #include "microsim/measure/smith_walk_budget.hpp"
+#include "microsim/measure/table_run_sums.hpp"
 #include "microsim/measure/vcavity_measure.hpp"
 #include "microsim/surface/generators.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -410,7 +412,8 @@ template <>
 SpectralTally make_tally<SpectralTally>(const TallyShape& s) {
   return SpectralTally(s.wavelengths, s.K, s.npix, s.nplane);
 }
-// A pass of units holds at least kPassChunks chunks (work for the threads) and at most
+// A pass of units holds at least kPassChunks chunks (work for the threads; 4 per thread on
+// smaller machines: each unit in a pass keeps its tally until the pass ends) and at most
 // kPassBytes of unit tallies (large hemisphere maps: one unit at a time).
 constexpr std::uint64_t kPassChunks = 16;
 constexpr double kPassBytes = 64.0 * 1024 * 1024;
@@ -419,7 +422,8 @@ UnitPasses path_passes(const TallyShape& shape) {
   // A spectral unit holds first moments only, of every wavelength.
   const double bytes = shape.wavelengths > 1 ? 8.0 * 2 * (K + 1) * (1.0 + npix + nplane) * shape.wavelengths
                                              : 16.0 * 2 * (K + 1) * (1.0 + npix + nplane);
-  return {kPassChunks, std::max<std::uint64_t>(1, static_cast<std::uint64_t>(kPassBytes / bytes))};
+  const auto threads = static_cast<std::uint64_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+  return {std::min(kPassChunks, 4 * threads), std::max<std::uint64_t>(1, static_cast<std::uint64_t>(kPassBytes / bytes))};
 }
 
 // The units of a run of n i.i.d. paths (the Smith walk model): one replicate of n paths.
@@ -675,9 +679,14 @@ void walk_surface(const SurfaceWalk& w, BsdfResult& r, PolarizedSums* polarized,
   // With a split, the replicates of this process are kept until the others' arrive; the
   // replicates then enter add_replicate in order, as in one process.
   std::vector<BsdfTally> kept(o.split ? w.plan.replicates : 0, BsdfTally(K, npix, nplane));
+  // A table-only run sums the replicates' first moments alone (measure/table_run_sums.hpp).
+  auto add_rep = [&](const BsdfTally& rep) {
+    if (o.table_sums_only) add_replicate_first_moments(r.measured, rep);
+    else r.measured.add_replicate(rep);
+  };
   auto keep = [&](int q, BsdfTally&& rep) {
     if (o.split) kept[q] = std::move(rep);
-    else r.measured.add_replicate(rep);
+    else add_rep(rep);
   };
   // The facets of a polarized path, then its Mueller matrices.
   auto mueller = [polarized](const WalkEnd& e, MuellerUnit& m) {
@@ -704,7 +713,9 @@ void walk_surface(const SurfaceWalk& w, BsdfResult& r, PolarizedSums* polarized,
           mueller(e, m);
         },
         [&](int, SpectralTally&& rep) {
-          for (int l = 0; l < L; ++l) r.spectral[l].add_replicate(rep, l);
+          for (int l = 0; l < L; ++l)
+            if (o.table_sums_only) add_replicate_first_moments(r.spectral[l], rep, l);
+            else r.spectral[l].add_replicate(rep, l);
           rep = SpectralTally();  // the finished replicate's memory back (L tallies wide)
         },
         polarized);
@@ -730,7 +741,7 @@ void walk_surface(const SurfaceWalk& w, BsdfResult& r, PolarizedSums* polarized,
   }
   if (o.split) {
     exchange_paths(*o.split, "bsdf", reps, false, kept);
-    for (const BsdfTally& rep : kept) r.measured.add_replicate(rep);
+    for (const BsdfTally& rep : kept) add_rep(rep);
   }
 }
 
@@ -749,7 +760,7 @@ void measure_surface(const Tracer& tracer, BsdfResult& r, std::uint64_t stream,
   std::optional<PolarizedSums> polarized;
   if (o.polarized)
     polarized.emplace(PolarizedSumsSetup{r.wi, w.ray_weight, w.plan.replicates, o.orders, o.material, o.spectral,
-                                         o.phi_i, o.resolution});
+                                         o.phi_i, o.resolution, o.table_sums_only});
   walk_surface(w, r, polarized ? &*polarized : nullptr, progress, share);
   if (polarized) r.polarization = polarized->finish();
 }

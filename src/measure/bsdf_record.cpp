@@ -100,6 +100,9 @@ BsdfTableOptions bsdf_table_options(const BsdfRequest& o, const Microsurface& s,
   for (double p : o.phi_i_deg) to.phi_i.push_back(rad(p));
   const bool renderer_table = o.format == "bsdf" || o.format == "binary" || o.format == "pbsdf";
   to.table_azimuths = renderer_table && to.phi_i.size() == 1 ? o.table_azimuths : 1;
+  // The turned runs feed the table alone: f for .bsdf and .binary, the Mueller bins for .pbsdf.
+  if (renderer_table)
+    to.turned_runs = o.format == "pbsdf" ? BsdfTableOptions::TurnedRuns::TableMueller : BsdfTableOptions::TurnedRuns::TableF;
   return to;
 }
 

@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 
+#include "microsim/measure/table_run_sums.hpp"
+
 namespace microsim {
 
 BsdfTable measure_bsdf_table(const Tracer& tracer, const BsdfTableOptions& o) {
@@ -39,13 +41,20 @@ BsdfTable measure_bsdf_table(const Tracer& tracer, const BsdfTableOptions& o) {
         b.rays = o.base.rays / N + (static_cast<std::uint64_t>(a) < o.base.rays % N ? 1 : 0);
         // The models go beside the nominal run only (the record's rows), as without averaging.
         if (a > 0) b.models = false, b.model_walks = 0;
+        const bool table_only = a > 0 && o.turned_runs != BsdfTableOptions::TurnedRuns::Everything;
+        if (table_only) {
+          b.table_sums_only = true;
+          if (o.turned_runs == BsdfTableOptions::TurnedRuns::TableF) b.polarized = false;
+        }
         if (o.progress) b.progress = [&, k](double f) { o.progress((k + f) / n); };
         else b.progress = nullptr;
         if (a == 0) table.results.push_back(measure_bsdf(tracer, b));
         else {
           table.turned[t].push_back(measure_bsdf(tracer, b));
           // The turned runs enter the table's averages, not the record: only the table's sums stay.
-          if (table.turned[t].back().polarization) table.turned[t].back().polarization->keep_table_sums_only();
+          BsdfResult& turned = table.turned[t].back();
+          if (table_only) keep_table_sums_only(turned, o.turned_runs == BsdfTableOptions::TurnedRuns::TableF);
+          else if (turned.polarization) turned.polarization->keep_table_sums_only();
         }
         ++k;
       }
@@ -55,7 +64,7 @@ BsdfTable measure_bsdf_table(const Tracer& tracer, const BsdfTableOptions& o) {
 
 double interpolate_f(const BsdfResult& r, int side, int slot, const Vec3& wo, int lambda) {
   const int R = r.map.resolution();
-  auto pixel = [&](int i, int j) { return r.f_pixel(side, slot, j * R + i, lambda).mean; };
+  auto pixel = [&](int i, int j) { return f_pixel_mean(r, side, slot, j * R + i, lambda); };
   if (R == 1) return pixel(0, 0);
   const Vec2 sq = r.map.to_square(wo);
   // Pixel centres sit at a = -1 + (i + 1/2) 2/R: continuous index x = (a + 1) R/2 - 1/2.

@@ -210,11 +210,17 @@ std::vector<NamedStokes> polarization_inputs() {
 // The sums of the walked paths
 
 MuellerUnit& MuellerUnit::operator+=(const MuellerUnit& o) {
-  if (sums.empty()) return *this = o;
-  for (std::size_t i = 0; i < sums.size(); ++i) sums[i] += o.sums[i];
-  for (std::size_t i = 0; i < map.size(); ++i) map[i] += o.map[i];
-  for (std::size_t i = 0; i < bins.size(); ++i) bins[i] += o.bins[i];
-  for (std::size_t i = 0; i < plane.size(); ++i) plane[i] += o.plane[i];
+  // Sum by sum: a bins_only unit has its bins alone; an empty sum (the reduction's identity)
+  // takes o's.
+  auto add = [](std::vector<double>& a, const std::vector<double>& b) {
+    if (a.empty()) a = b;
+    else
+      for (std::size_t i = 0; i < a.size(); ++i) a[i] += b[i];
+  };
+  add(sums, o.sums);
+  add(map, o.map);
+  add(bins, o.bins);
+  add(plane, o.plane);
   paths += o.paths;
   return *this;
 }
@@ -231,6 +237,7 @@ struct PolarizedSums::Layout {
   std::size_t width, map_width, bins_width, plane_width;
   PolarizationTally t;
   std::vector<double> bins_replicate, plane_replicate;  // [q][...]: the errors of the bins
+  int summing = 0;  // su.bins_only: the replicate whose sum bins_replicate holds (its only one)
 
   explicit Layout(const PolarizedSumsSetup& s)
       : su(s), K(s.orders), L(s.spectral.empty() ? 1 : static_cast<int>(s.spectral.size())),
@@ -251,7 +258,13 @@ struct PolarizedSums::Layout {
     map_width = width * t.pixels;
     bins_width = static_cast<std::size_t>(L) * t.bin_pixels * 16;
     plane_width = width * t.plane_bins;
-    // Each replicate's sum starts at zero and adds its units in order.
+    // Each replicate's sum starts at zero and adds its units in order; a bins_only run keeps the
+    // replicate being summed alone and adds it to the total when the next one starts.
+    if (su.bins_only) {
+      bins_replicate.assign(bins_width, 0.0);
+      t.bins_total.assign(bins_width, 0.0);
+      return;
+    }
     t.replicate.assign(width * s.replicates, 0.0);
     t.map_replicate.assign(map_width * s.replicates, 0.0);
     bins_replicate.assign(bins_width * s.replicates, 0.0);
@@ -264,6 +277,10 @@ PolarizedSums::~PolarizedSums() = default;
 
 MuellerUnit PolarizedSums::make_unit() const {
   MuellerUnit u;
+  if (layout_->su.bins_only) {
+    u.bins.assign(layout_->bins_width, 0.0);
+    return u;
+  }
   u.sums.assign(layout_->width, 0.0);
   u.map.assign(layout_->map_width, 0.0);
   u.bins.assign(layout_->bins_width, 0.0);
@@ -291,13 +308,14 @@ void PolarizedSums::add_path(const WalkEnd& e, const std::vector<WalkFacet>& fac
   // A finite object's ray reflected below the base plane counts in the albedo only.
   const bool above = e.direction.z() > 0.0;
   if (y.per_bin && above) {
-    const int bp = y.bin_map.pixel_of(e.direction), b = y.plane.bin_of(e.direction);
+    const int bp = y.bin_map.pixel_of(e.direction), b = y.su.bins_only ? -1 : y.plane.bin_of(e.direction);
     for (int l = 0; l < L; ++l) add_matrix(acc.bins.data() + (static_cast<std::size_t>(l) * y.t.bin_pixels + bp) * 16, w0, M[l]);
     if (b >= 0)
       for (int slot : {k, K})
         for (int l = 0; l < L; ++l)
           add_matrix(acc.plane.data() + ((static_cast<std::size_t>(slot) * L + l) * y.t.plane_bins + b) * 16, w0, M[l]);
   }
+  if (y.su.bins_only) return;
   const int px = above ? y.map.pixel_of(e.direction) : -1;
   for (int slot : {k, K})
     for (int l = 0; l < L; ++l) {
@@ -312,6 +330,12 @@ void PolarizedSums::add_unit(int q, const MuellerUnit& part) {
   auto add = [](double* to, const std::vector<double>& from) {
     for (std::size_t i = 0; i < from.size(); ++i) to[i] += from[i];
   };
+  if (y.su.bins_only) {
+    if (q != y.summing) add_summed_replicate(), y.summing = q;
+    add(y.bins_replicate.data(), part.bins);
+    y.t.paths += part.paths;
+    return;
+  }
   add(y.t.replicate.data() + y.width * q, part.sums);
   add(y.t.map_replicate.data() + y.map_width * q, part.map);
   add(y.bins_replicate.data() + y.bins_width * q, part.bins);
@@ -319,9 +343,22 @@ void PolarizedSums::add_unit(int q, const MuellerUnit& part) {
   y.t.paths += part.paths;
 }
 
+void PolarizedSums::add_summed_replicate() {
+  Layout& y = *layout_;
+  // finish()'s total: the replicates' sums added in order to a zero sum.
+  for (std::size_t i = 0; i < y.bins_width; ++i) {
+    y.t.bins_total[i] += y.bins_replicate[i];
+    y.bins_replicate[i] = 0.0;
+  }
+}
+
 PolarizationTally PolarizedSums::finish() {
   Layout& y = *layout_;
   PolarizationTally& t = y.t;
+  if (y.su.bins_only) {
+    add_summed_replicate();
+    return std::move(t);
+  }
   // The replicates added in order.
   auto total = [&](std::vector<double>& out, const std::vector<double>& reps, std::size_t w) {
     out.assign(w, 0.0);

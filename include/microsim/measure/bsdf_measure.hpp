@@ -144,6 +144,9 @@ struct BsdfOptions {
   // (measure/polarized_walk.hpp), built from the facets of the walk's own paths. Periodic
   // tiles and finite objects in one process.
   bool polarized = false;
+  // The run enters only a renderer table's azimuthal averages (measure/table_run_sums.hpp): its
+  // replicates add their first moments without their spread; no errors for it.
+  bool table_sums_only = false;
   // Called from the calling thread with the fraction of work done (progress display).
   std::function<void(double)> progress;
   // Other processes sharing the replicates and the model's batches (measure/shards.hpp);

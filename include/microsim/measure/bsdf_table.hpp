@@ -22,6 +22,12 @@ struct BsdfTableOptions {
   // first ones): the table then holds the surface's azimuthal mean, not one azimuth's lobe
   // (docs/theory/exports.md). 1: phi_i alone. Ignored when phi_i has several entries.
   int table_azimuths = 1;
+  // What is read of the turned runs (table_azimuths > 1): everything (their albedos and errors:
+  // measure albedo), or only a renderer table's averages (measure/table_run_sums.hpp): the
+  // reflected total's f per pixel (table_f: .bsdf, .binary; no Mueller sums walked), or the
+  // Mueller bins (.pbsdf). The table's entries are the same bit for bit.
+  enum class TurnedRuns { Everything, TableF, TableMueller };
+  TurnedRuns turned_runs = TurnedRuns::Everything;
   // Fraction of the whole table done (called from the calling thread).
   std::function<void(double)> progress;
 };

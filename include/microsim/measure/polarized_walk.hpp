@@ -100,6 +100,9 @@ struct PolarizedSumsSetup {
   double phi_i = 0.0;            // the in-plane bins' plane of incidence
   int resolution = 0;            // the record's R: in-plane bins, and the bin map's resolution
                                  // polarized_bin_resolution(R); 0: no per-bin tallies
+  // A run that enters only a table's averages (BsdfOptions::table_sums_only): bins_total alone,
+  // summed replicate by replicate as finish() sums it, without the other sums and the errors.
+  bool bins_only = false;
 };
 
 // One work unit's Mueller sums (measure/replicates.hpp): its paths, and its reflected paths'
@@ -131,6 +134,8 @@ class PolarizedSums {
  private:
   struct Layout;
   std::unique_ptr<Layout> layout_;
+  // bins_only: the replicate summed so far into bins_total, its sum back to zero.
+  void add_summed_replicate();
 };
 
 // The Mueller matrix of a walked path for each of `count` materials (the geometry shared): from
