@@ -61,15 +61,26 @@ double sum_g2_facets_per_bin(G2Result& r, const FacetTable& ft, const Microsurfa
   return vcav_total;
 }
 
+// w_f of facet k from its 2 A_f m_f, without a square root (g2_facet_terms' weight).
+struct CrossWeight {
+  const FacetTable& ft;
+  Vec3 o, i;
+  double operator()(std::size_t k) const {
+    const Vec3 c = ft.cross(k);
+    const double oc = o.dot(c), ic = i.dot(c);
+    return oc > 0 && ic > 0 ? 0.25 * (oc + ic) : 0.0;
+  }
+};
+
 // A whole surface as the estimator's one part, traced in the world frame. The points are drawn
-// along the CDF of w_f computed block by block from the facets' 2 A_f m_f (BlockFacetSampler,
-// in facet order: spatially coherent), every replicate's points on its facets.
+// along the CDF of w_f computed block by block (BlockFacetSampler, in facet order: spatially
+// coherent), every replicate's points on its facets.
 class SurfacePoints : public G2Points {
  public:
   SurfacePoints(const Tracer& tracer, const FacetTable& ft, const Vec3& o, const Vec3& i, std::uint64_t per_replicate)
-      : tracer_(tracer), ft_(ft), o_(o), i_(i), n_(per_replicate), sampler_(tracer.surface().num_facets(), weight_of()) {}
+      : tracer_(tracer), ft_(ft), weight_{ft, o, i}, n_(per_replicate), sampler_(tracer.surface().num_facets(), weight_) {}
   double total() const { return sampler_.total(); }
-  std::uint64_t stream() const override { return pair_stream(o_, i_, 0xC2000000ull); }
+  std::uint64_t stream() const override { return pair_stream(weight_.o, weight_.i, 0xC2000000ull); }
   std::size_t parts() const override { return 1; }
   std::unique_ptr<Scene> scene(std::size_t) const override { return make_scene(tracer_); }
   Vec3 to_local(std::size_t, const Vec3& w) const override { return w; }
@@ -77,23 +88,15 @@ class SurfacePoints : public G2Points {
   UnitRange points_on(int, UnitRange) const override { return {0, n_}; }
   std::size_t place(int, std::uint64_t j, CounterRng& rng) const override {
     const double u = (static_cast<double>(j) + rng.uniform()) / n_ * sampler_.total();
-    return sampler_.draw(u, weight_of());
+    return sampler_.draw(u, weight_);
   }
   int bin(std::size_t f) const override { return ft_.bin(f); }
   bool buried(std::size_t f) const override { return ft_.buried(f); }
 
  private:
-  // w_f from 2 A_f m_f, without a square root (g2_facet_terms' weight).
-  auto weight_of() const {
-    return [this](std::size_t k) {
-      const Vec3 c = ft_.cross(k);
-      const double oc = o_.dot(c), ic = i_.dot(c);
-      return oc > 0 && ic > 0 ? 0.25 * (oc + ic) : 0.0;
-    };
-  }
   const Tracer& tracer_;
   const FacetTable& ft_;
-  Vec3 o_, i_;
+  CrossWeight weight_;
   std::uint64_t n_;
   BlockFacetSampler sampler_;
 };
