@@ -109,8 +109,8 @@ namespace {
 
 // The ensemble's parts as the estimator's parts: ray n picks a part by its first draw (by the
 // parts' weights), then a uniform origin on that part's window, all from its own counter
-// (i.i.d. rays). Each batch's rays are grouped by part in ray order, so that each part's scene
-// is built once a batch. A hit is binned by its facet's normal in the world frame.
+// (i.i.d. rays). Each batch's rays (2^20: 20 bytes each) are grouped by part in ray order, so
+// that each part's scene is built once a batch. A hit is binned by its facet's normal in the world frame.
 class EnsembleRays : public VndfRays {
  public:
   EnsembleRays(const SceneEnsemble& e, const std::vector<int>& bin, std::uint64_t seed, std::uint64_t stream)
@@ -118,20 +118,25 @@ class EnsembleRays : public VndfRays {
   std::size_t parts() const override { return e_.parts(); }
   std::unique_ptr<Scene> scene(std::size_t k) const override { return e_.build(k); }
   Vec3 to_local(std::size_t k, const Vec3& w) const override { return e_.part(k).frame.to_local(w); }
-  std::uint64_t batch() const override { return std::uint64_t(1) << 22; }
+  std::uint64_t batch() const override { return std::uint64_t(1) << 20; }
   std::vector<std::vector<Vec2>> origins(UnitRange rays, UnitRange share) const override {
     const UnitRange mine{std::max(rays.first, share.first), std::min(rays.end, share.end)};
     std::vector<std::uint32_t> part(mine.size());
-    std::vector<Vec2> ab(mine.size());
     tbb::parallel_for(std::uint64_t(0), mine.size(), [&](std::uint64_t n) {
       CounterRng rng(seed_, stream_, mine.first + n);
       part[n] = static_cast<std::uint32_t>(e_.part_at(rng.uniform()));
+    });
+    std::vector<std::uint64_t> size(e_.parts(), 0);
+    for (std::uint32_t k : part) ++size[k];
+    std::vector<std::vector<Vec2>> out(e_.parts());
+    for (std::size_t k = 0; k < out.size(); ++k) out[k].reserve(size[k]);
+    for (std::uint64_t n = 0; n < mine.size(); ++n) {
+      CounterRng rng(seed_, stream_, mine.first + n);
+      rng.uniform();  // the draw that chose the part
       const double a = rng.uniform();
       const double b = rng.uniform();
-      ab[n] = Vec2(a, b);
-    });
-    std::vector<std::vector<Vec2>> out(e_.parts());
-    for (std::uint64_t n = 0; n < mine.size(); ++n) out[part[n]].push_back(ab[n]);
+      out[part[n]].emplace_back(a, b);
+    }
     return out;
   }
   int bin(std::size_t k, const Scene& scene, const TraceHit& h) const override {

@@ -1,13 +1,12 @@
 #include "g2_estimator.hpp"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <atomic>
 #include <vector>
 
 #include "microsim/measure/sampling.hpp"
 #include "microsim/measure/shards.hpp"
+#include "part_passes.hpp"
 
 namespace microsim {
 
@@ -39,7 +38,8 @@ ReplicatePlan plan_g2(G2Result& r, const G2Options& opt) {
 namespace {
 
 constexpr std::uint64_t kChunk = 1 << 13;  // points of one work unit
-constexpr std::size_t kUnitsPerPass = 256;  // work units between two progress reports
+// Work units of a pass: the scenes of its parts live while it runs; progress after each.
+constexpr std::size_t kUnitsPerPass = 256;
 
 // The counts of G2NormalBin, in its declaration order.
 constexpr int kCounts = 4;
@@ -82,8 +82,9 @@ void finish_g2(G2Result& r, const G2Options& opt, UnitRange reps) {
   }
 }
 
-// A work unit: the points [first, end) of replicate q on one part.
+// A work unit: the points [first, end) of replicate q on part k.
 struct G2Unit {
+  std::size_t part;
   int q;
   UnitRange points;
 };
@@ -92,10 +93,11 @@ struct G2Unit {
 // ((q nbins + b) kCounts + k)): added by the units in any order, the sums are the same.
 using G2Counts = std::vector<std::atomic<std::uint64_t>>;
 
-// Traces the points of one unit of part k (its scene `scene`, o and i in its frame).
-void trace_g2_unit(const G2Points& points, std::size_t k, const Scene& scene, const Vec3& o, const Vec3& i,
+// Traces the points of one unit on its part's scene (o and i in the world frame).
+void trace_g2_unit(const G2Points& points, const Scene& scene, const Vec3& o_world, const Vec3& i_world,
                    const G2Unit& u, std::uint64_t seed, int nbins, G2Counts& counts, TraceCounters& tc) {
-  const std::size_t first = points.facets(k).first;
+  const std::size_t first = points.facets(u.part).first;
+  const Vec3 o = points.to_local(u.part, o_world), i = points.to_local(u.part, i_world);
   std::vector<std::uint64_t> c(static_cast<std::size_t>(nbins) * kCounts, 0);
   for (std::uint64_t j = u.points.first; j < u.points.end; ++j) {
     CounterRng rng(seed, ReplicatePlan::stream(points.stream(), u.q), j);
@@ -118,14 +120,16 @@ void trace_g2_unit(const G2Points& points, std::size_t k, const Scene& scene, co
     if (c[n]) to[n] += c[n];
 }
 
-// The units of part k: each replicate's run of points on the part's facets, cut in chunks.
-std::vector<G2Unit> g2_units(const G2Points& points, std::size_t k, UnitRange reps) {
+// The units, part after part: each replicate's run of points on the part's facets, cut in
+// chunks.
+std::vector<G2Unit> g2_units(const G2Points& points, UnitRange reps) {
   std::vector<G2Unit> units;
-  for (int q = static_cast<int>(reps.first); q < static_cast<int>(reps.end); ++q) {
-    const UnitRange run = points.points_on(q, points.facets(k));
-    for (std::uint64_t j = run.first; j < run.end; j += kChunk)
-      units.push_back({q, {j, std::min(run.end, j + kChunk)}});
-  }
+  for (std::size_t k = 0; k < points.parts(); ++k)
+    for (int q = static_cast<int>(reps.first); q < static_cast<int>(reps.end); ++q) {
+      const UnitRange run = points.points_on(q, points.facets(k));
+      for (std::uint64_t j = run.first; j < run.end; j += kChunk)
+        units.push_back({k, q, {j, std::min(run.end, j + kChunk)}});
+    }
   return units;
 }
 
@@ -148,25 +152,22 @@ void trace_g2_points(const G2Points& points, G2Result& r, const G2Options& opt, 
   const int nbins = r.binning.size();
   const UnitRange reps = share_of(opt.split, static_cast<std::uint64_t>(plan.replicates));
   G2Counts counts(static_cast<std::size_t>(plan.replicates) * nbins * kCounts);
+  const std::vector<G2Unit> units = g2_units(points, reps);
+  std::vector<TraceCounters> tc(units.size());
   const double mine = static_cast<double>(plan.per_replicate() * reps.size());
   std::uint64_t done = 0;
-  for (std::size_t k = 0; k < points.parts(); ++k) {
-    const std::vector<G2Unit> units = g2_units(points, k, reps);
-    if (units.empty()) continue;
-    const std::unique_ptr<Scene> scene = points.scene(k);
-    const Vec3 o = points.to_local(k, r.o), i = points.to_local(k, r.i);
-    // Integer counters: summed in unit order, though any order gives the same sums.
-    std::vector<TraceCounters> tc(units.size());
-    for (std::size_t u0 = 0; u0 < units.size(); u0 += kUnitsPerPass) {
-      const std::size_t u1 = std::min(units.size(), u0 + kUnitsPerPass);
-      tbb::parallel_for(u0, u1, [&](std::size_t u) {
-        trace_g2_unit(points, k, *scene, o, i, units[u], opt.seed, nbins, counts, tc[u]);
+  std::size_t counted = 0;
+  run_part_passes(
+      units.size(), kUnitsPerPass, [&](std::size_t u) { return units[u].part; },
+      [&](std::size_t k) { return points.scene(k); },
+      [&](std::size_t u, const Scene& scene) {
+        trace_g2_unit(points, scene, r.o, r.i, units[u], opt.seed, nbins, counts, tc[u]);
+      },
+      [&](std::size_t units_done) {
+        for (; counted < units_done; ++counted) done += units[counted].points.size();
+        if (opt.progress) opt.progress(static_cast<double>(done) / mine);
       });
-      for (std::size_t u = u0; u < u1; ++u) done += units[u].points.size();
-      if (opt.progress) opt.progress(static_cast<double>(done) / mine);
-    }
-    for (const TraceCounters& c : tc) r.counters += c;
-  }
+  for (const TraceCounters& c : tc) r.counters += c;  // integer counters: any order, the same sums
   put_g2_counts(r, counts);
   finish_g2(r, opt, reps);
 }

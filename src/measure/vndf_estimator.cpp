@@ -2,6 +2,7 @@
 
 #include "microsim/measure/sampling.hpp"
 #include "microsim/measure/shards.hpp"
+#include "part_passes.hpp"
 
 namespace microsim {
 
@@ -37,24 +38,47 @@ void finish_vndf(VndfResult& r, const VndfOptions& o, UnitRange share, std::vect
   for (auto c : counts) r.hits += c;
 }
 
-// The rays of part k from `origins` on its window, added to counts and r.counters.
-void trace_vndf_part(const VndfRays& rays, std::size_t k, const std::vector<Vec2>& origins, VndfResult& r,
-                     std::vector<std::uint64_t>& counts) {
-  const std::unique_ptr<Scene> scene = rays.scene(k);
-  const Vec3 v = rays.to_local(k, r.v);
-  const RayWindow w = scene->ray_window(v);
+constexpr std::uint64_t kChunk = 1 << 14;  // rays of one work unit
+constexpr std::size_t kUnitsPerPass = 64;  // work units of a pass (the scenes of its parts live while it runs)
+
+// A work unit: the rays [first, end) of part k's origins.
+struct VndfUnit {
+  std::size_t part;
+  UnitRange rays;
+};
+
+// One batch's rays, from their origins per part, added to counts (nbins + 1: the last one
+// outside every bin) and r.counters.
+void trace_vndf_batch(const VndfRays& rays, const std::vector<std::vector<Vec2>>& origins, VndfResult& r,
+                      std::vector<std::uint64_t>& counts) {
+  std::vector<VndfUnit> units;
+  for (std::size_t k = 0; k < origins.size(); ++k)
+    for (std::uint64_t j = 0; j < origins[k].size(); j += kChunk)
+      units.push_back({k, {j, std::min<std::uint64_t>(origins[k].size(), j + kChunk)}});
   const int nbins = r.binning.size();
-  std::vector<std::uint64_t> part;
-  histogram_chunks(origins.size(), nbins, part, r.counters,
-                   [&](std::uint64_t j, std::vector<std::uint64_t>& c, TraceCounters& tc) {
-                     const Vec2& ab = origins[j];
-                     const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
-                     const TraceHit h = scene->intersect(org, -v, nullptr, tc);
-                     if (scene->front_facet(h) == Scene::kNoFacet) return;
-                     const int b = rays.bin(k, *scene, h);
-                     ++c[b >= 0 ? b : nbins];
-                   });
-  for (int b = 0; b <= nbins; ++b) counts[b] += part[b];
+  std::vector<std::vector<std::uint64_t>> c(units.size());
+  std::vector<TraceCounters> tc(units.size());
+  run_part_passes(
+      units.size(), kUnitsPerPass, [&](std::size_t u) { return units[u].part; },
+      [&](std::size_t k) { return rays.scene(k); },
+      [&](std::size_t u, const Scene& scene) {
+        const std::size_t k = units[u].part;
+        const Vec3 v = rays.to_local(k, r.v);
+        const RayWindow w = scene.ray_window(v);
+        c[u].assign(static_cast<std::size_t>(nbins) + 1, 0);
+        for (std::uint64_t j = units[u].rays.first; j < units[u].rays.end; ++j) {
+          const Vec2& ab = origins[k][j];
+          const TraceHit h = scene.intersect(w.origin0 + ab.x() * w.e1 + ab.y() * w.e2, -v, nullptr, tc[u]);
+          if (scene.front_facet(h) == Scene::kNoFacet) continue;  // a back face, or outside the region
+          const int b = rays.bin(k, scene, h);
+          ++c[u][b >= 0 ? b : nbins];
+        }
+      },
+      [](std::size_t) {});
+  for (std::size_t u = 0; u < units.size(); ++u) {
+    for (int b = 0; b <= nbins; ++b) counts[b] += c[u][b];
+    r.counters += tc[u];
+  }
 }
 
 }  // namespace
@@ -65,8 +89,7 @@ void trace_vndf_rays(const VndfRays& rays, VndfResult& r, const VndfOptions& o) 
   for (std::uint64_t first = 0; first < r.rays; first += rays.batch()) {
     const UnitRange batch{first, std::min(r.rays, first + rays.batch())};
     const std::vector<std::vector<Vec2>> origins = rays.origins(batch, share);
-    for (std::size_t k = 0; k < rays.parts(); ++k)
-      if (!origins[k].empty()) trace_vndf_part(rays, k, origins[k], r, counts);
+    trace_vndf_batch(rays, origins, r, counts);
     if (o.progress) o.progress(static_cast<double>(batch.end) / r.rays);
   }
   finish_vndf(r, o, share, std::move(counts));
