@@ -1,10 +1,11 @@
 #include "g2_estimator.hpp"
 
 #include <algorithm>
-#include <atomic>
+#include <string>
 #include <vector>
 
 #include "microsim/measure/sampling.hpp"
+#include "microsim/io/checks.hpp"
 #include "microsim/measure/shards.hpp"
 #include "part_passes.hpp"
 
@@ -89,16 +90,16 @@ struct G2Unit {
   UnitRange points;
 };
 
-// The integer counts of every replicate and bin (samples, visible from o, from i, from both at
-// ((q nbins + b) kCounts + k)): added by the units in any order, the sums are the same.
-using G2Counts = std::vector<std::atomic<std::uint64_t>>;
+// A unit's integer counts (samples, visible from o, from i, from both of bin b at b kCounts + k),
+// held until every unit has run and then added in unit order.
+using G2Counts = std::vector<std::uint64_t>;
 
 // Traces the points of one unit on its part's scene (o and i in the world frame).
 void trace_g2_unit(const G2Points& points, const Scene& scene, const Vec3& o_world, const Vec3& i_world,
-                   const G2Unit& u, std::uint64_t seed, int nbins, G2Counts& counts, TraceCounters& tc) {
+                   const G2Unit& u, std::uint64_t seed, int nbins, G2Counts& c, TraceCounters& tc) {
   const std::size_t first = points.facets(u.part).first;
   const Vec3 o = points.to_local(u.part, o_world), i = points.to_local(u.part, i_world);
-  std::vector<std::uint64_t> c(static_cast<std::size_t>(nbins) * kCounts, 0);
+  c.assign(static_cast<std::size_t>(nbins) * kCounts, 0);
   for (std::uint64_t j = u.points.first; j < u.points.end; ++j) {
     CounterRng rng(seed, ReplicatePlan::stream(points.stream(), u.q), j);
     const std::size_t f = points.place(u.q, j, rng);
@@ -115,9 +116,6 @@ void trace_g2_unit(const G2Points& points, const Scene& scene, const Vec3& o_wor
     at[2] += see_i;
     at[3] += see_o && see_i;
   }
-  std::atomic<std::uint64_t>* to = counts.data() + static_cast<std::size_t>(u.q) * nbins * kCounts;
-  for (std::size_t n = 0; n < c.size(); ++n)
-    if (c[n]) to[n] += c[n];
 }
 
 // The units, part after part: each replicate's run of points on the part's facets, cut in
@@ -133,17 +131,21 @@ std::vector<G2Unit> g2_units(const G2Points& points, UnitRange reps) {
   return units;
 }
 
-// The per-replicate counts of r.bins from `counts` (every replicate: the others' are zero).
-void put_g2_counts(G2Result& r, const G2Counts& counts) {
+// The per-replicate counts of r.bins from the units' counts, added in unit order (the
+// replicates of other processes stay zero).
+void put_g2_counts(G2Result& r, const std::vector<G2Unit>& units, const std::vector<G2Counts>& counts) {
   const int R = r.replicates, nbins = r.binning.size();
-  for (int b = 0; b < nbins; ++b) {
-    G2NormalBin& nb = r.bins[b];
-    std::vector<std::uint64_t>* to[kCounts] = {&nb.samples_r, &nb.visible_o_r, &nb.visible_i_r, &nb.visible_both_r};
-    for (int k = 0; k < kCounts; ++k) {
-      to[k]->assign(R, 0);
-      for (int q = 0; q < R; ++q) (*to[k])[q] = counts[(static_cast<std::size_t>(q) * nbins + b) * kCounts + k];
+  for (G2NormalBin& nb : r.bins)
+    for (auto* x : {&nb.samples_r, &nb.visible_o_r, &nb.visible_i_r, &nb.visible_both_r}) x->assign(R, 0);
+  for (std::size_t u = 0; u < units.size(); ++u)
+    for (int b = 0; b < nbins; ++b) {
+      G2NormalBin& nb = r.bins[b];
+      const std::uint64_t* c = counts[u].data() + static_cast<std::size_t>(b) * kCounts;
+      nb.samples_r[units[u].q] += c[0];
+      nb.visible_o_r[units[u].q] += c[1];
+      nb.visible_i_r[units[u].q] += c[2];
+      nb.visible_both_r[units[u].q] += c[3];
     }
-  }
 }
 
 }  // namespace
@@ -151,8 +153,16 @@ void put_g2_counts(G2Result& r, const G2Counts& counts) {
 void trace_g2_points(const G2Points& points, G2Result& r, const G2Options& opt, const ReplicatePlan& plan) {
   const int nbins = r.binning.size();
   const UnitRange reps = share_of(opt.split, static_cast<std::uint64_t>(plan.replicates));
-  G2Counts counts(static_cast<std::size_t>(plan.replicates) * nbins * kCounts);
+  // The units' counts are held until the end: refused before the work when they would not fit
+  // in memory (rather than ending in std::bad_alloc). At most ceil(n / kChunk) + parts units a
+  // replicate.
+  const double most = static_cast<double>(reps.size()) *
+                      (static_cast<double>(chunks_per_replicate(plan.per_replicate(), kChunk)) + points.parts());
+  require_memory(most * (sizeof(G2Unit) + sizeof(TraceCounters) + sizeof(G2Counts) + kCounts * nbins * 8.0),
+                 "{rays} " + std::to_string(opt.rays) + " (counts of " + std::to_string(static_cast<std::uint64_t>(most)) +
+                     " work units, " + std::to_string(nbins) + " normal bins)");
   const std::vector<G2Unit> units = g2_units(points, reps);
+  std::vector<G2Counts> counts(units.size());
   std::vector<TraceCounters> tc(units.size());
   const double mine = static_cast<double>(plan.per_replicate() * reps.size());
   std::uint64_t done = 0;
@@ -161,14 +171,14 @@ void trace_g2_points(const G2Points& points, G2Result& r, const G2Options& opt, 
       units.size(), kUnitsPerPass, [&](std::size_t u) { return units[u].part; },
       [&](std::size_t k) { return points.scene(k); },
       [&](std::size_t u, const Scene& scene) {
-        trace_g2_unit(points, scene, r.o, r.i, units[u], opt.seed, nbins, counts, tc[u]);
+        trace_g2_unit(points, scene, r.o, r.i, units[u], opt.seed, nbins, counts[u], tc[u]);
       },
       [&](std::size_t units_done) {
         for (; counted < units_done; ++counted) done += units[counted].points.size();
         if (opt.progress) opt.progress(static_cast<double>(done) / mine);
       });
-  for (const TraceCounters& c : tc) r.counters += c;  // integer counters: any order, the same sums
-  put_g2_counts(r, counts);
+  for (const TraceCounters& c : tc) r.counters += c;  // in unit order
+  put_g2_counts(r, units, counts);
   finish_g2(r, opt, reps);
 }
 
