@@ -11,6 +11,7 @@
 
 #include "cli_helpers.hpp"
 #include "microsim/measure/g1_measure.hpp"
+#include "microsim/measure/ensemble_estimators.hpp"
 #include "microsim/measure/g2_measure.hpp"
 #include "microsim/measure/stats.hpp"
 #include "microsim/measure/vcavity_measure.hpp"
@@ -752,7 +753,7 @@ TEST(ValidateChecks, VCavityG2AndVndfAreCheckedGrooveByGroove) {
   // A grazing pair, where masking is strong enough for the difference to matter.
   const Vec3 vo = direction_from_angles(rad(80), 0), vi = direction_from_angles(rad(70), rad(180));
   const G2Result together = measure_g2(joint, vo, vi, g);
-  const G2Result grooves = measure_vcavity_g2(strips, vo, vi, g);
+  const G2Result grooves = measure_g2(vcavity_grooves(strips, "test", GrooveFrames::StoredNormalNormalized), vo, vi, g);
   const double z_together = (together.g2().mean - together.vcavity) / together.g2().stderr_;
   const double z_grooves = (grooves.g2().mean - grooves.vcavity) / grooves.g2().stderr_;
   std::printf("g2 o 80/0 i 70/180: grooves %.5f +- %.5f (z %.2f), strips together %.5f +- %.5f (z %.2f), model %.5f\n",
@@ -764,7 +765,7 @@ TEST(ValidateChecks, VCavityG2AndVndfAreCheckedGrooveByGroove) {
   vo_opt.rays = 100000;
   const Vec3 v80 = direction_from_angles(rad(80), 0);
   const VndfResult joint_vndf = measure_vndf(joint, v80, vo_opt);
-  const VndfResult groove_vndf = measure_vcavity_vndf(strips, v80, vo_opt);
+  const VndfResult groove_vndf = measure_vndf(vcavity_grooves(strips, "test", GrooveFrames::StoredNormalNormalized), v80, vo_opt);
   const std::vector<double> p = vcavity_vndf_probabilities(strips, v80, groove_vndf.binning);
   const GofResult gj = histogram_gof(joint_vndf.bin_hits, joint_vndf.hits, p, vo_opt.family_alpha);
   const GofResult gg = histogram_gof(groove_vndf.bin_hits, groove_vndf.hits, p, vo_opt.family_alpha);
@@ -790,7 +791,7 @@ TEST(ValidateChecks, VCavityG2ErrorIsCalibrated) {
     G2Options g;
     g.rays = 8192;
     g.seed = static_cast<std::uint64_t>(seed);
-    const G2Result r = measure_vcavity_g2(strips, vo, vi, g);
+    const G2Result r = measure_g2(vcavity_grooves(strips, "test", GrooveFrames::StoredNormalNormalized), vo, vi, g);
     const Estimate e = r.g2();
     const double z = (e.mean - r.vcavity) / e.stderr_;
     sum_z2 += z * z;

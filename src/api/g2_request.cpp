@@ -2,11 +2,12 @@
 
 #include <chrono>
 #include <memory>
+#include <optional>
 
 #include "microsim/api/estimator_record.hpp"
 #include "microsim/api/request_checks.hpp"
+#include "microsim/measure/ensemble_estimators.hpp"
 #include "microsim/measure/g2_measure.hpp"
-#include "microsim/measure/vcavity_measure.hpp"
 #include "microsim/surface/generators.hpp"
 #include "microsim/trace/tracer.hpp"
 
@@ -55,7 +56,8 @@ Json g2_definitions(bool ensemble) {
 // infinite periodic V-groove of its own; its stored strips traced together would mask each other.
 Table g2_surface_rows(const G2Request& r, const Microsurface& s, const G2Options& go, TraceCounters& counters,
                       double& build_seconds, std::size_t& done) {
-  const bool grooves = is_vcavity(s);
+  std::optional<SceneEnsemble> grooves;
+  if (is_vcavity(s)) grooves.emplace(vcavity_grooves(s, "measure g2", GrooveFrames::StoredNormalNormalized));
   std::unique_ptr<Tracer> tracer;
   FacetTable table;
   if (!grooves) {
@@ -69,7 +71,7 @@ Table g2_surface_rows(const G2Request& r, const Microsurface& s, const G2Options
       for (double p_i : r.phi_i.degrees)
         for (double t_i : r.theta_i.degrees) {
           const Vec3 vo = direction_from_angles(rad(t_o), rad(p_o)), vi = direction_from_angles(rad(t_i), rad(p_i));
-          G2Result m = grooves ? measure_vcavity_g2(s, vo, vi, go) : measure_g2(*tracer, vo, vi, go, &table);
+          G2Result m = grooves ? measure_g2(*grooves, vo, vi, go) : measure_g2(*tracer, vo, vi, go, &table);
           counters += m.counters;
           Json& row = add_row(rows, m, s);
           row["theta_o_deg"] = t_o;  // exactly as requested

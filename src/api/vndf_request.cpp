@@ -6,6 +6,7 @@
 
 #include "microsim/api/estimator_record.hpp"
 #include "microsim/api/request_checks.hpp"
+#include "microsim/measure/ensemble_estimators.hpp"
 #include "microsim/measure/stats.hpp"
 #include "microsim/measure/vcavity_measure.hpp"
 #include "microsim/measure/vndf_measure.hpp"
@@ -72,7 +73,8 @@ struct VndfTotals {
 // stored strips traced together would mask each other.
 Table vndf_surface_rows(const VndfRequest& r, const Microsurface& s, std::size_t k, const VndfOptions& vo,
                         VndfTotals& totals) {
-  const bool grooves = is_vcavity(s);
+  std::optional<SceneEnsemble> grooves;
+  if (is_vcavity(s)) grooves.emplace(vcavity_grooves(s, "measure vndf", GrooveFrames::StoredNormalNormalized));
   const DirectionBinning bins = vndf_binning(vo);
   std::unique_ptr<Tracer> tracer;
   FacetTable table;
@@ -84,7 +86,7 @@ Table vndf_surface_rows(const VndfRequest& r, const Microsurface& s, std::size_t
   for (double p : r.phi.degrees)
     for (double t : r.theta.degrees) {
       const Vec3 v = direction_from_angles(rad(t), rad(p));
-      VndfResult m = grooves ? measure_vcavity_vndf(s, v, vo) : measure_vndf(*tracer, v, vo, &table);
+      VndfResult m = grooves ? measure_vndf(*grooves, v, vo) : measure_vndf(*tracer, v, vo, &table);
       totals.counters += m.counters;
       totals.lost += !s.macro().finite_object() ? m.counters.lost_below + m.counters.unresolved : m.counters.unresolved;
       std::optional<SamplerTest> sampler;

@@ -1,192 +1,44 @@
+// The G2 estimator on a whole surface (its Tracer, one part), and the G2 table and rows.
 #include "microsim/measure/g2_measure.hpp"
-#include "microsim/io/checks.hpp"
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
-#include <array>
-#include <atomic>
 #include <chrono>
 
-#include "microsim/measure/replicates.hpp"
-#include "microsim/measure/sampling.hpp"
+#include "g2_estimator.hpp"
+#include "microsim/measure/facet_table.hpp"
 #include "microsim/measure/stats.hpp"
-#include "estimator_steps.hpp"
 
 namespace microsim {
 
 namespace {
 
-struct Tally {
-  std::vector<std::uint64_t> samples, vis_o, vis_i, vis_both;
-  TraceCounters counters;
-  explicit Tally(int nbins = 0) : samples(nbins), vis_o(nbins), vis_i(nbins), vis_both(nbins) {}
-};
-
-constexpr std::uint64_t kChunk = 1 << 13;
-
-}  // namespace
-
-models::G2Forms G2Result::smith_numeric() const {
-  return models::g2_forms_from_lambda(lambda_o, lambda_i, models::azimuth_difference(o, i));
-}
-
-namespace {
-// Fields of G2Forms as an array (for the delta method).
-std::array<double, 4> as_array(const models::G2Forms& f) {
-  return {f.separable, f.height_correlated, f.direction_correlated, f.height_direction_correlated};
-}
-models::G2Forms from_array(const std::array<double, 4>& a) {
-  return {a[0], a[1], a[2], a[3]};
-}
-}  // namespace
-
-Estimate G2Result::g2() const {
-  std::vector<std::uint64_t> x(replicates, 0);
-  for (const G2NormalBin& nb : bins)
-    for (int q = 0; q < replicates; ++q) x[q] += nb.visible_both_r[q];
-  return replicate_mean(x, static_cast<double>(replicates) / samples);
-}
-Estimate G2Result::g1_o() const {
-  std::vector<std::uint64_t> x(replicates, 0);
-  for (const G2NormalBin& nb : bins)
-    for (int q = 0; q < replicates; ++q) x[q] += nb.visible_o_r[q];
-  return replicate_mean(x, static_cast<double>(replicates) / samples);
-}
-Estimate G2Result::g1_i() const {
-  std::vector<std::uint64_t> x(replicates, 0);
-  for (const G2NormalBin& nb : bins)
-    for (int q = 0; q < replicates; ++q) x[q] += nb.visible_i_r[q];
-  return replicate_mean(x, static_cast<double>(replicates) / samples);
-}
-Estimate G2Result::bin_g2(int b) const { return replicate_ratio(bins[b].visible_both_r, bins[b].samples_r); }
-Estimate G2Result::bin_g1_o(int b) const { return replicate_ratio(bins[b].visible_o_r, bins[b].samples_r); }
-Estimate G2Result::bin_g1_i(int b) const { return replicate_ratio(bins[b].visible_i_r, bins[b].samples_r); }
-
-namespace {
-// A bin's counts: samples, visible from o, from i, from both.
-struct BinCounts {
-  double n = 0, o = 0, i = 0, both = 0;
-};
-BinCounts counts_without(const G2NormalBin& nb, int rep) {  // rep < 0: all replicates
-  BinCounts c{static_cast<double>(nb.samples), static_cast<double>(nb.visible_o),
-              static_cast<double>(nb.visible_i), static_cast<double>(nb.visible_both)};
-  if (rep >= 0) {
-    c.n -= nb.samples_r[rep];
-    c.o -= nb.visible_o_r[rep];
-    c.i -= nb.visible_i_r[rep];
-    c.both -= nb.visible_both_r[rep];
-  }
-  return c;
-}
-// The four forms from the bin's g1_o, g1_i, and g2 minus each.
-void forms_and_diff(const BinCounts& c, double phi, std::array<double, 4>& value,
-                    std::array<double, 4>& diff) {
-  value = as_array(models::g2_forms_from_g1(c.o / c.n, c.i / c.n, phi));
-  for (int k = 0; k < 4; ++k) diff[k] = c.both / c.n - value[k];
-}
-}  // namespace
-
-G2Result::FormsFromG1 G2Result::bin_forms_from_g1(int b) const {
-  FormsFromG1 out;
-  const G2NormalBin& nb = bins[b];
-  if (nb.samples == 0) return out;
-  const double phi = models::azimuth_difference(o, i);
-  std::array<double, 4> value, diff, v, d;
-  forms_and_diff(counts_without(nb, -1), phi, value, diff);
-  std::array<std::vector<double>, 4> without;
-  for (int q = 0; q < replicates; ++q) {
-    const BinCounts c = counts_without(nb, q);
-    if (!(c.n > 0)) continue;  // the bin's only samples were in replicate q
-    forms_and_diff(c, phi, v, d);
-    for (int k = 0; k < 4; ++k) without[k].push_back(d[k]);
-  }
-  std::array<double, 4> se{};
-  for (int k = 0; k < 4; ++k) se[k] = jackknife(diff[k], without[k]).stderr_;
-  out.value = from_array(value);
-  out.diff = from_array(diff);
-  out.diff_stderr = from_array(se);
-  return out;
-}
-
-G2Result::FormsFromG1 G2Result::forms_from_g1() const {
-  const double phi = models::azimuth_difference(o, i);
-  // sum_b w_b (value_b, diff_b) over the bins with samples, without replicate `rep` (< 0: none).
-  auto average = [&](int rep, std::array<double, 4>& value, std::array<double, 4>& diff) {
-    value = {};
-    diff = {};
-    std::array<double, 4> v, d;
-    for (int b = 0; b < binning.size(); ++b) {
-      if (bins[b].weight <= 0 || bins[b].samples == 0) continue;
-      const BinCounts c = counts_without(bins[b], rep);
-      if (!(c.n > 0)) continue;
-      forms_and_diff(c, phi, v, d);
-      const double w = bins[b].weight / weight;
-      for (int k = 0; k < 4; ++k) {
-        value[k] += w * v[k];
-        diff[k] += w * d[k];
-      }
-    }
-  };
-  std::array<double, 4> value, diff, v, d;
-  average(-1, value, diff);
-  std::array<std::vector<double>, 4> without;
-  for (int q = 0; q < replicates; ++q) {
-    average(q, v, d);
-    for (int k = 0; k < 4; ++k) without[k].push_back(d[k]);
-  }
-  std::array<double, 4> se{};
-  for (int k = 0; k < 4; ++k) se[k] = jackknife(diff[k], without[k]).stderr_;
-  FormsFromG1 out;
-  out.value = from_array(value);
-  out.diff = from_array(diff);
-  out.diff_stderr = from_array(se);
-  return out;
-}
-
-DirectionBinning g2_normal_binning(const G2Options& o) {
-  return DirectionBinning(o.normal_theta_bins, o.normal_phi_bins, kPi);
-}
-
-namespace {
-
 // The exact facet sums of r.bins at (r.o, r.i), r.total_area, r.front_area, r.lambda_o and
-// r.lambda_i; returns the V-cavity sum over every bin.
+// r.lambda_i (deterministic parallel sums over the surface's facets); returns the V-cavity sum
+// over every bin.
 double sum_g2_facets_per_bin(G2Result& r, const FacetTable& ft, const Microsurface& s) {
   const int nbins = r.binning.size();
   const Vec3 o = r.o, i = r.i;
-  // Exact facet sums. Per bin: area, area facing both, weight w_f, w-weighted normal (3),
-  // V-cavity sum; then the back-facing projected areas toward o and toward i (Smith Lambda
-  // from facets). The CDF of w_f places the samples.
-  using Sums = std::vector<double>;
+  // Per bin: area, area facing both, weight w_f, w-weighted normal (3), V-cavity sum; then the
+  // back-facing projected areas toward o and toward i.
   constexpr std::size_t kW = 7;
   const std::size_t width = kW * static_cast<std::size_t>(nbins) + 2;
-  // w_f: symmetric in (o, i); A_f (v.m) at o = i = v.
-  const auto weight_of = [&](const Vec3& m, double a) {
-    const double om = o.dot(m), im = i.dot(m);
-    return om > 0 && im > 0 ? 0.5 * a * (om + im) : 0.0;
-  };
-  Sums sums = sum_over_facets(s.num_facets(), width, [&](std::size_t k, double* acc) {
+  const std::vector<double> sums = sum_over_facets(s.num_facets(), width, [&](std::size_t k, double* acc) {
     Vec3 m;
     double a;
     ft.normal_area(k, m, a);
-    const double om = o.dot(m), im = i.dot(m);
-    const bool front = om > 0 && im > 0;
-    const double wf = weight_of(m, a);
+    const G2FacetTerms t = g2_facet_terms(o, i, m, a);
     double* bin = acc + kW * static_cast<std::size_t>(ft.bin(k));
     bin[0] += a;
-    if (front) {
+    if (t.front) {
       bin[1] += a;
-      bin[2] += wf;
-      bin[3] += wf * m.x();
-      bin[4] += wf * m.y();
-      bin[5] += wf * m.z();
-      bin[6] += wf * models::vcavity_G2(o, i, m);
+      bin[2] += t.weight;
+      bin[3] += t.weight * m.x();
+      bin[4] += t.weight * m.y();
+      bin[5] += t.weight * m.z();
+      bin[6] += t.vcavity;
     }
-    acc[width - 2] += a * std::max(0.0, -om);
-    acc[width - 1] += a * std::max(0.0, -im);
+    acc[width - 2] += t.back_o;
+    acc[width - 1] += t.back_i;
   });
   double vcav_total = 0;
   for (int b = 0; b < nbins; ++b) {
@@ -209,21 +61,45 @@ double sum_g2_facets_per_bin(G2Result& r, const FacetTable& ft, const Microsurfa
   return vcav_total;
 }
 
-// Chunk tallies of replicates r0, r0 + 1, ... (chunks_per_replicate nc each) into the
-// per-replicate counts of r.bins and r.counters.
-void add_g2_parts(G2Result& r, const std::vector<Tally>& parts, int r0, std::uint64_t nc) {
-  for (std::size_t c = 0; c < parts.size(); ++c) {
-    const int rep = r0 + static_cast<int>(c / nc);
-    for (int b = 0; b < r.binning.size(); ++b) {
-      G2NormalBin& nb = r.bins[b];
-      nb.samples_r[rep] += parts[c].samples[b];
-      nb.visible_o_r[rep] += parts[c].vis_o[b];
-      nb.visible_i_r[rep] += parts[c].vis_i[b];
-      nb.visible_both_r[rep] += parts[c].vis_both[b];
-    }
-    r.counters += parts[c].counters;
+// w_f of facet k from its 2 A_f m_f, without a square root (g2_facet_terms' weight).
+struct CrossWeight {
+  const FacetTable& ft;
+  Vec3 o, i;
+  double operator()(std::size_t k) const {
+    const Vec3 c = ft.cross(k);
+    const double oc = o.dot(c), ic = i.dot(c);
+    return oc > 0 && ic > 0 ? 0.25 * (oc + ic) : 0.0;
   }
-}
+};
+
+// A whole surface as the estimator's one part, traced in the world frame. The points are drawn
+// along the CDF of w_f computed block by block (BlockFacetSampler, in facet order: spatially
+// coherent), every replicate's points on its facets.
+class SurfacePoints : public G2Points {
+ public:
+  SurfacePoints(const Tracer& tracer, const FacetTable& ft, const Vec3& o, const Vec3& i, std::uint64_t per_replicate)
+      : tracer_(tracer), ft_(ft), weight_{ft, o, i}, n_(per_replicate), sampler_(tracer.surface().num_facets(), weight_) {}
+  double total() const { return sampler_.total(); }
+  std::uint64_t stream() const override { return pair_stream(weight_.o, weight_.i, 0xC2000000ull); }
+  std::size_t parts() const override { return 1; }
+  std::unique_ptr<Scene> scene(std::size_t) const override { return make_scene(tracer_); }
+  Vec3 to_local(std::size_t, const Vec3& w) const override { return w; }
+  UnitRange facets(std::size_t) const override { return {0, tracer_.surface().num_facets()}; }
+  UnitRange points_on(int, UnitRange) const override { return {0, n_}; }
+  std::size_t place(int, std::uint64_t j, CounterRng& rng) const override {
+    const double u = (static_cast<double>(j) + rng.uniform()) / n_ * sampler_.total();
+    return sampler_.draw(u, weight_);
+  }
+  int bin(std::size_t f) const override { return ft_.bin(f); }
+  bool buried(std::size_t f) const override { return ft_.buried(f); }
+
+ private:
+  const Tracer& tracer_;
+  const FacetTable& ft_;
+  CrossWeight weight_;
+  std::uint64_t n_;
+  BlockFacetSampler sampler_;
+};
 
 }  // namespace
 
@@ -231,79 +107,16 @@ G2Result measure_g2(const Tracer& tracer, const Vec3& o_in, const Vec3& i_in, co
                     const FacetTable* table) {
   const Microsurface& s = tracer.surface();
   G2Result r = start_g2(o_in, i_in, opt, s.macro().area);
-  auto t0 = std::chrono::steady_clock::now();
-  const int nbins = r.binning.size();
-  const Vec3 o = r.o, i = r.i;
-
+  const auto t0 = std::chrono::steady_clock::now();
   FacetTable own;
   const FacetTable& ft = facet_table_for(s, r.binning, table, own);
-  const std::size_t nf = s.num_facets();
   const double vcav_total = sum_g2_facets_per_bin(r, ft, s);
-  const auto weight = [&](std::size_t k) {  // w_f from 2 A_f m_f, without a square root
-    const Vec3 c = ft.cross(k);
-    const double oc = o.dot(c), ic = i.dot(c);
-    return oc > 0 && ic > 0 ? 0.25 * (oc + ic) : 0.0;
-  };
-  const BlockFacetSampler sampler(nf, weight);  // places the samples
-  r.weight = sampler.total();
+  const ReplicatePlan plan = plan_g2(r, opt);
+  const SurfacePoints points(tracer, ft, r.o, r.i, plan.per_replicate());
+  r.weight = points.total();
   if (!(r.weight > 0)) throw RuntimeFailure("no facet faces both directions");
   r.vcavity = vcav_total / r.weight;
-
-  const std::uint64_t stream = pair_stream(o, i, 0xC2000000ull);
-  const ReplicatePlan plan = plan_g2(r, opt);
-  const int R = plan.replicates;
-  const std::uint64_t n_rep = plan.per_replicate();
-  std::atomic<std::uint64_t> done{0};
-  const double front = r.weight;
-  // Per replicate a stratified pass along the CDF of w_f (facet order is spatially coherent).
-  // The progress callback runs on the calling thread only: between two halves of the work.
-  auto body = [&](int rep, std::uint64_t j, Tally& t) {
-    CounterRng rng(opt.seed, ReplicatePlan::stream(stream, rep), j);
-    const double u = (static_cast<double>(j) + rng.uniform()) / n_rep * front;
-    const std::size_t k = sampler.draw(u, weight);
-    const Triangle f = s.facet(k);
-    const double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
-    const Vec3 p = f.point(r1 * (1 - r2), r1 * r2);
-    const SourcePlane plane = SourcePlane::of(f);
-    const int b = ft.bin(k);
-    // A facet pressed against an opposite-facing twin (touching walls, [GeomBSDF24, Fig. 6]) is hidden
-    // from every direction, as in measure_g1: its occlusion rays would start inside the
-    // neighbour and skip the twin at distance zero.
-    const bool buried = ft.buried(k);
-    const bool vo = !buried && !tracer.occluded(p, o, &plane, t.counters);
-    const bool vi = o == i ? vo : !buried && !tracer.occluded(p, i, &plane, t.counters);
-    ++t.samples[b];
-    t.vis_o[b] += vo;
-    t.vis_i[b] += vi;
-    t.vis_both[b] += vo && vi;
-    if ((j + 1) % kChunk == 0 || j + 1 == n_rep) done += (j % kChunk) + 1;
-  };
-  for (int b = 0; b < nbins; ++b) {
-    G2NormalBin& nb = r.bins[b];
-    for (auto* v : {&nb.samples_r, &nb.visible_o_r, &nb.visible_i_r, &nb.visible_both_r})
-      v->assign(R, 0);
-  }
-  const std::uint64_t nc = chunks_per_replicate(n_rep, kChunk);
-  // Two halves of the replicates (progress between them); chunk tallies merged per replicate
-  // in chunk order: identical for any thread count.
-  const UnitRange reps = share_of(opt.split, static_cast<std::uint64_t>(R));
-  const int share0 = static_cast<int>(reps.first), share1 = static_cast<int>(reps.end);
-  const int halves[3] = {share0, share0 + (share1 - share0) / 2, share1};
-  // The larger half's chunk tallies are held at once: refused before the work when they would
-  // not fit in memory (rather than ending in std::bad_alloc).
-  require_memory(static_cast<double>(share1 - halves[1]) * nc * (sizeof(Tally) + 4.0 * nbins * sizeof(std::uint64_t)),
-                 "{rays} " + std::to_string(opt.rays) + " (tallies of " + std::to_string(nc) +
-                     " chunks per replicate, " + std::to_string(nbins) + " normal bins)");
-  for (int h = 0; h < 2; ++h) {
-    const int r0 = halves[h], r1 = halves[h + 1];
-    if (r1 <= r0) continue;
-    std::vector<Tally> parts = run_replicate_chunks<Tally>(
-        r1 - r0, n_rep, kChunk, [&] { return Tally(nbins); },
-        [&](int rep, std::uint64_t j, Tally& t) { body(r0 + rep, j, t); });
-    add_g2_parts(r, parts, r0, nc);
-    if (opt.progress) opt.progress(static_cast<double>(done.load()) / (n_rep * (share1 - share0)));
-  }
-  finish_g2(r, opt, reps);
+  trace_g2_points(points, r, opt, plan);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }
@@ -443,7 +256,7 @@ void put_g2_models(Json& row, const G2Result& r, const Microsurface& s, const Es
 // difference to g2 with its standard error (delta method) and z-score.
 void put_forms_from_g1(Json& row, const G2Result& r) {
   const G2Result::FormsFromG1 fg = r.forms_from_g1();
-  const auto fv = as_array(fg.value), fd = as_array(fg.diff), fs = as_array(fg.diff_stderr);
+  const auto fv = form_values(fg.value), fd = form_values(fg.diff), fs = form_values(fg.diff_stderr);
   const char* const* names = kForms;
   for (int k = 0; k < 4; ++k) {
     row[std::string(names[k]) + "_from_g1"] = fv[k];

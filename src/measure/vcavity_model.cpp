@@ -9,14 +9,6 @@
 
 namespace microsim {
 
-G2Result measure_vcavity_g2(const Microsurface& s, const Vec3& o, const Vec3& i, const G2Options& opt) {
-  return measure_g2(vcavity_grooves(s, "measure_vcavity_g2", GrooveFrames::StoredNormalNormalized), o, i, opt);
-}
-
-VndfResult measure_vcavity_vndf(const Microsurface& s, const Vec3& v, const VndfOptions& o) {
-  return measure_vndf(vcavity_grooves(s, "measure_vcavity_vndf", GrooveFrames::StoredNormalNormalized), v, o);
-}
-
 BsdfTally trace_vcavity_bsdf(const Microsurface& s, const BsdfOptions& o, const Vec3& wi,
                              const HemisphereMap& map, const InPlaneBins& plane, std::uint64_t stream) {
   return trace_bsdf(vcavity_grooves(s, "trace_vcavity_bsdf", GrooveFrames::OfModel), o, wi, map, plane, stream);

@@ -1,8 +1,6 @@
 #include "microsim/measure/vndf_measure.hpp"
 
-#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
 #include <atomic>
@@ -10,32 +8,12 @@
 
 #include "microsim/measure/sampling.hpp"
 #include "microsim/measure/stats.hpp"
-#include "estimator_steps.hpp"
+#include "vndf_estimator.hpp"
+#include "microsim/measure/facet_table.hpp"
 
 namespace microsim {
 
 namespace {
-constexpr std::uint64_t kChunk = 1 << 14;
-
-// Runs body(j, counts, counters) for j in [0, n) in parallel chunks; per-chunk integer counts
-// merged in chunk order (identical for any thread count).
-template <class Body>
-void histogram_chunks(std::uint64_t n, int nbins, std::vector<std::uint64_t>& counts,
-                      TraceCounters& counters, Body&& body) {
-  const std::uint64_t nchunks = (n + kChunk - 1) / kChunk;
-  std::vector<std::vector<std::uint64_t>> parts(nchunks);
-  std::vector<TraceCounters> cparts(nchunks);
-  tbb::parallel_for(std::uint64_t(0), nchunks, [&](std::uint64_t c) {
-    parts[c].assign(nbins + 1, 0);  // last slot: outside every bin
-    const std::uint64_t end = std::min(n, (c + 1) * kChunk);
-    for (std::uint64_t j = c * kChunk; j < end; ++j) body(j, parts[c], cparts[c]);
-  });
-  counts.assign(nbins + 1, 0);
-  for (std::uint64_t c = 0; c < nchunks; ++c) {
-    for (int b = 0; b <= nbins; ++b) counts[b] += parts[c][b];
-    counters += cparts[c];
-  }
-}
 // Origins first .. first + origins.size() - 1 of the stream, i.i.d. uniform in the unit square,
 // sorted in Morton order (with their coordinates as tie-breaks: a total order, so the same for
 // any thread count).
@@ -64,10 +42,6 @@ void draw_sorted_origins(std::uint64_t seed, std::uint64_t stream, std::uint64_t
   });
 }
 }  // namespace
-
-DirectionBinning vndf_binning(const VndfOptions& o) {
-  return DirectionBinning(o.theta_bins, o.phi_bins, kPi / 2);
-}
 
 std::vector<double> bin_integrals(const DirectionBinning& bins,
                                   const std::function<double(const Vec3&)>& f) {
@@ -112,21 +86,40 @@ GofResult histogram_gof(const std::vector<std::uint64_t>& counts, std::uint64_t 
   return g;
 }
 
-Estimate VndfResult::dv(int b) const {
-  Estimate p = binomial_estimate(bin_hits[b], hits);
-  const double w = binning.solid_angle(b);
-  return {p.mean / w, p.stderr_ / w, bin_hits[b]};
-}
+namespace {
 
-double VndfResult::dv_smith_numeric(int b) const {
-  return front_projected[b] / front_projected_total / binning.solid_angle(b);
-}
+// A whole surface as the estimator's one part, traced in the world frame. Its rays are drawn in
+// batches of at most 2^22 (24 bytes per origin); every origin is an independent draw, so
+// batching changes nothing statistically. Each batch is sorted in Morton order of the origins
+// for coherence (the order does not change the statistics), and this process traces the rays at
+// its share of the positions of the sorted batches (every process draws and sorts every batch:
+// the sort is cheap beside the tracing).
+class SurfaceRays : public VndfRays {
+ public:
+  SurfaceRays(const Tracer& tracer, const DirectionBinning& binning, std::uint64_t seed, std::uint64_t stream)
+      : tracer_(tracer), binning_(binning), seed_(seed), stream_(stream) {}
+  std::size_t parts() const override { return 1; }
+  std::unique_ptr<Scene> scene(std::size_t) const override { return make_scene(tracer_); }
+  Vec3 to_local(std::size_t, const Vec3& w) const override { return w; }
+  std::uint64_t batch() const override { return std::uint64_t(1) << 22; }
+  std::vector<std::vector<Vec2>> origins(UnitRange rays, UnitRange share) const override {
+    std::vector<std::pair<std::uint64_t, Vec2>> sorted(rays.size());
+    draw_sorted_origins(seed_, stream_, rays.first, sorted);
+    std::vector<std::vector<Vec2>> out(1);
+    for (std::uint64_t j = 0; j < sorted.size(); ++j)
+      if (share.contains(rays.first + j)) out[0].push_back(sorted[j].second);
+    return out;
+  }
+  // The bin of the hit's normal.
+  int bin(std::size_t, const Scene&, const TraceHit& h) const override { return binning_.bin_of(h.normal); }
 
-std::vector<double> VndfResult::smith_numeric_probabilities() const {
-  std::vector<double> p(binning.size());
-  for (int b = 0; b < binning.size(); ++b) p[b] = front_projected[b] / front_projected_total;
-  return p;
-}
+ private:
+  const Tracer& tracer_;
+  const DirectionBinning& binning_;
+  std::uint64_t seed_, stream_;
+};
+
+}  // namespace
 
 VndfResult measure_vndf(const Tracer& tracer, const Vec3& v_in, const VndfOptions& o,
                         const FacetTable* table) {
@@ -135,12 +128,9 @@ VndfResult measure_vndf(const Tracer& tracer, const Vec3& v_in, const VndfOption
   auto t0 = std::chrono::steady_clock::now();
   const Vec3 v = r.v;
   const int nbins = r.binning.size();
-
   FacetTable own;
   const FacetTable& ft = facet_table_for(s, r.binning, table, own);
-  const std::size_t nf = s.num_facets();
-  using Sums = std::vector<double>;
-  Sums sums = sum_over_facets(nf, nbins + 1, [&](std::size_t k, double* acc) {
+  const std::vector<double> sums = sum_over_facets(s.num_facets(), nbins + 1, [&](std::size_t k, double* acc) {
     Vec3 m;
     double a;
     ft.normal_area(k, m, a);
@@ -151,46 +141,12 @@ VndfResult measure_vndf(const Tracer& tracer, const Vec3& v_in, const VndfOption
   r.front_projected.assign(sums.begin(), sums.begin() + nbins);
   for (double x : sums) r.front_projected_total += x;
   if (!(r.front_projected_total > 0)) throw RuntimeFailure("no facet faces the direction");
-
-  const std::unique_ptr<Scene> scene = make_scene(tracer);
-  const RayWindow w = scene->ray_window(v);
-  r.window_area_perp = w.area_perp;
+  r.window_area_perp = make_scene(tracer)->ray_window(v).area_perp;
   // Origins i.i.d. uniform over the window (not stratified): the bin counts are then exactly
   // multinomial, so the binomial standard errors and the chi-square p-values are calibrated
   // (stratified origins would make them conservative bounds, with chi-square far below its
-  // degrees of freedom and no power). Coherence is kept by tracing the rays in Morton order of
-  // their origins (the order does not change the statistics).
-  r.rays = o.rays;
-  const std::uint64_t stream = 0xD000 + direction_stream_key(v);
-  // Batches of at most 2^22 rays bound the memory (24 bytes per origin); every origin is an
-  // independent draw, so batching changes nothing statistically.
-  const std::uint64_t batch = std::uint64_t(1) << 22;
-  std::vector<std::uint64_t> counts(nbins + 1, 0);
-  std::vector<std::pair<std::uint64_t, Vec2>> origins;
-  // This process traces the rays at positions [first, end) of the sequence of sorted batches
-  // (every process draws and sorts every batch: the sort is cheap beside the tracing).
-  const UnitRange share = share_of(o.split, r.rays);
-  for (std::uint64_t first = 0; first < r.rays; first += batch) {
-    const std::uint64_t n = std::min(batch, r.rays - first);
-    origins.resize(n);
-    draw_sorted_origins(o.seed, stream, first, origins);
-    std::vector<std::uint64_t> part;
-    histogram_chunks(n, nbins, part, r.counters,
-                     [&](std::uint64_t j, std::vector<std::uint64_t>& c, TraceCounters& tc) {
-                       if (!share.contains(first + j)) return;
-                       const Vec2& ab = origins[j].second;
-                       const Vec3 org = w.origin0 + ab.x() * w.e1 + ab.y() * w.e2;
-                       const TraceHit h = scene->intersect(org, -v, nullptr, tc);
-                       // Back faces (rounding gaps, counted) and, in a measured region, hits
-                       // outside it are misses.
-                       if (scene->front_facet(h) == Scene::kNoFacet) return;
-                       const int b = r.binning.bin_of(h.normal);
-                       ++c[b >= 0 ? b : nbins];
-                     });
-    for (int b = 0; b <= nbins; ++b) counts[b] += part[b];
-    if (o.progress) o.progress(static_cast<double>(first + n) / r.rays);
-  }
-  finish_vndf(r, o, share, std::move(counts));
+  // degrees of freedom and no power).
+  trace_vndf_rays(SurfaceRays(tracer, r.binning, o.seed, 0xD000 + direction_stream_key(v)), r, o);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }

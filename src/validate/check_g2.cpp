@@ -110,7 +110,8 @@ struct G2Runs {
   G2Result g2(const SurfacePass& pass, const Vec3& a, const Vec3& b) {
     const Microsurface& s = pass.surface;
     G2Result r = measure_with_progress(progress, 2.0 * static_cast<double>(go.rays), go, [&](const G2Options& g) {
-      return is_vcavity(s) ? measure_vcavity_g2(s, a, b, g) : measure_g2(pass.tracer, a, b, g, &pass.table);
+      if (!is_vcavity(s)) return measure_g2(pass.tracer, a, b, g, &pass.table);
+      return measure_g2(vcavity_grooves(s, "check g2", GrooveFrames::StoredNormalNormalized), a, b, g);
     });
     progress.update();
     return r;

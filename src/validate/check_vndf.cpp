@@ -1,5 +1,6 @@
 // Check of the VNDF (histogram against D_v, sampler identity).
 #include "checks_common.hpp"
+#include "microsim/measure/ensemble_estimators.hpp"
 #include "microsim/measure/vcavity_measure.hpp"
 #include "microsim/surface/generators.hpp"
 
@@ -86,7 +87,8 @@ void check_vndf_view(const SurfaceSet& set, SurfacePass& pass, const VndfView& v
   const double unit = static_cast<double>(vo.rays);
   const VndfResult r = measure_with_progress(progress, unit, vo, [&](const VndfOptions& opt) {
     // A V-cavity ensemble: groove by groove [Heitz14, Sec. 6.1], as check_g1 measures it.
-    return is_vcavity(s) ? measure_vcavity_vndf(s, view.v, opt) : measure_vndf(pass.tracer, view.v, opt, &pass.table);
+    if (!is_vcavity(s)) return measure_vndf(pass.tracer, view.v, opt, &pass.table);
+    return measure_vndf(vcavity_grooves(s, "check vndf", GrooveFrames::StoredNormalNormalized), view.v, opt);
   });
   std::optional<SamplerTest> sampler;
   if (is_vcavity(s)) {

@@ -29,15 +29,23 @@ namespace microsim {
 std::vector<G1Result> measure_g1(const SceneEnsemble& e, const std::vector<Vec3>& views,
                                  const G1Options& options);
 
-// G2(o, m, i) ([GeomBSDF24, eq. 16], the weights of measure_g2): points drawn over the whole
-// ensemble with density w_f = A_f (max(0, o.m_f) + max(0, i.m_f)) / 2 over the facets facing
-// both (a stratified CDF per replicate, the stream depending on the unordered pair {o, i}), each
-// traced with two occlusion rays in its own part. `vcavity`: the V-cavity G2
-// min(G1(o, m), G1(i, m)) [Heitz14, eq. 24 and Sec. 6] averaged with the same weights.
+// G2(o, m, i) ([GeomBSDF24, eq. 16]), the one G2 estimator of measure_g2 (g2_estimator.hpp) with
+// the ensemble's parts as its parts: points drawn over the whole ensemble with density
+// w_f = A_f (max(0, o.m_f) + max(0, i.m_f)) / 2 over the facets facing both (a stratified CDF
+// per replicate, the stream depending on the unordered pair {o, i}), each traced with two
+// occlusion rays in its own part. `vcavity`: the V-cavity G2 min(G1(o, m), G1(i, m))
+// [Heitz14, eq. 24 and Sec. 6] averaged with the same weights. The V-cavity model's grooves:
+// measure_g2(vcavity_grooves(s, what, GrooveFrames::StoredNormalNormalized), o, i, options);
+// for such separate grooves `vcavity` is exact per facet, the value the measurement must
+// reproduce.
 G2Result measure_g2(const SceneEnsemble& e, const Vec3& o, const Vec3& i, const G2Options& options);
 
-// The VNDF histogram [Heitz14, eq. 13]: every ray picks a part by its weight and a uniform
-// origin on that part's window, i.i.d. (the bin counts are multinomial, as measure_vndf's).
+// The VNDF histogram [Heitz14, eq. 13], the one VNDF estimator of measure_vndf
+// (vndf_estimator.hpp) with the ensemble's parts as its parts: every ray picks a part by its
+// weight and a uniform origin on that part's window, i.i.d. (the bin counts are multinomial), and
+// a hit is binned by its facet's normal in the world frame. The V-cavity model's grooves:
+// measure_vndf(vcavity_grooves(s, what, GrooveFrames::StoredNormalNormalized), v, options), as
+// for measure_g2.
 VndfResult measure_vndf(const SceneEnsemble& e, const Vec3& v, const VndfOptions& options);
 
 // The BSDF random walk: on every part the same number of stratified paths along -wi, every

@@ -2,11 +2,12 @@
 // V-grooves, each traced on its own as an infinite periodic groove, averaged with the model's
 // weights (every groove covers the same macro area; its normals were drawn from (n.m) D(m)).
 // The grooves are an ensemble scene (vcavity_grooves, trace/scene_ensemble.hpp) and these are
-// the ensemble estimators of measure/ensemble_estimators.hpp run on it (vcavity_model.cpp). G1
-// has no wrapper: measure_g1(vcavity_grooves(s, what, GrooveFrames::StoredNormalOverHypot),
-// views, options) is the ensemble's G1 (measure_g1_views, the G1 record, does that).
-// G1, G2 and the VNDF take their share of the work from options.split as the whole-surface
-// estimators do (replicates for G1 and G2, rays for the VNDF; measure/shards.hpp), with the
+// the ensemble estimators of measure/ensemble_estimators.hpp run on it. G1, G2 and the VNDF
+// have no wrapper: measure_g1(vcavity_grooves(s, what, GrooveFrames::StoredNormalOverHypot),
+// views, options) is the ensemble's G1, and measure_g2 / measure_vndf on
+// vcavity_grooves(s, what, GrooveFrames::StoredNormalNormalized) its G2 and VNDF: the one G1,
+// G2 and VNDF estimator each. They take their share of the work from options.split as on a
+// whole surface (replicates for G1 and G2, rays for the VNDF; measure/shards.hpp), with the
 // same tally layouts, so shards merged give the single run's result.
 #pragma once
 #include <vector>
@@ -17,20 +18,6 @@
 #include "microsim/measure/vndf_measure.hpp"
 
 namespace microsim {
-
-// G2(o, m, i) of a vcavity ensemble ([GeomBSDF24, eq. 16], the weights of measure_g2): points drawn over
-// the whole ensemble with density w_f = A_f (max(0, o.m_f) + max(0, i.m_f)) / 2 over the
-// facets facing both (a stratified CDF over the 2K facets per replicate, the stream depending
-// on the unordered pair {o, i}), each traced with two occlusion rays on its own groove, an
-// infinite periodic V-groove in the groove's frame. For such a groove the V-cavity G2
-// min(G1(o, m), G1(i, m)) [Heitz14, eq. 24 and Sec. 6] is exact per facet, so `vcavity` is the value the
-// measurement must reproduce. Deterministic for any thread count.
-G2Result measure_vcavity_g2(const Microsurface& s, const Vec3& o, const Vec3& i, const G2Options& options);
-
-// The VNDF histogram [Heitz14, eq. 13] of a vcavity ensemble: every ray picks a groove uniformly
-// (every groove covers the same macro area) and a uniform origin on its tile, i.i.d. (the bin
-// counts are multinomial, as measure_vndf's), and is traced along -v on that groove alone.
-VndfResult measure_vcavity_vndf(const Microsurface& s, const Vec3& v, const VndfOptions& options);
 
 // The V-cavity model's VNDF of a vcavity ensemble, exact for its separate grooves: the bin
 // probabilities sum_{f in B} A_f (v.m_f)+ G1_vcavity(v, m_f) / sum_f (same) over its facets

@@ -22,27 +22,11 @@
 #include "microsim/measure/binning.hpp"
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/measure/table.hpp"
+#include "microsim/measure/vndf_result.hpp"
 #include "microsim/models/ndf.hpp"
 #include "microsim/trace/tracer.hpp"
 
 namespace microsim {
-
-struct VndfOptions {
-  std::uint64_t rays = 1000000;
-  std::uint64_t seed = 1;
-  int theta_bins = 18;  // over theta_m in [0, 90] degrees (5 degree rings)
-  int phi_bins = 16;    // 22.5 degree sectors
-  // Samples for the chi-square test of the nominal NDF's VNDF sampler (0: no sampler test).
-  std::uint64_t sampler_samples = 0;
-  // Family-wise false-alarm rate of the per-bin z test: 0.0027 is "3 sigma" for one bin,
-  // Sidak-corrected over the bins tested.
-  double family_alpha = 0.0027;
-  std::function<void(double)> progress;
-  // Other processes sharing the rays (measure/shards.hpp); nullptr: all traced here.
-  TallySplit* split = nullptr;
-};
-
-DirectionBinning vndf_binning(const VndfOptions& options);
 
 // Bin integrals P_B = int_B f(m) dm of a density over the bins' solid angles: each bin cut into
 // 4 x 4 sub-bins with 8 x 8 Gauss-Legendre points (DirectionBinning::bin_average).
@@ -62,26 +46,6 @@ struct GofResult {
 };
 GofResult histogram_gof(const std::vector<std::uint64_t>& counts, std::uint64_t total,
                         const std::vector<double>& probabilities, double family_alpha);
-
-struct VndfResult {
-  Vec3 v;
-  DirectionBinning binning{1, 1, kPi / 2};
-  std::uint64_t rays = 0;
-  std::uint64_t hits = 0;           // front-face first hits (the normalization)
-  std::uint64_t hits_below = 0;     // of which with a normal below the horizon (no bin)
-  std::vector<std::uint64_t> bin_hits;
-  std::vector<double> front_projected;  // sum_f A_f max(0, v.m_f) per bin
-  double front_projected_total = 0;     // over all facets
-  double window_area_perp = 0;
-  double macro_area = 1;
-  TraceCounters counters;
-  double seconds = 0;
-
-  Estimate dv(int b) const;                // histogram density in bin b
-  double dv_smith_numeric(int b) const;    // Smith with the surface's own facets
-  // Bin probabilities of the Smith-numeric VNDF (sum = mass of the binned normals).
-  std::vector<double> smith_numeric_probabilities() const;
-};
 
 VndfResult measure_vndf(const Tracer& tracer, const Vec3& v, const VndfOptions& options,
                         const FacetTable* table = nullptr);
