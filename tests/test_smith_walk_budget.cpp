@@ -377,7 +377,7 @@ TEST(SmithWalkBudget, ReplicateAlbedosAreTheFullTallysAlbedos) {
 }
 
 TEST(SmithWalkBudget, TallyWithoutCellsHasTheSameAlbedos) {
-  // The pilot's tally (no pixels, no in-plane bins) gets the same albedo slots from the same walks as a full one.
+  // A tally without cells (no pixels, no in-plane bins) gets the same albedo slots from the same walks as a full one.
   const mm::SmithRandomWalk walk =
       mm::SmithRandomWalk(mm::Ndf::beckmann(0.5, 0.5), mm::Material::mirror(), mm::HeightDistribution::Uniform, 1000)
           .with_fast_slope_sampler();

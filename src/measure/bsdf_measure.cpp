@@ -548,8 +548,8 @@ void check_spectral_options(const BsdfOptions& o, const Microsurface& s) {
 }
 
 // The Smith walks with expected escapes, in replicates of Latin-hypercube walks (measure/smith_walk_budget.hpp):
-// a pilot of kWalkPilotPerReplicate walks per replicate sizes the first run, then runs add walks to every
-// replicate (each a hypercube of its own) until the pooled errors meet the target. Every process of a split
+// a pilot of kWalkPilotPerReplicate walks per replicate, then runs that add walks to every replicate (each a
+// hypercube of its own) until the pooled errors meet the target. Every process of a split
 // computes all of them (the same result as one process).
 BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& r, std::uint64_t mstream,
                                const std::function<void(double)>& progress, double share) {
@@ -575,16 +575,16 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
           else reps[q] += rep;
         });
   };
-  std::vector<BsdfTally> pilot(R), reps(R);
-  run(pilot, std::min(kWalkPilotPerReplicate, cap), 0, TallyShape{K, 0, 0}, share, 0.1 * (1.0 - share));
-  BsdfTally albedos = replicate_albedos(pilot);
-  std::uint64_t kept = 0;  // walks per replicate in reps
-  for (int pass = 1; pass <= kWalkPasses; ++pass) {
+  std::vector<BsdfTally> reps(R);
+  std::uint64_t kept = std::min(kWalkPilotPerReplicate, cap);  // walks per replicate in reps
+  run(reps, kept, 0, TallyShape{K, npix, nplane}, share, 0.1 * (1.0 - share));
+  BsdfTally albedos = replicate_albedos(reps);
+  for (int pass = 1;; ++pass) {
     r.model_budget = smith_walk_budget(albedos, r, o.model_error_fraction, cap, pass == 1 ? kWalkPilotMargin : kWalkRerunMargin);
     const std::uint64_t need = std::min(cap, r.model_budget.walks / static_cast<std::uint64_t>(R));
-    if (pass > 1 && (need <= kept || smith_walk_target_met(albedos, r, o.model_error_fraction))) break;
+    if (pass > kWalkPasses || need <= kept || smith_walk_target_met(albedos, r, o.model_error_fraction)) break;
     run(reps, need - kept, mix64(0x9E3779B97F4A7C15ull * static_cast<std::uint64_t>(pass)), TallyShape{K, npix, nplane},
-        share + (0.1 + 0.3 * (pass - 1)) * (1.0 - share), 0.3 * (1.0 - share));
+        share + (0.1 + 0.9 * (pass - 1) / kWalkPasses) * (1.0 - share), 0.9 / kWalkPasses * (1.0 - share));
     kept = need;
     albedos = replicate_albedos(reps);
   }
