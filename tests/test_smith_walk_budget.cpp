@@ -334,17 +334,70 @@ TEST(SmithWalkBudget, WalksFromThePilotRule) {
   replicate(r.measured, 1000, {0.52, 0.11, 0.63, 0, 0, 0});  // se 0.01, 0.005, 0.015
   replicate(pilot, 100, {0.40, 0.20, 0.60, 0, 0, 0});
   replicate(pilot, 100, {0.48, 0.21, 0.69, 0, 0, 0});  // se 0.04, 0.005, 0.045
-  const WalkBudget b = smith_walk_budget(pilot, r, 1.0, 1000000);
+  const WalkBudget b = smith_walk_budget(pilot, r, 1.0, 1000000, 1.0);
   // order_1: (1.0 * 0.04 / 0.01)^2 = 16 -> 1600 walks per replicate; total: (1.0 * 3)^2 = 9 -> 900.
   EXPECT_EQ(b.limiting_side, 0);
   EXPECT_EQ(b.limiting_slot, 0);
   EXPECT_NEAR(static_cast<double>(b.walks), 2.0 * 1600, 2.0);
   // a margin divides the target: (1.25 * 4)^2 = 25 -> 2500
   EXPECT_NEAR(static_cast<double>(smith_walk_budget(pilot, r, 1.0, 1000000, 1.25).walks), 2.0 * 2500, 2.0);
+  // the first run after the pilot (default margin kWalkPilotMargin = 1/sqrt(2)): half the estimate
+  EXPECT_NEAR(static_cast<double>(smith_walk_budget(pilot, r, 1.0, 1000000).walks), 2.0 * 800, 2.0);
   EXPECT_EQ(smith_walk_budget(pilot, r, 1.0, 700).walks, 1400u);  // the cap
   EXPECT_EQ(smith_walk_budget(pilot, r, 100.0, 1000000).walks, 200u);  // at least the pilot
   // A run is kept when every slot's error is at most fraction x the measured: order_1's 0.04 against 0.01.
   EXPECT_FALSE(smith_walk_target_met(pilot, r, 1.0));
   EXPECT_FALSE(smith_walk_target_met(pilot, r, 3.99));
   EXPECT_TRUE(smith_walk_target_met(pilot, r, 4.01));
+}
+
+TEST(SmithWalkBudget, ReplicateAlbedosAreTheFullTallysAlbedos) {
+  // replicate_albedos: the albedo slots of replicates added by add_replicate, without their cells (what the
+  // budget and the target check read), equal bit for bit to those of the full tally.
+  const int K = 3;
+  std::vector<BsdfTally> reps;
+  BsdfTally full(K, 4, 2);
+  for (int q = 0; q < 5; ++q) {
+    BsdfTally rep(K, 4, 2);
+    rep.paths = 100;
+    for (std::size_t k = 0; k < rep.albedo.size(); ++k) rep.albedo[k] = 10.0 + q * (0.3 + k) + 0.01 * q * q;
+    rep.pix[3] = 7.0 * q;
+    full.add_replicate(rep);
+    reps.push_back(rep);
+  }
+  const BsdfTally a = replicate_albedos(reps);
+  EXPECT_EQ(a.replicates, full.replicates);
+  EXPECT_EQ(a.paths, full.paths);
+  EXPECT_EQ(a.albedo, full.albedo);
+  EXPECT_EQ(a.albedo2, full.albedo2);
+  EXPECT_TRUE(a.pix.empty());
+  // Power: one replicate fewer changes the spread.
+  reps.pop_back();
+  EXPECT_NE(replicate_albedos(reps).albedo2, full.albedo2);
+}
+
+TEST(SmithWalkBudget, TallyWithoutCellsHasTheSameAlbedos) {
+  // A tally without cells (no pixels, no in-plane bins) gets the same albedo slots from the same walks as a full one.
+  const mm::SmithRandomWalk walk =
+      mm::SmithRandomWalk(mm::Ndf::beckmann(0.5, 0.5), mm::Material::mirror(), mm::HeightDistribution::Uniform, 1000)
+          .with_fast_slope_sampler();
+  BsdfResult r;
+  r.options.orders = 4;
+  r.map = HemisphereMap(8);
+  r.plane = InPlaneBins(0.0, 8);
+  r.wi = direction_from_angles(rad(40.0), 0.0);
+  const WalkStrata strata = walk_strata(3, 5, 500);
+  const WalkWindow window = walk_window(walk, r.wi, 4, 3, 5);
+  BsdfTally full(4, r.map.size(), r.plane.size()), bare(4, 0, 0);
+  for (std::uint64_t j = 0; j < 500; ++j) {
+    smith_walk_expected_path(walk, r.wi, 3, 5, j, strata, r, full, window);
+    smith_walk_expected_path(walk, r.wi, 3, 5, j, strata, r, bare, window);
+  }
+  EXPECT_EQ(bare.albedo, full.albedo);
+  EXPECT_EQ(bare.albedo2, full.albedo2);
+  EXPECT_EQ(bare.paths, full.paths);
+  EXPECT_GT(full.albedo[full.a_index(0, 1)], 0.0);  // order 2 was reached
+  double cells = 0.0;
+  for (double x : full.pix) cells += x;
+  EXPECT_GT(cells, 0.0);  // the full tally binned the same escapes
 }

@@ -552,9 +552,9 @@ void check_spectral_options(const BsdfOptions& o, const Microsurface& s) {
 }
 
 // The Smith walks with expected escapes, in replicates of Latin-hypercube walks (measure/smith_walk_budget.hpp):
-// a pilot of kWalkPilotPerReplicate walks per replicate, then as many per replicate as the error target
-// needs (a new hypercube over them), checked on that run's errors. Every process of a split computes all of them (the same result as
-// one process).
+// a pilot of kWalkPilotPerReplicate walks per replicate, then runs that add walks to every replicate (each a
+// hypercube of its own) until the pooled errors meet the target. Every process of a split
+// computes all of them (the same result as one process).
 BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& r, std::uint64_t mstream,
                                const std::function<void(double)>& progress, double share) {
   const BsdfOptions& o = r.options;
@@ -562,33 +562,38 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
   const int R = std::max(1, o.replicates);
   const std::uint64_t cap = std::max<std::uint64_t>(1, o.model_walks * kWalkCapFactor / static_cast<std::uint64_t>(R));
   const WalkWindow window = walk_window(walk, r.wi, K, o.seed, mstream);
-  auto run = [&](std::uint64_t m, std::uint64_t salt, double p0, double span) {
+  // m more walks in each replicate of `reps` (tallies of `shape`), from the streams of `salt`.
+  auto run = [&](std::vector<BsdfTally>& reps, std::uint64_t m, std::uint64_t salt, const TallyShape& shape, double p0,
+                 double span) {
     std::vector<WalkStrata> strata(R);
     tbb::parallel_for(0, R, [&](int q) {
       strata[q] = walk_strata(o.seed, ReplicatePlan::stream(mstream ^ salt, q), m);
     });
-    BsdfTally t(K, npix, nplane);
     run_replicate_paths<BsdfTally, BsdfTally>(
-        UnitRange{0, static_cast<std::uint64_t>(R)}, R, m, TallyShape{K, npix, nplane}, progress ? std::function<void(double)>([&](double f) { progress(p0 + span * f); }) : nullptr, 1.0,
+        UnitRange{0, static_cast<std::uint64_t>(R)}, R, m, shape, progress ? std::function<void(double)>([&](double f) { progress(p0 + span * f); }) : nullptr, 1.0,
         [&](int q, std::uint64_t j, BsdfTally& acc, MuellerUnit&) {
           smith_walk_expected_path(walk, r.wi, o.seed, ReplicatePlan::stream(mstream ^ salt, q), j, strata[q], r, acc, window);
         },
-        [&](int, BsdfTally&& rep) { t.add_replicate(rep); });
-    return t;
+        [&](int q, BsdfTally&& rep) {
+          if (reps[q].paths == 0) reps[q] = std::move(rep);
+          else reps[q] += rep;
+        });
   };
-  // The pilot's error of a rare order (a few walks per replicate reach it) is itself rough: the walks are
-  // chosen again from each run's own errors, until a run has enough (at most kWalkPasses runs after the pilot).
-  std::uint64_t m = std::min(kWalkPilotPerReplicate, cap);
-  BsdfTally t = run(m, 0, share, 0.1 * (1.0 - share));
-  for (int pass = 1; pass <= kWalkPasses; ++pass) {
-    r.model_budget = smith_walk_budget(t, r, o.model_error_fraction, cap, pass == 1 ? kWalkPilotMargin : kWalkRerunMargin);
-    std::uint64_t next = r.model_budget.walks / static_cast<std::uint64_t>(R);
-    if (next <= m || smith_walk_target_met(t, r, o.model_error_fraction)) break;
-    next = std::min(next, cap);
-    m = next;
-    t = run(m, mix64(0x9E3779B97F4A7C15ull * static_cast<std::uint64_t>(pass)), share + 0.1 * (1.0 - share),
-            0.9 * (1.0 - share));
+  std::vector<BsdfTally> reps(R);
+  std::uint64_t kept = std::min(kWalkPilotPerReplicate, cap);  // walks per replicate in reps
+  run(reps, kept, 0, TallyShape{K, npix, nplane}, share, 0.1 * (1.0 - share));
+  BsdfTally albedos = replicate_albedos(reps);
+  for (int pass = 1;; ++pass) {
+    r.model_budget = smith_walk_budget(albedos, r, o.model_error_fraction, cap, pass == 1 ? kWalkPilotMargin : kWalkRerunMargin);
+    const std::uint64_t need = std::min(cap, r.model_budget.walks / static_cast<std::uint64_t>(R));
+    if (pass > kWalkPasses || need <= kept || smith_walk_target_met(albedos, r, o.model_error_fraction)) break;
+    run(reps, need - kept, mix64(0x9E3779B97F4A7C15ull * static_cast<std::uint64_t>(pass)), TallyShape{K, npix, nplane},
+        share + (0.1 + 0.9 * (pass - 1) / kWalkPasses) * (1.0 - share), 0.9 / kWalkPasses * (1.0 - share));
+    kept = need;
+    albedos = replicate_albedos(reps);
   }
+  BsdfTally t(K, npix, nplane);
+  for (const BsdfTally& rep : reps) t.add_replicate(rep);
   r.model_budget.walks = t.paths;
   return t;
 }

@@ -68,8 +68,10 @@ void add_forced_walk_escapes(BsdfTally& t, const std::vector<models::WalkEscape>
   p.clear();
   b.clear();
   double both = 0.0;
+  // a tally without cells (the pilot's: albedo slots only) bins no direction
+  const bool pixels = t.pixels > 0, bins = t.plane_bins > 0;
   auto add = [&](int s, int order, double w, const Vec3& d) {
-    const int px = map.pixel_of(d), bin = plane.bin_of(d);
+    const int px = pixels ? map.pixel_of(d) : -1, bin = bins ? plane.bin_of(d) : -1;
     for (int slot : {std::min(order, K) - 1, K}) {
       a.push_back({t.a_index(s, slot), w});
       if (px >= 0) p.push_back({t.p_index(s, slot, px), w});
@@ -90,6 +92,17 @@ void add_forced_walk_escapes(BsdfTally& t, const std::vector<models::WalkEscape>
   add_cells(a, t.albedo, t.albedo2);
   add_cells(p, t.pix, t.pix2);
   add_cells(b, t.plane, t.plane2);
+}
+
+BsdfTally replicate_albedos(const std::vector<BsdfTally>& reps) {
+  BsdfTally t;
+  for (const BsdfTally& rep : reps) {
+    BsdfTally a(rep.orders, 0, 0);
+    a.albedo = rep.albedo;
+    a.paths = rep.paths;
+    t.add_replicate(a);
+  }
+  return t;
 }
 
 WalkStrata walk_strata(std::uint64_t seed, std::uint64_t stream, std::uint64_t n) {

@@ -22,7 +22,8 @@ void add_walk_escapes(BsdfTally& t, const std::vector<models::WalkEscape>& escap
 // Adds one walk with forced continuation (models::SmithRandomWalk::walk_with_forced_continuation) to the
 // tally: its expected escapes of the orders 1 .. K - 1 and its drawn exit of order K or above (`drawn`,
 // nullptr for a lost walk) to their slots, and all of them to the total (a mirror's walk adds exactly 1 there,
-// to rounding: the weights telescope). Per walk one term per cell.
+// to rounding: the weights telescope). Per walk one term per cell. A tally without pixels or in-plane bins
+// (replicate_albedos makes such tallies) gets the albedo slots alone.
 void add_forced_walk_escapes(BsdfTally& t, const std::vector<models::WalkEscape>& escapes,
                              const models::WalkExit* drawn, const HemisphereMap& map, const InPlaneBins& plane);
 
@@ -32,18 +33,26 @@ constexpr double kWalkErrorFraction = 1.0;
 // Slots measured to rounding (standard error below this, e.g. a mirror's total 1) set no target.
 constexpr double kWalkErrorFloor = 1e-9;
 
-// The pilot: kWalkPilotPerReplicate walks in each replicate; at most kWalkCapFactor model_walks walks (the
-// model never costs more walks than requested; the record states the error reached). The walks after the
-// pilot are chosen for the target error itself (kWalkPilotMargin 1: the pilot's error of a rare order, from
-// 32 replicates of few walks, errs both ways, and a run that misses is followed by another); after a run
-// that missed, for the target divided by kWalkRerunMargin, so that the next run rarely misses again.
+// The pilot: kWalkPilotPerReplicate walks in each replicate (the result when their errors meet the target); at
+// most kWalkCapFactor model_walks walks (the model never costs more walks than requested; the record states the
+// error reached). The walks of the pilot and the runs after it are pooled: each run adds
+// walks to every replicate (a Latin hypercube of their own), so a run that misses the target is topped up rather
+// than run again. The pilot's error of a rare order, from 32 replicates of few walks, errs both ways by up to
+// ~2x in walks, so the first run is sized for kWalkPilotMargin^2 = 1/2 of the pilot's estimate (rarely more
+// than needed), and each later run tops the pooled walks up to the pooled errors' estimate for the target
+// divided by kWalkRerunMargin (rarely short again).
 constexpr std::uint64_t kWalkPilotPerReplicate = 64;
 constexpr std::uint64_t kWalkCapFactor = 1;
-constexpr double kWalkPilotMargin = 1.0;
+constexpr double kWalkPilotMargin = 0.7071067811865476;
 constexpr double kWalkRerunMargin = 1.1;
-// Runs after the pilot, each with the walks its predecessor's errors ask for; the first run whose own errors
-// meet the target (smith_walk_target_met) is kept.
-constexpr int kWalkPasses = 3;
+// Runs after the pilot (at most), each topping the pooled walks up to what the pooled errors ask for, until the
+// pooled errors meet the target (smith_walk_target_met). A replicate of a few dozen walks has a rough error of a
+// rare order: small runs may need more top-ups than large ones.
+constexpr int kWalkPasses = 5;
+
+// The albedo slots of per-walk replicate tallies added as BsdfTally::add_replicate adds them (no pixel or in-plane
+// cells): what smith_walk_budget and smith_walk_target_met read, without the cost of the cells.
+BsdfTally replicate_albedos(const std::vector<BsdfTally>& reps);
 
 // The first kLatinDims uniforms of the walks of one replicate form a Latin hypercube over its n walks
 // (each dimension d: walk j draws (perm_d(j) + U) / n): every walk's uniforms are still independent and

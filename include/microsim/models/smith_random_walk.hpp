@@ -282,15 +282,6 @@ class SmithRandomWalk {
   template <class Rng, class EscapeVisitor>
   std::uint64_t walk_with_weight_window(const Vec3& wi, Rng& rng, int forced_orders, double w_low, double w_high,
                                         EscapeVisitor&& at_escape, std::uint64_t* lost = nullptr) const {
-    struct Branch {
-      Vec3 w;       // direction of travel (current frame)
-      double h;     // height (current frame)
-      bool above;   // frame
-      double weight;
-      int order;    // events so far
-      bool resume;  // a split copy: the escape of this leg is tallied; the next height is still to draw
-      double g;     // with resume: the escape probability of this leg
-    };
     Branch pending[kMaxBranches];
     int npending = 0;
     std::uint64_t events = 0;
@@ -319,42 +310,10 @@ class SmithRandomWalk {
               U_next = U;
             }
           }
-          if (forced) {
-            if (!(b.weight > 0.0)) break;
-            if (b.weight < w_low) {  // Russian roulette
-              const bool survives = rng.uniform() * w_low < b.weight;
-              // the roulette's change of the branch's weight, W - (w_low or 0), has mean 0: a correction of the
-              // total (order 0) that keeps a mirror walk's total exactly 1 (its branches' weights all leave, above)
-              if (material_.kind != MaterialKind::Dielectric)
-                at_escape(WalkEscape{0, true, Vec3::UnitZ(), b.weight - (survives ? w_low : 0.0)});
-              if (!survives) break;
-              b.weight = w_low;
-            } else if (b.weight > w_high) {  // splitting: this branch and n - 1 pending copies
-              const int n = static_cast<int>(
-                  std::min<double>({double(kMaxSplit), double(kMaxBranches - npending), std::ceil(b.weight / w_high)}));
-              if (n > 1) {
-                b.weight /= n;
-                Branch copy = b;
-                copy.resume = true;
-                copy.g = g;
-                for (int k = 1; k < n; ++k) pending[npending++] = copy;
-              }
-            }
-          }
+          if (forced && !hold_in_window(b, g, w_low, w_high, pending, npending, rng, at_escape)) break;
         }
         b.resume = false;
-        // --- next intersection height, given no escape
-        double c_next;
-        if (up) {
-          const double U = U_next >= 0.0 ? U_next : g + (1.0 - g) * (1.0 - rng.uniform());  // on [g, 1]
-          c_next = c * std::pow(std::min(U, 1.0), -1.0 / lambda);
-        } else if (b.w.z() < 0.0) {
-          const double U = 1.0 - rng.uniform();  // (0, 1]
-          c_next = c * std::pow(U, 1.0 / (1.0 + lambda));
-        } else {
-          c_next = c;
-        }
-        b.h = heights_.invC1(std::clamp(c_next, 0.0, 1.0));
+        b.h = heights_.invC1(std::clamp(next_c(b.w, c, lambda, g, U_next, rng), 0.0, 1.0));
         if (b.order + 1 > max_order_ || !scatter_at(rng, b.w, b.h, b.above, b.weight, lambda)) {
           if (lost) ++*lost;
           break;
@@ -367,20 +326,79 @@ class SmithRandomWalk {
   }
 
  private:
-  // One scattering event of walk_with_weight_window at height h: a visible normal of the arriving direction
-  // w (leg_lambda: Lambda of the leg, see sample_visible_normal_fast), then the material's choice; w, h, above
-  // and weight updated. False where no visible normal was found.
+  // A branch of walk_with_weight_window.
+  struct Branch {
+    Vec3 w;       // direction of travel (current frame)
+    double h;     // height (current frame)
+    bool above;   // frame
+    double weight;
+    int order;    // events so far
+    bool resume;  // a split copy: the escape of this leg is tallied; the next height is still to draw
+    double g;     // with resume: the escape probability of this leg
+  };
+
+  // The weight window of walk_with_weight_window after a forced event (escape probability g of the leg):
+  // Russian roulette below w_low (its zero-mean change of the total to at_escape as order 0, mirrors and
+  // conductors), splitting above w_high into pending copies. False where the branch ends.
+  template <class Rng, class EscapeVisitor>
+  bool hold_in_window(Branch& b, double g, double w_low, double w_high, Branch* pending, int& npending, Rng& rng,
+                      EscapeVisitor& at_escape) const {
+    if (!(b.weight > 0.0)) return false;
+    if (b.weight < w_low) {  // Russian roulette
+      const bool survives = rng.uniform() * w_low < b.weight;
+      // the roulette's change of the branch's weight, W - (w_low or 0), has mean 0: a correction of the
+      // total (order 0) that keeps a mirror walk's total exactly 1 (its branches' weights all leave, above)
+      if (material_.kind != MaterialKind::Dielectric)
+        at_escape(WalkEscape{0, true, Vec3::UnitZ(), b.weight - (survives ? w_low : 0.0)});
+      if (!survives) return false;
+      b.weight = w_low;
+    } else if (b.weight > w_high) {  // splitting: this branch and n - 1 pending copies
+      const int n = static_cast<int>(
+          std::min<double>({double(kMaxSplit), double(kMaxBranches - npending), std::ceil(b.weight / w_high)}));
+      if (n > 1) {
+        b.weight /= n;
+        Branch copy = b;
+        copy.resume = true;
+        copy.g = g;
+        for (int k = 1; k < n; ++k) pending[npending++] = copy;
+      }
+    }
+    return true;
+  }
+
+  // C1 of the next intersection of a leg along w from C1 = c, given no escape. Upward: C1(h') = c U^(-1/Lambda)
+  // with U uniform on (g, 1] (a drawn escape's refused uniform U_next >= 0, else a new one); downward:
+  // C1(h') = c U^(1/(1 + Lambda(-w))), U uniform on (0, 1]; horizontal: Lambda = inf, it hits where it is.
   template <class Rng>
-  bool scatter_at(Rng& rng, Vec3& w, double& h, bool& above, double& weight, double leg_lambda) const {
-    const Vec3 v = -w;
-    Vec3 m;
-    double vm = 0.0;
+  double next_c(const Vec3& w, double c, double lambda, double g, double U_next, Rng& rng) const {
+    if (w.z() > 0.0) {
+      const double U = U_next >= 0.0 ? U_next : g + (1.0 - g) * (1.0 - rng.uniform());  // on [g, 1]
+      return c * std::pow(std::min(U, 1.0), -1.0 / lambda);
+    }
+    if (w.z() < 0.0) return c * std::pow(1.0 - rng.uniform(), 1.0 / (1.0 + lambda));
+    return c;
+  }
+
+  // A visible normal m of the view v (the direction the ray came from, [Heitz14, eq. 13]) with v.m > 0:
+  // v.m > 0 by construction, a rounding-level v.m <= 0 (grazing visible normal) is redrawn (at most 16 draws).
+  // leg_lambda: see sample_visible_normal_fast. False where none was found.
+  template <class Rng>
+  bool draw_visible_normal(Rng& rng, const Vec3& v, double leg_lambda, Vec3& m, double& vm) const {
+    vm = 0.0;
     for (int tries = 0; tries < 16 && !(vm > 0.0); ++tries) {
       const double u1 = rng.uniform(), u2 = rng.uniform();
       m = fast_slopes_ ? sample_visible_normal_fast(ndf_, v, u1, u2, leg_lambda) : sample_visible_normal_any(ndf_, v, u1, u2);
       vm = v.dot(m);
     }
-    if (!(vm > 0.0)) return false;
+    return vm > 0.0;
+  }
+
+  // The material's choice at a facet m (v.m = vm > 0) for the ray that came from v: mirror: reflect
+  // [GeomBSDF24, eq. 13a]; conductor: reflect, weight *= F; dielectric: reflect with probability F, else
+  // refract [GeomBSDF24, eq. 15a] and continue in the other medium's mirrored frame (h -> -h).
+  template <class Rng>
+  void scatter(Rng& rng, const Vec3& v, const Vec3& m, double vm, Vec3& w, double& h, bool& above,
+               double& weight) const {
     switch (material_.kind) {
       case MaterialKind::Mirror:
         w = reflect(v, m);
@@ -395,8 +413,8 @@ class SmithRandomWalk {
           w = reflect(v, m);
         } else {
           Vec3 t;
-          const double n = above ? material_.eta : 1.0 / material_.eta;
-          if (!refract(v, m, 1.0 / n, &t)) {
+          const double n = above ? material_.eta : 1.0 / material_.eta;  // far / near
+          if (!refract(v, m, 1.0 / n, &t)) {  // cannot happen when F < 1 (TIR gives F = 1)
             w = reflect(v, m);
           } else {
             w = mirror_z(t).normalized();
@@ -408,6 +426,18 @@ class SmithRandomWalk {
       }
     }
     w.normalize();
+  }
+
+  // One scattering event of walk_with_weight_window at height h: a visible normal of the arriving direction
+  // w (leg_lambda: Lambda of the leg, see sample_visible_normal_fast), then the material's choice; w, h, above
+  // and weight updated. False where no visible normal was found.
+  template <class Rng>
+  bool scatter_at(Rng& rng, Vec3& w, double& h, bool& above, double& weight, double leg_lambda) const {
+    const Vec3 v = -w;
+    Vec3 m;
+    double vm;
+    if (!draw_visible_normal(rng, v, leg_lambda, m, vm)) return false;
+    scatter(rng, v, m, vm, w, h, above, weight);
     return true;
   }
 
@@ -419,111 +449,56 @@ class SmithRandomWalk {
     Vec3 w = -wi;       // propagation direction in the current frame
     double h = detail::kInf;
     bool above = true;  // current frame: the medium above (true) or the mirrored medium below
+    // the exit after `order` events: along w (the weight as it is), or lost
+    auto leave = [&](int order, bool lost) -> WalkExit {
+      out.lost = lost;
+      out.order = order;
+      if (!lost) {
+        out.reflected = above;
+        out.direction = above ? w : mirror_z(w);
+      }
+      return out;
+    };
     for (int order = 0;; ++order) {
       // --- next intersection height (or escape)
       const double c = (h == detail::kInf) ? 1.0 : heights_.C1(h);
-      double c_next;
+      double c_next = c;  // horizontal: Lambda = inf, hits where it is
       if (w.z() > 0.0) {
         const double lambda = ndf_.Lambda(w);
         const double g1 = (lambda == 0.0) ? 1.0 : std::pow(c, lambda);
-        if (order <= expected_orders) {
-          // expected escape W g1 tallied; the escape itself still drawn (continuing with W, probability 1 - g1)
-          at_escape(WalkEscape{order, above, above ? w : mirror_z(w), out.weight * g1});
-          if (forced) {
-            // continue with the weight of no escape; U uniform in (g1, 1]
-            const double U = g1 + (1.0 - g1) * (1.0 - rng.uniform());
-            out.weight *= 1.0 - g1;
-            if (!(out.weight > 0.0) || !(U > 0.0)) {  // g1 = 1: nothing continues
-              out.weight = 0.0;
-              out.reflected = above;
-              out.order = order;
-              out.direction = above ? w : mirror_z(w);
-              return out;
-            }
-            c_next = c * std::pow(std::min(U, 1.0), -1.0 / lambda);
-          } else {
-            const double U = rng.uniform();
-            if (U < g1) {
-              out.reflected = above;
-              out.order = order;
-              out.direction = above ? w : mirror_z(w);
-              return out;
-            }
-            c_next = c * std::pow(U, -1.0 / lambda);
+        // expected escape W g1 tallied; the escape itself still drawn (continuing with W, probability 1 - g1)
+        if (order <= expected_orders) at_escape(WalkEscape{order, above, above ? w : mirror_z(w), out.weight * g1});
+        if (order <= expected_orders && forced) {
+          // continue with the weight of no escape; U uniform in (g1, 1]
+          const double U = g1 + (1.0 - g1) * (1.0 - rng.uniform());
+          out.weight *= 1.0 - g1;
+          if (!(out.weight > 0.0) || !(U > 0.0)) {  // g1 = 1: nothing continues
+            out.weight = 0.0;
+            return leave(order, false);
           }
+          c_next = c * std::pow(std::min(U, 1.0), -1.0 / lambda);
         } else {
           const double U = rng.uniform();
-          if (U < g1) {  // escapes
-            out.reflected = above;
-            out.order = order;
-            out.direction = above ? w : mirror_z(w);
-            return out;
-          }
+          if (U < g1) return leave(order, false);  // escapes
           c_next = c * std::pow(U, -1.0 / lambda);
         }
       } else if (w.z() < 0.0) {
         const double lambda = ndf_.Lambda(-w);
         const double U = 1.0 - rng.uniform();  // (0, 1]
         c_next = c * std::pow(U, 1.0 / (1.0 + lambda));
-      } else {
-        c_next = c;  // horizontal: Lambda = inf, hits where it is
       }
-      c_next = std::clamp(c_next, 0.0, 1.0);
-      h = heights_.invC1(c_next);
-      if (order + 1 > max_order_) {
-        out.lost = true;
-        out.order = order;
-        return out;
-      }
+      h = heights_.invC1(std::clamp(c_next, 0.0, 1.0));
+      if (order + 1 > max_order_) return leave(order, true);
       // --- facet normal: visible normals of the direction the ray came from [Heitz14, eq. 13]
-      const Vec3 v = -w;  // toward where the ray came from
+      const Vec3 v = -w;
       Vec3 m;
-      double vm = 0.0;
-      // v.m > 0 by construction; a rounding-level v.m <= 0 (grazing visible normal) is redrawn.
-      for (int tries = 0; tries < 16 && !(vm > 0.0); ++tries) {
-        const double u1 = rng.uniform(), u2 = rng.uniform();
-        m = fast_slopes_ ? sample_visible_normal_fast(ndf_, v, u1, u2) : sample_visible_normal_any(ndf_, v, u1, u2);
-        vm = v.dot(m);
-      }
-      if (!(vm > 0.0)) {
-        out.lost = true;
-        out.order = order;
-        return out;
-      }
+      double vm;
+      if (!draw_visible_normal(rng, v, std::numeric_limits<double>::quiet_NaN(), m, vm)) return leave(order, true);
       at_vertex(WalkVertex{v, h, above, out.weight});
-      // --- scattering
-      switch (material_.kind) {
-        case MaterialKind::Mirror:
-          w = reflect(v, m);  // [GeomBSDF24, eq. 13a]
-          break;
-        case MaterialKind::Conductor:
-          out.weight *= material_.reflectance(vm, true);
-          w = reflect(v, m);
-          break;
-        case MaterialKind::Dielectric: {
-          const double F = material_.reflectance(vm, above);
-          if (rng.uniform() < F) {
-            w = reflect(v, m);
-          } else {
-            Vec3 t;
-            const double n = above ? material_.eta : 1.0 / material_.eta;  // far / near
-            if (!refract(v, m, 1.0 / n, &t)) {  // cannot happen when F < 1 (TIR gives F = 1)
-              w = reflect(v, m);
-            } else {
-              // [GeomBSDF24, eq. 15a], then continue in the other medium's mirrored frame
-              w = mirror_z(t).normalized();
-              h = -h;
-              above = !above;
-            }
-          }
-          break;
-        }
-      }
-      w.normalize();
+      scatter(rng, v, m, vm, w, h, above, out.weight);
     }
   }
 
- private:
   Ndf ndf_;
   Material material_;
   SmithHeights heights_;
