@@ -1,10 +1,14 @@
 // Every tally field survives a split run: for every estimator (G1 with both of its estimators,
-// G2, VNDF, BSDF) on every kind of scene (a periodic tile, a non-periodic heightmap window, a
-// finite object, a V-cavity), the record of `--shard 1/2` + `--shard 2/2` + `merge`, and of
+// G2, VNDF, BSDF; the BSDF also spectral, and spectral and polarized) on every kind of scene (a
+// periodic tile, a non-periodic heightmap window, a finite object, a V-cavity; spectral and
+// polarized runs refuse V-cavities), the record of `--shard 1/2` + `--shard 2/2` + `merge`, and of
 // `mpirun -n 2` when built with MPI, equals the single run's bit for bit apart from timings, and
 // every record carries every trace counter. The counters' names are listed here on their own,
 // not taken from the declaration (TraceCounters::for_each_field), so that a field dropped from
-// the declaration fails here.
+// the declaration fails here. Spectral and polarized records are compared whole (every
+// wavelength's albedo, every Mueller matrix, degree of polarization and per-bin f), after a
+// check that those fields hold data: a sum dropped from its declaration (SpectralTally,
+// MuellerUnit) arrives as zeros after the split and fails the comparison.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -59,8 +63,44 @@ std::string command(const std::string& estimator, const std::string& surface) {
   if (estimator == "g2")
     return "measure g2 " + surface + " --theta-o 30,85 --theta-i 80 --phi-i 180 --rays 4000 --seed 3";
   if (estimator == "vndf") return "measure vndf " + surface + " --theta 30,88 --rays 20001 --sampler-samples 0";
-  return "measure bsdf " + surface + " --material conductor --eta 0.2 --k 3 --theta-i 80 --rays 4000 " +
-         "--resolution 8 --seed 3";
+  const std::string bsdf = "measure bsdf " + surface + " --theta-i 80 --rays 4000 --resolution 8 --seed 3";
+  if (estimator == "bsdf_spectral") return bsdf + " --material conductor --metal Au --wavelengths 450,550,650";
+  if (estimator == "bsdf_polarized")
+    return bsdf + " --material conductor --metal Au --wavelengths 450,550,650 --polarized";
+  return bsdf + " --material conductor --eta 0.2 --k 3";
+}
+
+// The numbers of a JSON value (nested arrays and objects), in order.
+void numbers_of(const json& j, std::vector<double>& out) {
+  if (j.is_number()) out.push_back(j.get<double>());
+  else if (j.is_array() || j.is_object())
+    for (const auto& e : j) numbers_of(e, out);
+}
+bool any_nonzero(const json& j) {
+  std::vector<double> v;
+  numbers_of(j, v);
+  for (double x : v)
+    if (x != 0.0) return true;
+  return false;
+}
+
+// A spectral run's per-wavelength albedo and a polarized run's Mueller fields hold data for every
+// wavelength (the comparison of records that were all zeros there would prove nothing).
+void expect_spectral_and_mueller_data(const json& rec, const std::string& estimator, const std::string& cmd) {
+  if (estimator != "bsdf_spectral" && estimator != "bsdf_polarized") return;
+  const json& total = rec.at("spectral").at("albedo").at("reflected").at("total");
+  ASSERT_EQ(total.size(), 3u) << cmd;
+  for (const json& a : total) EXPECT_GT(a.get<double>(), 0.0) << cmd;
+  EXPECT_NE(total[0], total[2]) << cmd << ": gold's albedo depends on the wavelength";
+  if (estimator != "bsdf_polarized") return;
+  const json& p = rec.at("polarization");
+  for (const char* part : {"mueller", "mueller_stderr", "resolved_degree_of_polarization", "degree_of_polarization"})
+    for (std::size_t l = 0; l < 3; ++l)
+      EXPECT_TRUE(any_nonzero(p.at("reflected").at("total").at(l).at(part))) << cmd << ": " << part << " " << l;
+  for (std::size_t l = 0; l < 3; ++l) {
+    EXPECT_TRUE(any_nonzero(p.at("bins").at("f").at(l))) << cmd << ": bins, wavelength " << l;
+    EXPECT_TRUE(any_nonzero(p.at("in_plane").at("total").at("f").at(l))) << cmd << ": in_plane, wavelength " << l;
+  }
 }
 
 class TallyFields : public ::testing::TestWithParam<Case> {
@@ -122,7 +162,8 @@ TEST_P(TallyFields, ShardsMergedAndMpiRanksEqualOneRunWithEveryCounter) {
     below += tc.value("lost_below", 0ull);
   }
   const std::string scene = c.scene, estimator = c.estimator;
-  if (scene == "window" && estimator != "bsdf") {
+  const bool bsdf = estimator.rfind("bsdf", 0) == 0;
+  if (scene == "window" && !bsdf) {
     EXPECT_GT(side_exits, 0u) << cmd;
     if (estimator == "g1" || estimator == "vndf") {
       EXPECT_GT(side_entries, 0u) << cmd;
@@ -135,6 +176,7 @@ TEST_P(TallyFields, ShardsMergedAndMpiRanksEqualOneRunWithEveryCounter) {
     EXPECT_GT(below, 0u) << cmd;  // rays beside the object
   }
 
+  expect_spectral_and_mueller_data(single, estimator, cmd);
   const json a = record_without_timings(single), b = record_without_timings(read_record(merged));
   EXPECT_TRUE(a == b) << cmd << "\nmerged shards differ from one run: " << differences(a, b);
 
@@ -154,6 +196,8 @@ std::vector<Case> all_cases() {
   std::vector<Case> cases;
   for (const char* e : {"g1", "g2", "vndf", "bsdf"})
     for (const char* s : {"tile", "window", "boxes", "vcavity"}) cases.push_back({e, s});
+  for (const char* e : {"bsdf_spectral", "bsdf_polarized"})
+    for (const char* s : {"tile", "window", "boxes"}) cases.push_back({e, s});
   return cases;
 }
 

@@ -12,6 +12,7 @@
 #include "microsim/measure/bsdf_walk.hpp"
 #include "microsim/measure/replicates.hpp"
 #include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/tally_fields.hpp"
 
 namespace microsim {
 
@@ -211,11 +212,7 @@ std::vector<NamedStokes> polarization_inputs() {
 
 MuellerUnit& MuellerUnit::operator+=(const MuellerUnit& o) {
   if (sums.empty()) return *this = o;
-  for (std::size_t i = 0; i < sums.size(); ++i) sums[i] += o.sums[i];
-  for (std::size_t i = 0; i < map.size(); ++i) map[i] += o.map[i];
-  for (std::size_t i = 0; i < bins.size(); ++i) bins[i] += o.bins[i];
-  for (std::size_t i = 0; i < plane.size(); ++i) plane[i] += o.plane[i];
-  paths += o.paths;
+  add_fields(*this, o);
   return *this;
 }
 
