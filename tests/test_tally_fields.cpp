@@ -20,6 +20,9 @@
 
 #include "cli_helpers.hpp"
 #include "record_helpers.hpp"
+#include "microsim/measure/polarized_walk.hpp"
+#include "microsim/measure/shards.hpp"
+#include "microsim/measure/spectral_tally.hpp"
 #include "microsim/tally_fields.hpp"
 #include "microsim/trace/tracer.hpp"
 
@@ -225,6 +228,90 @@ TEST(TallyFieldsDeclaration, TraceCountersSumPackAndRecordEveryField) {
   for (const std::string& k : kCounters) EXPECT_TRUE(j.contains(k)) << k;
   EXPECT_EQ(j["side_entries"], 2 * kCounters.size());
   EXPECT_EQ(j["rays"], 2u);
+}
+
+// The sums of a spectral replicate and a replicate's Mueller sums cross a split as rows of their
+// declared fields (FieldRows): a replicate put into its row and read back keeps every member
+// (listed here by hand, not taken from the declaration), and operator+= adds every member, so a
+// member missing from SpectralTally::for_each_field or MuellerUnit::for_each_field fails here.
+TEST(TallyFieldsDeclaration, SpectralRowsAndSumsCarryEveryMember) {
+  using microsim::SpectralTally;
+  SpectralTally s(3, 2, 4, 5);
+  double x = 1;
+  for (std::vector<double>* v : {&s.albedo, &s.pix, &s.plane})
+    for (double& e : *v) e = x++;
+  s.paths = 11;
+  s.lost = 12;
+  s.unterminated = 13;
+  s.events = 14;
+  s.counters.rays = 15;
+  s.counters.side_entries = 16;
+  microsim::ShardRecorder whole(1, 1);  // one process: the exchange leaves the rows as they are
+  microsim::FieldRows<SpectralTally> rows("bsdf_spectral", 2, {0, 2}, SpectralTally(3, 2, 4, 5));
+  rows.put(1, s);
+  rows.exchange(whole);
+  SpectralTally back(3, 2, 4, 5);
+  rows.get(1, back);
+  EXPECT_EQ(back.albedo, s.albedo);
+  EXPECT_EQ(back.pix, s.pix);
+  EXPECT_EQ(back.plane, s.plane);
+  EXPECT_EQ(back.paths, 11u);
+  EXPECT_EQ(back.lost, 12u);
+  EXPECT_EQ(back.unterminated, 13u);
+  EXPECT_EQ(back.events, 14u);
+  EXPECT_EQ(back.counters.rays, 15u);
+  EXPECT_EQ(back.counters.side_entries, 16u);
+  rows.get(0, back);  // a row nobody put: zeros
+  EXPECT_EQ(back.paths, 0u);
+  EXPECT_EQ(back.pix, std::vector<double>(s.pix.size(), 0.0));
+  SpectralTally twice(3, 2, 4, 5);
+  twice += s;
+  twice += s;
+  for (std::size_t i = 0; i < s.pix.size(); ++i) EXPECT_EQ(twice.pix[i], 2 * s.pix[i]);
+  EXPECT_EQ(twice.albedo[5], 2 * s.albedo[5]);
+  EXPECT_EQ(twice.plane.back(), 2 * s.plane.back());
+  EXPECT_EQ(twice.events, 28u);
+  EXPECT_EQ(twice.counters.side_entries, 32u);
+  // A replicate of another shape, or outside this process's share, is a programming error.
+  EXPECT_THROW(rows.put(1, SpectralTally(2, 2, 4, 5)), std::logic_error);
+  microsim::FieldRows<SpectralTally> half("bsdf_spectral", 2, {0, 1}, SpectralTally(3, 2, 4, 5));
+  EXPECT_THROW(half.put(1, s), std::logic_error);
+}
+
+TEST(TallyFieldsDeclaration, MuellerRowsAndSumsCarryEveryMember) {
+  using microsim::MuellerUnit;
+  const auto shaped = [] {
+    MuellerUnit u;
+    u.sums.assign(2 * 16, 0.0);
+    u.map.assign(2 * 4 * 16, 0.0);
+    u.bins.assign(3 * 16, 0.0);
+    u.plane.assign(2 * 5 * 16, 0.0);
+    return u;
+  };
+  MuellerUnit m = shaped();
+  double x = 1;
+  for (std::vector<double>* v : {&m.sums, &m.map, &m.bins, &m.plane})
+    for (double& e : *v) e = x++;
+  m.paths = 7;
+  microsim::ShardRecorder whole(1, 1);
+  microsim::FieldRows<MuellerUnit> rows("bsdf_mueller", 1, {0, 1}, shaped());
+  rows.put(0, m);
+  rows.exchange(whole);
+  MuellerUnit back = shaped();
+  rows.get(0, back);
+  EXPECT_EQ(back.sums, m.sums);
+  EXPECT_EQ(back.map, m.map);
+  EXPECT_EQ(back.bins, m.bins);
+  EXPECT_EQ(back.plane, m.plane);
+  EXPECT_EQ(back.paths, 7u);
+  MuellerUnit twice = shaped();
+  twice += m;
+  twice += m;
+  EXPECT_EQ(twice.sums[3], 2 * m.sums[3]);
+  EXPECT_EQ(twice.map[9], 2 * m.map[9]);
+  EXPECT_EQ(twice.bins[20], 2 * m.bins[20]);
+  EXPECT_EQ(twice.plane.back(), 2 * m.plane.back());
+  EXPECT_EQ(twice.paths, 14u);
 }
 
 }  // namespace
