@@ -6,7 +6,8 @@
 // every record carries every trace counter. The counters' names are listed here on their own,
 // not taken from the declaration (TraceCounters::for_each_field), so that a field dropped from
 // the declaration fails here. Spectral and polarized records are compared whole (every
-// wavelength's albedo, every Mueller matrix, degree of polarization and per-bin f), after a
+// wavelength's albedo, every Mueller matrix, degree of polarization and per-bin f; a spectral
+// run on the tile also its .bsdf table, made from every wavelength's hemisphere maps), after a
 // check that those fields hold data: a sum dropped from its declaration (SpectralTally,
 // MuellerUnit) arrives as zeros after the split and fails the comparison.
 #include <gtest/gtest.h>
@@ -73,6 +74,15 @@ std::string command(const std::string& estimator, const std::string& surface) {
   return bsdf + " --material conductor --eta 0.2 --k 3";
 }
 
+// What a case writes: a spectral run on the tile writes the renderer table (.bsdf, from the f of
+// every wavelength, of which the record holds the first wavelength's) and its record beside it
+// (.json); the other cases write the record alone (a polarized record holds every Mueller sum).
+std::string output_extension(const std::string& estimator, const std::string& scene) {
+  return estimator == "bsdf_spectral" && scene == "tile" ? "bsdf" : "json";
+}
+// The record of an output (OUT.bsdf: OUT.json beside it).
+std::string record_of(const std::string& output) { return output.substr(0, output.rfind('.')) + ".json"; }
+
 // The numbers of a JSON value (nested arrays and objects), in order.
 void numbers_of(const json& j, std::vector<double>& out) {
   if (j.is_number()) out.push_back(j.get<double>());
@@ -132,8 +142,9 @@ TEST_P(TallyFields, ShardsMergedAndMpiRanksEqualOneRunWithEveryCounter) {
   const Case c = GetParam();
   const std::string name = std::string(c.estimator) + "_" + c.scene;
   const std::string cmd = command(c.estimator, surface(c.scene));
-  const std::string one = tmp(name + "_one.json"), part = tmp(name + "_part.json"),
-                    merged = tmp(name + "_merged.json");
+  const std::string ext = output_extension(c.estimator, c.scene);
+  const std::string one = tmp(name + "_one." + ext), part = tmp(name + "_part." + ext),
+                    merged = tmp(name + "_merged." + ext);
   Result r = run_microsim(cmd + " --threads 1 -q -o " + one);
   ASSERT_EQ(r.code, 0) << cmd << "\n" << r.err;
   for (int k = 1; k <= 2; ++k) {
@@ -143,7 +154,7 @@ TEST_P(TallyFields, ShardsMergedAndMpiRanksEqualOneRunWithEveryCounter) {
   r = run_microsim("merge " + part + ".shard-1-of-2.json " + part + ".shard-2-of-2.json --threads 1 -q -o " +
                    merged);
   ASSERT_EQ(r.code, 0) << r.err;
-  const json single = read_record(one);
+  const json single = read_record(record_of(one));
 
   // Every record holds every counter, under its name.
   std::vector<json> counters;
@@ -180,18 +191,20 @@ TEST_P(TallyFields, ShardsMergedAndMpiRanksEqualOneRunWithEveryCounter) {
   }
 
   expect_spectral_and_mueller_data(single, estimator, cmd);
-  const json a = record_without_timings(single), b = record_without_timings(read_record(merged));
+  const json a = record_without_timings(single), b = record_without_timings(read_record(record_of(merged)));
   EXPECT_TRUE(a == b) << cmd << "\nmerged shards differ from one run: " << differences(a, b);
+  if (ext != "json") EXPECT_TRUE(slurp(one) == slurp(merged)) << cmd << "\nmerged shards' ." << ext << " differs";
 
 #ifdef MICROSIM_MPIEXEC
-  const std::string two = tmp(name + "_mpi.json");
+  const std::string two = tmp(name + "_mpi." + ext);
   r = run_microsim(cmd + " --threads 1 -q -o " + two, std::string(MICROSIM_MPIEXEC) +
                                                           " -n 2 --allow-run-as-root --oversubscribe --bind-to none");
   ASSERT_EQ(r.code, 0) << cmd << "\n" << r.err;
-  const json ranks = read_record(two);
+  const json ranks = read_record(record_of(two));
   EXPECT_EQ(ranks.value("ranks", 0), 2) << cmd;
   const json m = record_without_timings(ranks);
   EXPECT_TRUE(a == m) << cmd << "\nmpirun -n 2 differs from one run: " << differences(a, m);
+  if (ext != "json") EXPECT_TRUE(slurp(one) == slurp(two)) << cmd << "\nmpirun -n 2's ." << ext << " differs";
 #endif
 }
 
