@@ -349,13 +349,8 @@ TEST(SpectralBsdf, RglSpectraAreEachWavelengthsTable) {
   EXPECT_GT(r, 1.3 * b);
 }
 
-TEST(IndexFile, SpectralRunsRefuseShardsAndVcavityEnsembles) {
-  const std::string flat = temp_path("spectral", "flat_shard.exr");
-  ASSERT_EQ(run_microsim("--quiet generate flat --resolution 8 -o " + flat).code, 0);
-  const Result shard = run_microsim("--quiet --shard 1/2 measure bsdf " + flat + " --material conductor --metal Au "
-                                    "--theta-i 0 --rays 100 -o " + temp_path("spectral", "shard.json"));
-  EXPECT_EQ(shard.code, 2);
-  EXPECT_NE(shard.err.find("not split over shards"), std::string::npos) << shard.err;
+// (Spectral runs split over shards and MPI ranks: test_tally_fields.cpp.)
+TEST(IndexFile, SpectralRunsRefuseVcavityEnsembles) {
   const std::string vc = temp_path("spectral", "vc.ply");
   ASSERT_EQ(run_microsim("--quiet generate vcavity --config " + std::string(MICROSIM_SOURCE_DIR) +
                          "/surfaces/vcavity.toml -o " + vc).code, 0);

@@ -8,7 +8,8 @@
 //
 // and everything that must touch every field is derived from that list here: the sum of two
 // tallies, their size and order as values exchanged between processes (shards, MPI ranks:
-// measure/shards.hpp), and their fields in a record. A field added to the declaration is then
+// measure/shards.hpp; FieldRows there makes one row per unit of a declared tally: the spectral
+// BSDF's SpectralTally, the polarized BSDF's MuellerUnit), and their fields in a record. A field added to the declaration is then
 // summed, exchanged and recorded everywhere at once; one missing from it is missing everywhere
 // (and visibly so in the record), never silently dropped by one hand-written copy.
 //

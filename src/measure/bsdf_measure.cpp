@@ -451,6 +451,68 @@ BsdfTally run_paths(std::uint64_t n, int K, int npix, int nplane,
   return total;
 }
 
+// Replicate tallies handed to `deliver` in replicate order: at once (one process), or, with a
+// split, kept as rows of their declared fields (FieldRows, measure/shards.hpp) until exchange()
+// brings the other processes' rows, and then all delivered in order, as in one process.
+template <class T>
+class ReplicatesInOrder {
+ public:
+  using Deliver = std::function<void(int, const T&)>;
+  ReplicatesInOrder(const char* kind, TallySplit* split, UnitRange reps, int replicates, const T& shape,
+                    Deliver deliver)
+      : split_(split), deliver_(std::move(deliver)) {
+    if (!split) return;
+    rows_.emplace(kind, static_cast<std::uint64_t>(replicates), reps, shape);
+    scratch_ = shape;
+  }
+  void add(int q, const T& rep) {
+    if (rows_) rows_->put(static_cast<std::uint64_t>(q), rep);
+    else deliver_(q, rep);
+  }
+  // After this process's replicates (a split): every replicate, in order.
+  void exchange() {
+    if (!rows_) return;
+    rows_->exchange(*split_);
+    for (std::uint64_t q = 0; q < rows_->units(); ++q) {
+      rows_->get(q, scratch_);
+      deliver_(static_cast<int>(q), scratch_);
+    }
+  }
+
+ private:
+  TallySplit* split_;
+  Deliver deliver_;
+  std::optional<FieldRows<T>> rows_;
+  T scratch_;
+};
+
+// Where the walk's Mueller unit sums go (polarized runs): into the run's PolarizedSums unit by
+// unit (one process); with a split, summed per replicate (from zero, in unit order) and kept
+// until every process's replicates are in (ReplicatesInOrder). A replicate's sum in
+// PolarizedSums starts at zero and 0 + S is S: the same sums bit for bit.
+class ReplicateMuellerSums {
+ public:
+  ReplicateMuellerSums(PolarizedSums& sums, TallySplit* split, UnitRange reps, int replicates)
+      : sums_(sums), split_(split != nullptr),
+        replicates_("bsdf_mueller", split, reps, replicates, sums.make_unit(),
+                    [&sums](int q, const MuellerUnit& u) { sums.add_unit(q, u); }) {}
+  MuellerUnit make_unit() const { return sums_.make_unit(); }
+  // Unit g of the `groups` units of replicate q, in unit order.
+  void add_unit(int q, std::uint64_t g, std::uint64_t groups, const MuellerUnit& unit) {
+    if (!split_) return sums_.add_unit(q, unit);
+    if (g == 0) replicate_ = sums_.make_unit();
+    replicate_ += unit;
+    if (g + 1 == groups) replicates_.add(q, replicate_);
+  }
+  void exchange() { replicates_.exchange(); }
+
+ private:
+  PolarizedSums& sums_;
+  bool split_;
+  ReplicatesInOrder<MuellerUnit> replicates_;
+  MuellerUnit replicate_;  // the replicate being summed (a split)
+};
+
 // A unit's tallies: the path sums (Unit) and, in a polarized run, the Mueller sums of the same
 // paths (empty otherwise).
 template <class Unit>
@@ -472,7 +534,7 @@ struct WalkUnit {
 template <class Unit, class Rep, class Body, class Done>
 void run_replicate_paths(UnitRange reps, int replicates, std::uint64_t n, const TallyShape& shape,
                          const std::function<void(double)>& progress, double progress_span, Body&& body,
-                         Done&& done, PolarizedSums* polarized = nullptr) {
+                         Done&& done, ReplicateMuellerSums* polarized = nullptr) {
   const UnitPlan plan = path_plan(replicates, n);
   std::optional<Rep> rep;  // the replicate being summed
   run_units<WalkUnit<Unit>>(
@@ -487,7 +549,7 @@ void run_replicate_paths(UnitRange reps, int replicates, std::uint64_t n, const 
           if (g == 0) rep.emplace(make_tally<Rep>(shape));
           *rep += part.sums;
         }
-        if (polarized) polarized->add_unit(q, part.mueller);
+        if (polarized) polarized->add_unit(q, g, plan.groups(), part.mueller);
         if (g + 1 == plan.groups()) done(q, std::move(*rep));
       },
       plan.units_of(reps), path_passes(shape),
@@ -531,7 +593,7 @@ void exchange_paths(TallySplit& split, const char* kind, UnitRange share, bool s
 }
 
 // A spectral run: a conductor index per wavelength, increasing wavelengths, the first index the
-// material's; periodic tiles and finite objects in one process.
+// material's; periodic tiles and finite objects (V-cavity ensembles: one index).
 void check_spectral_options(const BsdfOptions& o, const Microsurface& s) {
   if (o.spectral.empty() && o.wavelengths_nm.empty()) return;
   if (o.spectral.size() != o.wavelengths_nm.size())
@@ -547,7 +609,6 @@ void check_spectral_options(const BsdfOptions& o, const Microsurface& s) {
   if (!(o.material.kind == models::MaterialKind::Conductor && o.material.eta == o.spectral[0].eta &&
         o.material.k == o.spectral[0].k))
     throw std::invalid_argument("BsdfOptions: the material must be the first wavelength's conductor");
-  if (o.split) throw ParameterError("{wavelengths}: spectral runs are not split over shards or MPI ranks");
   if (is_vcavity(s)) throw ParameterError("{wavelengths}: V-cavity ensembles are measured at one index");
 }
 
@@ -600,7 +661,6 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
 
 void check_polarized_options(const BsdfOptions& o, const Microsurface& s) {
   if (!o.polarized) return;
-  if (o.split) throw ParameterError("{polarized}: polarized runs are not split over shards or MPI ranks");
   if (is_vcavity(s)) throw ParameterError("{polarized}: V-cavity ensembles are not walked with Mueller matrices");
 }
 
@@ -682,13 +742,17 @@ void walk_surface(const SurfaceWalk& w, BsdfResult& r, PolarizedSums* polarized,
   r.measured = BsdfTally(K, npix, nplane);
   const UnitRange reps = share_of(o.split, static_cast<std::uint64_t>(w.plan.replicates));
   // With a split, the replicates of this process are kept until the others' arrive; the
-  // replicates then enter add_replicate in order, as in one process.
-  std::vector<BsdfTally> kept(o.split ? w.plan.replicates : 0, BsdfTally(K, npix, nplane));
+  // replicates then enter add_replicate in order, as in one process. The same for a spectral
+  // run's replicates and a polarized run's Mueller sums (ReplicatesInOrder).
+  std::vector<BsdfTally> kept(o.split && L == 0 ? w.plan.replicates : 0, BsdfTally(K, npix, nplane));
   // A table-only run sums the replicates' first moments alone (measure/table_run_sums.hpp).
   auto add_rep = [&](const BsdfTally& rep) {
     if (o.table_sums_only) add_replicate_first_moments(r.measured, rep);
     else r.measured.add_replicate(rep);
   };
+  std::optional<ReplicateMuellerSums> mueller_sums;
+  if (polarized) mueller_sums.emplace(*polarized, o.split, reps, w.plan.replicates);
+  ReplicateMuellerSums* const msums = mueller_sums ? &*mueller_sums : nullptr;
   auto keep = [&](int q, BsdfTally&& rep) {
     if (o.split) kept[q] = std::move(rep);
     else add_rep(rep);
@@ -707,6 +771,13 @@ void walk_surface(const SurfaceWalk& w, BsdfResult& r, PolarizedSums* polarized,
     // One walk per path, a weight per wavelength (bsdf_walk.hpp); each wavelength's tallies
     // receive exactly what a run with that wavelength's index alone would.
     r.spectral.assign(L, BsdfTally(K, npix, nplane));
+    ReplicatesInOrder<SpectralTally> spectral_reps(
+        "bsdf_spectral", o.split, reps, w.plan.replicates, make_tally<SpectralTally>(shape),
+        [&](int, const SpectralTally& rep) {
+          for (int l = 0; l < L; ++l)
+            if (o.table_sums_only) add_replicate_first_moments(r.spectral[l], rep, l);
+            else r.spectral[l].add_replicate(rep, l);
+        });
     run_replicate_paths<SpectralTally, SpectralTally>(
         reps, w.plan.replicates, w.plan.per_replicate(), shape, progress, share,
         [&](int q, std::uint64_t i, SpectralTally& t, MuellerUnit& m) {
@@ -717,13 +788,12 @@ void walk_surface(const SurfaceWalk& w, BsdfResult& r, PolarizedSums* polarized,
           record_walk_end(t, e, weights, w.ray_weight, r.map, r.plane);
           mueller(e, m);
         },
-        [&](int, SpectralTally&& rep) {
-          for (int l = 0; l < L; ++l)
-            if (o.table_sums_only) add_replicate_first_moments(r.spectral[l], rep, l);
-            else r.spectral[l].add_replicate(rep, l);
+        [&](int q, SpectralTally&& rep) {
+          spectral_reps.add(q, rep);
           rep = SpectralTally();  // the finished replicate's memory back (L tallies wide)
         },
-        polarized);
+        msums);
+    spectral_reps.exchange();
     r.measured = r.spectral[0];
   } else if (unit_weight) {
     run_replicate_paths<ExitCounts<std::uint32_t>, ExitCounts<std::uint64_t>>(
@@ -733,7 +803,7 @@ void walk_surface(const SurfaceWalk& w, BsdfResult& r, PolarizedSums* polarized,
           record_walk_end(t, e, r.map, r.plane);
           mueller(e, m);
         },
-        [&](int q, ExitCounts<std::uint64_t>&& rep) { keep(q, rep.tally()); }, polarized);
+        [&](int q, ExitCounts<std::uint64_t>&& rep) { keep(q, rep.tally()); }, msums);
   } else {
     run_replicate_paths<BsdfTally, BsdfTally>(
         reps, w.plan.replicates, w.plan.per_replicate(), shape, progress, share,
@@ -742,12 +812,13 @@ void walk_surface(const SurfaceWalk& w, BsdfResult& r, PolarizedSums* polarized,
           record_walk_end(t, e, w.ray_weight, r.map, r.plane);
           mueller(e, m);
         },
-        keep, polarized);
+        keep, msums);
   }
-  if (o.split) {
+  if (o.split && L == 0) {
     exchange_paths(*o.split, "bsdf", reps, false, kept);
     for (const BsdfTally& rep : kept) add_rep(rep);
   }
+  if (msums) msums->exchange();
 }
 
 // The explicit surface's tallies (V-cavity ensembles: every groove traced on its own as an

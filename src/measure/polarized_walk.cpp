@@ -12,6 +12,7 @@
 #include "microsim/measure/bsdf_walk.hpp"
 #include "microsim/measure/replicates.hpp"
 #include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/tally_fields.hpp"
 
 namespace microsim {
 
@@ -210,18 +211,9 @@ std::vector<NamedStokes> polarization_inputs() {
 // The sums of the walked paths
 
 MuellerUnit& MuellerUnit::operator+=(const MuellerUnit& o) {
-  // Sum by sum: a bins_only unit has its bins alone; an empty sum (the reduction's identity)
-  // takes o's.
-  auto add = [](std::vector<double>& a, const std::vector<double>& b) {
-    if (a.empty()) a = b;
-    else
-      for (std::size_t i = 0; i < a.size(); ++i) a[i] += b[i];
-  };
-  add(sums, o.sums);
-  add(map, o.map);
-  add(bins, o.bins);
-  add(plane, o.plane);
-  paths += o.paths;
+  // Field by field (tally_fields.hpp): an empty field takes o's, so that a bins_only unit (its
+  // bins alone) and the reduction's identity add as the full sums do.
+  add_fields(*this, o);
   return *this;
 }
 

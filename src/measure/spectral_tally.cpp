@@ -35,12 +35,6 @@ void SpectralTally::add_exit(int s, int order, const double* w, int px, int b) {
 SpectralTally& SpectralTally::operator+=(const SpectralTally& o) {
   if (albedo.empty()) return *this = o;
   if (o.albedo.empty()) return *this;
-  auto add = [](std::vector<double>& a, const std::vector<double>& b) {
-    for (std::size_t k = 0; k < a.size(); ++k) a[k] += b[k];
-  };
-  add(albedo, o.albedo);
-  add(pix, o.pix);
-  add(plane, o.plane);
   add_fields(*this, o);
   return *this;
 }

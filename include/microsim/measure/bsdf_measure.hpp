@@ -142,7 +142,7 @@ struct BsdfOptions {
   int replicates = 32;
   // Mueller matrices along every reflected path, per order and wavelength
   // (measure/polarized_walk.hpp), built from the facets of the walk's own paths. Periodic
-  // tiles and finite objects in one process.
+  // tiles and finite objects, in one process or split (measure/shards.hpp).
   bool polarized = false;
   // The run enters only a renderer table's azimuthal averages (measure/table_run_sums.hpp): its
   // replicates add their first moments without their spread; no errors for it.

@@ -113,6 +113,16 @@ struct MuellerUnit {
   std::vector<double> bins;   // [l][bin pixel][16]
   std::vector<double> plane;  // [k][l][b][16]
   std::uint64_t paths = 0;
+  // Every sum, declared once (tally_fields.hpp): added (operator+=) and exchanged between
+  // processes (a replicate's row, measure/shards.hpp) from this list alone.
+  template <class F>
+  static constexpr void for_each_field(F&& f) {
+    f("sums", &MuellerUnit::sums);
+    f("map", &MuellerUnit::map);
+    f("bins", &MuellerUnit::bins);
+    f("plane", &MuellerUnit::plane);
+    f("paths", &MuellerUnit::paths);
+  }
   MuellerUnit& operator+=(const MuellerUnit& o);
 };
 

@@ -4,8 +4,9 @@
 // Why the split is exact: every ray draws its numbers from CounterRng(seed, stream, index), so a
 // ray is the same wherever it is traced, and an estimator's work is made of units whose tallies
 // do not depend on which process computed them:
-//  * replicates (G1, G2, BSDF: each replicate is a full stratified pass, measure/replicates.hpp),
-//    and the sequential batches of the BSDF's Smith random walk: one row of tallies per unit;
+//  * replicates (G1, G2, BSDF: each replicate is a full stratified pass, measure/replicates.hpp;
+//    a spectral BSDF's sums of every wavelength and a polarized one's Mueller sums alike), and
+//    the sequential batches of the BSDF's Smith random walk: one row of tallies per unit;
 //  * single rays (VNDF: i.i.d. origins, integer bin counts): only totals.
 // A process computes the units of its share; `exchange` then completes the tallies (an MPI sum,
 // or the parts read back by a merge) before the estimator turns them into a result, so the result
@@ -14,10 +15,12 @@
 // even real sums (weights of a conductor, of a finite object's rays) arrive bit for bit.
 #pragma once
 #include <cstdint>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "microsim/common.hpp"
+#include "microsim/tally_fields.hpp"
 #include "microsim/trace/tracer.hpp"
 
 namespace microsim {
@@ -52,6 +55,8 @@ struct Tallies {
           std::size_t row_reals, std::size_t tail_counts, std::size_t tail_reals);
   std::uint64_t* count_row(std::uint64_t u) { return counts.data() + u * row_counts; }
   double* real_row(std::uint64_t u) { return reals.data() + u * row_reals; }
+  const std::uint64_t* count_row(std::uint64_t u) const { return counts.data() + u * row_counts; }
+  const double* real_row(std::uint64_t u) const { return reals.data() + u * row_reals; }
   // Number of values exchanged (the size of the tallies on the wire: 8 bytes each).
   std::size_t values() const {
     return counts.size() + reals.size() + tail_counts.size() + tail_reals.size();
@@ -82,6 +87,41 @@ class TallySplit {
 inline UnitRange share_of(const TallySplit* split, std::uint64_t units) {
   return split ? split->share(units) : UnitRange{0, units};
 }
+
+// The per-unit tallies of a declared struct (tally_fields.hpp) as the rows of one exchange: unit
+// u's row holds its fields in declaration order, the integers in its count row and the reals in
+// its real row, so every declared field crosses (shards, merge, MPI) and no other. A process puts
+// the units of its share; after exchange() every row is complete and get() reads unit u back.
+// Every unit has the shape of `shape` (vectors at the same lengths); a unit of another shape is
+// a std::logic_error.
+template <class T, class D = AllFields<T>>
+class FieldRows {
+ public:
+  FieldRows(const char* kind, std::uint64_t units, UnitRange share, const T& shape)
+      : sizes_(field_sizes<T, D>(shape)), rows_(kind, units, share, sizes_.counts, sizes_.reals, 0, 0) {}
+  // Unit u of this process's share.
+  void put(std::uint64_t u, const T& x) {
+    check_shape(x);
+    if (!rows_.covered.contains(u)) throw std::logic_error("FieldRows: unit outside this process's share");
+    pack_fields<T, D>(x, rows_.count_row(u), rows_.real_row(u));
+  }
+  void exchange(TallySplit& split) { split.exchange(rows_); }
+  // Unit u (any unit, after the exchange) into x, a tally of the units' shape.
+  void get(std::uint64_t u, T& x) const {
+    check_shape(x);
+    unpack_fields<T, D>(x, rows_.count_row(u), rows_.real_row(u));
+  }
+  std::uint64_t units() const { return rows_.units; }
+
+ private:
+  void check_shape(const T& x) const {
+    const FieldSizes s = field_sizes<T, D>(x);
+    if (s.counts != sizes_.counts || s.reals != sizes_.reals)
+      throw std::logic_error("FieldRows: a unit's fields differ in size from the rows'");
+  }
+  FieldSizes sizes_;
+  Tallies rows_;
+};
 
 // --- Shards ---------------------------------------------------------------------------------
 

@@ -20,8 +20,13 @@ struct SpectralTally {
   std::uint64_t paths = 0, lost = 0, unterminated = 0, events = 0;
   TraceCounters counters;
 
+  // Every sum, declared once (tally_fields.hpp): added (operator+=) and exchanged between
+  // processes (a replicate's row, measure/shards.hpp) from this list alone.
   template <class F>
   static constexpr void for_each_field(F&& f) {
+    f("albedo", &SpectralTally::albedo);
+    f("pix", &SpectralTally::pix);
+    f("plane", &SpectralTally::plane);
     f("paths", &SpectralTally::paths);
     f("lost", &SpectralTally::lost);
     f("unterminated", &SpectralTally::unterminated);
