@@ -5,7 +5,9 @@ For each NDF (Beckmann, GGX), roughness alpha and incidence theta_i, K tiles (se
 are measured with `microsim measure bsdf` (mirror, and a conductor); the records give the explicit albedo per
 order and the Smith random walk's [Heitz16] (smith_multiple), the EXR the orders >= 2 hemisphere maps
 (order_2 + order_3 + order_4plus). Beside them the models of microsim.models: single scattering (E_ss),
-Kulla-Conty [KullaConty17], Turquin [Turquin19], the Smith walk's orders >= 2 map.
+Kulla-Conty [KullaConty17], Turquin [Turquin19], the Smith walk's orders >= 2 map, and the V-cavity
+multiple-scattering model (every V-groove's interreflections in closed form [Xie18], grooves drawn with
+(n.m) D(m) [Heitz14, Sec. 6]; its albedo and map from vcavity_multiple_map).
 
   energy_compensation.py --microsim build/microsim --out DIR [--small] [--seeds 6] [--rays 300000] ...
 
@@ -193,16 +195,19 @@ def study(a):
                     walk_tot, _ = mean_se([w["total"] for w in walk])
                     kc_ms = F_ms * (1.0 - E)
                     tq_ms = F0 * (1.0 - E) / E * e_ss_f
+                    vcm_map, vcm_ms, vcm_tot = M.vcavity_multiple_map(ndf, mat, wi, R, 2)
                     ms_models = {"smith_single": 0.0, "vcavity_single": 0.0, "heitz16_walk": walk_ms,
-                                 "kulla_conty": kc_ms, "turquin": tq_ms}
+                                 "kulla_conty": kc_ms, "turquin": tq_ms, "vcavity_multiple": vcm_ms}
                     total_models = {"smith_single": e_ss_f, "vcavity_single": vc, "heitz16_walk": walk_tot,
-                                    "kulla_conty": e_ss_f + kc_ms, "turquin": e_ss_f + tq_ms}
+                                    "kulla_conty": e_ss_f + kc_ms, "turquin": e_ss_f + tq_ms,
+                                    "vcavity_multiple": vcm_tot}
                     # lobes of orders >= 2
                     ms_maps = [ms[t]["ms"] for ms in mapsets]
                     model_maps = {
                         "kulla_conty": M.compensation_map(table, mat, "kulla_conty", wi, R, 8),
                         "turquin": M.compensation_map(table, mat, "turquin", wi, R, 8),
                         "heitz16_walk": M.smith_walk_map(ndf, mat, wi, R, 2, a.walks, 1)[0],
+                        "vcavity_multiple": vcm_map,
                     }
                     dist = {k: jackknife_distance(M, ms_maps, v) for k, v in model_maps.items()}
                     floor = noise_floor(M, ms_maps)
@@ -218,17 +223,18 @@ def study(a):
 
 # ------------------------------------------------------------------------------------------------ output
 
-MODELS = ["heitz16_walk", "kulla_conty", "turquin"]
+MODELS = ["heitz16_walk", "kulla_conty", "turquin", "vcavity_multiple"]
 NAMES = {"smith_single": "Smith single", "vcavity_single": "V-cavity single", "heitz16_walk": "Heitz16 walk",
-         "kulla_conty": "Kulla-Conty", "turquin": "Turquin"}
+         "kulla_conty": "Kulla-Conty", "turquin": "Turquin", "vcavity_multiple": "V-cavity multiple"}
+STYLES = {"heitz16_walk": ("s-", "C0"), "kulla_conty": ("^--", "C1"), "turquin": ("v:", "C2"),
+          "vcavity_multiple": ("D-.", "C3")}
 
 
 def table_albedo_md(rows, material):
     """Albedos: explicit (mean of tiles +- standard error between tiles) and each model's minus explicit."""
-    out = ["| NDF | α | θi | E₁ explicit | E≥2 explicit | E total explicit | ΔE₁ Smith | ΔE₁ V-cavity | "
-           "ΔE≥2 Heitz16 walk | ΔE≥2 Kulla-Conty | ΔE≥2 Turquin | ΔE total Smith single | ΔE total Heitz16 walk | "
-           "ΔE total Kulla-Conty | ΔE total Turquin |",
-           "|" + "---|" * 15]
+    head = (["NDF", "α", "θi", "E₁ explicit", "E≥2 explicit", "E total explicit", "ΔE₁ Smith", "ΔE₁ V-cavity"]
+            + [f"ΔE≥2 {NAMES[m]}" for m in MODELS] + [f"ΔE total {NAMES[m]}" for m in ["smith_single"] + MODELS])
+    out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
         if r["material"] != material:
             continue
@@ -244,8 +250,8 @@ def table_albedo_md(rows, material):
 
 def table_lobe_md(rows, material):
     """Hellinger distances of the orders >= 2 lobes to the explicit mean lobe (jackknife errors), noise floor."""
-    out = ["| NDF | α | θi | E≥2 explicit | H Heitz16 walk | H Kulla-Conty | H Turquin | H noise floor |",
-           "|" + "---|" * 8]
+    head = ["NDF", "α", "θi", "E≥2 explicit"] + [f"H {NAMES[m]}" for m in MODELS] + ["H noise floor"]
+    out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
         if r["material"] != material:
             continue
@@ -274,8 +280,9 @@ def figures(a, rows, lobes):
                 th = [r["theta"] for r in rs]
                 ax.errorbar(th, [r["explicit"]["ms"][0] for r in rs], yerr=[r["explicit"]["ms"][1] for r in rs],
                             fmt="ko", label="explicit", capsize=3)
-                for m, st in zip(MODELS, ["s-", "^--", "v:"]):
-                    ax.plot(th, [r["ms_models"][m] for r in rs], st, label=NAMES[m], alpha=0.8)
+                for m in MODELS:
+                    ax.plot(th, [r["ms_models"][m] for r in rs], STYLES[m][0], color=STYLES[m][1], label=NAMES[m],
+                            alpha=0.8)
                 ax.set_title(f"{mat}, α={al:g}", fontsize=9)
                 ax.set_xlabel("θi (deg)")
                 if ai == 0:
@@ -289,22 +296,27 @@ def figures(a, rows, lobes):
     # lobe maps at the roughest alpha, mirror
     for ndf in sorted({r["ndf"] for r in rows}):
         al = max(alphas)
-        fig, axes = plt.subplots(len(thetas), 4, figsize=(10, 2.6 * len(thetas)), squeeze=False)
+        fig, axes = plt.subplots(len(thetas), 1 + len(MODELS), figsize=(12.5, 2.6 * len(thetas)), squeeze=False)
         for ti, th in enumerate(thetas):
             key = (mats[0], ndf, al, th)
             if key not in lobes:
                 continue
             expl, mm, _ = lobes[key]
-            imgs = [expl, mm["heitz16_walk"], mm["kulla_conty"], mm["turquin"]]
-            vmax = max(float(np.max(x)) for x in imgs)
-            for ci, (img, name) in enumerate(zip(imgs, ["explicit", "Heitz16 walk", "Kulla-Conty", "Turquin"])):
+            imgs = [expl] + [mm[m] for m in MODELS]
+            # The scale of the explicit and the Smith-based maps: the V-cavity model's lobe is far more
+            # peaked and saturates there (its peak over the scale in its title).
+            vmax = max(float(np.max(x)) for x, m in zip(imgs, ["explicit"] + MODELS) if m != "vcavity_multiple")
+            for ci, (img, m) in enumerate(zip(imgs, ["explicit"] + MODELS)):
                 ax = axes[ti][ci]
                 ax.imshow(img, cmap="magma", vmin=0, vmax=vmax)
                 ax.set_xticks([])
                 ax.set_yticks([])
-                ax.set_title(f"{name}, θi={th:g}°", fontsize=8)
-        fig.suptitle(f"{ndf}, α={al:g}, {mats[0]}: f of orders ≥ 2 (equal-area hemisphere map, common scale per row)",
-                     fontsize=9)
+                name = NAMES.get(m, m)
+                peak = float(np.max(img)) / vmax if vmax > 0 else 0.0
+                extra = f" (peak ×{peak:.0f})" if peak > 1.5 else ""
+                ax.set_title(f"{name}, θi={th:g}°{extra}", fontsize=8)
+        fig.suptitle(f"{ndf}, α={al:g}, {mats[0]}: f of orders ≥ 2 (equal-area hemisphere map, common scale per row; "
+                     "the V-cavity model saturates)", fontsize=9)
         fig.tight_layout()
         fig.savefig(os.path.join(a.out, f"ec_lobes_{ndf}.png"), dpi=90)
         plt.close(fig)
@@ -312,17 +324,20 @@ def figures(a, rows, lobes):
     fig, axes = plt.subplots(2, len(thetas), figsize=(3.5 * len(thetas), 6), squeeze=False)
     for ti, th in enumerate(thetas):
         for ndf, mk in zip(sorted({r["ndf"] for r in rows}), ["o", "s"]):
-            # albedo errors of the material with Fresnel (with a mirror the three models agree: 1 - E_ss)
+            # albedo errors of the material with Fresnel (with a mirror the three Smith-based models agree:
+            # 1 - E_ss)
             rs = [r for r in rows if r["ndf"] == ndf and r["theta"] == th and r["material"] == mats[-1]]
             x = [r["alpha"] for r in rs]
-            for m, c in zip(MODELS, ["C0", "C1", "C2"]):
+            for m in MODELS:
+                c = STYLES[m][1]
                 axes[0][ti].errorbar(x, [r["ms_models"][m] - r["explicit"]["ms"][0] for r in rs],
                                      yerr=[r["explicit"]["ms"][1] for r in rs], fmt=mk + "-", color=c, capsize=2,
                                      label=f"{NAMES[m]} ({ndf})", alpha=0.8)
             # lobe shapes of the mirror
             rs = [r for r in rows if r["ndf"] == ndf and r["theta"] == th and r["material"] == mats[0]]
             x = [r["alpha"] for r in rs]
-            for m, c in zip(MODELS, ["C0", "C1", "C2"]):
+            for m in MODELS:
+                c = STYLES[m][1]
                 axes[1][ti].errorbar(x, [r["lobe_distance"][m][0] for r in rs],
                                      yerr=[r["lobe_distance"][m][1] for r in rs], fmt=mk + "-", color=c, capsize=2,
                                      alpha=0.8)
@@ -340,15 +355,38 @@ def figures(a, rows, lobes):
     plt.close(fig)
 
 
+def vcavity_checks(M, r, vcm_map):
+    """The V-cavity multiple-scattering model in the study: with a mirror its total albedo is 1 (every ray leaves
+    its groove), its order 1 is the record's V-cavity single scattering (the same grooves' single bounces,
+    [Heitz14, eq. 24], computed by another route), its map holds its albedo of orders >= 2, and its lobe distance
+    is measured. A wrong model (the map scaled, an order moved, the light lost) fails one of them."""
+    ok = True
+    tot, ms = r["total_models"]["vcavity_multiple"], r["ms_models"]["vcavity_multiple"]
+    single = r["total_models"]["vcavity_single"]
+    power = float(np.sum(vcm_map * M.hemisphere_cos_integrals(vcm_map.shape[0])))
+    print(f"theta {r['theta']:g}: V-cavity multiple total {tot:.6f}, order 1 {tot - ms:.5f} against V-cavity single "
+          f"{single:.5f}, map power {power:.5f} against E>=2 {ms:.5f}, H {r['lobe_distance']['vcavity_multiple'][0]:.3f}")
+    if abs(tot - 1.0) > 1e-9:
+        print("FAIL: V-cavity multiple-scattering mirror albedo is not 1"); ok = False
+    if abs((tot - ms) - single) > 1e-4:
+        print("FAIL: V-cavity multiple-scattering order 1 differs from the V-cavity single scattering"); ok = False
+    if abs(power - ms) > 1e-9 * max(1.0, ms):
+        print("FAIL: V-cavity multiple-scattering map does not hold its albedo"); ok = False
+    if ms > 0 and not (r["lobe_distance"]["vcavity_multiple"][0] >= 0):
+        print("FAIL: no V-cavity multiple-scattering lobe distance"); ok = False
+    return ok
+
+
 def small_checks(rows, lobes):
     """The pipeline must tell a wrong lobe apart: the explicit order-1 lobe taken for the orders >= 2 lobe is
     further from it than the noise floor and than the Smith walk's lobe; the explicit and compensated mirror
-    albedos are 1."""
+    albedos are 1; the V-cavity multiple-scattering model passes vcavity_checks."""
     import microsim
     M = microsim.models
     ok = True
     for r in rows:
         expl, mm, order_1 = lobes[(r["material"], r["ndf"], r["alpha"], r["theta"])]
+        ok &= vcavity_checks(M, r, mm["vcavity_multiple"])
         d_wrong = M.hellinger_distance(expl, order_1)
         d_walk = r["lobe_distance"]["heitz16_walk"][0]
         print(f"theta {r['theta']:g}: wrong-lobe distance {d_wrong:.3f}, walk {d_walk:.3f}, floor {r['noise_floor']:.3f}")

@@ -1,6 +1,6 @@
 // microsim.models energy compensation: the E_ss table, the Kulla-Conty and Turquin lobes and their
-// hemisphere maps, the Smith walk's map of orders >= 2, and the Hellinger lobe distance
-// (models/energy_compensation.hpp, measure/compensation_maps.hpp).
+// hemisphere maps, the Smith walk's and the V-cavity model's maps of orders >= 2, and the Hellinger lobe
+// distance (models/energy_compensation.hpp, measure/compensation_maps.hpp, measure/vcavity_multiple_map.hpp).
 //
 // Maps are returned as (R, R) arrays in the row order of the EXR files of `measure bsdf` (row 0 is the top,
 // square coordinate b = +1), so that they compare pixel by pixel with the measured channels.
@@ -9,6 +9,7 @@
 #include <pybind11/stl.h>
 
 #include "microsim/measure/compensation_maps.hpp"
+#include "microsim/measure/vcavity_multiple_map.hpp"
 #include "microsim/models/energy_compensation.hpp"
 
 namespace py = pybind11;
@@ -88,6 +89,20 @@ void bind_compensation(py::module_& m) {
       }, py::arg("ndf"), py::arg("material"), py::arg("i"), py::arg("resolution"), py::arg("min_order") = 2,
       py::arg("walks") = 1000000, py::arg("seed") = 1,
       "(map of the Smith walk's orders >= min_order, their albedo)");
+  m.def("vcavity_multiple_map", [](const models::Ndf& ndf, const models::Material& mat, const std::vector<double>& i,
+                                   int resolution, int min_order, int orders, int n_theta, int n_phi) {
+        const HemisphereMap map(resolution);
+        GrooveLobeMaps g;
+        {
+          py::gil_scoped_release release;
+          g = vcavity_multiple_maps(ndf, mat, direction_of(i), map, orders, n_theta, n_phi);
+        }
+        return py::make_tuple(image_of(map, g.f_from_order(min_order)), g.albedo_from_order(min_order),
+                              g.albedo[orders]);
+      }, py::arg("ndf"), py::arg("material"), py::arg("i"), py::arg("resolution"), py::arg("min_order") = 2,
+      py::arg("orders") = 4, py::arg("n_theta") = 1024, py::arg("n_phi") = 1024,
+      "(map of the V-cavity multiple-scattering model's orders >= min_order, their albedo, the total albedo): "
+      "every V-groove's interreflections in closed form, grooves weighted by (n.m) D(m)");
   m.def("hemisphere_cos_integrals", [](int resolution) {
         const HemisphereMap map(resolution);
         std::vector<double> c(map.size());

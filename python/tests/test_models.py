@@ -173,3 +173,23 @@ def test_compensation_maps_in_the_exr_orientation():
     assert np.unravel_index(np.argmax(walk1), walk1.shape)[1] == col
     assert M.hellinger_distance(single, walk1) < 0.1
     assert M.hellinger_distance(single, single[:, ::-1]) > 0.5
+
+
+def test_vcavity_multiple_map_in_the_exr_orientation():
+    """The V-cavity multiple-scattering map (image order of the measure bsdf EXR): with a mirror all orders
+    hold an albedo of 1, the map of orders >= 2 holds the albedo returned with it, and the lobe of all orders
+    for light from +x peaks in the left column like the single-scattering lobe (its mirror image does not)."""
+    R = 16
+    c = M.hemisphere_cos_integrals(R)
+    ndf = M.NDF("beckmann", 0.5)
+    i = [math.sin(math.radians(60)), 0.0, math.cos(math.radians(60))]
+    all_orders, a1, total = M.vcavity_multiple_map(ndf, M.Material.mirror(), i, R, 1, 4, 256, 256)
+    ms, a2, _ = M.vcavity_multiple_map(ndf, M.Material.mirror(), i, R, 2, 4, 256, 256)
+    assert abs(total - 1) < 1e-12 and abs(a1 - 1) < 1e-12
+    assert abs((all_orders * c).sum() - 1) < 1e-12
+    assert abs((ms * c).sum() - a2) < 1e-12 and 0.05 < a2 < 0.2
+    single = M.compensation_map(M.EssTable(ndf), M.Material.mirror(), "single", i, R)
+    assert np.unravel_index(np.argmax(all_orders), all_orders.shape)[1] == 0
+    assert np.unravel_index(np.argmax(single), single.shape)[1] == 0
+    assert M.hellinger_distance(single, all_orders) < 0.1
+    assert M.hellinger_distance(single, all_orders[:, ::-1]) > 0.5

@@ -133,21 +133,26 @@ struct GrooveFrame {
   Vec3 to_world(const Vec3& w) const { return w.x() * x + w.y() * y + w.z() * Vec3::UnitZ(); }
 };
 
+// Row i (polar angle index, 0 <= i < n_theta) of vcavity_quadrature: rows are independent, so a
+// caller may sum them in parallel.
+template <class F>
+void vcavity_quadrature_row(const Ndf& ndf, int n_theta, int n_phi, int i, F&& f) {
+  const double dt = 0.5 * detail::kPi / n_theta, dp = 2.0 * detail::kPi / n_phi;
+  const double th = (i + 0.5) * dt, st = std::sin(th), ct = std::cos(th);
+  for (int j = 0; j < n_phi; ++j) {
+    const double ph = (j + 0.5) * dp;
+    const Vec3 m(st * std::cos(ph), st * std::sin(ph), ct);
+    const double w = ct * ndf.D(m) * st * dt * dp;
+    if (w > 0) f(w, m);
+  }
+}
+
 // Calls f(weight, m) over a midpoint quadrature of the hemisphere of groove normals with
 // weight (n.m) D(m) dm (sums to ~1: [Heitz14, eq. 2]); grooves m and m' are the same groove, both
 // are visited. Per-order albedos are continuous in m (kinks only), so the error is O(h^2).
 template <class F>
 void vcavity_quadrature(const Ndf& ndf, int n_theta, int n_phi, F&& f) {
-  const double dt = 0.5 * detail::kPi / n_theta, dp = 2.0 * detail::kPi / n_phi;
-  for (int i = 0; i < n_theta; ++i) {
-    const double th = (i + 0.5) * dt, st = std::sin(th), ct = std::cos(th);
-    for (int j = 0; j < n_phi; ++j) {
-      const double ph = (j + 0.5) * dp;
-      const Vec3 m(st * std::cos(ph), st * std::sin(ph), ct);
-      const double w = ct * ndf.D(m) * st * dt * dp;
-      if (w > 0) f(w, m);
-    }
-  }
+  for (int i = 0; i < n_theta; ++i) vcavity_quadrature_row(ndf, n_theta, n_phi, i, f);
 }
 
 // The V-cavity multiple-scattering albedo per slot (as vgroove_albedo): the groove albedo
