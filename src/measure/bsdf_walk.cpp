@@ -1,5 +1,7 @@
 #include "microsim/measure/bsdf_walk.hpp"
 
+#include "microsim/measure/bsdf_options.hpp"
+
 namespace microsim {
 
 WalkEnd walk_bsdf_path(const Tracer& tracer, const Vec3& origin, const Vec3& dir0,
