@@ -12,6 +12,8 @@
 
 #include "microsim/surface/microsurface.hpp"
 #include "microsim/tally_fields.hpp"
+#include "microsim/trace/facet_plane.hpp"
+#include "microsim/trace/source_plane.hpp"
 #include "microsim/trace/tile_border.hpp"
 #include "microsim/trace/trace_counters.hpp"
 
@@ -27,17 +29,6 @@ inline void set_ray_extent(RTCRay& ray, double tfar) {
   ray.time = 0;
   ray.id = 0;
 }
-
-// A ray leaving a facet never meets that facet's plane again; hits on it are rounding
-// artefacts and are rejected by an Embree filter (docs/theory/numerics.md).
-struct SourcePlane {
-  Vec3 normal;    // unit
-  double offset;  // normal . p for p on the plane
-  static SourcePlane of(const Triangle& t) {
-    Vec3 n = t.normal();
-    return {n, n.dot(t.p0)};
-  }
-};
 
 // The facet a ray leaves, for the walks: its index and its unit normal as the tracer reported it
 // (TraceHit::normal, within kReportedNormalSlack of SourcePlane::of's normal of the same facet).
@@ -153,6 +144,10 @@ class Tracer {
   double z_top() const { return z_top_; }
   double z_bottom() const { return z_bottom_; }
   RTCScene scene() const { return scene_; }
+  // Heightfields: Embree's grid vertices (x, y, z floats), null for meshes; the facet planes
+  // formed from them (FacetPlanes, the same triangles as the surface's facets).
+  const float* grid_vertices() const { return grid_vertices_; }
+  FacetPlanes facet_planes() const { return FacetPlanes(surface_, grid_vertices_); }
   double build_seconds() const { return build_seconds_; }
 
   // Benchmarks: while a log is set on a thread, every Embree query that thread's traces make
