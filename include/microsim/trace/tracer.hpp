@@ -220,6 +220,16 @@ class Tracer {
   bool trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
              const SourceFacet* leaving, TraceCounters& c, TraceHit* out,
              RaySide side = RaySide::Front) const;
+  // trace in steps (tracer.cpp, inline there: every query takes them): the ray's state between
+  // segments, a window's entry, a segment's extent, a hit's report, the step through the border.
+  struct RayState;
+  inline double border_margin(const Vec3& dir) const;
+  inline double footprint_exit(const Vec3& p, const Vec3& dir) const;
+  bool enter_window(RayState& r, TraceCounters& c) const;
+  inline bool segment_extent(RayState& r) const;
+  inline bool take_hit(const RTCRayHit& rh, const RayState& r, bool filtered, TraceCounters& c,
+                       TraceHit* out) const;
+  inline bool cross_border(RayState& r, TraceCounters& c, TraceHit* out) const;
 
   const Microsurface& surface_;
   RTCDevice device_ = nullptr;
