@@ -5,6 +5,7 @@
 #include <cstdint>
 
 #include "microsim/trace/ray_window.hpp"
+#include "microsim/trace/scene.hpp"  // Scene::ray_window, the window of any scene
 #include "microsim/trace/tracer.hpp"
 
 namespace microsim {
