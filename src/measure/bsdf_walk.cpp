@@ -14,7 +14,7 @@ namespace {
 // more than max_events leaves the walk unterminated. False: the ray scatters at `hit`.
 inline bool walk_ends(const TraceHit& hit, RaySide side, int order, const Vec3& dir, bool finite,
                       const Microsurface& s, int max_events, WalkEnd& e) {
-  // A measured region: a first hit outside it is a miss (measure/sampling.hpp), and so is a
+  // A measured region: a first hit outside it is a miss (trace/ray_window.hpp), and so is a
   // first ray that meets nothing (it entered the patch through a side wall, below it).
   const bool region = s.macro().region;
   if (order == 0 && region && (!hit.hit || hit.facet >= s.num_facets())) {
