@@ -499,7 +499,7 @@ TEST(Tracer, FacetTriangleEqualsMicrosurfaceFacet) {
     // With a region, every cell's facets follow the region's (named by tracer hits).
     const std::size_t end = s.num_facets() + (s.has_region() ? 2 * static_cast<std::size_t>(s.nx()) * s.ny() : 0);
     const Tracer tracer(s);
-    const FacetPlanes planes(tracer);
+    const FacetPlanes planes = tracer.facet_planes();
     for (std::size_t k = 0; k < end; ++k) {
       const Triangle a = s.facet(k), b = facet_triangle(s, k);
       ASSERT_EQ(a.p0, b.p0) << k;
@@ -683,7 +683,7 @@ TEST(Tracer, ReportedNormalIsWithinItsSlackOfThePlaneNormal) {
   double worst = 0;
   for (const Microsurface& s : surfaces) {
     const Tracer tracer(s);
-    const FacetPlanes planes(tracer);
+    const FacetPlanes planes = tracer.facet_planes();
     std::uniform_real_distribution<double> u(-0.5, 0.5);
     int hits = 0;
     for (int k = 0; k < 20000; ++k) {
@@ -746,7 +746,7 @@ TEST(Tracer, LeavingAFacetEqualsLeavingItsPlane) {
         const bool back = variant == 5;
         Vec3 dir = (std::sqrt(1 - lift * lift) * along + (back ? -lift : lift) * m).normalized();
         const RaySide side = back ? RaySide::Back : RaySide::Front;
-        const SourcePlane plane = FacetPlanes(tracer).plane(h.facet);
+        const SourcePlane plane = tracer.facet_planes().plane(h.facet);
         TraceCounters c1, c2, c3;
         const TraceHit a = tracer.first_hit(h.point, dir, &plane, c1, side);
         const TraceHit b = tracer.first_hit(h.point, dir, SourceFacet{h.facet, h.normal}, c2, side);

@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "microsim/measure/g1_measure.hpp"
+#include "microsim/measure/g1_result.hpp"
 #include "microsim/measure/shards.hpp"
 #include "microsim/models/vgroove_multiple.hpp"
 #include "microsim/tally_fields.hpp"

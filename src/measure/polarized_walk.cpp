@@ -11,7 +11,9 @@
 
 #include "microsim/measure/bsdf_walk.hpp"
 #include "microsim/measure/replicates.hpp"
-#include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/bsdf_options.hpp"
+#include "microsim/measure/hemisphere_map.hpp"
+#include "microsim/measure/in_plane_bins.hpp"
 #include "microsim/tally_fields.hpp"
 
 namespace microsim {

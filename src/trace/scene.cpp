@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "microsim/measure/sampling.hpp"
+#include "microsim/trace/ray_window.hpp"
 
 namespace microsim {
 

@@ -327,6 +327,194 @@ std::size_t Tracer::facet_of_hit(unsigned prim_id, float u, float v, const Vec3&
   return best;
 }
 
+// The state of one ray of Tracer::trace, carried from segment to segment.
+struct Tracer::RayState {
+  Vec3 o;                  // the segment's origin
+  const Vec3& dir;
+  double hx, hy;           // half the tile
+  bool back;               // RaySide::Back
+  bool side_entry = false;  // entered a window through a side wall inside the slab
+  double margin = -1;      // past the tile border (border_margin), formed when first needed
+  // The segment: distances to the slab face it heads for and to the tile border (or the
+  // window's footprint), and the query's extent.
+  double t_slab = 0, t_exit = 0, tfar = 0;
+};
+
+namespace {
+
+// The filter and plane of Tracer::trace's queries: a ray leaving a plane or facet, or
+// travelling inside the solid, has its wrong-side and self-intersection hits rejected.
+inline void init_plane_context(PlaneContext& ctx, const SourcePlane* source, const SourceFacet* leaving,
+                               const Microsurface& surface, const float* grid_vertices, double scale,
+                               bool back) {
+  rtcInitIntersectContext(&ctx.context);
+  ctx.source = source;
+  ctx.leaving = source ? nullptr : leaving;
+  ctx.surface = &surface;
+  ctx.grid_vertices = grid_vertices;
+  ctx.scale = scale;
+  ctx.back_side = back;
+  if (source || leaving || back) ctx.context.filter = reject_source_plane;
+}
+
+// The float ray of a segment from o along dir, [0, tfar].
+inline void set_segment_ray(RTCRay& ray, const Vec3& o, const Vec3& dir, double tfar) {
+  ray.org_x = static_cast<float>(o.x());
+  ray.org_y = static_cast<float>(o.y());
+  ray.org_z = static_cast<float>(o.z());
+  ray.dir_x = static_cast<float>(dir.x());
+  ray.dir_y = static_cast<float>(dir.y());
+  ray.dir_z = static_cast<float>(dir.z());
+  set_ray_extent(ray, tfar);
+}
+
+// A ray that leaves the slab downward: a ray inside the solid is transmitted (exit_below),
+// any other is lost. Upward it has escaped: nothing to count.
+inline void leave_slab(const Vec3& dir, bool back, TraceCounters& c, TraceHit* out) {
+  if (dir.z() < 0) {
+    if (back && out) out->exit_below = true;
+    else ++c.lost_below;
+  }
+}
+
+}  // namespace
+
+// Beyond the tile border a ray may travel this far inside the padded copy before it is cut
+// (half a cell), so a hit exactly on the border is found inside the geometry.
+inline double Tracer::border_margin(const Vec3& dir) const {
+  const Macrosurface& macro = surface_.macro();
+  double dxy = std::max(std::abs(dir.x()), std::abs(dir.y()));
+  double cell = surface_.kind() == Microsurface::Kind::Heightfield
+                    ? std::min(surface_.dx(), surface_.dy())
+                    : 0.02 * std::min(macro.size_x, macro.size_y);
+  return dxy > 0 ? 0.5 * cell / dxy : 0.0;
+}
+
+// Window: distance along the ray from p to where it leaves the footprint (+inf if it never does).
+inline double Tracer::footprint_exit(const Vec3& p, const Vec3& dir) const {
+  double t = std::numeric_limits<double>::infinity();
+  if (dir.x() > 0) t = std::min(t, (foot_x1_ - p.x()) / dir.x());
+  if (dir.x() < 0) t = std::min(t, (foot_x0_ - p.x()) / dir.x());
+  if (dir.y() > 0) t = std::min(t, (foot_y1_ - p.y()) / dir.y());
+  if (dir.y() < 0) t = std::min(t, (foot_y0_ - p.y()) / dir.y());
+  return std::max(t, 0.0);
+}
+
+// A window's ray starts where it enters the footprint (rays from above the guard band start
+// outside it when they are long enough); false for one that never enters (nothing to meet).
+// A ray that enters through a side wall below the surface there meets the solid from behind
+// first: a miss (the side-wall rule), not the convex-edge graze of take_hit.
+bool Tracer::enter_window(RayState& r, TraceCounters& c) const {
+  Vec3& o = r.o;
+  const Vec3& dir = r.dir;
+  double t_in = 0, t_out = std::numeric_limits<double>::infinity();
+  const double lo[2] = {foot_x0_, foot_y0_}, hi[2] = {foot_x1_, foot_y1_};
+  for (int a = 0; a < 2; ++a) {
+    if (dir[a] == 0) {
+      if (o[a] < lo[a] || o[a] > hi[a]) t_out = -1;
+      continue;
+    }
+    double t0 = (lo[a] - o[a]) / dir[a], t1 = (hi[a] - o[a]) / dir[a];
+    if (t0 > t1) std::swap(t0, t1);
+    t_in = std::max(t_in, t0);
+    t_out = std::min(t_out, t1);
+  }
+  if (!(t_in <= t_out)) {
+    ++c.side_exits;
+    return false;
+  }
+  if (t_in > 0) {
+    o += t_in * dir;
+    for (int a = 0; a < 2; ++a) o[a] = std::min(std::max(o[a], lo[a]), hi[a]);
+    if (o.z() < z_top_) {  // entered through a side wall, inside the slab
+      ++c.side_entries;
+      r.side_entry = true;
+    }
+  }
+  return true;
+}
+
+// The segment from r.o: its slab and border distances and the query's extent; false when the
+// ray is already outside the slab and moving away from it.
+inline bool Tracer::segment_extent(RayState& r) const {
+  const Vec3& o = r.o;
+  const Vec3& dir = r.dir;
+  const bool periodic = surface_.macro().periodic;
+  r.t_slab = std::numeric_limits<double>::infinity();
+  if (dir.z() > 0) r.t_slab = (z_top_ - o.z()) / dir.z();
+  if (dir.z() < 0) r.t_slab = (z_bottom_ - o.z()) / dir.z();
+  if (r.t_slab < 0) return false;
+  // On a periodic tile a segment that certainly leaves the slab before the tile border (most:
+  // the slab is a few cells thick) ends at t_slab whatever the border distance and margin
+  // are (t_exit >= t_slab): neither is formed (tile_border.hpp, reaches_before_border).
+  r.t_exit = std::numeric_limits<double>::infinity();
+  r.tfar = r.t_slab;
+  if (!(periodic && reaches_before_border(o, dir, r.hx, r.hy, r.t_slab))) {
+    if (periodic) {
+      r.t_exit = distance_to_tile_border(o, dir, r.hx, r.hy);
+    } else if (window_) {
+      r.t_exit = footprint_exit(o, dir);
+    }
+    if (!window_ && r.margin < 0) r.margin = border_margin(dir);
+    r.tfar = std::min(r.t_exit + (window_ ? 0.0 : r.margin), r.t_slab);
+  }
+  return true;
+}
+
+// The hit Embree reported for the segment, into *out (the facet's copy inside the tile, its
+// exact normal, the side met); false for a downward ray from above a heightfield that grazed a
+// convex edge (a back face first): the caller traces the segment again with wrong-side hits
+// rejected.
+inline bool Tracer::take_hit(const RTCRayHit& rh, const RayState& r, bool filtered,
+                             TraceCounters& c, TraceHit* out) const {
+  const Macrosurface& macro = surface_.macro();
+  const Vec3& dir = r.dir;
+  Vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+  out->hit = true;
+  out->point = r.o + static_cast<double>(rh.ray.tfar) * dir;
+  if (macro.periodic) {  // canonical copy: inside the tile, like the facet reported
+    if (out->point.x() >= r.hx) out->point.x() -= macro.size_x;
+    else if (out->point.x() < -r.hx) out->point.x() += macro.size_x;
+    if (out->point.y() >= r.hy) out->point.y() -= macro.size_y;
+    else if (out->point.y() < -r.hy) out->point.y() += macro.size_y;
+  }
+  out->facet = facet_of_hit(rh.hit.primID, rh.hit.u, rh.hit.v, ng, &out->normal);
+  out->backface = out->normal.dot(dir) > 0;
+  if (out->backface && !filtered && !r.back && dir.z() < 0 && !r.side_entry &&
+      surface_.kind() == Microsurface::Kind::Heightfield) {
+    // A downward ray from above a heightfield meets the graph from above first, so a back
+    // face first means it grazed a convex edge (a V-groove's ridge) closer than float spacing:
+    // it passes over it. (Finite objects seen from below legitimately see back faces first:
+    // the undersurface.)
+    *out = TraceHit();
+    return false;
+  }
+  if (out->backface != r.back) ++c.backface_hits;
+  return true;
+}
+
+// After a segment that met nothing: true when the ray goes on through the opposite tile border
+// (r.o moved there), false when it ended (left the slab, a window's side wall, a finite object).
+inline bool Tracer::cross_border(RayState& r, TraceCounters& c, TraceHit* out) const {
+  const Macrosurface& macro = surface_.macro();
+  if (r.t_slab <= r.t_exit) {
+    // Leaves the slab inside this tile: upward it escapes; downward it was lost, or, for a
+    // ray inside the solid, it leaves through the bottom (transmitted).
+    leave_slab(r.dir, r.back, c, out);
+    return false;
+  }
+  if (window_) {  // reached a side wall inside the slab: ends here (see first_hit)
+    ++c.side_exits;
+    return false;
+  }
+  if (!macro.periodic) return false;
+  // Move to the border and re-enter through the opposite side (both at a corner).
+  r.o += r.t_exit * r.dir;
+  reenter_opposite_side(r.o, r.dir, macro);
+  ++c.border_crossings;
+  return true;
+}
+
 template <bool kOcclusion>
 bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
                    const SourceFacet* leaving, TraceCounters& c, TraceHit* out, RaySide side) const {
@@ -334,113 +522,23 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
   const Macrosurface& macro = surface_.macro();
   const bool back = side == RaySide::Back;
   PlaneContext ctx;
-  rtcInitIntersectContext(&ctx.context);
-  ctx.source = source;
-  ctx.leaving = source ? nullptr : leaving;
-  ctx.surface = &surface_;
-  ctx.grid_vertices = grid_vertices_;
-  ctx.scale = scale_;
-  ctx.back_side = back;
-  if (source || leaving || back) ctx.context.filter = reject_source_plane;
-
-  Vec3 o = org;
-  const double hx = 0.5 * macro.size_x, hy = 0.5 * macro.size_y;
+  init_plane_context(ctx, source, leaving, surface_, grid_vertices_, scale_, back);
+  RayState r{org, dir, 0.5 * macro.size_x, 0.5 * macro.size_y, back};
   if (macro.periodic && surface_.kind() == Microsurface::Kind::Heightfield) {
     // An origin off the tile (a measured region's ray window reaches past it): its periodic copy.
-    if (o.x() < -hx || o.x() > hx) o.x() -= macro.size_x * std::floor((o.x() + hx) / macro.size_x);
-    if (o.y() < -hy || o.y() > hy) o.y() -= macro.size_y * std::floor((o.y() + hy) / macro.size_y);
+    Vec3& o = r.o;
+    if (o.x() < -r.hx || o.x() > r.hx) o.x() -= macro.size_x * std::floor((o.x() + r.hx) / macro.size_x);
+    if (o.y() < -r.hy || o.y() > r.hy) o.y() -= macro.size_y * std::floor((o.y() + r.hy) / macro.size_y);
   }
-  // Beyond the tile border a ray may travel this far inside the padded copy before it is cut
-  // (half a cell), so a hit exactly on the border is found inside the geometry.
-  // (Formed when first needed: a segment that certainly leaves the slab first does not.)
-  double margin = -1;
-  auto border_margin = [&] {
-    if (margin < 0) {
-      double dxy = std::max(std::abs(dir.x()), std::abs(dir.y()));
-      double cell = surface_.kind() == Microsurface::Kind::Heightfield
-                        ? std::min(surface_.dx(), surface_.dy())
-                        : 0.02 * std::min(macro.size_x, macro.size_y);
-      margin = dxy > 0 ? 0.5 * cell / dxy : 0.0;
-    }
-    return margin;
-  };
+  if (window_ && !enter_window(r, c)) return false;
   const int max_segments = 100000;
-  // Window: distance along the ray to where it leaves the footprint (+inf if it never does).
-  auto footprint_exit = [&](const Vec3& p) {
-    double t = std::numeric_limits<double>::infinity();
-    if (dir.x() > 0) t = std::min(t, (foot_x1_ - p.x()) / dir.x());
-    if (dir.x() < 0) t = std::min(t, (foot_x0_ - p.x()) / dir.x());
-    if (dir.y() > 0) t = std::min(t, (foot_y1_ - p.y()) / dir.y());
-    if (dir.y() < 0) t = std::min(t, (foot_y0_ - p.y()) / dir.y());
-    return std::max(t, 0.0);
-  };
-  // A ray that enters a window through a side wall below the surface there meets the solid
-  // from behind first: a miss (the side-wall rule), not the convex-edge graze below.
-  bool side_entry = false;
-  if (window_) {
-    // Start where the ray enters the footprint (rays from above the guard band start outside
-    // it when they are long enough); one that never enters has nothing to meet.
-    double t_in = 0, t_out = std::numeric_limits<double>::infinity();
-    const double lo[2] = {foot_x0_, foot_y0_}, hi[2] = {foot_x1_, foot_y1_};
-    for (int a = 0; a < 2; ++a) {
-      if (dir[a] == 0) {
-        if (o[a] < lo[a] || o[a] > hi[a]) t_out = -1;
-        continue;
-      }
-      double t0 = (lo[a] - o[a]) / dir[a], t1 = (hi[a] - o[a]) / dir[a];
-      if (t0 > t1) std::swap(t0, t1);
-      t_in = std::max(t_in, t0);
-      t_out = std::min(t_out, t1);
-    }
-    if (!(t_in <= t_out)) {
-      ++c.side_exits;
-      return false;
-    }
-    if (t_in > 0) {
-      o += t_in * dir;
-      for (int a = 0; a < 2; ++a) o[a] = std::min(std::max(o[a], lo[a]), hi[a]);
-      if (o.z() < z_top_) {  // entered through a side wall, inside the slab
-        ++c.side_entries;
-        side_entry = true;
-      }
-    }
-  }
-
   for (int segment = 0; segment < max_segments; ++segment) {
-    // Distance to the slab face the ray is heading for.
-    double t_slab = std::numeric_limits<double>::infinity();
-    if (dir.z() > 0) t_slab = (z_top_ - o.z()) / dir.z();
-    if (dir.z() < 0) t_slab = (z_bottom_ - o.z()) / dir.z();
-    if (t_slab < 0) {
-      // Already outside the slab and moving away from it.
-      if (dir.z() < 0) {
-        if (back && out) out->exit_below = true;
-        else ++c.lost_below;
-      }
+    if (!segment_extent(r)) {
+      leave_slab(dir, back, c, out);
       return false;
     }
-    // On a periodic tile a segment that certainly leaves the slab before the tile border (most:
-    // the slab is a few cells thick) ends at t_slab whatever the border distance and margin
-    // are (t_exit >= t_slab): neither is formed (tile_border.hpp, reaches_before_border).
-    double t_exit = std::numeric_limits<double>::infinity();
-    double tfar = t_slab;
-    if (!(macro.periodic && reaches_before_border(o, dir, hx, hy, t_slab))) {
-      if (macro.periodic) {
-        t_exit = distance_to_tile_border(o, dir, hx, hy);
-      } else if (window_) {
-        t_exit = footprint_exit(o);
-      }
-      tfar = std::min(t_exit + (window_ ? 0.0 : border_margin()), t_slab);
-    }
-
     RTCRayHit rh;
-    rh.ray.org_x = static_cast<float>(o.x());
-    rh.ray.org_y = static_cast<float>(o.y());
-    rh.ray.org_z = static_cast<float>(o.z());
-    rh.ray.dir_x = static_cast<float>(dir.x());
-    rh.ray.dir_y = static_cast<float>(dir.y());
-    rh.ray.dir_z = static_cast<float>(dir.z());
-    set_ray_extent(rh.ray, tfar);
+    set_segment_ray(rh.ray, r.o, dir, r.tfar);
     if (ray_log) ray_log->push_back(rh.ray);
     if (kOcclusion) {
       rtcOccluded1(scene_, &ctx.context, &rh.ray);
@@ -450,51 +548,13 @@ bool Tracer::trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
       rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
       rtcIntersect1(scene_, &ctx.context, &rh);
       if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
-        Vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
-        out->hit = true;
-        out->point = o + static_cast<double>(rh.ray.tfar) * dir;
-        if (macro.periodic) {  // canonical copy: inside the tile, like the facet reported
-          if (out->point.x() >= hx) out->point.x() -= macro.size_x;
-          else if (out->point.x() < -hx) out->point.x() += macro.size_x;
-          if (out->point.y() >= hy) out->point.y() -= macro.size_y;
-          else if (out->point.y() < -hy) out->point.y() += macro.size_y;
-        }
-        out->facet = facet_of_hit(rh.hit.primID, rh.hit.u, rh.hit.v, ng, &out->normal);
-        out->backface = out->normal.dot(dir) > 0;
-        if (out->backface && !ctx.context.filter && !back && dir.z() < 0 && !side_entry &&
-            surface_.kind() == Microsurface::Kind::Heightfield) {
-          // A downward ray from above a heightfield meets the graph from above first, so a
-          // back face first means it grazed a convex edge (a V-groove's ridge) closer than float
-          // spacing: it passes over it. Trace this segment again with wrong-side hits rejected,
-          // as rays leaving a facet are. (Finite objects seen from below legitimately see back
-          // faces first: the undersurface.)
-          ctx.context.filter = reject_source_plane;
-          *out = TraceHit();
-          --segment;
-          continue;
-        }
-        if (out->backface != back) ++c.backface_hits;
-        return true;
+        if (take_hit(rh, r, ctx.context.filter != nullptr, c, out)) return true;
+        ctx.context.filter = reject_source_plane;  // the grazed edge: this segment again
+        --segment;
+        continue;
       }
     }
-    if (t_slab <= t_exit) {
-      // Leaves the slab inside this tile: upward it escapes; downward it was lost, or, for a
-      // ray inside the solid, it leaves through the bottom (transmitted).
-      if (dir.z() < 0) {
-        if (back && out) out->exit_below = true;
-        else ++c.lost_below;
-      }
-      return false;
-    }
-    if (window_) {  // reached a side wall inside the slab: ends here (see first_hit)
-      ++c.side_exits;
-      return false;
-    }
-    if (!macro.periodic) return false;
-    // Move to the border and re-enter through the opposite side (both at a corner).
-    o += t_exit * dir;
-    reenter_opposite_side(o, dir, macro);
-    ++c.border_crossings;
+    if (!cross_border(r, c, out)) return false;
   }
   ++c.unresolved;
   return false;

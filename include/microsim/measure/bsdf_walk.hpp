@@ -7,8 +7,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/bsdf_tally.hpp"
 #include "microsim/measure/exit_counts.hpp"
+#include "microsim/measure/hemisphere_map.hpp"
+#include "microsim/measure/in_plane_bins.hpp"
 #include "microsim/measure/spectral_tally.hpp"
 #include "microsim/models/microfacet_bsdf.hpp"
 #include "microsim/trace/tracer.hpp"

@@ -5,7 +5,12 @@
 // ensemble's own grooves (`vcavity_multiple_grooves`: for a mirror or conductor the exact
 // expectation of the traced estimate).
 #pragma once
-#include "microsim/measure/bsdf_measure.hpp"
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "microsim/measure/bsdf_result.hpp"
+#include "microsim/surface/microsurface.hpp"
 
 namespace microsim {
 

@@ -4,7 +4,8 @@
 #include <algorithm>
 #include <cstdint>
 
-#include "microsim/trace/scene.hpp"
+#include "microsim/trace/ray_window.hpp"
+#include "microsim/trace/scene.hpp"  // Scene::ray_window, the window of any scene
 #include "microsim/trace/tracer.hpp"
 
 namespace microsim {
@@ -50,14 +51,7 @@ struct Strata {
   Vec2 point(std::uint64_t i, CounterRng& rng) const { return point(cell(i), rng); }
 };
 
-// The window the parallel rays along -v start from: origin0 + a e1 + b e2, (a, b) in [0,1]^2.
-// Periodic tile: the horizontal tile at the top of the slab (wrap-around makes every ray
-// equivalent). Finite object: a rectangle perpendicular to v covering its projection. A
-// non-periodic heightfield measured in a region (Macrosurface::region, a window): a rectangle
-// at the top of the slab covering every ray that can meet the region's facets. With a region,
-// hits outside it are misses (periodic or not).
-// (RayWindow: trace/scene.hpp.)
-RayWindow make_ray_window(const Tracer& tracer, const Vec3& v);
+// The window of parallel rays (RayWindow, make_ray_window): trace/ray_window.hpp.
 
 // A random stream id for a direction (same construction as the G1 estimator's).
 inline std::uint64_t direction_stream_key(const Vec3& v) {

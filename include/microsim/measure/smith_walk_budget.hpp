@@ -8,7 +8,8 @@
 #include <limits>
 #include <vector>
 
-#include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/bsdf_result.hpp"
+#include "microsim/models/smith_random_walk.hpp"
 
 namespace microsim {
 

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/bsdf_tally.hpp"
 
 namespace microsim {
 

@@ -5,7 +5,7 @@
 // (the same sums, in the same order, as add_replicate), and once finished keep only what the
 // table reads.
 #pragma once
-#include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/bsdf_result.hpp"
 #include "microsim/measure/spectral_tally.hpp"
 
 namespace microsim {

@@ -12,7 +12,10 @@
 #pragma once
 #include <vector>
 
-#include "microsim/measure/bsdf_measure.hpp"
+#include "microsim/measure/bsdf_options.hpp"
+#include "microsim/measure/bsdf_tally.hpp"
+#include "microsim/measure/hemisphere_map.hpp"
+#include "microsim/measure/in_plane_bins.hpp"
 #include "microsim/measure/g1_measure.hpp"
 #include "microsim/measure/g2_measure.hpp"
 #include "microsim/measure/vndf_measure.hpp"

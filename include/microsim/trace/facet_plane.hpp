@@ -1,10 +1,10 @@
-// The plane a ray leaving facet k starts from (SourcePlane, trace/tracer.hpp), for the walks,
+// The plane a ray leaving facet k starts from (SourcePlane, trace/source_plane.hpp), for the walks,
 // which need it at every scattering event.
 #pragma once
 #include <cstddef>
 
 #include "microsim/surface/microsurface.hpp"
-#include "microsim/trace/tracer.hpp"
+#include "microsim/trace/source_plane.hpp"
 
 namespace microsim {
 
@@ -49,13 +49,8 @@ inline SourcePlane facet_plane(const Microsurface& s, std::size_t k) {
 // surface's height array is another 4 bytes per cell that a walk's hit misses in cache).
 class FacetPlanes {
  public:
-  explicit FacetPlanes(const Tracer& t)
-      : FacetPlanes(t.surface(), t.surface().kind() == Microsurface::Kind::Heightfield
-                                     ? static_cast<const float*>(rtcGetGeometryBufferData(
-                                           rtcGetGeometry(t.scene(), 0), RTC_BUFFER_TYPE_VERTEX, 0))
-                                     : nullptr) {}
-  // The same from the tracer's vertex buffer given directly (its filter, which calls no Embree
-  // function); null: from the surface's heights.
+  // From a tracer's grid vertices (Tracer::grid_vertices; Tracer::facet_planes builds this);
+  // null: from the surface's heights.
   FacetPlanes(const Microsurface& s, const float* grid_vertices) : s_(s) {
     if (s_.kind() != Microsurface::Kind::Heightfield || !grid_vertices) return;
     // The grid of Tracer: one periodic copy of cells around a periodic tile, none around a

@@ -8,16 +8,10 @@
 #include <cstddef>
 #include <memory>
 
+#include "microsim/trace/ray_window.hpp"
 #include "microsim/trace/tracer.hpp"
 
 namespace microsim {
-
-// The window the parallel rays along -v start from: origin0 + a e1 + b e2, (a, b) in [0,1]^2
-// (make_ray_window in measure/sampling.hpp for a Tracer's surface).
-struct RayWindow {
-  Vec3 origin0, e1, e2;
-  double area_perp = 0;  // |(e1 x e2) . v|
-};
 
 // What a ray that leaves the measured region means.
 enum class RegionExit {

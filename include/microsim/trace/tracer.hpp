@@ -12,7 +12,10 @@
 
 #include "microsim/surface/microsurface.hpp"
 #include "microsim/tally_fields.hpp"
+#include "microsim/trace/facet_plane.hpp"
+#include "microsim/trace/source_plane.hpp"
 #include "microsim/trace/tile_border.hpp"
+#include "microsim/trace/trace_counters.hpp"
 
 namespace microsim {
 
@@ -26,17 +29,6 @@ inline void set_ray_extent(RTCRay& ray, double tfar) {
   ray.time = 0;
   ray.id = 0;
 }
-
-// A ray leaving a facet never meets that facet's plane again; hits on it are rounding
-// artefacts and are rejected by an Embree filter (docs/theory/numerics.md).
-struct SourcePlane {
-  Vec3 normal;    // unit
-  double offset;  // normal . p for p on the plane
-  static SourcePlane of(const Triangle& t) {
-    Vec3 n = t.normal();
-    return {n, n.dot(t.p0)};
-  }
-};
 
 // The facet a ray leaves, for the walks: its index and its unit normal as the tracer reported it
 // (TraceHit::normal, within kReportedNormalSlack of SourcePlane::of's normal of the same facet).
@@ -86,41 +78,6 @@ struct TraceHit {
   std::size_t facet = 0;
   bool backface = false;  // the ray met the facet from behind (rounding at silhouettes)
 };
-
-// Events that a careful reader wants counted (docs/theory/numerics.md).
-struct TraceCounters {
-  std::uint64_t rays = 0;
-  std::uint64_t border_crossings = 0;  // periodic wrap-arounds
-  std::uint64_t lost_below = 0;        // left the surface's slab downward without a hit
-  std::uint64_t backface_hits = 0;     // first hit on the unexpected side (a back face for a
-                                       // Front ray, a front face for a Back ray)
-  std::uint64_t unresolved = 0;        // still inside the slab after the wrap limit
-  // Non-periodic heightfield windows (a measured patch): rays that leave the patch through a
-  // side wall inside the slab (ended there: the rule of Tracer::first_hit), and rays from
-  // above that enter the patch through a side wall.
-  std::uint64_t side_exits = 0;
-  std::uint64_t side_entries = 0;
-
-  // Every field, once: the sum below, the exchange between processes (measure/shards.hpp) and
-  // the records' `trace_counters` derive from this list (tally_fields.hpp).
-  template <class F>
-  static constexpr void for_each_field(F&& f) {
-    f("rays", &TraceCounters::rays);
-    f("border_crossings", &TraceCounters::border_crossings);
-    f("lost_below", &TraceCounters::lost_below);
-    f("backface_hits", &TraceCounters::backface_hits);
-    f("unresolved", &TraceCounters::unresolved);
-    f("side_exits", &TraceCounters::side_exits);
-    f("side_entries", &TraceCounters::side_entries);
-  }
-  TraceCounters& operator+=(const TraceCounters& o) {
-    add_fields(*this, o);
-    return *this;
-  }
-};
-// A field added above but not to the declaration would be neither summed nor exchanged.
-static_assert(scalar_field_count<TraceCounters>() * sizeof(std::uint64_t) == sizeof(TraceCounters),
-              "every field of TraceCounters is declared in TraceCounters::for_each_field");
 
 class Tracer;
 
@@ -187,6 +144,10 @@ class Tracer {
   double z_top() const { return z_top_; }
   double z_bottom() const { return z_bottom_; }
   RTCScene scene() const { return scene_; }
+  // Heightfields: Embree's grid vertices (x, y, z floats), null for meshes; the facet planes
+  // formed from them (FacetPlanes, the same triangles as the surface's facets).
+  const float* grid_vertices() const { return grid_vertices_; }
+  FacetPlanes facet_planes() const { return FacetPlanes(surface_, grid_vertices_); }
   double build_seconds() const { return build_seconds_; }
 
   // Benchmarks: while a log is set on a thread, every Embree query that thread's traces make
@@ -259,6 +220,16 @@ class Tracer {
   bool trace(const Vec3& org, const Vec3& dir, const SourcePlane* source,
              const SourceFacet* leaving, TraceCounters& c, TraceHit* out,
              RaySide side = RaySide::Front) const;
+  // trace in steps (tracer.cpp, inline there: every query takes them): the ray's state between
+  // segments, a window's entry, a segment's extent, a hit's report, the step through the border.
+  struct RayState;
+  inline double border_margin(const Vec3& dir) const;
+  inline double footprint_exit(const Vec3& p, const Vec3& dir) const;
+  bool enter_window(RayState& r, TraceCounters& c) const;
+  inline bool segment_extent(RayState& r) const;
+  inline bool take_hit(const RTCRayHit& rh, const RayState& r, bool filtered, TraceCounters& c,
+                       TraceHit* out) const;
+  inline bool cross_border(RayState& r, TraceCounters& c, TraceHit* out) const;
 
   const Microsurface& surface_;
   RTCDevice device_ = nullptr;

@@ -1,4 +1,9 @@
-#include "microsim/measure/sampling.hpp"
+#include "microsim/trace/ray_window.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "microsim/trace/tracer.hpp"
 
 namespace microsim {
 
