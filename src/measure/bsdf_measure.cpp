@@ -729,6 +729,56 @@ std::vector<WalkFacet>& walk_facets() {
   return facets;
 }
 
+// The facets of a polarized path, then its Mueller matrices (nothing for an unpolarized run).
+void add_polarized_path(PolarizedSums* polarized, const WalkEnd& e, MuellerUnit& m) {
+  if (polarized) polarized->add_path(e, walk_facets(), m);
+}
+std::vector<WalkFacet>* polarized_facets(PolarizedSums* polarized) {
+  return polarized ? &walk_facets() : nullptr;
+}
+
+// A finished replicate into the run's tally: with its spread, or its first moments alone for a
+// table-only run (measure/table_run_sums.hpp).
+void add_run_replicate(BsdfTally& into, const BsdfTally& rep, bool table_sums_only) {
+  if (table_sums_only) add_replicate_first_moments(into, rep);
+  else into.add_replicate(rep);
+}
+
+// A spectral run: one walk per path, a weight per wavelength (bsdf_walk.hpp); each wavelength's
+// tallies receive exactly what a run with that wavelength's index alone would. With a split the
+// replicates enter in order once every process's have arrived (ReplicatesInOrder).
+void walk_spectral_paths(const SurfaceWalk& w, BsdfResult& r, PolarizedSums* polarized, ReplicateMuellerSums* msums,
+                         UnitRange reps, const std::function<void(double)>& progress, double share) {
+  const BsdfOptions& o = w.o;
+  const int L = static_cast<int>(o.spectral.size());
+  const TallyShape shape{o.orders, r.map.size(), r.plane.size(), L};
+  r.spectral.assign(L, BsdfTally(o.orders, r.map.size(), r.plane.size()));
+  ReplicatesInOrder<SpectralTally> spectral_reps(
+      "bsdf_spectral", o.split, reps, w.plan.replicates, make_tally<SpectralTally>(shape),
+      [&](int, const SpectralTally& rep) {
+        for (int l = 0; l < L; ++l)
+          if (o.table_sums_only) add_replicate_first_moments(r.spectral[l], rep, l);
+          else r.spectral[l].add_replicate(rep, l);
+      });
+  run_replicate_paths<SpectralTally, SpectralTally>(
+      reps, w.plan.replicates, w.plan.per_replicate(), shape, progress, share,
+      [&](int q, std::uint64_t i, SpectralTally& t, MuellerUnit& m) {
+        double weights[kMaxWavelengths];
+        std::fill(weights, weights + L, 1.0);
+        const SpectralWeights sw{o.spectral.data(), L, weights};
+        const WalkEnd e = w.walk(q, i, t, &sw, polarized_facets(polarized));
+        record_walk_end(t, e, weights, w.ray_weight, r.map, r.plane);
+        add_polarized_path(polarized, e, m);
+      },
+      [&](int q, SpectralTally&& rep) {
+        spectral_reps.add(q, rep);
+        rep = SpectralTally();  // the finished replicate's memory back (L tallies wide)
+      },
+      msums);
+  spectral_reps.exchange();
+  r.measured = r.spectral[0];
+}
+
 // The explicit surface's paths, replicates one after the other, each a stratified pass of its
 // own stream; their sums and spread give the calibrated errors (measure/replicates.hpp). A
 // polarized run keeps every path's facets and adds its Mueller matrices to `polarized`.
@@ -737,86 +787,52 @@ void walk_surface(const SurfaceWalk& w, BsdfResult& r, PolarizedSums* polarized,
   using models::MaterialKind;
   const BsdfOptions& o = w.o;
   const int K = o.orders, npix = r.map.size(), nplane = r.plane.size();
-  const int L = static_cast<int>(o.spectral.size());
-  const TallyShape shape{K, npix, nplane, L > 0 ? L : 1};
+  const TallyShape shape{K, npix, nplane, 1};
   r.measured = BsdfTally(K, npix, nplane);
   const UnitRange reps = share_of(o.split, static_cast<std::uint64_t>(w.plan.replicates));
-  // With a split, the replicates of this process are kept until the others' arrive; the
-  // replicates then enter add_replicate in order, as in one process. The same for a spectral
-  // run's replicates and a polarized run's Mueller sums (ReplicatesInOrder).
-  std::vector<BsdfTally> kept(o.split && L == 0 ? w.plan.replicates : 0, BsdfTally(K, npix, nplane));
-  // A table-only run sums the replicates' first moments alone (measure/table_run_sums.hpp).
-  auto add_rep = [&](const BsdfTally& rep) {
-    if (o.table_sums_only) add_replicate_first_moments(r.measured, rep);
-    else r.measured.add_replicate(rep);
-  };
+  // A polarized run's Mueller sums enter in replicate order, with a split too.
   std::optional<ReplicateMuellerSums> mueller_sums;
   if (polarized) mueller_sums.emplace(*polarized, o.split, reps, w.plan.replicates);
   ReplicateMuellerSums* const msums = mueller_sums ? &*mueller_sums : nullptr;
+  if (!o.spectral.empty()) {
+    walk_spectral_paths(w, r, polarized, msums, reps, progress, share);
+    if (msums) msums->exchange();
+    return;
+  }
+  // With a split, the replicates of this process are kept until the others' arrive; the
+  // replicates then enter add_replicate in order, as in one process.
+  std::vector<BsdfTally> kept(o.split ? w.plan.replicates : 0, BsdfTally(K, npix, nplane));
   auto keep = [&](int q, BsdfTally&& rep) {
     if (o.split) kept[q] = std::move(rep);
-    else add_rep(rep);
+    else add_run_replicate(r.measured, rep, o.table_sums_only);
   };
-  // The facets of a polarized path, then its Mueller matrices.
-  auto mueller = [polarized](const WalkEnd& e, MuellerUnit& m) {
-    if (polarized) polarized->add_path(e, walk_facets(), m);
-  };
-  auto facets = [polarized]() { return polarized ? &walk_facets() : nullptr; };
   // Every exit of weight exactly 1 (mirror, dielectric; rays of weight 1): integer counts
   // (measure/exit_counts.hpp), the same tallies bit for bit. A unit counts in 32 bits.
   const bool unit_weight = w.ray_weight == 1.0 &&
                            (o.material.kind == MaterialKind::Mirror || o.material.kind == MaterialKind::Dielectric) &&
                            w.plan.per_replicate() < (std::uint64_t(1) << 32);
-  if (L > 0) {
-    // One walk per path, a weight per wavelength (bsdf_walk.hpp); each wavelength's tallies
-    // receive exactly what a run with that wavelength's index alone would.
-    r.spectral.assign(L, BsdfTally(K, npix, nplane));
-    ReplicatesInOrder<SpectralTally> spectral_reps(
-        "bsdf_spectral", o.split, reps, w.plan.replicates, make_tally<SpectralTally>(shape),
-        [&](int, const SpectralTally& rep) {
-          for (int l = 0; l < L; ++l)
-            if (o.table_sums_only) add_replicate_first_moments(r.spectral[l], rep, l);
-            else r.spectral[l].add_replicate(rep, l);
-        });
-    run_replicate_paths<SpectralTally, SpectralTally>(
-        reps, w.plan.replicates, w.plan.per_replicate(), shape, progress, share,
-        [&](int q, std::uint64_t i, SpectralTally& t, MuellerUnit& m) {
-          double weights[kMaxWavelengths];
-          std::fill(weights, weights + L, 1.0);
-          const SpectralWeights sw{o.spectral.data(), L, weights};
-          const WalkEnd e = w.walk(q, i, t, &sw, facets());
-          record_walk_end(t, e, weights, w.ray_weight, r.map, r.plane);
-          mueller(e, m);
-        },
-        [&](int q, SpectralTally&& rep) {
-          spectral_reps.add(q, rep);
-          rep = SpectralTally();  // the finished replicate's memory back (L tallies wide)
-        },
-        msums);
-    spectral_reps.exchange();
-    r.measured = r.spectral[0];
-  } else if (unit_weight) {
+  if (unit_weight) {
     run_replicate_paths<ExitCounts<std::uint32_t>, ExitCounts<std::uint64_t>>(
         reps, w.plan.replicates, w.plan.per_replicate(), shape, progress, share,
         [&](int q, std::uint64_t i, ExitCounts<std::uint32_t>& t, MuellerUnit& m) {
-          const WalkEnd e = w.walk(q, i, t, nullptr, facets());
+          const WalkEnd e = w.walk(q, i, t, nullptr, polarized_facets(polarized));
           record_walk_end(t, e, r.map, r.plane);
-          mueller(e, m);
+          add_polarized_path(polarized, e, m);
         },
         [&](int q, ExitCounts<std::uint64_t>&& rep) { keep(q, rep.tally()); }, msums);
   } else {
     run_replicate_paths<BsdfTally, BsdfTally>(
         reps, w.plan.replicates, w.plan.per_replicate(), shape, progress, share,
         [&](int q, std::uint64_t i, BsdfTally& t, MuellerUnit& m) {
-          const WalkEnd e = w.walk(q, i, t, nullptr, facets());
+          const WalkEnd e = w.walk(q, i, t, nullptr, polarized_facets(polarized));
           record_walk_end(t, e, w.ray_weight, r.map, r.plane);
-          mueller(e, m);
+          add_polarized_path(polarized, e, m);
         },
         keep, msums);
   }
-  if (o.split && L == 0) {
+  if (o.split) {
     exchange_paths(*o.split, "bsdf", reps, false, kept);
-    for (const BsdfTally& rep : kept) add_rep(rep);
+    for (const BsdfTally& rep : kept) add_run_replicate(r.measured, rep, o.table_sums_only);
   }
   if (msums) msums->exchange();
 }
