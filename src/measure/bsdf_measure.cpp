@@ -315,11 +315,7 @@ void BsdfTally::add_replicate(const SpectralTally& rep, int l) {
   const std::size_t L = static_cast<std::size_t>(rep.wavelengths);
   add_replicate_sums(*this, rep.paths, [&](int which, std::size_t i) { return (*sums[which])[i * L + l]; });
   BsdfTally counts;  // the path counts, shared by every wavelength
-  counts.paths = rep.paths;
-  counts.lost = rep.lost;
-  counts.unterminated = rep.unterminated;
-  counts.events = rep.events;
-  counts.counters = rep.counters;
+  rep.put_path_counts(counts);
   add_fields(*this, counts);
   ++replicates;
 }

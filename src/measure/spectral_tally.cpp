@@ -45,12 +45,16 @@ BsdfTally SpectralTally::wavelength(int l) const {
   for (std::size_t i = 0; i < t.albedo.size(); ++i) t.albedo[i] = albedo[i * L + l];
   for (std::size_t i = 0; i < t.pix.size(); ++i) t.pix[i] = pix[i * L + l];
   for (std::size_t i = 0; i < t.plane.size(); ++i) t.plane[i] = plane[i * L + l];
+  put_path_counts(t);
+  return t;
+}
+
+void SpectralTally::put_path_counts(BsdfTally& t) const {
   t.paths = paths;
   t.lost = lost;
   t.unterminated = unterminated;
   t.events = events;
   t.counters = counters;
-  return t;
 }
 
 }  // namespace microsim

@@ -31,11 +31,7 @@ void add_replicate_first_moments(BsdfTally& t, const SpectralTally& rep, int l) 
   add_sums(t.pix, [&](std::size_t i) { return rep.pix[i * L + l]; });
   add_sums(t.plane, [&](std::size_t i) { return rep.plane[i * L + l]; });
   BsdfTally counts;  // the path counts, shared by every wavelength
-  counts.paths = rep.paths;
-  counts.lost = rep.lost;
-  counts.unterminated = rep.unterminated;
-  counts.events = rep.events;
-  counts.counters = rep.counters;
+  rep.put_path_counts(counts);
   add_fields(t, counts);
   ++t.replicates;
 }

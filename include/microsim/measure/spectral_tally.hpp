@@ -42,6 +42,8 @@ struct SpectralTally {
   SpectralTally& operator+=(const SpectralTally& o);
   // Wavelength l's sums and the counts, as a BsdfTally of one replicate (replicates == 0).
   BsdfTally wavelength(int l) const;
+  // The path counts, shared by every wavelength, written into t (its sums untouched).
+  void put_path_counts(BsdfTally& t) const;
 };
 
 }  // namespace microsim
