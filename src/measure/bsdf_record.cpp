@@ -17,12 +17,6 @@ namespace {
 
 const char* const kSideName[2] = {"reflected", "transmitted"};
 
-std::string fixed(double x, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, x);
-  return buf;
-}
-
 // Comparisons of one surface's row: the table's rule (compare in table.hpp) without p-values.
 void compare_one(Json& row, Comparison c) {
   c.p.clear();
