@@ -112,6 +112,7 @@ inline Rate binned_lean_rays_per_second(const Tracer& tracer, const FacetTable& 
             ++h16[b == FacetTable::kNoBin16 ? nobin : q * nb + b];
             break;
           }
+          case BinVariant::Blocks64: break;  // counted block by block above
         }
       }
     }

@@ -193,7 +193,9 @@ TEST_P(TallyFields, ShardsMergedAndMpiRanksEqualOneRunWithEveryCounter) {
   expect_spectral_and_mueller_data(single, estimator, cmd);
   const json a = record_without_timings(single), b = record_without_timings(read_record(record_of(merged)));
   EXPECT_TRUE(a == b) << cmd << "\nmerged shards differ from one run: " << differences(a, b);
-  if (ext != "json") EXPECT_TRUE(slurp(one) == slurp(merged)) << cmd << "\nmerged shards' ." << ext << " differs";
+  if (ext != "json") {
+    EXPECT_TRUE(slurp(one) == slurp(merged)) << cmd << "\nmerged shards' ." << ext << " differs";
+  }
 
 #ifdef MICROSIM_MPIEXEC
   const std::string two = tmp(name + "_mpi." + ext);
@@ -204,7 +206,9 @@ TEST_P(TallyFields, ShardsMergedAndMpiRanksEqualOneRunWithEveryCounter) {
   EXPECT_EQ(ranks.value("ranks", 0), 2) << cmd;
   const json m = record_without_timings(ranks);
   EXPECT_TRUE(a == m) << cmd << "\nmpirun -n 2 differs from one run: " << differences(a, m);
-  if (ext != "json") EXPECT_TRUE(slurp(one) == slurp(two)) << cmd << "\nmpirun -n 2's ." << ext << " differs";
+  if (ext != "json") {
+    EXPECT_TRUE(slurp(one) == slurp(two)) << cmd << "\nmpirun -n 2's ." << ext << " differs";
+  }
 #endif
 }
 
