@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """The source tools measure what they claim: tools/function_lengths.py finds a function's first
 and last line (a multi-line signature, a constructor with brace initializers, braces in strings
-and comments) and tools/include_cycles.py finds a two-header cycle and nothing in a chain."""
+and comments) and tools/include_cycles.py finds a two-header cycle and nothing in a chain, and a
+lower layer's header or source including an upper layer's (and not the reverse)."""
 import pathlib
 import subprocess
 import sys
@@ -69,6 +70,25 @@ def main():
               "--fail-touching x exits 1 on a cycle in x")
         check(subprocess.run(guarded + ["y"], capture_output=True).returncode == 0,
               "--fail-touching y ignores a cycle in x")
+        # A layer rule: a lower directory's header or source including an upper one's fails,
+        # the upper including the lower does not.
+        for d_ in ("include/microsim/low", "include/microsim/up", "src/low", "src/up"):
+            (root / d_).mkdir(parents=True)
+        (root / "include/microsim/up/req.hpp").write_text('#include "microsim/low/est.hpp"\n')
+        (root / "include/microsim/low/est.hpp").write_text("\n")
+        (root / "src/up/local.hpp").write_text("\n")
+        layered = [sys.executable, str(ROOT / "tools" / "include_cycles.py"), "--root", d,
+                   "--forbid-includes", "low,other", "up"]
+        check(subprocess.run(layered, capture_output=True).returncode == 0, "an upper layer may include a lower one")
+        (root / "src/low/est.cpp").write_text('#include "microsim/low/est.hpp"\n#include "../up/local.hpp"\n')
+        broken = subprocess.run(layered, capture_output=True, text=True)
+        check(broken.returncode == 1 and "src/low/est.cpp includes ../up/local.hpp" in broken.stdout,
+              f"a lower source including an upper src-local header fails: {broken.stdout}")
+        (root / "src/low/est.cpp").write_text('#include "microsim/low/est.hpp"\n')
+        (root / "include/microsim/low/est.hpp").write_text('#include "microsim/up/req.hpp"\n')
+        broken = subprocess.run(layered, capture_output=True, text=True)
+        check(broken.returncode == 1 and "include/microsim/low/est.hpp includes microsim/up/req.hpp" in broken.stdout,
+              f"a lower header including an upper one fails: {broken.stdout}")
         long_file = root / "src" / "x" / "long.cpp"
         long_file.write_text("int f() {\n" + "  ;\n" * 90 + "}\n")
         over = subprocess.run([sys.executable, str(ROOT / "tools" / "function_lengths.py"), "3", "--root", d,

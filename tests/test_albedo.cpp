@@ -12,6 +12,7 @@
 #include <algorithm>
 
 #include "cli_helpers.hpp"
+#include "microsim/api/albedo_resolve.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/measure/albedo_measure.hpp"
 #include "microsim/measure/stats.hpp"

@@ -1,13 +1,18 @@
 // The library's measure bsdf and measure albedo requests (microsim/api/bsdf_request.hpp,
 // albedo_request.hpp): check() refuses each out-of-range field with a message naming that
 // parameter ("{rays}: ..."), which the front ends spell as their option or keyword; the records
-// are measured on the request's angles sorted and without repeats.
+// are measured on the request's angles sorted and without repeats; a request resolves into the
+// measurement's options field by field (api/albedo_resolve.hpp) and its record keeps the
+// request's parameters before the measured part.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
+#include "microsim/api/albedo_resolve.hpp"
 #include "microsim/api/albedo_run.hpp"
 #include "microsim/api/bsdf_run.hpp"
 #include "microsim/common.hpp"
@@ -162,6 +167,82 @@ TEST(AlbedoRequestChecks, RunNeedsSurfacesAndMeasuresSortedAngles) {
   EXPECT_EQ(j["quadrature"]["nodes"], 2);
   ASSERT_EQ(j["rows"].size(), 2u);
   for (const Json& row : j["rows"]) EXPECT_EQ(row["albedo"], 1.0);  // a flat mirror: every path leaves
+}
+
+// The positions of `keys` among the record's keys, in the record's order (-1: missing).
+std::vector<long> key_positions(const Json& record, const std::vector<std::string>& keys) {
+  std::vector<std::string> order;
+  for (auto it = record.begin(); it != record.end(); ++it) order.push_back(it.key());
+  std::vector<long> out;
+  for (const std::string& k : keys) {
+    const auto at = std::find(order.begin(), order.end(), k);
+    out.push_back(at == order.end() ? -1 : static_cast<long>(at - order.begin()));
+  }
+  return out;
+}
+
+// Every key present and in the given order.
+bool in_order(const std::vector<long>& positions) {
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    if (positions[i] < 0 || (i > 0 && positions[i] <= positions[i - 1])) return false;
+  return true;
+}
+
+TEST(AlbedoRequestResolve, OptionsCarryEveryFieldOfTheRequest) {
+  AlbedoRequest r;  // every field away from AlbedoOptions' defaults
+  r.material = "conductor";
+  r.eta = 0.5;
+  r.k = 2.5;
+  r.mu_nodes = 5;
+  r.phi_i_deg = 20;
+  r.azimuths = 3;
+  r.orders = 6;
+  r.rays = 12345;
+  r.seed = 9;
+  r.replicates = 7;
+  r.max_events = 77;
+  const AlbedoOptions o = albedo_options(r);
+  EXPECT_EQ(o.material.kind, models::MaterialKind::Conductor);
+  EXPECT_EQ(o.material.eta, 0.5);
+  EXPECT_EQ(o.material.k, 2.5);
+  EXPECT_EQ(o.quadrature.rule, "gauss-legendre");
+  EXPECT_EQ(o.quadrature.mu, gauss_legendre_mu(5).mu);
+  EXPECT_EQ(o.phi_i_deg, 20);
+  EXPECT_EQ(o.azimuths, 3);
+  EXPECT_EQ(o.orders, 6);
+  EXPECT_EQ(o.rays, 12345);
+  EXPECT_EQ(o.seed, 9u);
+  EXPECT_EQ(o.replicates, 7);
+  EXPECT_EQ(o.max_events, 77);
+  // Given incidences: the trapezoid rule on their cosines, increasing in mu.
+  r.theta_i_deg = {60, 0};
+  const MuQuadrature q = albedo_options(r).quadrature;
+  EXPECT_EQ(q.rule, "trapezoid");
+  ASSERT_EQ(q.mu.size(), 2u);
+  EXPECT_NEAR(q.mu[0], 0.5, 1e-15);
+  EXPECT_EQ(q.mu[1], 1.0);
+}
+
+TEST(AlbedoRequestChecks, RecordHasTheParametersBeforeTheMeasuredPart) {
+  AlbedoRequest r = mirror_albedo();
+  r.surfaces = {surface_held("flat", std::make_shared<const Microsurface>(flat_heightfield()))};
+  const Json j = measure_albedo_record(r, RunContext());
+  const std::vector<long> at =
+      key_positions(j, {"command", "file", "parameters", "quadrature", "definitions", "surfaces", "rows", "averages"});
+  EXPECT_TRUE(in_order(at)) << j.dump().substr(0, 200);
+  // Power: the same keys in another order are refused.
+  EXPECT_FALSE(in_order(key_positions(j, {"file", "quadrature", "parameters"})));
+}
+
+TEST(BsdfRequestChecks, RecordHasTheParametersBeforeTheMeasuredPart) {
+  BsdfRequest r = mirror_bsdf();
+  r.surface = surface_held("flat", std::make_shared<const Microsurface>(flat_heightfield()));
+  const Json j = measure_bsdf_record(r, RunContext());
+  EXPECT_TRUE(in_order(key_positions(j, {"command", "file", "surface", "parameters", "definitions", "albedo",
+                                         "rows", "in_plane", "incidences"})));
+  EXPECT_FALSE(in_order(key_positions(j, {"definitions", "parameters"})));  // power: the order is seen
+  EXPECT_EQ(j["parameters"]["material"], "mirror");
+  EXPECT_FALSE(j["definitions"].contains("polarization"));  // not a polarized request
 }
 
 }  // namespace

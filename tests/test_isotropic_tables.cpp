@@ -7,6 +7,7 @@
 #include <cmath>
 #include <vector>
 
+#include "microsim/api/bsdf_resolve.hpp"
 #include "microsim/measure/bsdf_record.hpp"
 #include "microsim/measure/bsdf_table.hpp"
 #include "test_helpers.hpp"

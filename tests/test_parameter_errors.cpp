@@ -9,8 +9,8 @@
 
 #include "../src/cli/option_checks.hpp"
 #include "cli_helpers.hpp"
+#include "microsim/api/bsdf_request.hpp"
 #include "microsim/common.hpp"
-#include "microsim/measure/bsdf_record.hpp"
 #include "microsim/surface/surface_spec.hpp"
 
 namespace {

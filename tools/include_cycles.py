@@ -8,15 +8,22 @@ A cycle means neither can be understood, tested or linked without the other,
 so the script lists every strongly connected group of two or more components
 (Tarjan's algorithm) and, optionally, the directory-level cycles
 (io -> measure -> io), which is how layering rules ("io may depend on result
-types, not the reverse") are stated.
+types, not the reverse") are stated. A layer rule names lower directories whose
+headers and sources must include nothing of the upper ones (measure knows no
+request of api, no command of cli).
 
 Usage: include_cycles.py [--root DIR] [--dirs] [--fail] [--fail-touching DIR ...]
-  --dirs           also report cycles between top-level directories (io, measure, ...)
-  --fail           exit 1 when a component cycle exists (the default only reports)
-  --fail-touching  exit 1 when a component cycle has a member in one of these top-level
-                   directories (a guard for the directories already free of cycles)
+                         [--forbid-includes LOWER UPPER ...]
+  --dirs             also report cycles between top-level directories (io, measure, ...)
+  --fail             exit 1 when a component cycle exists (the default only reports)
+  --fail-touching    exit 1 when a component cycle has a member in one of these top-level
+                     directories (a guard for the directories already free of cycles)
+  --forbid-includes  LOWER UPPER, each a comma-separated list of top-level directories:
+                     exit 1 when a header or source in LOWER includes one in UPPER
+                     (repeatable: one rule each)
 """
 import argparse
+import os
 import pathlib
 import re
 import sys
@@ -60,6 +67,32 @@ def component_graph(root):
                 deps.add(dst)
                 graph.setdefault(dst, set())
     return graph
+
+
+def top_directory(path, root):
+    """Top-level directory of a file under include/microsim or src ("measure", ...), or None."""
+    parts = path.relative_to(root).parts
+    if parts[:2] == ("include", "microsim") and len(parts) > 3:
+        return parts[2]
+    if parts[0] == "src" and len(parts) > 2:
+        return parts[1]
+    return None
+
+
+def layer_violations(root, lower, upper):
+    """Lines "file includes target" for every #include from a file in a `lower` directory of a
+    file in an `upper` one (includes resolved as component_graph resolves them)."""
+    files = sorted(list((root / "include").rglob("*.hpp")) + list((root / "src").rglob("*.hpp"))
+                   + list((root / "src").rglob("*.cpp")))
+    found = []
+    for f in files:
+        if top_directory(f, root) not in lower:
+            continue
+        for target in INCLUDE.findall(f.read_text(errors="replace")):
+            hit = resolve(target, f, root)
+            if hit is not None and top_directory(pathlib.Path(os.path.normpath(hit)), root) in upper:
+                found.append(f"{f.relative_to(root)} includes {target}")
+    return found
 
 
 def strongly_connected(graph):
@@ -124,6 +157,7 @@ def main():
     parser.add_argument("--dirs", action="store_true")
     parser.add_argument("--fail", action="store_true")
     parser.add_argument("--fail-touching", nargs="+", default=[], metavar="DIR")
+    parser.add_argument("--forbid-includes", nargs=2, action="append", default=[], metavar=("LOWER", "UPPER"))
     args = parser.parse_args()
     root = pathlib.Path(args.root).resolve()
     graph = component_graph(root)
@@ -147,7 +181,15 @@ def main():
     touching = [g for g in cycles if any(c.split("/")[0] in args.fail_touching for c in g)]
     for group in touching:
         print("cycle in a guarded directory:", " <-> ".join(group))
-    return 1 if (args.fail and cycles) or touching else 0
+    violations = []
+    for lower, upper in args.forbid_includes:
+        lower_dirs, upper_dirs = set(lower.split(",")), set(upper.split(","))
+        for line in layer_violations(root, lower_dirs, upper_dirs):
+            violations.append(line)
+            print(f"layer rule ({lower} below {upper}) broken: {line}")
+    if args.forbid_includes:
+        print(f"layer rule violations: {len(violations)}")
+    return 1 if (args.fail and cycles) or touching or violations else 0
 
 
 if __name__ == "__main__":

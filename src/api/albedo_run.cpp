@@ -2,10 +2,11 @@
 
 #include <chrono>
 
+#include "microsim/api/albedo_record.hpp"
+#include "microsim/api/albedo_resolve.hpp"
 #include "microsim/api/estimator_record.hpp"
 #include "microsim/api/record_file.hpp"
 #include "microsim/io/output.hpp"
-#include "microsim/measure/albedo_measure.hpp"
 
 namespace microsim {
 

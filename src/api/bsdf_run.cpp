@@ -2,9 +2,10 @@
 
 #include <chrono>
 
-#include "microsim/io/bsdf_files.hpp"
+#include "microsim/api/bsdf_files.hpp"
+#include "microsim/api/bsdf_record.hpp"
+#include "microsim/api/bsdf_resolve.hpp"
 #include "microsim/io/output.hpp"
-#include "microsim/measure/bsdf_record.hpp"
 #include "microsim/surface/microsurface.hpp"
 #include "microsim/trace/tracer.hpp"
 

@@ -1,7 +1,6 @@
 #include "microsim/io/bsdf_files.hpp"
 
 #include <chrono>
-#include <cstdio>
 
 #include "microsim/io/merl.hpp"
 #include "microsim/io/pbsdf.hpp"
@@ -9,14 +8,6 @@
 #include "microsim/version.hpp"
 
 namespace microsim {
-
-namespace {
-std::string fixed(double x, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, x);
-  return buf;
-}
-}  // namespace
 
 Json bsdf_exr_attributes(const Json& j, const std::string& json_path) {
   Json attrs = {{"microsim_command", "measure bsdf"},
@@ -34,41 +25,20 @@ Json bsdf_exr_attributes(const Json& j, const std::string& json_path) {
 }
 
 namespace {
-std::string rgl_description(const BsdfRequest& o, const Microsurface& s, const BsdfTable& t) {
-  const auto f4 = [](double x) { return fixed(x, 4); };
-  std::string d = "microsim measured BSDF of an explicit microsurface (" + s.description.dump() +
-                  "), material " + o.material;
-  if (o.eta) d += " eta " + f4(*o.eta);
-  if (o.k) d += " k " + f4(*o.k);
-  if (!o.metal.empty()) d += " " + o.metal;
-  if (!o.ior_file.empty()) d += " from index file " + o.ior_file;
-  if (t.results[0].wavelengths() > 0) {
-    d += " at";
-    for (double nm : t.results[0].options.wavelengths_nm) d += " " + fixed(nm, 1);
-    d += " nm (rgb: linear sRGB, CIE 1931 2-degree observer, equal-energy white)";
-  }
-  d += "; reflection, all scattering orders; " + std::to_string(t.paths(0, 0)) +
-       " random walks per incidence";
-  if (t.azimuths() > 1)
-    d += " over " + std::to_string(t.azimuths()) + " incidence azimuths (the azimuthal mean)";
-  d += ", seed " + std::to_string(o.seed);
-  if (o.material == "dielectric") d += "; the reflected part only (transmission is not in this table)";
-  return d;
-}
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 }  // namespace
 
-void write_bsdf_tables(const std::string& path, const BsdfRequest& o, const BsdfTable& t,
-                       const Microsurface& s, Json& j, const std::string& json_path) {
+void write_bsdf_table_file(const std::string& path, const BsdfTableFile& o, const BsdfTable& t,
+                           const Microsurface& s, Json& j, const std::string& json_path) {
   const auto tb = std::chrono::steady_clock::now();
   if (o.format == "exr") {
     write_exr(path, bsdf_table_exr(t, bsdf_exr_attributes(j, json_path)));
   } else if (o.format == "bsdf") {
     RglOptions ro;
     ro.resolution = o.table_resolution;
-    ro.description = rgl_description(o, s, t);
+    ro.description = o.rgl_description;
     const RglTable rgl = build_rgl_table(t, s, ro);
     write_rgl_bsdf(path, rgl);
     j["table"] = {{"format", "RGL tensor file (Dupuy and Jakob 2018)"},

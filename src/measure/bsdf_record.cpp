@@ -56,51 +56,6 @@ const char* const kNominalZ[3] = {"z_smith_single", "z_smith_multiple", "z_vcavi
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
-// Request
-
-void check_bsdf_surface(const BsdfRequest& o, const Microsurface& s, const std::string& name) {
-  const std::string& ext = o.format;
-  if (s.macro().finite_object() && (ext == "bsdf" || ext == "binary" || ext == "pbsdf"))
-    throw ParameterError(literal_text(name) + ": {output} ." + ext + " tables need a periodic tile (this surface is a finite object)");
-  const bool anisotropic_surface = s.nominal && std::abs(s.nominal->alpha_x - s.nominal->alpha_y) > 1e-12;
-  if (ext == "binary" && anisotropic_surface)
-    throw ParameterError(literal_text(name) + ": {output} .binary needs an isotropic surface (MERL tables are isotropic; nominal "
-                         "alpha_x != alpha_y); write a .bsdf with {phi_i} -180:180:STEP instead");
-  if (ext == "pbsdf" && anisotropic_surface)
-    throw ParameterError(literal_text(name) + ": {output} .pbsdf needs an isotropic surface (Mitsuba's measured_polarized "
-                         "tables are isotropic; nominal alpha_x != alpha_y)");
-  if (ext == "bsdf" && anisotropic_surface && o.phi_i_deg.size() == 1)
-    throw ParameterError(literal_text(name) + ": an anisotropic surface (alpha_x != alpha_y) needs {phi_i} over the full "
-                         "circle for a .bsdf (e.g. {phi_i} -180:180:30)");
-}
-
-BsdfTableOptions bsdf_table_options(const BsdfRequest& o, const Microsurface& s, TallySplit* split) {
-  BsdfTableOptions to;
-  to.base.material = bsdf_material(o);
-  if (const auto table = bsdf_index_table(o)) {
-    to.base.wavelengths_nm = bsdf_wavelengths(o);
-    to.base.spectral = spectral_conductors(*table, to.base.wavelengths_nm);
-  }
-  to.base.orders = o.orders;
-  to.base.rays = static_cast<std::uint64_t>(o.rays);
-  to.base.split = split;
-  to.base.seed = o.seed;
-  to.base.resolution = o.resolution;
-  to.base.replicates = o.replicates;
-  to.base.models = o.models;
-  to.base.polarized = o.polarized;
-  to.base.model_walks = s.nominal && o.models ? to.base.rays : 0;
-  for (double t : o.theta_i_deg) to.theta_i.push_back(rad(t));
-  for (double p : o.phi_i_deg) to.phi_i.push_back(rad(p));
-  const bool renderer_table = o.format == "bsdf" || o.format == "binary" || o.format == "pbsdf";
-  to.table_azimuths = renderer_table && to.phi_i.size() == 1 ? o.table_azimuths : 1;
-  // The turned runs feed the table alone: f for .bsdf and .binary, the Mueller bins for .pbsdf.
-  if (renderer_table)
-    to.turned_runs = o.format == "pbsdf" ? BsdfTableOptions::TurnedRuns::TableMueller : BsdfTableOptions::TurnedRuns::TableF;
-  return to;
-}
-
-// ---------------------------------------------------------------------------------------------
 // Tables of one incidence
 
 Table bsdf_albedo_spec() {
@@ -449,41 +404,7 @@ Json bsdf_incidences_json(const BsdfTable& t, const Microsurface& s) {
   return out;
 }
 
-namespace {
-// The record's parameters: the request as run (one incidence: its angles as numbers).
-Json bsdf_parameters_json(const BsdfRequest& o, const BsdfTable& t) {
-  const BsdfResult& r = t.results.at(0);
-  const bool single = t.results.size() == 1;
-  Json parameters = {{"material", o.material},
-                     {"eta", o.eta ? Json(*o.eta) : Json(nullptr)},
-                     {"k", o.k ? Json(*o.k) : Json(nullptr)},
-                     {"theta_i_deg", single ? Json(o.theta_i_deg[0]) : Json(o.theta_i_deg)},
-                     {"phi_i_deg", single ? Json(o.phi_i_deg[0]) : Json(o.phi_i_deg)},
-                     {"orders", o.orders},
-                     {"rays", t.paths(0, 0)},  // over every azimuth of an averaged table
-                     {"rays_requested", o.rays},
-                     {"seed", o.seed},
-                     {"replicates", r.options.replicates},
-                     {"resolution", o.resolution},
-                     {"in_plane_bins", r.plane.size()},
-                     {"in_plane_band_half_width_deg", deg(r.plane.half_width())},
-                     {"max_events", r.options.max_events},
-                     {"smith_multiple_walks", r.options.model_walks},
-                     {"models", o.models}};
-  if (o.format == "bsdf") parameters["table_resolution"] = o.table_resolution;
-  if (o.polarized) parameters["polarized"] = true;
-  if (!r.spectral.empty()) {
-    const auto table = bsdf_index_table(o);
-    parameters["metal"] = o.metal.empty() ? Json(nullptr) : Json(o.metal);
-    parameters["ior_file"] = o.ior_file.empty() ? Json(nullptr) : Json(o.ior_file);
-    parameters["index_source"] = table->source;
-    parameters["wavelengths_nm"] = r.options.wavelengths_nm;
-  }
-  return parameters;
-}
-
-// What the record's fields mean (spectral and polarized runs: their fields too).
-Json bsdf_definitions_json(const BsdfRequest& o, const BsdfResult& r) {
+Json bsdf_definitions_json(const BsdfResult& r, bool polarized) {
   Json definitions = {
       {"albedo", "fraction of the incident power leaving on each side after exactly n scattering "
                  "events (order_Kplus: K or more; total: all); a conductor's paths carry the "
@@ -525,7 +446,7 @@ Json bsdf_definitions_json(const BsdfRequest& o, const BsdfResult& r) {
         "reflected_rgb: linear sRGB of the reflected albedo spectrum (CIE 1931 2-degree observer "
         "by the fit of [Wyman13], equal-energy illuminant, each channel divided by a constant "
         "spectrum's: a mirror is (1, 1, 1)); n and k linear in the wavelength between table rows";
-  if (o.polarized)
+  if (polarized)
     definitions["polarization"] =
         "Mueller matrices of the reflected paths (row-major 4 x 4, Stokes vectors with s3 = -2 Im(Ex Ey*) "
         "for exp(-i omega t)); input frame: the light travelling along -l with reference axis "
@@ -538,18 +459,10 @@ Json bsdf_definitions_json(const BsdfRequest& o, const BsdfResult& r) {
         "replicate means. M00 is the BSDF of unpolarized light";
   return definitions;
 }
-}  // namespace
 
-void put_bsdf_record(Json& j, const BsdfRequest& o, const BsdfTable& t, const Microsurface& s,
-                     const std::string& file) {
-  const BsdfResult& r = t.results.at(0);
-  const bool single = t.results.size() == 1;
-  j["file"] = file;
-  j["surface"] = s.description;
-  j["parameters"] = bsdf_parameters_json(o, t);
-  j["definitions"] = bsdf_definitions_json(o, r);
+void put_bsdf_incidences(Json& j, const BsdfTable& t, const Microsurface& s) {
   const Json incidences = bsdf_incidences_json(t, s);
-  if (single)
+  if (t.results.size() == 1)
     for (auto it = incidences[0].begin(); it != incidences[0].end(); ++it)
       if (it.key() != "theta_i_deg" && it.key() != "phi_i_deg") j[it.key()] = it.value();
   j["incidences"] = incidences;

@@ -1,6 +1,8 @@
 // measure albedo as a request of the library: the directional albedo E(mu) per scattering order
 // and in total at the nodes of a quadrature in mu, and E_avg = 2 int E(mu) mu dmu with its
-// errors, per surface (measure/albedo_measure.hpp); its record and the lookup table E(mu, alpha).
+// errors, per surface (measure/albedo_measure.hpp); its record and the lookup table E(mu, alpha)
+// (api/albedo_record.hpp). The request is resolved into the measurement's options in
+// api/albedo_resolve.hpp: the measure layer knows no request.
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -10,15 +12,14 @@
 
 #include "microsim/api/run_context.hpp"
 #include "microsim/api/surface_input.hpp"
+#include "microsim/measure/mu_quadrature.hpp"
 #include "microsim/models/microfacet_bsdf.hpp"
 
 namespace microsim {
 
-// Ranges of the request (the command line's help uses them).
-constexpr int kMinMuNodes = 2, kMaxMuNodes = 64;
+// Ranges of the request (the command line's help uses them; mu_nodes: kMinMuNodes, kMaxMuNodes
+// of measure/mu_quadrature.hpp).
 constexpr int kMaxAlbedoAzimuths = 360;
-// Azimuths averaged on an anisotropic surface when the request leaves it open (azimuths = 0).
-constexpr int kAnisotropicAlbedoAzimuths = 8;
 
 struct AlbedoRequest {
   // Each surface is measured on its own (a row of the lookup table, in the order given).
@@ -31,7 +32,9 @@ struct AlbedoRequest {
   int mu_nodes = 8;                 // Gauss-Legendre nodes in mu (when theta_i_deg is empty)
   std::vector<double> theta_i_deg;  // given incidences instead: the trapezoid rule in mu
   double phi_i_deg = 0.0;
-  int azimuths = 0;  // incidence azimuths averaged; 0: 1 (isotropic), kAnisotropicAlbedoAzimuths (anisotropic)
+  // Incidence azimuths averaged; 0: 1 (isotropic), kAnisotropicAlbedoAzimuths (anisotropic;
+  // measure/albedo_measure.hpp).
+  int azimuths = 0;
   int orders = 4;
   long long rays = 200000;  // per mu node and surface
   std::uint64_t seed = 1;

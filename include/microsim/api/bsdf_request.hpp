@@ -4,7 +4,9 @@
 //
 // A request states a measurement as the command line and the Python module give it (material
 // by name, angles in degrees, the output format); check() holds every limit, so that each front
-// end refuses the same requests with the same words (measure/bsdf_record.hpp builds the record).
+// end refuses the same requests with the same words. The request is resolved into the table's
+// options in api/bsdf_resolve.hpp, its record is built in api/bsdf_record.hpp and its table files
+// are written by api/bsdf_files.hpp: the measure layer knows no request.
 #pragma once
 #include <cstdint>
 #include <optional>

@@ -1,5 +1,6 @@
 // The files of a BSDF measurement (measure/bsdf_record.hpp): the EXR hemisphere tables, the RGL
-// tensor file and the MERL table, written from the measured tables and the record.
+// tensor file and the MERL table, written from the measured tables and the record. What they
+// take of a request comes as plain values (BsdfTableFile; api/bsdf_files.hpp fills it).
 #pragma once
 #include <string>
 
@@ -18,9 +19,15 @@ ExrTable bsdf_table_exr(const BsdfTable& t, const Json& attributes);
 // The header attributes of `measure bsdf`'s EXR (record: as put_bsdf_record wrote it).
 Json bsdf_exr_attributes(const Json& record, const std::string& json_path);
 
-// Writes the table in the request's format to `path` (exr, bsdf, binary; json: nothing) and
-// adds the record's "table" field for the renderer tables.
-void write_bsdf_tables(const std::string& path, const BsdfRequest& request, const BsdfTable& t,
-                       const Microsurface& s, Json& record, const std::string& json_path);
+// What a table file takes of the measurement's request (api/bsdf_files.hpp fills it).
+struct BsdfTableFile {
+  std::string format = "json";  // exr, bsdf (RGL tensor file), binary (MERL), pbsdf; json: no table
+  int table_resolution = 64;    // .bsdf tables; .pbsdf grids
+  std::string rgl_description;  // the .bsdf file's description of the measurement
+};
+// Writes the table in the file's format to `path` (exr, bsdf, binary, pbsdf; json: nothing)
+// and adds the record's "table" field for the renderer tables.
+void write_bsdf_table_file(const std::string& path, const BsdfTableFile& file, const BsdfTable& t,
+                           const Microsurface& s, Json& record, const std::string& json_path);
 
 }  // namespace microsim

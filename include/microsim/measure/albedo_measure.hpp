@@ -19,56 +19,27 @@
 // incidence azimuth: E is then the mean over `azimuths` azimuths phi_i + 2 pi a / N (rays split
 // evenly), its error combined from the runs' independent errors.
 //
-// Quadrature. E_avg = sum_j W_j E(mu_j):
-//  * gauss-legendre (default): the N-point Gauss-Legendre rule in mu on [0, 1], W_j = w_j mu_j
-//    (w_j the rule's weights on [-1, 1]); exact when E is a polynomial of degree <= 2N - 2;
-//  * trapezoid (given incidence angles): E linear in mu between the nodes and constant from the
-//    outermost nodes to mu = 0 and mu = 1, integrated exactly against 2 mu.
-// Statistical error: sqrt(sum_j W_j^2 se_j^2) (independent nodes). Quadrature error: the
-// difference |Q - Q_low| from a lower-order rule on a subset of the same measured values
-// (every other node; gauss-legendre: the interpolating polynomial of those nodes integrated
-// exactly; trapezoid: the piecewise-linear rule on them, the outermost nodes kept). It is the
-// error of the lower rule, so an overestimate of the higher rule's; its own noise,
-// sqrt(sum_j (W_j - W'_j)^2 se_j^2), is reported beside it.
+// Quadrature: E_avg = sum_j W_j E(mu_j) by a rule in mu with its statistical and quadrature
+// errors (measure/mu_quadrature.hpp).
+//
+// The measurement takes plain values (AlbedoOptions); a request of the library
+// (api/albedo_request.hpp) is resolved into them in api/albedo_resolve.hpp, and its record is
+// put together in api/albedo_record.hpp.
 #pragma once
+#include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "microsim/api/albedo_request.hpp"
 #include "microsim/io/output.hpp"
 #include "microsim/measure/bsdf_table.hpp"
+#include "microsim/measure/mu_quadrature.hpp"
 #include "microsim/measure/table.hpp"
+#include "microsim/models/microfacet_bsdf.hpp"
 #include "microsim/surface/microsurface.hpp"
 
 namespace microsim {
-
-// A quadrature of 2 int_0^1 E(mu) mu dmu on measured nodes, with a lower-order rule on a subset
-// of them for the error estimate. Nodes increase in mu.
-struct MuQuadrature {
-  std::string rule;                 // "gauss-legendre" or "trapezoid"
-  std::vector<double> mu;           // nodes
-  std::vector<double> weight;       // W_j: E_avg = sum_j W_j E(mu_j)
-  std::vector<double> low_weight;   // W'_j of the lower-order rule (0 on nodes it does not use)
-  bool has_low_rule = false;        // false when the subset is every node (too few nodes)
-  std::string description() const;  // the rule and its lower-order partner, in words
-};
-// The N-point Gauss-Legendre rule in mu on [0, 1] (N >= 2).
-MuQuadrature gauss_legendre_mu(int nodes);
-// The piecewise-linear rule on the given nodes (sorted here; at least one, each in (0, 1]).
-MuQuadrature trapezoid_mu(std::vector<double> mu);
-
-// E_avg of values at the nodes, with its statistical and quadrature errors.
-struct AlbedoAverage {
-  double value = 0.0;
-  double stderr_ = 0.0;            // sqrt(sum W_j^2 se_j^2)
-  double quadrature_error = 0.0;   // |Q - Q_low|; NaN without a lower-order rule
-  double quadrature_error_noise = 0.0;  // sqrt(sum (W_j - W'_j)^2 se_j^2); NaN likewise
-  double low_rule_value = 0.0;
-};
-AlbedoAverage average_albedo(const MuQuadrature& q, const std::vector<Estimate>& e);
-// The quadrature the request asks for.
-MuQuadrature albedo_quadrature(const AlbedoRequest& request);
 
 // The nominal roughness a surface stands for in the lookup table: alpha for an isotropic
 // nominal NDF, sqrt(alpha_x alpha_y) for an anisotropic one; NaN without a nominal NDF.
@@ -94,9 +65,26 @@ struct AlbedoSurface {
   double seconds = 0.0;
 };
 
-// Measures E at every node of the request's quadrature on one surface (the BSDF walk with
-// hemisphere maps of one pixel and no models). `progress`: fraction done.
-AlbedoSurface measure_albedo(const Microsurface& s, const std::string& file, const AlbedoRequest& request,
+// Azimuths averaged on an anisotropic surface when the options leave it open (azimuths = 0).
+constexpr int kAnisotropicAlbedoAzimuths = 8;
+
+// What the measurement of E needs: the material, the nodes and the walks' counts.
+struct AlbedoOptions {
+  models::Material material;
+  MuQuadrature quadrature;  // its nodes are the incidences measured
+  double phi_i_deg = 0.0;
+  int azimuths = 0;  // incidence azimuths averaged; 0: 1 (isotropic), kAnisotropicAlbedoAzimuths (anisotropic)
+  int orders = 4;
+  long long rays = 200000;  // per mu node
+  std::uint64_t seed = 1;
+  int replicates = 32;
+  int max_events = 10000;
+};
+
+// Measures E at every node of the options' quadrature on one surface (the BSDF walk with
+// hemisphere maps of one pixel and no models). `progress`: fraction done. ParameterError when
+// the rays are fewer than the replicates of every azimuth.
+AlbedoSurface measure_albedo(const Microsurface& s, const std::string& file, const AlbedoOptions& options,
                              const std::function<void(double)>& progress = {});
 
 // The slot names of E: "reflected_order_1", ..., "reflected_total", "transmitted_..." (a
@@ -111,14 +99,16 @@ Table albedo_average_spec();
 Table albedo_nodes_table(const std::vector<AlbedoSurface>& surfaces, const MuQuadrature& q);
 Table albedo_average_table(const std::vector<AlbedoSurface>& surfaces, const MuQuadrature& q);
 
-// The record of `measure albedo` after its run header: parameters, definitions, quadrature,
-// surfaces, rows (per node) and averages (E_avg per series).
-void put_albedo_record(Json& record, const AlbedoRequest& request, const std::vector<AlbedoSurface>& surfaces);
+// The measured part of `measure albedo`'s record (after its parameters): quadrature,
+// definitions, surfaces, rows (per node) and averages (E_avg per series).
+void put_albedo_results(Json& record, const MuQuadrature& q, const std::vector<AlbedoSurface>& surfaces);
 
 // The lookup table: rows are the surfaces (in the order given; attribute alpha lists their
 // nominal alpha), columns the mu nodes (increasing). Channels: E (all orders, both sides),
 // E_stderr (the error map), E_avg, E_avg_stderr and E_avg_quadrature_error (the row's value in
-// every column), and per series <series> and <series>_stderr.
-ExrTable albedo_lut_exr(const AlbedoRequest& request, const std::vector<AlbedoSurface>& surfaces);
+// every column), and per series <series> and <series>_stderr. The header names `material`, `rays` (per
+// node) and `orders` (also K when there are no surfaces).
+ExrTable albedo_lut_exr(const MuQuadrature& q, const std::vector<AlbedoSurface>& surfaces, const std::string& material,
+                        long long rays, int orders);
 
 }  // namespace microsim

@@ -1,8 +1,8 @@
 // The record of a BSDF measurement (measure/bsdf_measure.hpp, measure/bsdf_table.hpp).
 //
-// The request (api/bsdf_request.hpp) states a measurement as the command line and the Python
-// module give it; its material and indices are resolved here. Each incidence's result becomes
-// two Tables (measure/table.hpp):
+// The measure layer knows no request: a BsdfRequest (api/bsdf_request.hpp) is resolved into the
+// table's options in api/bsdf_resolve.hpp and its record is put together in api/bsdf_record.hpp
+// from the parts here. Each incidence's result becomes two Tables (measure/table.hpp):
 // the albedo per side and scattering order with the models beside it, and the in-plane lobe per
 // bin; the JSON record, the EXR file and the renderer tables' descriptions only format them
 // (the files: io/bsdf_files.hpp).
@@ -18,28 +18,12 @@
 #include <string>
 #include <vector>
 
-#include "microsim/api/bsdf_request.hpp"
 #include "microsim/measure/bsdf_measure.hpp"
 #include "microsim/measure/bsdf_table.hpp"
 #include "microsim/measure/table.hpp"
 #include "microsim/models/metals.hpp"
 
 namespace microsim {
-
-// The index table of a spectral request (--metal or --ior-file), or nullopt; UsageError for a
-// misplaced or unknown metal and an unreadable or malformed file.
-std::optional<models::IndexTable> bsdf_index_table(const BsdfRequest& request);
-// The wavelengths of a spectral request, checked against its table (empty when not spectral).
-std::vector<double> bsdf_wavelengths(const BsdfRequest& request);
-// The material the request names (a spectral conductor: its index at the first wavelength); UsageError for a wrong name or missing / misplaced indices.
-models::Material bsdf_material(const BsdfRequest& request);
-// The checks that need the surface: the renderer tables need a periodic tile, and an anisotropic
-// surface needs azimuths over the full circle (`name`: the surface file, for messages).
-void check_bsdf_surface(const BsdfRequest& request, const Microsurface& s, const std::string& name);
-// The table's options for a checked request (`split`: shards and MPI ranks, or nullptr).
-BsdfTableOptions bsdf_table_options(const BsdfRequest& request, const Microsurface& s,
-                                    TallySplit* split = nullptr);
-
 
 // The albedo and in-plane tables' columns and merge rules without rows (`orders`: K of the
 // request; the albedo table's columns do not depend on it).
@@ -62,9 +46,10 @@ Table bsdf_in_plane_table(const BsdfResult& r);
 Json bsdf_summary_json(const BsdfResult& r, const Microsurface& s);
 // Every incidence: {theta_i_deg, phi_i_deg, and the fields of bsdf_summary_json}, phi_i outer.
 Json bsdf_incidences_json(const BsdfTable& t, const Microsurface& s);
-// The record of `measure bsdf` after its run header: file, surface, parameters, definitions,
-// with one incidence its fields at the top level, and incidences.
-void put_bsdf_record(Json& record, const BsdfRequest& request, const BsdfTable& t,
-                     const Microsurface& s, const std::string& file);
+// What the record's fields mean (a spectral run's fields too; `polarized`: the Mueller fields).
+Json bsdf_definitions_json(const BsdfResult& r, bool polarized);
+// The measured part of `measure bsdf`'s record (after its definitions): with one incidence its
+// fields at the top level, and incidences.
+void put_bsdf_incidences(Json& record, const BsdfTable& t, const Microsurface& s);
 
 }  // namespace microsim
