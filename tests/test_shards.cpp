@@ -308,16 +308,19 @@ TEST_F(Shards, MpiBadInputOneLineExitTwoOnEveryRank) {
 }
 #endif
 
-// A V-cavity ensemble is measured groove by groove; its replicates (G1, G2) and rays (VNDF) are
-// shared out like those of a single surface, and the merged shards give the single run's record.
-TEST_F(Shards, VcavityG1G2VndfAndValidateShardsMergedEqualOneRun) {
+// A V-cavity ensemble is measured groove by groove; its replicates (G1, G2), rays (VNDF) and
+// units of grooves (the BSDF walk) are shared out like those of a single surface, and the merged
+// shards give the single run's record.
+TEST_F(Shards, VcavityG1G2VndfBsdfAndValidateShardsMergedEqualOneRun) {
   const std::string vc = tmp("vc.ply");
   ASSERT_EQ(run_microsim("generate vcavity --grooves 128 -q -o " + vc).code, 0);
   const std::vector<std::tuple<std::string, std::string, int>> runs = {
       {"measure g1 " + vc + " --theta 40,80 --rays 6000", "vcg1", 3},
       {"measure g2 " + vc + " --theta-o 30,75 --theta-i 60 --phi-i 180 --rays 6000", "vcg2", 4},
       {"measure vndf " + vc + " --theta 20,70 --rays 20001 --sampler-samples 0", "vcvndf", 4},
-      {"validate " + vc + " --checks g1,g2,vndf --theta 75 --rays 12000", "vcval", 2}};
+      {"validate " + vc + " --checks g1,g2,vndf --theta 75 --rays 12000", "vcval", 2},
+      {"measure bsdf " + vc + " --material conductor --eta 0.2 --k 3 --theta-i 60 --rays 6000 --resolution 8 "
+       "--no-models", "vcbsdf", 4}};
   for (const auto& [command, name, n] : runs) {
     const auto [one, merged] = single_and_merged(command, name, n);
     EXPECT_EQ(record_without_timings(merged), record_without_timings(one)) << command;

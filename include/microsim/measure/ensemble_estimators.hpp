@@ -4,8 +4,8 @@
 // (deterministic for any thread count). The parts must cover equal shares of the macro area
 // (UsageError otherwise): ray-casting rays are spread evenly over them. G1 and G2 take their
 // share of the work from options.split as the whole-surface estimators do (replicates; rays for
-// the VNDF; measure/shards.hpp), with the same tally layouts, so shards merged give the single
-// run's result.
+// the VNDF; blocks of parts for the BSDF walk; measure/shards.hpp), with the same tally layouts,
+// so shards merged give the single run's result.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -50,7 +50,11 @@ VndfResult measure_vndf(const SceneEnsemble& e, const Vec3& v, const VndfOptions
 
 // The BSDF random walk: on every part the same number of stratified paths along -wi, every
 // interreflection kept; exit directions turned back to the world frame before binning. The
-// tallies are per unit macro area of a part.
+// tallies are per unit macro area of a part. Work units of run_units (measure/replicates.hpp):
+// blocks of at most 16 consecutive parts, the leaves of the halving split of the parts, walked
+// part after part from zero and added in that tree's order (measure/halving_sum.hpp); with
+// options.split each process walks its share of the blocks and the path sums are exchanged
+// (partial-record entry `bsdf_ensemble`).
 BsdfTally trace_bsdf(const SceneEnsemble& e, const BsdfOptions& o, const Vec3& wi,
                      const HemisphereMap& map, const InPlaneBins& plane, std::uint64_t stream);
 

@@ -40,6 +40,8 @@ G1Result measure_g1(const Tracer& tracer, const Vec3& v, const G1Options& option
 //    (Tracer::prefetch_front): on heightfields of kAheadMinCells cells or more, larger than the
 //    caches, the memory reads of consecutive rays then overlap.
 // options.grid_fast_paths = false takes SceneFirstHit everywhere.
+// Not on run_units (measure/replicates.hpp): its units lie in one replicate and its body sees one ray, while
+// GridBatched traces ray j of every replicate as one block and the ahead routes pipeline a chunk across replicates.
 enum class G1RaycastRoute { SceneFirstHit, GridBatched, GridAhead };
 G1RaycastRoute g1_raycast_route(const Microsurface& s, const G1Options& options);
 // Whether measure_g1 sets estimator (b)'s draws up ahead of tracing them (the same draws in the
