@@ -19,7 +19,8 @@ namespace microsim {
 namespace {
 
 // Exact sums over the ensemble's facets, in facet order (g2_facet_terms); returns the CDF of
-// w_f and sets bin[j].
+// w_f and sets bin[j]. Not the whole surface's sum_over_facets (g2_measure.cpp): its totals are
+// sums of per-bin block sums, these facet by facet, so one loop would change the records' last bits.
 std::vector<double> sum_g2_facets(G2Result& r, const SceneEnsemble& e, std::vector<int>& bin) {
   const Vec3 o = r.o, i = r.i;
   const std::size_t nf = e.num_facets();
@@ -160,6 +161,7 @@ VndfResult measure_vndf(const SceneEnsemble& e, const Vec3& v_in, const VndfOpti
   const std::size_t nf = e.num_facets();
   std::vector<int> bin(nf);
   r.front_projected.assign(nbins, 0.0);
+  // Facet by facet (the whole surface's sum_over_facets adds per-bin block sums: other last bits).
   for (std::size_t j = 0; j < nf; ++j) {
     bin[j] = r.binning.bin_of(e.facet_normal(j));
     const double proj = std::max(0.0, e.facet_area(j) * v.dot(e.facet_normal(j)));
