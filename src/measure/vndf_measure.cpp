@@ -15,32 +15,16 @@
 namespace microsim {
 
 namespace {
-// The 21 leading bits of a coordinate in [0, 1): its cell on the 2^21 x 2^21 Morton grid.
-std::uint64_t morton_cell(double a) { return static_cast<std::uint64_t>(a * (1 << 21)) & 0x1FFFFF; }
-
-// Morton order of the unit-square points p and q: the order of the keys that interleave the
-// bits of their cells (y's bit above x's at every level), without forming the keys: the axis
-// whose cells differ in the higher bit decides, y on a tie (dy < dx && dy < (dy ^ dx): the
-// highest set bit of dy is below that of dx). Equal cells are ordered by their coordinates: a
-// total order, so the same for any thread count.
-bool morton_less(const Vec2& p, const Vec2& q) {
-  const std::uint64_t xp = morton_cell(p.x()), xq = morton_cell(q.x());
-  const std::uint64_t yp = morton_cell(p.y()), yq = morton_cell(q.y());
-  const std::uint64_t dx = xp ^ xq, dy = yp ^ yq;
-  if (dx == 0 && dy == 0) return p.x() < q.x() || (p.x() == q.x() && p.y() < q.y());
-  const bool x_decides = dy < dx && dy < (dy ^ dx);
-  return x_decides ? xp < xq : yp < yq;
-}
-
 // Origins first .. first + origins.size() - 1 of the stream, i.i.d. uniform in the unit square,
-// sorted in Morton order (morton_less). Sorted where they are drawn: 16 bytes an origin.
-void draw_sorted_origins(std::uint64_t seed, std::uint64_t stream, std::uint64_t first, std::vector<Vec2>& origins) {
+// sorted in Morton order with their coordinates as tie-breaks (VndfOrigin's order).
+void draw_sorted_origins(std::uint64_t seed, std::uint64_t stream, std::uint64_t first,
+                         std::vector<VndfOrigin>& origins) {
   tbb::parallel_for(std::uint64_t(0), static_cast<std::uint64_t>(origins.size()), [&](std::uint64_t j) {
     CounterRng rng(seed, stream, first + j);
     const double a = rng.uniform(), b = rng.uniform();
-    origins[j] = Vec2(a, b);
+    origins[j] = VndfOrigin::of(a, b);
   });
-  tbb::parallel_sort(origins.begin(), origins.end(), morton_less);
+  tbb::parallel_sort(origins.begin(), origins.end());
 }
 }  // namespace
 
@@ -103,9 +87,9 @@ class SurfaceRays : public VndfRays {
   std::unique_ptr<Scene> scene(std::size_t) const override { return make_scene(tracer_); }
   Vec3 to_local(std::size_t, const Vec3& w) const override { return w; }
   std::uint64_t batch() const override { return std::uint64_t(1) << 22; }
-  std::vector<std::vector<Vec2>> origins(UnitRange rays, UnitRange share) const override {
-    std::vector<std::vector<Vec2>> out(1);
-    std::vector<Vec2>& sorted = out[0];
+  std::vector<std::vector<VndfOrigin>> origins(UnitRange rays, UnitRange share) const override {
+    std::vector<std::vector<VndfOrigin>> out(1);
+    std::vector<VndfOrigin>& sorted = out[0];
     sorted.resize(rays.size());
     draw_sorted_origins(seed_, stream_, rays.first, sorted);
     // This process's share of the positions [first, end) of the sorted batch: one slice.
