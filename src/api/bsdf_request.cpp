@@ -73,6 +73,31 @@ void check_counts(const BsdfRequest& o) {
   require_integer_in(o.table_azimuths, 1, kMaxTableAzimuths, "table_azimuths");
 }
 
+// Peak bytes of the tallies of a BSDF run (measure_bsdf_table), checked against peak RSS. One
+// tally holds F = 16 * 2 (K + 1) (1 + R^2 + R) bytes: sums and second moments of the albedos,
+// pixels and in-plane bins, both sides, K + 1 slots. While a run walks: its own tally, the unit
+// tallies of a pass (U bytes each, first moments only per wavelength in a spectral run; as many
+// as path_passes in bsdf_measure.cpp takes: at most min(16, 4 threads) and 64 MiB of them, at
+// least one) and the replicate being summed; afterwards, with models, the Smith walk's
+// replicates (a tally each, kept until its error is met), a pass and their sum. Kept to the
+// end, per incidence: the nominal run's tallies (spectral: each wavelength's and the first's
+// copy; the Smith walk's) and each turned run's reflected-total pixel sums (8 R^2 bytes per
+// wavelength, none for .pbsdf), with their hemisphere maps (8 R^2). Not counted: a polarized
+// run's Mueller sums and the replicates a split run keeps until the exchange.
+double bsdf_tally_bytes(const BsdfRequest& o, double n_inc, double runs, double wavelengths, int threads) {
+  const double npix = static_cast<double>(o.resolution) * o.resolution, slots = o.orders + 1.0;
+  const double F = 16.0 * 2 * slots * (1 + npix + o.resolution);
+  const double U = wavelengths > 0 ? 8.0 * 2 * slots * (1 + npix + o.resolution) * wavelengths : F;
+  const auto pass = [&](double unit) {
+    return std::min(std::min(16.0, 4.0 * threads), std::max(1.0, std::floor(64.0 * 1024 * 1024 / unit)));
+  };
+  const double walking = F + U * (pass(U) + 1);
+  const double smith = o.models ? F * (o.replicates + pass(F) + 1) : 0.0;
+  const double nominal = F * ((wavelengths > 0 ? wavelengths + 1 : 1) + (o.models ? 1 : 0)) + 8 * npix;
+  const double turned = (o.format == "pbsdf" ? 0.0 : 8 * npix * std::max(1.0, wavelengths)) + 8 * npix;
+  return std::max(walking, smith) + n_inc * (nominal + (runs - 1) * turned);
+}
+
 // The output format against the incidences, and the memory of its tables and of the tallies.
 void check_tables(const BsdfRequest& o) {
   const std::string& ext = o.format;
@@ -102,12 +127,8 @@ void check_tables(const BsdfRequest& o) {
     require_memory(4.0 * 16 * kPbsdfWavelengths * g.theta_h * g.theta_d * g.phi_d,
                    "{table_resolution} " + std::to_string(o.table_resolution) + " for a .pbsdf");
   }
-  // Tallies: f and f^2 per side, slot and pixel, one per worker plus the merge tree, and the
-  // finished results of every incidence.
-  const double tally = 2.0 * (o.orders + 1) * (static_cast<double>(o.resolution) * o.resolution + o.resolution) * 2 * 8;
   const int threads = o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency();
-  // (a spectral run's results: a tally per wavelength beside the first wavelength's)
-  const double need = tally * (3.0 * threads + 4.0 + 2.0 * n_inc * runs * (1.0 + wavelengths));
+  const double need = bsdf_tally_bytes(o, static_cast<double>(n_inc), runs, wavelengths, threads);
   const double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
   if (need > 0.5 * have)
     throw ParameterError("{resolution} " + std::to_string(o.resolution) + " with {orders} " +

@@ -19,7 +19,8 @@ namespace microsim {
 namespace {
 
 // Exact sums over the ensemble's facets, in facet order (g2_facet_terms); returns the CDF of
-// w_f and sets bin[j].
+// w_f and sets bin[j]. Not the whole surface's sum_over_facets (g2_measure.cpp): its totals are
+// sums of per-bin block sums, these facet by facet, so one loop would change the records' last bits.
 std::vector<double> sum_g2_facets(G2Result& r, const SceneEnsemble& e, std::vector<int>& bin) {
   const Vec3 o = r.o, i = r.i;
   const std::size_t nf = e.num_facets();
@@ -119,7 +120,7 @@ class EnsembleRays : public VndfRays {
   std::unique_ptr<Scene> scene(std::size_t k) const override { return e_.build(k); }
   Vec3 to_local(std::size_t k, const Vec3& w) const override { return e_.part(k).frame.to_local(w); }
   std::uint64_t batch() const override { return std::uint64_t(1) << 20; }
-  std::vector<std::vector<Vec2>> origins(UnitRange rays, UnitRange share) const override {
+  std::vector<std::vector<VndfOrigin>> origins(UnitRange rays, UnitRange share) const override {
     const UnitRange mine{std::max(rays.first, share.first), std::min(rays.end, share.end)};
     std::vector<std::uint32_t> part(mine.size());
     tbb::parallel_for(std::uint64_t(0), mine.size(), [&](std::uint64_t n) {
@@ -128,14 +129,14 @@ class EnsembleRays : public VndfRays {
     });
     std::vector<std::uint64_t> size(e_.parts(), 0);
     for (std::uint32_t k : part) ++size[k];
-    std::vector<std::vector<Vec2>> out(e_.parts());
+    std::vector<std::vector<VndfOrigin>> out(e_.parts());
     for (std::size_t k = 0; k < out.size(); ++k) out[k].reserve(size[k]);
     for (std::uint64_t n = 0; n < mine.size(); ++n) {
       CounterRng rng(seed_, stream_, mine.first + n);
       rng.uniform();  // the draw that chose the part
       const double a = rng.uniform();
       const double b = rng.uniform();
-      out[part[n]].emplace_back(a, b);
+      out[part[n]].push_back(VndfOrigin::of(a, b));
     }
     return out;
   }
@@ -160,6 +161,7 @@ VndfResult measure_vndf(const SceneEnsemble& e, const Vec3& v_in, const VndfOpti
   const std::size_t nf = e.num_facets();
   std::vector<int> bin(nf);
   r.front_projected.assign(nbins, 0.0);
+  // Facet by facet (the whole surface's sum_over_facets adds per-bin block sums: other last bits).
   for (std::size_t j = 0; j < nf; ++j) {
     bin[j] = r.binning.bin_of(e.facet_normal(j));
     const double proj = std::max(0.0, e.facet_area(j) * v.dot(e.facet_normal(j)));

@@ -91,7 +91,7 @@ struct G2Unit {
 };
 
 // A unit's integer counts (samples, visible from o, from i, from both of bin b at b kCounts + k),
-// held until every unit has run and then added in unit order.
+// held while its pass runs and then added into its replicate's counts.
 using G2Counts = std::vector<std::uint64_t>;
 
 // Traces the points of one unit on its part's scene (o and i in the world frame).
@@ -131,21 +131,23 @@ std::vector<G2Unit> g2_units(const G2Points& points, UnitRange reps) {
   return units;
 }
 
-// The per-replicate counts of r.bins from the units' counts, added in unit order (the
-// replicates of other processes stay zero).
-void put_g2_counts(G2Result& r, const std::vector<G2Unit>& units, const std::vector<G2Counts>& counts) {
-  const int R = r.replicates, nbins = r.binning.size();
+// Empty per-replicate counts of r.bins (R each).
+void clear_g2_counts(G2Result& r) {
   for (G2NormalBin& nb : r.bins)
-    for (auto* x : {&nb.samples_r, &nb.visible_o_r, &nb.visible_i_r, &nb.visible_both_r}) x->assign(R, 0);
-  for (std::size_t u = 0; u < units.size(); ++u)
-    for (int b = 0; b < nbins; ++b) {
-      G2NormalBin& nb = r.bins[b];
-      const std::uint64_t* c = counts[u].data() + static_cast<std::size_t>(b) * kCounts;
-      nb.samples_r[units[u].q] += c[0];
-      nb.visible_o_r[units[u].q] += c[1];
-      nb.visible_i_r[units[u].q] += c[2];
-      nb.visible_both_r[units[u].q] += c[3];
-    }
+    for (auto* x : {&nb.samples_r, &nb.visible_o_r, &nb.visible_i_r, &nb.visible_both_r}) x->assign(r.replicates, 0);
+}
+
+// A finished unit's counts added into its replicate's counts of r.bins. Integer sums: the
+// order the units are added in does not change them.
+void add_g2_counts(G2Result& r, int q, const G2Counts& c) {
+  for (std::size_t b = 0; b < r.bins.size(); ++b) {
+    G2NormalBin& nb = r.bins[b];
+    const std::uint64_t* at = c.data() + b * kCounts;
+    nb.samples_r[q] += at[0];
+    nb.visible_o_r[q] += at[1];
+    nb.visible_i_r[q] += at[2];
+    nb.visible_both_r[q] += at[3];
+  }
 }
 
 }  // namespace
@@ -153,17 +155,19 @@ void put_g2_counts(G2Result& r, const std::vector<G2Unit>& units, const std::vec
 void trace_g2_points(const G2Points& points, G2Result& r, const G2Options& opt, const ReplicatePlan& plan) {
   const int nbins = r.binning.size();
   const UnitRange reps = share_of(opt.split, static_cast<std::uint64_t>(plan.replicates));
-  // The units' counts are held until the end: refused before the work when they would not fit
-  // in memory (rather than ending in std::bad_alloc). At most ceil(n / kChunk) + parts units a
-  // replicate.
+  // The list of units is held until the end: refused before the work when it would not fit in
+  // memory (rather than ending in std::bad_alloc). At most ceil(n / kChunk) + parts units a
+  // replicate. Their counts live only while their pass runs (kUnitsPerPass at a time).
   const double most = static_cast<double>(reps.size()) *
                       (static_cast<double>(chunks_per_replicate(plan.per_replicate(), kChunk)) + points.parts());
-  require_memory(most * (sizeof(G2Unit) + sizeof(TraceCounters) + sizeof(G2Counts) + kCounts * nbins * 8.0),
-                 "{rays} " + std::to_string(opt.rays) + " (counts of " + std::to_string(static_cast<std::uint64_t>(most)) +
+  require_memory(most * sizeof(G2Unit) + kUnitsPerPass * (sizeof(TraceCounters) + kCounts * nbins * 8.0),
+                 "{rays} " + std::to_string(opt.rays) + " (" + std::to_string(static_cast<std::uint64_t>(most)) +
                      " work units, " + std::to_string(nbins) + " normal bins)");
   const std::vector<G2Unit> units = g2_units(points, reps);
-  std::vector<G2Counts> counts(units.size());
-  std::vector<TraceCounters> tc(units.size());
+  // The counts of a pass's units: a pass starts at a multiple of kUnitsPerPass (run_part_passes).
+  std::vector<G2Counts> counts(std::min(units.size(), kUnitsPerPass));
+  std::vector<TraceCounters> tc(counts.size());
+  clear_g2_counts(r);
   const double mine = static_cast<double>(plan.per_replicate() * reps.size());
   std::uint64_t done = 0;
   std::size_t counted = 0;
@@ -171,14 +175,19 @@ void trace_g2_points(const G2Points& points, G2Result& r, const G2Options& opt, 
       units.size(), kUnitsPerPass, [&](std::size_t u) { return units[u].part; },
       [&](std::size_t k) { return points.scene(k); },
       [&](std::size_t u, const Scene& scene) {
-        trace_g2_unit(points, scene, r.o, r.i, units[u], opt.seed, nbins, counts[u], tc[u]);
+        const std::size_t slot = u % kUnitsPerPass;
+        tc[slot] = TraceCounters{};
+        trace_g2_unit(points, scene, r.o, r.i, units[u], opt.seed, nbins, counts[slot], tc[slot]);
       },
       [&](std::size_t units_done) {
-        for (; counted < units_done; ++counted) done += units[counted].points.size();
+        for (; counted < units_done; ++counted) {  // the pass's units, in unit order
+          const std::size_t slot = counted % kUnitsPerPass;
+          add_g2_counts(r, units[counted].q, counts[slot]);
+          r.counters += tc[slot];
+          done += units[counted].points.size();
+        }
         if (opt.progress) opt.progress(static_cast<double>(done) / mine);
       });
-  for (const TraceCounters& c : tc) r.counters += c;  // in unit order
-  put_g2_counts(r, units, counts);
   finish_g2(r, opt, reps);
 }
 

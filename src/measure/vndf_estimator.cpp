@@ -18,6 +18,33 @@ VndfResult start_vndf(const Vec3& v, const VndfOptions& o, double macro_area) {
 }
 
 namespace {
+// x (< 2^32) spread to the even bits of a word: the inverse of compact_bits (common.hpp).
+std::uint64_t spread_bits(std::uint64_t x) {
+  x &= 0xFFFFFFFFull;
+  x = (x | (x << 16)) & 0x0000FFFF0000FFFFull;
+  x = (x | (x << 8)) & 0x00FF00FF00FF00FFull;
+  x = (x | (x << 4)) & 0x0F0F0F0F0F0F0F0Full;
+  x = (x | (x << 2)) & 0x3333333333333333ull;
+  x = (x | (x << 1)) & 0x5555555555555555ull;
+  return x;
+}
+constexpr double kTwo53 = 9007199254740992.0;  // CounterRng::uniform's 53 bits
+}  // namespace
+
+VndfOrigin VndfOrigin::of(double a, double b) {
+  const auto ka = static_cast<std::uint64_t>(a * kTwo53), kb = static_cast<std::uint64_t>(b * kTwo53);
+  return {spread_bits(ka >> 32) | (spread_bits(kb >> 32) << 1), ((ka & 0xFFFFFFFFull) << 32) | (kb & 0xFFFFFFFFull)};
+}
+
+Vec2 VndfOrigin::ab() const {
+  std::uint32_t ha, hb;
+  morton_decode(key, ha, hb);
+  const std::uint64_t ka = (static_cast<std::uint64_t>(ha) << 32) | (rest >> 32);
+  const std::uint64_t kb = (static_cast<std::uint64_t>(hb) << 32) | (rest & 0xFFFFFFFFull);
+  return Vec2(static_cast<double>(ka) / kTwo53, static_cast<double>(kb) / kTwo53);
+}
+
+namespace {
 
 // `counts` (nbins + 1, the last one below the horizon) and r.counters hold the rays `share`:
 // completes them from the other processes (o.split), then fills the bin counts and totals.
@@ -49,7 +76,7 @@ struct VndfUnit {
 
 // One batch's rays, from their origins per part, added to counts (nbins + 1: the last one
 // outside every bin) and r.counters.
-void trace_vndf_batch(const VndfRays& rays, const std::vector<std::vector<Vec2>>& origins, VndfResult& r,
+void trace_vndf_batch(const VndfRays& rays, const std::vector<std::vector<VndfOrigin>>& origins, VndfResult& r,
                       std::vector<std::uint64_t>& counts) {
   std::vector<VndfUnit> units;
   for (std::size_t k = 0; k < origins.size(); ++k)
@@ -67,7 +94,7 @@ void trace_vndf_batch(const VndfRays& rays, const std::vector<std::vector<Vec2>>
         const RayWindow w = scene.ray_window(v);
         c[u].assign(static_cast<std::size_t>(nbins) + 1, 0);
         for (std::uint64_t j = units[u].rays.first; j < units[u].rays.end; ++j) {
-          const Vec2& ab = origins[k][j];
+          const Vec2 ab = origins[k][j].ab();
           const TraceHit h = scene.intersect(w.origin0 + ab.x() * w.e1 + ab.y() * w.e2, -v, nullptr, tc[u]);
           if (scene.front_facet(h) == Scene::kNoFacet) continue;  // a back face, or outside the region
           const int b = rays.bin(k, scene, h);
@@ -88,7 +115,7 @@ void trace_vndf_rays(const VndfRays& rays, VndfResult& r, const VndfOptions& o) 
   std::vector<std::uint64_t> counts(static_cast<std::size_t>(r.binning.size()) + 1, 0);
   for (std::uint64_t first = 0; first < r.rays; first += rays.batch()) {
     const UnitRange batch{first, std::min(r.rays, first + rays.batch())};
-    const std::vector<std::vector<Vec2>> origins = rays.origins(batch, share);
+    const std::vector<std::vector<VndfOrigin>> origins = rays.origins(batch, share);
     trace_vndf_batch(rays, origins, r, counts);
     if (o.progress) o.progress(static_cast<double>(batch.end) / r.rays);
   }

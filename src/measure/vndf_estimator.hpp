@@ -21,6 +21,18 @@ namespace microsim {
 // macro area and the normal binning of the options.
 VndfResult start_vndf(const Vec3& v, const VndfOptions& o, double macro_area);
 
+// A ray origin (a, b) in [0, 1)^2 drawn as two CounterRng uniforms (multiples of 2^-53), held
+// exactly in 16 bytes: `key` interleaves the 21 leading bits of a and b (b's above a's at every
+// level: the Morton order of the origins for coherent rays), `rest` holds the 32 trailing bits of
+// a above those of b. Comparing (key, rest) orders the origins by (Morton key, a, b), a total
+// order, so a batch sorted by it is the same for any thread count.
+struct VndfOrigin {
+  std::uint64_t key = 0, rest = 0;
+  static VndfOrigin of(double a, double b);
+  Vec2 ab() const;
+  bool operator<(const VndfOrigin& o) const { return key < o.key || (key == o.key && rest < o.rest); }
+};
+
 // The rays of a surface cut into parts (a whole surface is one), each traced on its own in its
 // own frame: ray n of the measurement is drawn from its own counter (i.i.d. rays, so the bin
 // counts are multinomial).
@@ -35,7 +47,7 @@ class VndfRays {
   virtual std::uint64_t batch() const = 0;
   // The origins (a, b) in [0, 1)^2 on their part's ray window (Scene::ray_window) of the rays
   // of `share` among the rays [first, end) of the measurement, per part, in tracing order.
-  virtual std::vector<std::vector<Vec2>> origins(UnitRange rays, UnitRange share) const = 0;
+  virtual std::vector<std::vector<VndfOrigin>> origins(UnitRange rays, UnitRange share) const = 0;
   // The normal bin (-1: none) of a front-face hit on part k's scene.
   virtual int bin(std::size_t k, const Scene& scene, const TraceHit& h) const = 0;
 };

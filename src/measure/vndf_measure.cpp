@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 
@@ -15,31 +16,15 @@ namespace microsim {
 
 namespace {
 // Origins first .. first + origins.size() - 1 of the stream, i.i.d. uniform in the unit square,
-// sorted in Morton order (with their coordinates as tie-breaks: a total order, so the same for
-// any thread count).
+// sorted in Morton order with their coordinates as tie-breaks (VndfOrigin's order).
 void draw_sorted_origins(std::uint64_t seed, std::uint64_t stream, std::uint64_t first,
-                         std::vector<std::pair<std::uint64_t, Vec2>>& origins) {
+                         std::vector<VndfOrigin>& origins) {
   tbb::parallel_for(std::uint64_t(0), static_cast<std::uint64_t>(origins.size()), [&](std::uint64_t j) {
     CounterRng rng(seed, stream, first + j);
     const double a = rng.uniform(), b = rng.uniform();
-    const auto spread = [](std::uint64_t x) {  // interleave the 21 bits of x with zeros
-      x &= 0x1FFFFF;
-      x = (x | (x << 32)) & 0x1F00000000FFFFull;
-      x = (x | (x << 16)) & 0x1F0000FF0000FFull;
-      x = (x | (x << 8)) & 0x100F00F00F00F00Full;
-      x = (x | (x << 4)) & 0x10C30C30C30C30C3ull;
-      x = (x | (x << 2)) & 0x1249249249249249ull;
-      return x;
-    };
-    const std::uint64_t key = spread(static_cast<std::uint64_t>(a * (1 << 21))) |
-                              (spread(static_cast<std::uint64_t>(b * (1 << 21))) << 1);
-    origins[j] = {key, Vec2(a, b)};
+    origins[j] = VndfOrigin::of(a, b);
   });
-  tbb::parallel_sort(origins.begin(), origins.end(), [](const auto& x, const auto& y) {
-    return x.first < y.first ||
-           (x.first == y.first && (x.second.x() < y.second.x() ||
-                                   (x.second.x() == y.second.x() && x.second.y() < y.second.y())));
-  });
+  tbb::parallel_sort(origins.begin(), origins.end());
 }
 }  // namespace
 
@@ -89,7 +74,7 @@ GofResult histogram_gof(const std::vector<std::uint64_t>& counts, std::uint64_t 
 namespace {
 
 // A whole surface as the estimator's one part, traced in the world frame. Its rays are drawn in
-// batches of at most 2^22 (24 bytes per origin); every origin is an independent draw, so
+// batches of at most 2^22 (16 bytes per origin); every origin is an independent draw, so
 // batching changes nothing statistically. Each batch is sorted in Morton order of the origins
 // for coherence (the order does not change the statistics), and this process traces the rays at
 // its share of the positions of the sorted batches (every process draws and sorts every batch:
@@ -102,12 +87,15 @@ class SurfaceRays : public VndfRays {
   std::unique_ptr<Scene> scene(std::size_t) const override { return make_scene(tracer_); }
   Vec3 to_local(std::size_t, const Vec3& w) const override { return w; }
   std::uint64_t batch() const override { return std::uint64_t(1) << 22; }
-  std::vector<std::vector<Vec2>> origins(UnitRange rays, UnitRange share) const override {
-    std::vector<std::pair<std::uint64_t, Vec2>> sorted(rays.size());
+  std::vector<std::vector<VndfOrigin>> origins(UnitRange rays, UnitRange share) const override {
+    std::vector<std::vector<VndfOrigin>> out(1);
+    std::vector<VndfOrigin>& sorted = out[0];
+    sorted.resize(rays.size());
     draw_sorted_origins(seed_, stream_, rays.first, sorted);
-    std::vector<std::vector<Vec2>> out(1);
-    for (std::uint64_t j = 0; j < sorted.size(); ++j)
-      if (share.contains(rays.first + j)) out[0].push_back(sorted[j].second);
+    // This process's share of the positions [first, end) of the sorted batch: one slice.
+    const auto at = [&](std::uint64_t n) { return static_cast<std::ptrdiff_t>(std::clamp(n, rays.first, rays.end) - rays.first); };
+    sorted.erase(sorted.begin() + at(share.end), sorted.end());
+    sorted.erase(sorted.begin(), sorted.begin() + at(share.first));
     return out;
   }
   // The bin of the hit's normal.
