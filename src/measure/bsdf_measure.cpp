@@ -439,6 +439,9 @@ UnitPasses path_passes(const TallyShape& shape) {
   const double bytes = shape.wavelengths > 1 ? 8.0 * 2 * (K + 1) * (1.0 + npix + nplane) * shape.wavelengths
                                              : 16.0 * 2 * (K + 1) * (1.0 + npix + nplane);
   const auto threads = static_cast<std::uint64_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+  // First moments (the Smith walk's replicates, one short unit each): half the bytes, and a pass takes every
+  // unit that fits, so that the threads wait for the slowest unit once per run rather than once per few units.
+  if (shape.first_moments) return {~std::uint64_t(0), std::max<std::uint64_t>(1, static_cast<std::uint64_t>(2.0 * kPassBytes / bytes))};
   return {std::min(kPassChunks, 4 * threads), std::max<std::uint64_t>(1, static_cast<std::uint64_t>(kPassBytes / bytes))};
 }
 
