@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <vector>
 
 #include "microsim/measure/bsdf_measure.hpp"
@@ -400,4 +401,73 @@ TEST(SmithWalkBudget, TallyWithoutCellsHasTheSameAlbedos) {
   double cells = 0.0;
   for (double x : full.pix) cells += x;
   EXPECT_GT(cells, 0.0);  // the full tally binned the same escapes
+}
+
+TEST(SmithWalkBudget, FirstMomentReplicatesGiveTheFullReplicatesResult) {
+  // The model's replicates are tallies of first moments (BsdfTally::first_moments): the same walks give the
+  // same first moments and counts as full tallies, and add_replicate of them the same result bit for bit.
+  const mm::SmithRandomWalk walk =
+      mm::SmithRandomWalk(mm::Ndf::beckmann(0.5, 0.5), mm::Material::mirror(), mm::HeightDistribution::Uniform, 1000)
+          .with_fast_slope_sampler();
+  BsdfResult r;
+  r.options.orders = 4;
+  r.map = HemisphereMap(8);
+  r.plane = InPlaneBins(0.0, 8);
+  r.wi = direction_from_angles(rad(30.0), 0.0);
+  const WalkWindow window = walk_window(walk, r.wi, 4, 3, 5);
+  BsdfTally from_full(4, r.map.size(), r.plane.size()), from_first(4, r.map.size(), r.plane.size());
+  for (int q = 0; q < 4; ++q) {
+    const WalkStrata strata = walk_strata(3, 5 + q, 200);
+    BsdfTally full(4, r.map.size(), r.plane.size());
+    BsdfTally first = BsdfTally::first_moments(4, r.map.size(), r.plane.size());
+    for (std::uint64_t j = 0; j < 200; ++j) {
+      smith_walk_expected_path(walk, r.wi, 3, 5 + q, j, strata, r, full, window);
+      smith_walk_expected_path(walk, r.wi, 3, 5 + q, j, strata, r, first, window);
+    }
+    EXPECT_FALSE(first.has_second_moments());
+    EXPECT_TRUE(first.pix2.empty());
+    EXPECT_EQ(first.pix, full.pix);
+    EXPECT_EQ(first.plane, full.plane);
+    EXPECT_EQ(first.albedo, full.albedo);
+    from_full.add_replicate(full);
+    from_first.add_replicate(first);
+  }
+  EXPECT_EQ(from_first.pix, from_full.pix);
+  EXPECT_EQ(from_first.pix2, from_full.pix2);
+  EXPECT_EQ(from_first.albedo2, from_full.albedo2);
+  EXPECT_EQ(from_first.plane2, from_full.plane2);
+  EXPECT_EQ(from_first.both2, from_full.both2);
+  EXPECT_EQ(from_first.paths, from_full.paths);
+  double spread = 0.0;
+  for (double x : from_full.pix2) spread += x;
+  EXPECT_GT(spread, 0.0);  // the replicates differ: the comparison of the spreads has power
+  // Tallies of other moments do not add.
+  BsdfTally a = BsdfTally::first_moments(4, 8, 2);
+  EXPECT_THROW(a += BsdfTally(4, 8, 2), std::logic_error);
+}
+
+TEST(SmithWalkBudget, WalkWindowIsTheSerialMeanOfTheWeightAfterTheFirstEvent) {
+  // walk_window runs its walks on TBB's threads and sums them in walk order: the serial sum, bit for bit.
+  const mm::SmithRandomWalk walk =
+      mm::SmithRandomWalk(mm::Ndf::beckmann(0.5, 0.5), mm::Material::mirror(), mm::HeightDistribution::Uniform, 1000)
+          .with_fast_slope_sampler();
+  const Vec3 wi = direction_from_angles(rad(50.0), 0.0);
+  struct Rng {
+    CounterRng c;
+    double uniform() { return c.uniform(); }
+  };
+  double continuing = 0.0;
+  for (std::uint64_t j = 0; j < kWindowWalks; ++j) {
+    Rng rng{CounterRng(3, 5 ^ 0x3D1A0C0000000000ull, j)};
+    double first = 0.0;
+    walk.walk_with_weight_window(wi, rng, 3, 0.0, std::numeric_limits<double>::infinity(), [&](const mm::WalkEscape& e) {
+      if (e.order == 1) first += e.weight;
+    });
+    continuing += 1.0 - first;
+  }
+  const double w = continuing / static_cast<double>(kWindowWalks);
+  const WalkWindow window = walk_window(walk, wi, 4, 3, 5);
+  EXPECT_EQ(window.low, kWindowLow * w);
+  EXPECT_EQ(window.high, kWindowHigh * w);
+  EXPECT_GT(w, 0.01);  // the walks go on after the first event
 }

@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <stdexcept>
 #include <type_traits>
 
 namespace microsim {
@@ -235,6 +236,18 @@ BsdfTally::BsdfTally(int K, int npix, int nplane) : orders(K), pixels(npix), pla
   plane2.assign(s * nplane, 0.0);
 }
 
+BsdfTally BsdfTally::first_moments(int K, int npix, int nplane) {
+  BsdfTally t;
+  t.orders = K;
+  t.pixels = npix;
+  t.plane_bins = nplane;
+  const std::size_t s = 2 * static_cast<std::size_t>(K + 1);
+  t.albedo.assign(s, 0.0);
+  t.pix.assign(s * npix, 0.0);
+  t.plane.assign(s * nplane, 0.0);
+  return t;
+}
+
 void BsdfTally::add_exit(int s, int order, double w, int px, int b) {
   const int k = std::min(order, orders) - 1;
   const double w2 = w * w;
@@ -257,6 +270,7 @@ BsdfTally& BsdfTally::operator+=(const BsdfTally& o) {
   if (albedo.empty()) return *this = o;
   if (o.albedo.empty()) return *this;
   auto add = [](std::vector<double>& a, const std::vector<double>& b) {
+    if (a.size() != b.size()) throw std::logic_error("BsdfTally: adding tallies of other shapes or moments");
     for (std::size_t k = 0; k < a.size(); ++k) a[k] += b[k];
   };
   for_each_moment([&](const char*, auto sum, auto second) {
@@ -397,13 +411,19 @@ std::uint64_t direction_stream(std::uint64_t base, double theta, double phi) {
          static_cast<std::uint64_t>(static_cast<std::int64_t>(phi * 1e6));
 }
 
-// The sizes of a unit's tallies: orders, pixels, in-plane bins, wavelengths (1: one tally).
+// The sizes of a unit's tallies: orders, pixels, in-plane bins, wavelengths (1: one tally); first_moments:
+// BsdfTally::first_moments (replicates that only enter add_replicate).
 struct TallyShape {
   int K, npix, nplane, wavelengths = 1;
+  bool first_moments = false;
 };
 template <class T>
 T make_tally(const TallyShape& s) {
   return T(s.K, s.npix, s.nplane);
+}
+template <>
+BsdfTally make_tally<BsdfTally>(const TallyShape& s) {
+  return s.first_moments ? BsdfTally::first_moments(s.K, s.npix, s.nplane) : BsdfTally(s.K, s.npix, s.nplane);
 }
 template <>
 SpectralTally make_tally<SpectralTally>(const TallyShape& s) {
@@ -420,6 +440,9 @@ UnitPasses path_passes(const TallyShape& shape) {
   const double bytes = shape.wavelengths > 1 ? 8.0 * 2 * (K + 1) * (1.0 + npix + nplane) * shape.wavelengths
                                              : 16.0 * 2 * (K + 1) * (1.0 + npix + nplane);
   const auto threads = static_cast<std::uint64_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+  // First moments (the Smith walk's replicates, one short unit each): half the bytes, and a pass takes every
+  // unit that fits, so that the threads wait for the slowest unit once per run rather than once per few units.
+  if (shape.first_moments) return {~std::uint64_t(0), std::max<std::uint64_t>(1, static_cast<std::uint64_t>(2.0 * kPassBytes / bytes))};
   return {std::min(kPassChunks, 4 * threads), std::max<std::uint64_t>(1, static_cast<std::uint64_t>(kPassBytes / bytes))};
 }
 
@@ -539,8 +562,9 @@ void run_replicate_paths(UnitRange reps, int replicates, std::uint64_t n, const 
       [&] { return WalkUnit<Unit>{make_tally<Unit>(shape), polarized ? polarized->make_unit() : MuellerUnit()}; },
       [&](int q, std::uint64_t i, WalkUnit<Unit>& u) { body(q, i, u.sums, u.mueller); },
       [&](int q, std::uint64_t g, WalkUnit<Unit>&& part) {
-        if constexpr (std::is_same<Rep, SpectralTally>::value && std::is_same<Unit, Rep>::value) {
-          if (g == 0) rep.emplace(std::move(part.sums));  // x, as 0 + x (the weights are >= 0), uncopied
+        if constexpr (std::is_same<Unit, Rep>::value) {
+          // x, as 0 + x: a tally's sums start at +0 and never hold -0 (+0 + -0 is +0), uncopied
+          if (g == 0) rep.emplace(std::move(part.sums));
           else *rep += part.sums;
         } else {
           if (g == 0) rep.emplace(make_tally<Rep>(shape));
@@ -584,10 +608,13 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
   const int R = std::max(1, o.replicates);
   const std::uint64_t cap = std::max<std::uint64_t>(1, o.model_walks * kWalkCapFactor / static_cast<std::uint64_t>(R));
   const WalkWindow window = walk_window(walk, r.wi, K, o.seed, mstream);
-  // m more walks in each replicate of `reps` (tallies of `shape`), from the streams of `salt`.
-  auto run = [&](std::vector<BsdfTally>& reps, std::uint64_t m, std::uint64_t salt, const TallyShape& shape, double p0,
-                 double span) {
+  // The replicates only enter add_replicate: first moments (BsdfTally::first_moments).
+  const TallyShape shape{K, npix, nplane, 1, true};
+  // m more walks in each replicate of `reps`, from the streams of `salt`; the run's replicates are added to
+  // the pooled ones side by side once all are in.
+  auto run = [&](std::vector<BsdfTally>& reps, std::uint64_t m, std::uint64_t salt, double p0, double span) {
     std::vector<WalkStrata> strata(R);
+    std::vector<BsdfTally> fresh(R);
     tbb::parallel_for(0, R, [&](int q) {
       strata[q] = walk_strata(o.seed, ReplicatePlan::stream(mstream ^ salt, q), m);
     });
@@ -596,20 +623,21 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
         [&](int q, std::uint64_t j, BsdfTally& acc, MuellerUnit&) {
           smith_walk_expected_path(walk, r.wi, o.seed, ReplicatePlan::stream(mstream ^ salt, q), j, strata[q], r, acc, window);
         },
-        [&](int q, BsdfTally&& rep) {
-          if (reps[q].paths == 0) reps[q] = std::move(rep);
-          else reps[q] += rep;
-        });
+        [&](int q, BsdfTally&& rep) { fresh[q] = std::move(rep); });
+    tbb::parallel_for(0, R, [&](int q) {
+      if (reps[q].paths == 0) reps[q] = std::move(fresh[q]);
+      else reps[q] += fresh[q];
+    });
   };
   std::vector<BsdfTally> reps(R);
   std::uint64_t kept = std::min(kWalkPilotPerReplicate, cap);  // walks per replicate in reps
-  run(reps, kept, 0, TallyShape{K, npix, nplane}, share, 0.1 * (1.0 - share));
+  run(reps, kept, 0, share, 0.1 * (1.0 - share));
   BsdfTally albedos = replicate_albedos(reps);
   for (int pass = 1;; ++pass) {
     r.model_budget = smith_walk_budget(albedos, r, o.model_error_fraction, cap, pass == 1 ? kWalkPilotMargin : kWalkRerunMargin);
     const std::uint64_t need = std::min(cap, r.model_budget.walks / static_cast<std::uint64_t>(R));
     if (pass > kWalkPasses || need <= kept || smith_walk_target_met(albedos, r, o.model_error_fraction)) break;
-    run(reps, need - kept, mix64(0x9E3779B97F4A7C15ull * static_cast<std::uint64_t>(pass)), TallyShape{K, npix, nplane},
+    run(reps, need - kept, mix64(0x9E3779B97F4A7C15ull * static_cast<std::uint64_t>(pass)),
         share + (0.1 + 0.9 * (pass - 1) / kWalkPasses) * (1.0 - share), 0.9 / kWalkPasses * (1.0 - share));
     kept = need;
     albedos = replicate_albedos(reps);

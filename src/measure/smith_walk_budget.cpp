@@ -1,5 +1,7 @@
 #include "microsim/measure/smith_walk_budget.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -8,16 +10,18 @@ namespace microsim {
 
 namespace {
 
-// Adds the per-walk sums of (index, weight) pairs to sum and sum2: one term per distinct index.
+// Adds the per-walk sums of (index, weight) pairs to sum and sum2: one term per distinct index (sum2
+// empty: a tally of first moments, BsdfTally::first_moments).
 void add_cells(std::vector<std::pair<std::size_t, double>>& cells, std::vector<double>& sum,
                std::vector<double>& sum2) {
+  const bool second = !sum2.empty();
   std::sort(cells.begin(), cells.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   for (std::size_t i = 0; i < cells.size();) {
     double w = 0.0;
     std::size_t j = i;
     for (; j < cells.size() && cells[j].first == cells[i].first; ++j) w += cells[j].second;
     sum[cells[i].first] += w;
-    sum2[cells[i].first] += w * w;
+    if (second) sum2[cells[i].first] += w * w;
     i = j;
   }
 }
@@ -125,15 +129,18 @@ WalkWindow walk_window(const models::SmithRandomWalk& walk, const Vec3& wi, int 
     CounterRng c;
     double uniform() { return c.uniform(); }
   };
-  double continuing = 0.0;
-  for (std::uint64_t j = 0; j < kWindowWalks; ++j) {
+  // each walk's weight after its first event on TBB's threads, summed in walk order
+  std::vector<double> after_first(kWindowWalks);
+  tbb::parallel_for(std::uint64_t(0), kWindowWalks, [&](std::uint64_t j) {
     Rng rng{CounterRng(seed, stream ^ 0x3D1A0C0000000000ull, j)};
     double first = 0.0;
     walk.walk_with_weight_window(wi, rng, orders - 1, 0.0, std::numeric_limits<double>::infinity(), [&](const models::WalkEscape& e) {
       if (e.order == 1) first += e.weight;
     });
-    continuing += 1.0 - first;
-  }
+    after_first[j] = 1.0 - first;
+  });
+  double continuing = 0.0;
+  for (const double x : after_first) continuing += x;
   const double w = std::max(continuing / static_cast<double>(kWindowWalks), kWindowFloor);
   return {kWindowLow * w, kWindowHigh * w};
 }

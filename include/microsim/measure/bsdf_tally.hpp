@@ -52,6 +52,11 @@ struct BsdfTally {
 
   BsdfTally() = default;
   BsdfTally(int K, int npix, int nplane);
+  // A replicate's tally of first moments only (albedo2, pix2, plane2 empty): add_replicate reads a
+  // replicate's first moments and counts alone, so per-path second moments of a replicate that only
+  // enters add_replicate are never read (the Smith walk's replicates: half the memory to zero and add).
+  static BsdfTally first_moments(int K, int npix, int nplane);
+  bool has_second_moments() const { return albedo2.size() == albedo.size(); }
   int slots() const { return orders + 1; }
   std::size_t a_index(int s, int k) const { return static_cast<std::size_t>(s) * slots() + k; }
   std::size_t p_index(int s, int k, int px) const {
