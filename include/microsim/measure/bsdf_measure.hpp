@@ -40,10 +40,10 @@ namespace microsim {
 
 // Periodic tiles; finite objects (rays over a window covering the projection, tallies per unit
 // of the flux on the macrosurface: a convex mirror object's total albedo is its visible area
-// ratio); V-cavity ensembles (each groove traced on its own, measure/vcavity_measure.hpp).
-// Throws UsageError for theta_i outside [0, 90) and bad counts.
+// ratio); V-cavity ensembles (each groove traced on its own, measure/ensemble_estimators.hpp).
+// Throws ParameterError for theta_i outside [0, 90) and bad counts.
 BsdfResult measure_bsdf(const Tracer& tracer, const BsdfOptions& options);
 
-// The record's tables and writers: measure/bsdf_record.hpp.
+// The record's tables: measure/bsdf_record.hpp; the table files: io/bsdf_files.hpp.
 
 }  // namespace microsim

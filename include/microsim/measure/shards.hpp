@@ -41,7 +41,8 @@ UnitRange shard_range(std::uint64_t units, int k, int n);
 // (tail_counts, tail_reals). Integer totals from several processes are summed; real totals come
 // from one process only (the others leave them at zero).
 struct Tallies {
-  std::string kind;           // "g1", "g2", "vndf", "bsdf", "bsdf_model"
+  // "g1", "g2", "vndf", "bsdf", "bsdf_model", "bsdf_spectral", "bsdf_mueller", "bsdf_ensemble"
+  std::string kind;
   std::uint64_t units = 0;    // replicates, batches or rays
   UnitRange covered;          // the units this process computed
   std::size_t row_counts = 0, row_reals = 0;
