@@ -268,6 +268,20 @@ BsdfOptions walk_options(const mm::Material& m, double theta_deg, std::uint64_t 
   o.model_walks = rays;
   return o;
 }
+// The Smith walk of a Beckmann alpha 0.5 mirror with the fast slope sampler, as the measurement runs it.
+mm::SmithRandomWalk beckmann_mirror_walk() {
+  return mm::SmithRandomWalk(mm::Ndf::beckmann(0.5, 0.5), mm::Material::mirror(), mm::HeightDistribution::Uniform, 1000)
+      .with_fast_slope_sampler();
+}
+// A result to walk into: 4 orders, an 8x8 hemisphere map and 8 in-plane bins, incidence theta_deg.
+BsdfResult four_order_result(double theta_deg) {
+  BsdfResult r;
+  r.options.orders = 4;
+  r.map = HemisphereMap(8);
+  r.plane = InPlaneBins(0.0, 8);
+  r.wi = direction_from_angles(rad(theta_deg), 0.0);
+  return r;
+}
 }  // namespace
 
 TEST(SmithWalkBudget, IndependentOfThreadCount) {
@@ -379,14 +393,8 @@ TEST(SmithWalkBudget, ReplicateAlbedosAreTheFullTallysAlbedos) {
 
 TEST(SmithWalkBudget, TallyWithoutCellsHasTheSameAlbedos) {
   // A tally without cells (no pixels, no in-plane bins) gets the same albedo slots from the same walks as a full one.
-  const mm::SmithRandomWalk walk =
-      mm::SmithRandomWalk(mm::Ndf::beckmann(0.5, 0.5), mm::Material::mirror(), mm::HeightDistribution::Uniform, 1000)
-          .with_fast_slope_sampler();
-  BsdfResult r;
-  r.options.orders = 4;
-  r.map = HemisphereMap(8);
-  r.plane = InPlaneBins(0.0, 8);
-  r.wi = direction_from_angles(rad(40.0), 0.0);
+  const mm::SmithRandomWalk walk = beckmann_mirror_walk();
+  const BsdfResult r = four_order_result(40.0);
   const WalkStrata strata = walk_strata(3, 5, 500);
   const WalkWindow window = walk_window(walk, r.wi, 4, 3, 5);
   BsdfTally full(4, r.map.size(), r.plane.size()), bare(4, 0, 0);
@@ -406,14 +414,8 @@ TEST(SmithWalkBudget, TallyWithoutCellsHasTheSameAlbedos) {
 TEST(SmithWalkBudget, FirstMomentReplicatesGiveTheFullReplicatesResult) {
   // The model's replicates are tallies of first moments (BsdfTally::first_moments): the same walks give the
   // same first moments and counts as full tallies, and add_replicate of them the same result bit for bit.
-  const mm::SmithRandomWalk walk =
-      mm::SmithRandomWalk(mm::Ndf::beckmann(0.5, 0.5), mm::Material::mirror(), mm::HeightDistribution::Uniform, 1000)
-          .with_fast_slope_sampler();
-  BsdfResult r;
-  r.options.orders = 4;
-  r.map = HemisphereMap(8);
-  r.plane = InPlaneBins(0.0, 8);
-  r.wi = direction_from_angles(rad(30.0), 0.0);
+  const mm::SmithRandomWalk walk = beckmann_mirror_walk();
+  const BsdfResult r = four_order_result(30.0);
   const WalkWindow window = walk_window(walk, r.wi, 4, 3, 5);
   BsdfTally from_full(4, r.map.size(), r.plane.size()), from_first(4, r.map.size(), r.plane.size());
   for (int q = 0; q < 4; ++q) {
@@ -448,9 +450,7 @@ TEST(SmithWalkBudget, FirstMomentReplicatesGiveTheFullReplicatesResult) {
 
 TEST(SmithWalkBudget, WalkWindowIsTheSerialMeanOfTheWeightAfterTheFirstEvent) {
   // walk_window runs its walks on TBB's threads and sums them in walk order: the serial sum, bit for bit.
-  const mm::SmithRandomWalk walk =
-      mm::SmithRandomWalk(mm::Ndf::beckmann(0.5, 0.5), mm::Material::mirror(), mm::HeightDistribution::Uniform, 1000)
-          .with_fast_slope_sampler();
+  const mm::SmithRandomWalk walk = beckmann_mirror_walk();
   const Vec3 wi = direction_from_angles(rad(50.0), 0.0);
   struct Rng {
     CounterRng c;
