@@ -9,6 +9,7 @@
 #include "microsim/measure/table_run_sums.hpp"
 #include "microsim/measure/vcavity_measure.hpp"
 #include "path_sums_exchange.hpp"
+#include "walk_passes.hpp"
 #include "microsim/surface/generators.hpp"
 
 #include <tbb/blocked_range.h>
@@ -429,21 +430,15 @@ template <>
 SpectralTally make_tally<SpectralTally>(const TallyShape& s) {
   return SpectralTally(s.wavelengths, s.K, s.npix, s.nplane);
 }
-// A pass of units holds at least kPassChunks chunks (work for the threads; 4 per thread on
-// smaller machines: each unit in a pass keeps its tally until the pass ends) and at most
-// kPassBytes of unit tallies (large hemisphere maps: one unit at a time).
-constexpr std::uint64_t kPassChunks = 16;
-constexpr double kPassBytes = 64.0 * 1024 * 1024;
+// The passes of a run's units (walk_passes.hpp).
 UnitPasses path_passes(const TallyShape& shape) {
-  const double K = shape.K, npix = shape.npix, nplane = shape.nplane;
   // A spectral unit holds first moments only, of every wavelength.
-  const double bytes = shape.wavelengths > 1 ? 8.0 * 2 * (K + 1) * (1.0 + npix + nplane) * shape.wavelengths
-                                             : 16.0 * 2 * (K + 1) * (1.0 + npix + nplane);
-  const auto threads = static_cast<std::uint64_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+  const double bytes = shape.wavelengths > 1 ? 0.5 * walk_tally_bytes(shape.K, shape.npix, shape.nplane) * shape.wavelengths
+                                             : walk_tally_bytes(shape.K, shape.npix, shape.nplane);
   // First moments (the Smith walk's replicates, one short unit each): half the bytes, and a pass takes every
   // unit that fits, so that the threads wait for the slowest unit once per run rather than once per few units.
   if (shape.first_moments) return {~std::uint64_t(0), std::max<std::uint64_t>(1, static_cast<std::uint64_t>(2.0 * kPassBytes / bytes))};
-  return {std::min(kPassChunks, 4 * threads), std::max<std::uint64_t>(1, static_cast<std::uint64_t>(kPassBytes / bytes))};
+  return walk_passes(bytes);
 }
 
 // The units of a run of n i.i.d. paths (the Smith walk model): one replicate of n paths.

@@ -16,6 +16,7 @@
 #include "microsim/measure/replicates.hpp"
 #include "microsim/measure/sampling.hpp"
 #include "path_sums_exchange.hpp"
+#include "walk_passes.hpp"
 
 namespace microsim {
 
@@ -27,10 +28,6 @@ namespace {
 // one tbb::parallel_deterministic_reduce over the parts with grain kPartsPerUnit, bit for bit,
 // for any number of threads or processes.
 constexpr std::uint64_t kPartsPerUnit = 16;
-// A pass walks at most 4 units per thread (the scenes of their parts live while it runs) and
-// kPassBytes of unit tallies (large hemisphere maps: one unit at a time).
-constexpr double kPassBytes = 64.0 * 1024 * 1024;
-
 // What the paths of one part share: its scene (built once, at the start of the pass that walks
 // the part), the incidence in its frame and its ray window.
 struct PartWalk {
@@ -84,10 +81,11 @@ struct EnsembleWalk {
   }
 };
 
+// A unit is one chunk: a pass of walk_passes.hpp takes the fewer of its chunks and its units (the
+// scenes of the pass's parts live while it runs).
 std::uint64_t units_per_pass(const EnsembleWalk& w) {
-  const double bytes = 16.0 * 2 * (w.o.orders + 1) * (1.0 + w.map.size() + w.plane.size());
-  const auto threads = static_cast<std::uint64_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
-  return std::max<std::uint64_t>(1, std::min<std::uint64_t>(4 * threads, static_cast<std::uint64_t>(kPassBytes / bytes)));
+  const UnitPasses p = walk_passes(walk_tally_bytes(w.o.orders, w.map.size(), w.plane.size()));
+  return std::min(p.min_chunks, p.max_units);
 }
 
 // The units of `share` a pass at a time: the scenes of the pass's parts built in parallel, then
