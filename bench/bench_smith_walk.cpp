@@ -28,10 +28,10 @@ int main(int argc, char** argv) {
   for (double theta : {0.0, 30.0, 60.0, 80.0}) {
     r.wi = direction_from_angles(theta * kPi / 180.0, 0.0);
     const WalkWindow window = walk_window(walk, r.wi, K, 1, 7);
-    const WalkStrata strata = walk_strata(1, 7, n);
+    const WalkNet net = walk_net(1, 7, 0, n);
     BsdfTally t(K, r.map.size(), r.plane.size());
     const double c0 = bench::cpu_seconds();
-    for (std::uint64_t j = 0; j < n; ++j) smith_walk_expected_path(walk, r.wi, 1, 7, j, strata, r, t, window);
+    for (std::uint64_t j = 0; j < n; ++j) smith_walk_expected_path(walk, r.wi, 1, 7, j, net, r, t, window);
     const double s = bench::cpu_seconds() - c0;
     total += s;
     std::printf("%9.0f  %7.1f  %11.3f\n", theta, 1e9 * s / static_cast<double>(n),

@@ -592,9 +592,9 @@ void check_spectral_options(const BsdfOptions& o, const Microsurface& s) {
   if (is_vcavity(s)) throw ParameterError("{wavelengths}: V-cavity ensembles are measured at one index");
 }
 
-// The Smith walks with expected escapes, in replicates of Latin-hypercube walks (measure/smith_walk_budget.hpp):
-// a pilot of kWalkPilotPerReplicate walks per replicate, then runs that add walks to every replicate (each a
-// hypercube of its own) until the pooled errors meet the target. Every process of a split
+// The Smith walks with expected escapes, in replicates of walks driven by shifted Sobol points
+// (measure/smith_walk_budget.hpp): a pilot of kWalkPilotPerReplicate walks per replicate, then runs that add
+// the next walks of every replicate's sequence until the pooled errors meet the target. Every process of a split
 // computes all of them (the same result as one process).
 BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& r, std::uint64_t mstream,
                                const std::function<void(double)>& progress, double share) {
@@ -605,18 +605,16 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
   const WalkWindow window = walk_window(walk, r.wi, K, o.seed, mstream);
   // The replicates only enter add_replicate: first moments (BsdfTally::first_moments).
   const TallyShape shape{K, npix, nplane, 1, true};
-  // m more walks in each replicate of `reps`, from the streams of `salt`; the run's replicates are added to
-  // the pooled ones side by side once all are in.
-  auto run = [&](std::vector<BsdfTally>& reps, std::uint64_t m, std::uint64_t salt, double p0, double span) {
-    std::vector<WalkStrata> strata(R);
+  // Walks first .. first + m - 1 of each replicate of `reps` (the next points of its sequence); the run's
+  // replicates are added to the pooled ones side by side once all are in.
+  auto run = [&](std::vector<BsdfTally>& reps, std::uint64_t first, std::uint64_t m, double p0, double span) {
+    std::vector<WalkNet> nets(R);
     std::vector<BsdfTally> fresh(R);
-    tbb::parallel_for(0, R, [&](int q) {
-      strata[q] = walk_strata(o.seed, ReplicatePlan::stream(mstream ^ salt, q), m);
-    });
+    tbb::parallel_for(0, R, [&](int q) { nets[q] = walk_net(o.seed, ReplicatePlan::stream(mstream, q), first, m); });
     run_replicate_paths<BsdfTally, BsdfTally>(
         UnitRange{0, static_cast<std::uint64_t>(R)}, R, m, shape, progress ? std::function<void(double)>([&](double f) { progress(p0 + span * f); }) : nullptr, 1.0,
         [&](int q, std::uint64_t j, BsdfTally& acc, MuellerUnit&) {
-          smith_walk_expected_path(walk, r.wi, o.seed, ReplicatePlan::stream(mstream ^ salt, q), j, strata[q], r, acc, window);
+          smith_walk_expected_path(walk, r.wi, o.seed, ReplicatePlan::stream(mstream, q), first + j, nets[q], r, acc, window);
         },
         [&](int q, BsdfTally&& rep) { fresh[q] = std::move(rep); });
     tbb::parallel_for(0, R, [&](int q) {
@@ -626,14 +624,17 @@ BsdfTally smith_walks_to_error(const models::SmithRandomWalk& walk, BsdfResult& 
   };
   std::vector<BsdfTally> reps(R);
   std::uint64_t kept = std::min(kWalkPilotPerReplicate, cap);  // walks per replicate in reps
-  run(reps, kept, 0, share, 0.1 * (1.0 - share));
+  run(reps, 0, kept, share, 0.1 * (1.0 - share));
   BsdfTally albedos = replicate_albedos(reps);
   for (int pass = 1;; ++pass) {
+    const bool met = smith_walk_target_met(albedos, r, o.model_error_fraction);
     r.model_budget = smith_walk_budget(albedos, r, o.model_error_fraction, cap, pass == 1 ? kWalkPilotMargin : kWalkRerunMargin);
+    // a pilot that misses the target by less than its margin is topped up as a pooled run would be
+    if (!met && pass == 1 && r.model_budget.walks / static_cast<std::uint64_t>(R) <= kept)
+      r.model_budget = smith_walk_budget(albedos, r, o.model_error_fraction, cap, kWalkRerunMargin);
     const std::uint64_t need = std::min(cap, r.model_budget.walks / static_cast<std::uint64_t>(R));
-    if (pass > kWalkPasses || need <= kept || smith_walk_target_met(albedos, r, o.model_error_fraction)) break;
-    run(reps, need - kept, mix64(0x9E3779B97F4A7C15ull * static_cast<std::uint64_t>(pass)),
-        share + (0.1 + 0.9 * (pass - 1) / kWalkPasses) * (1.0 - share), 0.9 / kWalkPasses * (1.0 - share));
+    if (pass > kWalkPasses || need <= kept || met) break;
+    run(reps, kept, need - kept, share + (0.1 + 0.9 * (pass - 1) / kWalkPasses) * (1.0 - share), 0.9 / kWalkPasses * (1.0 - share));
     kept = need;
     albedos = replicate_albedos(reps);
   }

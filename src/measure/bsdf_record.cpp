@@ -411,7 +411,7 @@ Json bsdf_definitions_json(const BsdfResult& r, bool polarized) {
                  "product of their Fresnel factors, a dielectric chooses reflection with "
                  "probability F (unpolarized light); *_stderr: standard error of the mean of "
                  "`replicates` independent stratified replicates of the rays (the Smith walk's: "
-                 "over its replicates of Latin-hypercube walks, or its independent walks with "
+                 "over its replicates of walks driven by shifted Sobol points, or its independent walks with "
                  "albedo_models.smith_multiple.error_target null)"},
       {"in_plane", "f = p / int_B |cos theta_o| d omega (exact), p the fraction of power leaving "
                    "through bin B: a band |beta| <= half width around the plane of incidence, "

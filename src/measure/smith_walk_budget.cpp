@@ -109,18 +109,17 @@ BsdfTally replicate_albedos(const std::vector<BsdfTally>& reps) {
   return t;
 }
 
-WalkStrata walk_strata(std::uint64_t seed, std::uint64_t stream, std::uint64_t n) {
-  WalkStrata s;
-  s.n = n;
-  s.perm.resize(static_cast<std::size_t>(kLatinDims) * n);
-  for (int d = 0; d < kLatinDims; ++d) {
-    std::uint32_t* p = s.perm.data() + static_cast<std::size_t>(d) * n;
-    for (std::uint64_t j = 0; j < n; ++j) p[j] = static_cast<std::uint32_t>(j);
-    CounterRng rng(seed, stream ^ 0x1A7140C0BE000000ull, static_cast<std::uint64_t>(d));
-    for (std::uint64_t j = n; j > 1; --j)  // Fisher-Yates
-      std::swap(p[j - 1], p[rng.next_u64() % j]);
+WalkNet walk_net(std::uint64_t seed, std::uint64_t stream, std::uint64_t first, std::uint64_t n) {
+  WalkNet net;
+  net.first = first;
+  net.n = n;
+  net.points.resize(static_cast<std::size_t>(kSobolDims) * n);
+  for (int d = 0; d < kSobolDims; ++d) {
+    CounterRng rng(seed, stream ^ 0x50B01500000000ull, static_cast<std::uint64_t>(d));
+    const auto shift = static_cast<std::uint32_t>(rng.next_u64() >> 32);
+    shifted_sobol_components(first, n, d, shift, net.points.data() + static_cast<std::size_t>(d) * n);
   }
-  return s;
+  return net;
 }
 
 WalkWindow walk_window(const models::SmithRandomWalk& walk, const Vec3& wi, int orders, std::uint64_t seed,
@@ -146,20 +145,21 @@ WalkWindow walk_window(const models::SmithRandomWalk& walk, const Vec3& wi, int 
 }
 
 void smith_walk_expected_path(const models::SmithRandomWalk& walk, const Vec3& wi, std::uint64_t seed,
-                              std::uint64_t stream, std::uint64_t j, const WalkStrata& strata,
+                              std::uint64_t stream, std::uint64_t j, const WalkNet& net,
                               const BsdfResult& r, BsdfTally& t, const WalkWindow& window) {
   struct Rng {
     CounterRng c;
-    const WalkStrata& s;
+    const WalkNet& net;
     std::uint64_t j;
     int k = 0;
     double uniform() {
       const double u = c.uniform();
-      if (k >= kLatinDims) return u;
-      const double v = (s.perm[static_cast<std::size_t>(k++) * s.n + j] + u) / static_cast<double>(s.n);
+      if (k >= kSobolDims) return u;
+      // the net's 32 bits, the walk's uniform below them: uniform on [0, 1)
+      const double v = (net.point(k++, j) + u) * 0x1p-32;
       return std::min(v, 1.0 - 0x1p-53);
     }
-  } rng{CounterRng(seed, stream, j), strata, j};
+  } rng{CounterRng(seed, stream, j), net, j};
   ++t.paths;
   const int expected_orders = t.orders - 1;
   thread_local std::vector<models::WalkEscape> escapes;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "microsim/measure/bsdf_result.hpp"
+#include "microsim/measure/sobol_sequence.hpp"
 #include "microsim/models/smith_random_walk.hpp"
 
 namespace microsim {
@@ -37,7 +38,7 @@ constexpr double kWalkErrorFloor = 1e-9;
 // The pilot: kWalkPilotPerReplicate walks in each replicate (the result when their errors meet the target); at
 // most kWalkCapFactor model_walks walks (the model never costs more walks than requested; the record states the
 // error reached). The walks of the pilot and the runs after it are pooled: each run adds
-// walks to every replicate (a Latin hypercube of their own), so a run that misses the target is topped up rather
+// walks to every replicate (the next points of its sequence), so a run that misses the target is topped up rather
 // than run again. The pilot's error of a rare order, from 32 replicates of few walks, errs both ways by up to
 // ~2x in walks, so the first run is sized for kWalkPilotMargin^2 = 1/2 of the pilot's estimate (rarely more
 // than needed), and each later run tops the pooled walks up to the pooled errors' estimate for the target
@@ -55,23 +56,21 @@ constexpr int kWalkPasses = 5;
 // cells): what smith_walk_budget and smith_walk_target_met read, without the cost of the cells.
 BsdfTally replicate_albedos(const std::vector<BsdfTally>& reps);
 
-// The first kLatinDims uniforms of the walks of one replicate form a Latin hypercube over its n walks
-// (each dimension d: walk j draws (perm_d(j) + U) / n): every walk's uniforms are still independent and
-// uniform, so each walk's expectation is unchanged, but the first height, the first facet normal and the
-// draw after it are spread evenly over the replicate, which removes most of the order-1 spread (a smooth
-// function of them with expected escapes). The errors come from the spread of the replicates.
-constexpr int kLatinDims = 6;
-struct WalkStrata {
-  std::uint64_t n = 0;
-  std::vector<std::uint32_t> perm;  // [d * n + j]
+// The first kSobolDims uniforms of walk j of a replicate are point j of that replicate's digitally shifted Sobol
+// sequence (measure/sobol_sequence.hpp), plus a uniform below 2^-32 from the walk's own generator: every walk's
+// uniforms are still uniform, so each walk's expectation is unchanged, but the first heights and facet normals
+// (through the order-2 escape) are spread over the replicate as a net, which removes most of the spread of the
+// orders 1 and 2 (smooth functions of them with expected escapes). The errors come from the spread of the
+// replicates, each shifted independently. A replicate's walks 0 .. m - 1 are the first m points whatever runs
+// they were walked in, so runs that add walks extend the sequence.
+struct WalkNet {
+  std::uint64_t first = 0, n = 0;        // walks first .. first + n - 1
+  std::vector<std::uint32_t> points;     // [d * n + (j - first)], shifted
+  std::uint32_t point(int d, std::uint64_t j) const { return points[static_cast<std::size_t>(d) * n + (j - first)]; }
 };
-WalkStrata walk_strata(std::uint64_t seed, std::uint64_t stream, std::uint64_t n);
+// The net of the walks first .. first + n - 1 of the replicate of `stream`: its shifts depend on (seed, stream) only.
+WalkNet walk_net(std::uint64_t seed, std::uint64_t stream, std::uint64_t first, std::uint64_t n);
 
-// Walk j of a replicate (CounterRng(seed, stream, j), its first uniforms from `strata`) with forced
-// continuation through the orders 1 .. K - 1 and its branches' weights in `window`
-// (models::SmithRandomWalk::walk_with_weight_window: every walk adds to the orders up to K), added to t
-// (add_forced_walk_escapes); the drawn escapes of orders K and above as more escapes. The default window
-// [0, inf] is plain forced continuation.
 // The weight window of the walks (models::SmithRandomWalk::walk_with_weight_window) of one incidence:
 // [kWindowLow, kWindowHigh] times the mean weight that goes on after the first event (1 - the order-1 albedo
 // for a mirror), estimated from kWindowWalks forced walks of their own stream (at least kWindowFloor). Branches
@@ -85,8 +84,13 @@ constexpr double kWindowLow = 0.25, kWindowHigh = 2.0, kWindowFloor = 1e-6;
 WalkWindow walk_window(const models::SmithRandomWalk& walk, const Vec3& wi, int orders, std::uint64_t seed,
                        std::uint64_t stream);
 
+// Walk j of a replicate (CounterRng(seed, stream, j), its first uniforms from `net`, which holds j) with forced
+// continuation through the orders 1 .. K - 1 and its branches' weights in `window`
+// (models::SmithRandomWalk::walk_with_weight_window: every walk adds to the orders up to K), added to t
+// (add_forced_walk_escapes); the drawn escapes of orders K and above as more escapes. The default window
+// [0, inf] is plain forced continuation.
 void smith_walk_expected_path(const models::SmithRandomWalk& walk, const Vec3& wi, std::uint64_t seed,
-                              std::uint64_t stream, std::uint64_t j, const WalkStrata& strata,
+                              std::uint64_t stream, std::uint64_t j, const WalkNet& net,
                               const BsdfResult& r, BsdfTally& t, const WalkWindow& window = {});
 
 // The walks per replicate m = m_pilot (margin stderr_pilot / (fraction * stderr_measured))^2, the largest over the
