@@ -27,7 +27,7 @@ struct DirectionNumbers {
       const Primitive& p = kPrimitives[d - 1];
       std::uint32_t m[32];
       for (int i = 0; i < p.s; ++i) m[i] = p.m[i];
-      // m_i = 2 a_1 m_{i-1} ^ 4 a_2 m_{i-2} ^ ... ^ 2^s m_{i-s} ^ m_{i-s} [JoeKuo08, eq. 2]
+      // m_i = 2 a_1 m_{i-1} ^ 4 a_2 m_{i-2} ^ ... ^ 2^s m_{i-s} ^ m_{i-s}, the recurrence of [JoeKuo08]
       for (int i = p.s; i < 32; ++i) {
         std::uint32_t x = m[i - p.s] ^ (m[i - p.s] << p.s);
         for (int k = 1; k < p.s; ++k)
