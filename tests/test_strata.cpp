@@ -145,3 +145,21 @@ TEST(Strata, MeanOfAnIndicatorVariesLessThanWithIndependentPoints) {
   // Power: independent points reach the binomial variance and fail the same bound.
   EXPECT_GT(var_indep, binomial / 2);
 }
+
+TEST(Strata, MortonEncodeInterleavesTheBitsAndInvertsDecode) {
+  CounterRng rng(5, 9, 0);
+  for (int t = 0; t < 2000; ++t) {
+    const auto x = static_cast<std::uint32_t>(rng.next_u64()), y = static_cast<std::uint32_t>(rng.next_u64());
+    std::uint64_t bitwise = 0;  // the same interleaving written bit by bit
+    for (int b = 0; b < 32; ++b) {
+      bitwise |= static_cast<std::uint64_t>((x >> b) & 1u) << (2 * b);
+      bitwise |= static_cast<std::uint64_t>((y >> b) & 1u) << (2 * b + 1);
+    }
+    ASSERT_EQ(morton_encode(x, y), bitwise);
+    std::uint32_t dx, dy;
+    morton_decode(morton_encode(x, y), dx, dy);
+    ASSERT_EQ(dx, x);
+    ASSERT_EQ(dy, y);
+    if (x != y) ASSERT_NE(morton_encode(y, x), bitwise);  // power: the order of the coordinates matters
+  }
+}

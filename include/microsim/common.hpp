@@ -118,4 +118,17 @@ inline void morton_decode(std::uint64_t code, std::uint32_t& x, std::uint32_t& y
   y = compact_bits(code >> 1);
 }
 
+// x (< 2^32) spread to the even bits of a word: the inverse of compact_bits.
+inline std::uint64_t spread_bits(std::uint64_t x) {
+  x &= 0xFFFFFFFFull;
+  x = (x | (x << 16)) & 0x0000FFFF0000FFFFull;
+  x = (x | (x << 8)) & 0x00FF00FF00FF00FFull;
+  x = (x | (x << 4)) & 0x0F0F0F0F0F0F0F0Full;
+  x = (x | (x << 2)) & 0x3333333333333333ull;
+  x = (x | (x << 1)) & 0x5555555555555555ull;
+  return x;
+}
+// The Morton code of (x, y): the inverse of morton_decode.
+inline std::uint64_t morton_encode(std::uint32_t x, std::uint32_t y) { return spread_bits(x) | (spread_bits(y) << 1); }
+
 }  // namespace microsim

@@ -18,22 +18,13 @@ VndfResult start_vndf(const Vec3& v, const VndfOptions& o, double macro_area) {
 }
 
 namespace {
-// x (< 2^32) spread to the even bits of a word: the inverse of compact_bits (common.hpp).
-std::uint64_t spread_bits(std::uint64_t x) {
-  x &= 0xFFFFFFFFull;
-  x = (x | (x << 16)) & 0x0000FFFF0000FFFFull;
-  x = (x | (x << 8)) & 0x00FF00FF00FF00FFull;
-  x = (x | (x << 4)) & 0x0F0F0F0F0F0F0F0Full;
-  x = (x | (x << 2)) & 0x3333333333333333ull;
-  x = (x | (x << 1)) & 0x5555555555555555ull;
-  return x;
-}
 constexpr double kTwo53 = 9007199254740992.0;  // CounterRng::uniform's 53 bits
 }  // namespace
 
 VndfOrigin VndfOrigin::of(double a, double b) {
   const auto ka = static_cast<std::uint64_t>(a * kTwo53), kb = static_cast<std::uint64_t>(b * kTwo53);
-  return {spread_bits(ka >> 32) | (spread_bits(kb >> 32) << 1), ((ka & 0xFFFFFFFFull) << 32) | (kb & 0xFFFFFFFFull)};
+  return {morton_encode(static_cast<std::uint32_t>(ka >> 32), static_cast<std::uint32_t>(kb >> 32)),
+          ((ka & 0xFFFFFFFFull) << 32) | (kb & 0xFFFFFFFFull)};
 }
 
 Vec2 VndfOrigin::ab() const {
