@@ -89,6 +89,13 @@ def main():
         broken = subprocess.run(layered, capture_output=True, text=True)
         check(broken.returncode == 1 and "include/microsim/low/est.hpp includes microsim/up/req.hpp" in broken.stdout,
               f"a lower header including an upper one fails: {broken.stdout}")
+        # Includes through "../" name the file they reach: a cycle through them is found.
+        for d_ in ("src/z", "src/z2"):
+            (root / d_).mkdir(parents=True)
+        (root / "src/z/p.hpp").write_text('#include "../z2/q.hpp"\n')
+        (root / "src/z2/q.hpp").write_text('#include "../z/p.hpp"\n')
+        cycles = include_cycles.strongly_connected(include_cycles.component_graph(root))
+        check(["z/p", "z2/q"] in cycles, f"a cycle through ../ includes is found: {cycles}")
         long_file = root / "src" / "x" / "long.cpp"
         long_file.write_text("int f() {\n" + "  ;\n" * 90 + "}\n")
         over = subprocess.run([sys.executable, str(ROOT / "tools" / "function_lengths.py"), "3", "--root", d,

@@ -43,10 +43,11 @@ def component_of(path, root):
 
 
 def resolve(target, including, root):
-    """File an #include "target" names: include/ first, then relative to the includer."""
+    """File an #include "target" names: include/ first, then relative to the includer ("../"
+    folded, so that the file has one component name however it is reached)."""
     for candidate in (root / "include" / target, including.parent / target, root / "src" / target):
         if candidate.is_file():
-            return candidate
+            return pathlib.Path(os.path.normpath(candidate))
     return None
 
 
