@@ -387,9 +387,9 @@ SingleScatteringAlbedos single_scattering_albedos(const Ndf& ndf, const Material
     }
   };
   // Rows in blocks: the block's terms in parallel, then summed in the fixed order. A block holds about 2^12
-  // samples (128 KiB of terms, reused): a block of 2^18 (8 MiB) was a fresh mapping at every call, and its page
-  // faults tripled the time of n = 512.
-  const int block = std::max(1, std::min(n, (1 << 12) / n));
+  // samples (128 KiB of terms, reused; a block of 2^18, 8 MiB, was a fresh mapping at every call, and its page
+  // faults tripled the time of n = 512), and at least 16 rows, so that the threads share every block.
+  const int block = std::min(n, std::max(16, (1 << 12) / n));
   std::vector<double> terms(static_cast<std::size_t>(block) * n * kTerms);
   double sum[kTerms] = {0.0, 0.0, 0.0, 0.0};
   for (int p0 = 0; p0 < n; p0 += block) {
