@@ -1,5 +1,7 @@
 #include "microsim/measure/smith_walk_budget.hpp"
 
+#include "microsim/measure/sobol_sequence.hpp"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>

@@ -9,7 +9,6 @@
 #include <vector>
 
 #include "microsim/measure/bsdf_result.hpp"
-#include "microsim/measure/sobol_sequence.hpp"
 #include "microsim/models/smith_random_walk.hpp"
 
 namespace microsim {
